@@ -1,0 +1,81 @@
+"""Every exception the library raises on bad input, in one place.
+
+All are :class:`ValueError` subclasses, so ``except ValueError`` keeps working for
+callers who do not care which check failed. Each message names the offending field
+(node, variable, observation index, ...) and the offending value. Every check runs
+*before* any state is changed: a rejected input leaves a model, a filter or a tracker
+exactly as it was.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "DBNError",
+    "ModelError",
+    "CycleError",
+    "UnknownVariableError",
+    "DuplicateNameError",
+    "CPDShapeError",
+    "NotNormalizedError",
+    "NegativeProbabilityError",
+    "EvidenceError",
+    "InputError",
+    "ShapeError",
+    "NonFiniteError",
+    "TimeOrderError",
+]
+
+
+class DBNError(ValueError):
+    """Base class of every error raised by this library on bad input."""
+
+
+# --- model declaration -----------------------------------------------------------------
+class ModelError(DBNError):
+    """A model declaration (variables, CPDs, graph) is invalid."""
+
+
+class CycleError(ModelError):
+    """The parent relation of a Bayes net (or of one DBN slice) has a directed cycle."""
+
+
+class UnknownVariableError(ModelError):
+    """A CPD, an edge, a query or evidence names a variable the model does not have."""
+
+
+class DuplicateNameError(ModelError):
+    """Two variables (or two CPDs) share one name."""
+
+
+class CPDShapeError(ModelError):
+    """A CPD's table, weights or covariance does not have the shape its variables imply."""
+
+
+class NotNormalizedError(ModelError):
+    """A row of a conditional probability table does not sum to 1 (tolerance 1e-9)."""
+
+
+class NegativeProbabilityError(ModelError):
+    """A probability table holds a negative (or NaN) entry."""
+
+
+# --- evidence and data -----------------------------------------------------------------
+class EvidenceError(DBNError):
+    """Evidence (hard or soft) is invalid: unknown variable, state out of range, a
+    likelihood vector of the wrong length, negative or all zero."""
+
+
+class InputError(DBNError):
+    """Data handed to a filter or a tracker is invalid."""
+
+
+class ShapeError(InputError):
+    """An array has the wrong shape or dimension."""
+
+
+class NonFiniteError(InputError):
+    """An array holds NaN or infinity where finite numbers are required."""
+
+
+class TimeOrderError(InputError):
+    """Observations or log timestamps go backwards in time (or quit before enter)."""

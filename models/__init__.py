@@ -1,0 +1,1 @@
+"""The trackers of the seed papers, each built on ``dbn`` and ``inference``."""
