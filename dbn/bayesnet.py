@@ -1,0 +1,276 @@
+"""A Bayes net: variables, one CPD each, on a networkx DAG, validated at construction."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import networkx as nx
+import numpy as np
+from numpy.typing import ArrayLike
+
+from dbn.cpds import ContinuousCPD, DeterministicCPD, LinearGaussianCPD, TabularCPD
+from dbn.errors import (
+    CPDShapeError,
+    CycleError,
+    DuplicateNameError,
+    EvidenceError,
+    ModelError,
+    UnknownVariableError,
+)
+from dbn.variables import ContinuousVariable, DiscreteVariable, Variable
+
+__all__ = ["BayesNet", "CPD", "check_evidence"]
+
+CPD = TabularCPD | DeterministicCPD | LinearGaussianCPD | ContinuousCPD
+
+
+class BayesNet:
+    """A Bayes net on a directed acyclic graph.
+
+    Parameters
+    ----------
+    variables : sequence of DiscreteVariable or ContinuousVariable
+        Names must be unique.
+    cpds : sequence of CPD
+        Exactly one per variable; the CPD's parents define the edges.
+
+    Raises
+    ------
+    DuplicateNameError, UnknownVariableError, CycleError, CPDShapeError, ModelError
+        Each naming the node and the value at fault. A discrete child must have discrete
+        parents and a tabular or deterministic CPD whose table has the shape
+        ``(*parent_cardinalities, cardinality)``.
+
+    Notes
+    -----
+    The object is immutable: ``tables`` (the dense table of every discrete CPD, including
+    the 0/1 tables of deterministic CPDs) is computed once here.
+    """
+
+    def __init__(self, variables: Sequence[Variable], cpds: Sequence[CPD]) -> None:
+        vars_: dict[str, Variable] = {}
+        for v in variables:
+            if not isinstance(v, DiscreteVariable | ContinuousVariable):
+                raise ModelError(f"not a variable: {v!r}")
+            if v.name in vars_:
+                raise DuplicateNameError(f"two variables are named {v.name!r}")
+            vars_[v.name] = v
+        cpd_map: dict[str, CPD] = {}
+        for c in cpds:
+            name = getattr(c, "variable", None)
+            if name not in vars_:
+                raise UnknownVariableError(f"CPD for unknown variable {name!r}")
+            if name in cpd_map:
+                raise DuplicateNameError(f"two CPDs are given for variable {name!r}")
+            cpd_map[name] = c
+        missing = [n for n in vars_ if n not in cpd_map]
+        if missing:
+            raise ModelError(f"no CPD for variable(s) {missing}")
+
+        graph = nx.DiGraph()
+        graph.add_nodes_from(vars_)
+        for name, c in cpd_map.items():
+            for p in c.parents:
+                if p not in vars_:
+                    raise UnknownVariableError(f"CPD of {name!r}: unknown parent {p!r}")
+                graph.add_edge(p, name)
+        try:
+            cycle = nx.find_cycle(graph)
+        except nx.NetworkXNoCycle:
+            cycle = None
+        if cycle:
+            path = " -> ".join([u for u, _ in cycle] + [cycle[0][0]])
+            raise CycleError(f"the graph has a directed cycle: {path}")
+
+        tables: dict[str, np.ndarray] = {}
+        for name, c in cpd_map.items():
+            v = vars_[name]
+            if isinstance(v, DiscreteVariable):
+                if not isinstance(c, TabularCPD | DeterministicCPD):
+                    raise ModelError(
+                        f"discrete variable {name!r} needs a TabularCPD or DeterministicCPD, "
+                        f"got {type(c).__name__}"
+                    )
+                for p in c.parents:
+                    if not isinstance(vars_[p], DiscreteVariable):
+                        raise ModelError(
+                            f"discrete variable {name!r} has a continuous parent {p!r}"
+                        )
+                pcards = [vars_[p].cardinality for p in c.parents]  # type: ignore[union-attr]
+                table = np.asarray(c.to_table(pcards, v.cardinality), dtype=np.float64)
+                table.setflags(write=False)
+                tables[name] = table
+            elif isinstance(c, TabularCPD | DeterministicCPD):
+                raise ModelError(f"continuous variable {name!r} has a discrete CPD")
+            elif isinstance(c, LinearGaussianCPD) and c.dim != v.dim:
+                raise CPDShapeError(
+                    f"CPD of {name!r}: dimension {c.dim}, but the variable has dim {v.dim}"
+                )
+        self._variables = vars_
+        self._cpds = cpd_map
+        self._graph = graph
+        self._tables = tables
+        self._order = tuple(nx.lexicographical_topological_sort(graph))
+
+    # --- read-only views ----------------------------------------------------------------
+    @property
+    def variables(self) -> Mapping[str, Variable]:
+        """Name -> variable, in declaration order."""
+        return dict(self._variables)
+
+    @property
+    def cpds(self) -> Mapping[str, CPD]:
+        """Name -> CPD."""
+        return dict(self._cpds)
+
+    @property
+    def graph(self) -> nx.DiGraph:
+        """A copy of the DAG (edges parent -> child)."""
+        return self._graph.copy()
+
+    @property
+    def nodes(self) -> tuple[str, ...]:
+        return tuple(self._variables)
+
+    @property
+    def is_discrete(self) -> bool:
+        """True when every variable is discrete (exact engines need this)."""
+        return all(isinstance(v, DiscreteVariable) for v in self._variables.values())
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._variables
+
+    def __len__(self) -> int:
+        return len(self._variables)
+
+    def __repr__(self) -> str:
+        return f"BayesNet({len(self)} variables, {self._graph.number_of_edges()} edges)"
+
+    def variable(self, name: str) -> Variable:
+        try:
+            return self._variables[name]
+        except KeyError:
+            raise UnknownVariableError(f"unknown variable {name!r}") from None
+
+    def cpd(self, name: str) -> CPD:
+        self.variable(name)
+        return self._cpds[name]
+
+    def parents(self, name: str) -> tuple[str, ...]:
+        return tuple(self.cpd(name).parents)
+
+    def children(self, name: str) -> tuple[str, ...]:
+        self.variable(name)
+        return tuple(self._graph.successors(name))
+
+    def cardinality(self, name: str) -> int:
+        v = self.variable(name)
+        if not isinstance(v, DiscreteVariable):
+            raise ModelError(f"variable {name!r} is continuous: it has no cardinality")
+        return v.cardinality
+
+    def table(self, name: str) -> np.ndarray:
+        """Dense table ``(*parent_cardinalities, cardinality)`` of a discrete node (read-only)."""
+        self.variable(name)
+        try:
+            return self._tables[name]
+        except KeyError:
+            raise ModelError(f"variable {name!r} is continuous: it has no table") from None
+
+    def topological_order(self) -> tuple[str, ...]:
+        """Parents before children (ties broken by name, so the order is reproducible)."""
+        return self._order
+
+    # --- sampling and joint probability ---------------------------------------------------
+    def log_joint(self, assignment: Mapping[str, int | str]) -> float:
+        """``log P(x)`` of a full assignment of a discrete net (states by index or name)."""
+        if not self.is_discrete:
+            raise ModelError("log_joint needs a discrete net")
+        x = {n: self.variable(n).index(s) for n, s in assignment.items()}  # type: ignore[union-attr]
+        missing = [n for n in self._variables if n not in x]
+        if missing:
+            raise EvidenceError(f"assignment misses variable(s) {missing}")
+        total = 0.0
+        with np.errstate(divide="ignore"):
+            for n in self._variables:
+                idx = tuple(x[p] for p in self._cpds[n].parents) + (x[n],)
+                total += float(np.log(self._tables[n][idx]))
+        return total
+
+    def sample(self, rng: np.random.Generator, num_samples: int) -> dict[str, np.ndarray]:
+        """Ancestral samples of a discrete net: name -> int array of shape ``(num_samples,)``."""
+        if not self.is_discrete:
+            raise ModelError("sample needs a discrete net")
+        out: dict[str, np.ndarray] = {}
+        for n in self._order:
+            table = self._tables[n]
+            rows = (
+                table[tuple(out[p] for p in self._cpds[n].parents)]
+                if self._cpds[n].parents
+                else np.broadcast_to(table, (num_samples, table.shape[-1]))
+            )
+            u = rng.random(num_samples)[:, None]
+            out[n] = np.minimum((np.cumsum(rows, axis=-1) < u).sum(axis=-1), table.shape[-1] - 1)
+        return out
+
+
+def check_evidence(
+    bn: BayesNet,
+    evidence: Mapping[str, int | str] | None = None,
+    soft_evidence: Mapping[str, ArrayLike] | None = None,
+) -> tuple[dict[str, int], dict[str, np.ndarray]]:
+    """Validate hard and soft (virtual) evidence against a discrete net.
+
+    Parameters
+    ----------
+    evidence : mapping name -> state index or state name, optional
+        Hard evidence ``X = x``.
+    soft_evidence : mapping name -> array_like of shape ``(cardinality,)``, optional
+        Virtual evidence: a likelihood ``lambda(x) = p(observation | X = x)`` per state,
+        nonnegative, finite and not all zero (its scale does not matter for posteriors but
+        enters the log evidence).
+
+    Returns
+    -------
+    hard : dict name -> int
+    soft : dict name -> float array (cardinality,)
+
+    Raises
+    ------
+    EvidenceError
+        Unknown variable, state out of range, wrong length, negative/NaN/all-zero vector.
+    """
+    hard: dict[str, int] = {}
+    for name, state in (evidence or {}).items():
+        if name not in bn:
+            raise EvidenceError(f"evidence on unknown variable {name!r}")
+        v = bn.variable(name)
+        if not isinstance(v, DiscreteVariable):
+            raise EvidenceError(
+                f"hard evidence on continuous variable {name!r} is not supported here"
+            )
+        hard[name] = v.index(state)
+    soft: dict[str, np.ndarray] = {}
+    for name, lik in (soft_evidence or {}).items():
+        if name not in bn:
+            raise EvidenceError(f"soft evidence on unknown variable {name!r}")
+        soft[name] = check_likelihood(name, bn.cardinality(name), lik)
+    return hard, soft
+
+
+def check_likelihood(name: str, cardinality: int, lik: Any) -> np.ndarray:
+    """A validated virtual-evidence vector of shape ``(cardinality,)``."""
+    try:
+        arr = np.asarray(lik, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise EvidenceError(f"soft evidence on {name!r} is not numeric: {lik!r}") from None
+    if arr.shape != (cardinality,):
+        raise EvidenceError(
+            f"soft evidence on {name!r} has shape {arr.shape}, expected ({cardinality},)"
+        )
+    if not np.all(np.isfinite(arr)) or np.any(arr < 0):
+        raise EvidenceError(f"soft evidence on {name!r} must be finite and nonnegative, got {arr}")
+    if not np.any(arr > 0):
+        raise EvidenceError(f"soft evidence on {name!r} is all zero")
+    return arr

@@ -1,0 +1,337 @@
+"""Conditional probability distributions (CPDs).
+
+Kinds
+-----
+- :class:`TabularCPD`: a discrete child with discrete parents, one probability row per
+  parent configuration.
+- :class:`DeterministicCPD`: a discrete child that is a function of its discrete parents
+  (e.g. a counter ``c_k = c_{k-1} + [l_k = new]``); exact inference sees a 0/1 table.
+- :class:`LinearGaussianCPD`: a continuous child ``x ~ N(b + sum_p W_p u_p, S)``.
+- :class:`ContinuousCPD`: the protocol any continuous CPD implements
+  (``sample(key, parent_values)``, ``log_prob(value, parent_values)``).
+
+Table layout
+------------
+A tabular CPD of a child with cardinality ``K`` and parents with cardinalities
+``(K_1, ..., K_m)`` holds an array of shape ``(K_1, ..., K_m, K)``: the **last** axis is
+the child, so ``table[u_1, ..., u_m]`` is the row ``P(child | parents = u)`` and sums to 1.
+(pgmpy stores the transpose, ``(K, K_1 * ... * K_m)``; :mod:`dbn.pgmpy_adapter` converts.)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from dbn.errors import CPDShapeError, ModelError, NegativeProbabilityError, NotNormalizedError
+
+__all__ = [
+    "ROW_TOLERANCE",
+    "TabularCPD",
+    "DeterministicCPD",
+    "LinearGaussianCPD",
+    "ContinuousCPD",
+    "DiscreteCPD",
+]
+
+ROW_TOLERANCE = 1e-9
+"""Rows of a probability table must sum to 1 within this absolute tolerance."""
+
+
+def _parents_tuple(variable: str, parents: Sequence[str]) -> tuple[str, ...]:
+    if isinstance(parents, str):
+        raise ModelError(
+            f"CPD of {variable!r}: parents must be a sequence of names, got the string {parents!r}"
+        )
+    out = tuple(parents)
+    for p in out:
+        if not isinstance(p, str) or not p:
+            raise ModelError(
+                f"CPD of {variable!r}: parent names must be non-empty strings, got {p!r}"
+            )
+    if len(set(out)) != len(out):
+        raise ModelError(f"CPD of {variable!r}: a parent is listed twice in {out}")
+    if variable in out:
+        raise ModelError(f"CPD of {variable!r}: the variable is its own parent")
+    return out
+
+
+def check_probability_table(variable: str, parents: tuple[str, ...], table: np.ndarray) -> None:
+    """Raise unless ``table`` (shape ``(*parent_cards, K)``) holds probability rows.
+
+    Raises
+    ------
+    NegativeProbabilityError
+        An entry is negative or NaN (the message gives the first one and where).
+    NotNormalizedError
+        A row does not sum to 1 within :data:`ROW_TOLERANCE` (the message gives the row).
+    """
+    bad = ~(table >= 0)
+    if bad.any():
+        where = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise NegativeProbabilityError(
+            f"CPD of {variable!r}: entry {float(table[where])!r} at {_describe(parents, where[:-1])}, "
+            f"state {where[-1]} is negative or NaN"
+        )
+    sums = table.sum(axis=-1)
+    off = np.abs(sums - 1.0) > ROW_TOLERANCE
+    if off.any():
+        where = tuple(int(i) for i in np.argwhere(off)[0])
+        raise NotNormalizedError(
+            f"CPD of {variable!r}: the row for {_describe(parents, where)} sums to "
+            f"{float(sums[where])!r}, not 1 (tolerance {ROW_TOLERANCE})"
+        )
+
+
+def _describe(parents: tuple[str, ...], index: tuple[int, ...]) -> str:
+    if not parents:
+        return "the prior (no parents)"
+    return "parents " + ", ".join(f"{p}={i}" for p, i in zip(parents, index))
+
+
+@dataclass(frozen=True, eq=False)
+class TabularCPD:
+    """``P(variable | parents)`` as a table of shape ``(*parent_cardinalities, cardinality)``.
+
+    Parameters
+    ----------
+    variable : str
+        The child.
+    parents : sequence of str
+        The parents, in the order of the table's leading axes.
+    table : array_like, shape ``(K_1, ..., K_m, K)``
+        ``table[u] = P(variable = . | parents = u)``; every row sums to 1 within 1e-9 and
+        holds no negative entry. For a root node the shape is ``(K,)``.
+
+    The table is copied and made read-only (value semantics).
+    """
+
+    variable: str
+    parents: tuple[str, ...]
+    table: np.ndarray = field(repr=False)
+
+    def __init__(self, variable: str, parents: Sequence[str], table: ArrayLike) -> None:
+        parents_t = _parents_tuple(variable, parents)
+        try:
+            arr = np.array(table, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise CPDShapeError(f"CPD of {variable!r}: table is not numeric ({exc})") from None
+        if arr.ndim != len(parents_t) + 1:
+            raise CPDShapeError(
+                f"CPD of {variable!r}: table has {arr.ndim} axes, expected {len(parents_t) + 1} "
+                f"(one per parent {parents_t} and one for the child, last)"
+            )
+        check_probability_table(variable, parents_t, arr)
+        arr.setflags(write=False)
+        object.__setattr__(self, "variable", variable)
+        object.__setattr__(self, "parents", parents_t)
+        object.__setattr__(self, "table", arr)
+
+    @property
+    def cardinality(self) -> int:
+        """Number of states of the child."""
+        return int(self.table.shape[-1])
+
+    @property
+    def parent_cardinalities(self) -> tuple[int, ...]:
+        """Cardinalities of the parents, in order."""
+        return tuple(int(k) for k in self.table.shape[:-1])
+
+    @property
+    def log_table(self) -> np.ndarray:
+        """``log(table)`` (zeros become ``-inf``)."""
+        with np.errstate(divide="ignore"):
+            return np.log(self.table)
+
+    def to_table(self, parent_cardinalities: Sequence[int], cardinality: int) -> np.ndarray:
+        """The table, after checking it has the shape the model's cardinalities imply."""
+        expected = (*tuple(int(k) for k in parent_cardinalities), int(cardinality))
+        if self.table.shape != expected:
+            raise CPDShapeError(
+                f"CPD of {self.variable!r}: table shape {self.table.shape} does not match "
+                f"{expected} (parents {self.parents} then the child)"
+            )
+        return self.table
+
+
+@dataclass(frozen=True, eq=False)
+class DeterministicCPD:
+    """A discrete child that is a deterministic function of its discrete parents.
+
+    Parameters
+    ----------
+    variable : str
+        The child.
+    parents : sequence of str
+        The parents, in the order of ``fn``'s arguments.
+    fn : callable
+        ``fn(*parent_states) -> child_state``. It is called once with integer numpy arrays
+        (all parent configurations, broadcast) and must return integer states of the same
+        shape, each in ``0..cardinality-1``. Example, a counter:
+        ``DeterministicCPD("c", [prev("c"), "new"], lambda c, new: np.minimum(c + new, C - 1))``.
+    """
+
+    variable: str
+    parents: tuple[str, ...]
+    fn: Callable[..., Any] = field(repr=False)
+
+    def __init__(self, variable: str, parents: Sequence[str], fn: Callable[..., Any]) -> None:
+        parents_t = _parents_tuple(variable, parents)
+        if not callable(fn):
+            raise ModelError(f"CPD of {variable!r}: fn must be callable, got {fn!r}")
+        object.__setattr__(self, "variable", variable)
+        object.__setattr__(self, "parents", parents_t)
+        object.__setattr__(self, "fn", fn)
+
+    def to_table(self, parent_cardinalities: Sequence[int], cardinality: int) -> np.ndarray:
+        """The 0/1 table of shape ``(*parent_cardinalities, cardinality)``."""
+        cards = tuple(int(k) for k in parent_cardinalities)
+        if len(cards) != len(self.parents):
+            raise CPDShapeError(
+                f"CPD of {self.variable!r}: {len(cards)} parent cardinalities for parents {self.parents}"
+            )
+        grids = np.indices(cards, dtype=np.int64) if cards else np.zeros((0,), dtype=np.int64)
+        try:
+            out = np.asarray(self.fn(*grids) if cards else self.fn())
+        except Exception as exc:  # the user's function failed: say which CPD
+            raise ModelError(
+                f"CPD of {self.variable!r}: fn raised {type(exc).__name__}: {exc}"
+            ) from exc
+        out = np.broadcast_to(out, cards)
+        if not np.issubdtype(out.dtype, np.integer):
+            if not np.all(np.equal(np.mod(out, 1), 0)):
+                raise CPDShapeError(f"CPD of {self.variable!r}: fn returned non-integer states")
+            out = out.astype(np.int64)
+        bad = (out < 0) | (out >= cardinality)
+        if bad.any():
+            where = tuple(int(i) for i in np.argwhere(bad)[0]) if cards else ()
+            raise CPDShapeError(
+                f"CPD of {self.variable!r}: fn gives state {int(out[where])} for "
+                f"{_describe(self.parents, where)}, outside 0..{cardinality - 1}"
+            )
+        table = np.zeros((*cards, int(cardinality)))
+        np.put_along_axis(table, out[..., None], 1.0, axis=-1)
+        return table
+
+
+@runtime_checkable
+class ContinuousCPD(Protocol):
+    """What any continuous CPD implements (NIW, truncated normal, mixtures, ...).
+
+    ``parent_values`` is a mapping from parent name to its value (an array).
+    """
+
+    variable: str
+    parents: tuple[str, ...]
+
+    def sample(self, key: Any, parent_values: dict[str, Any]) -> Any:
+        """One draw of the child given its parents' values (``key``: a jax PRNG key)."""
+        ...
+
+    def log_prob(self, value: Any, parent_values: dict[str, Any]) -> Any:
+        """``log p(value | parents)``."""
+        ...
+
+
+@dataclass(frozen=True, eq=False)
+class LinearGaussianCPD:
+    """``x ~ N(bias + sum_p W_p u_p, cov)`` for a continuous child of dimension ``d``.
+
+    Parameters
+    ----------
+    variable : str
+    parents : sequence of str
+        Continuous parents ``u_p``.
+    weights : sequence of arrays, shapes ``(d, dim(u_p))``
+        One matrix per parent, in the order of ``parents``.
+    bias : array_like, shape ``(d,)``
+    cov : array_like, shape ``(d, d)``
+        Symmetric positive definite (checked by a Cholesky factorisation).
+    """
+
+    variable: str
+    parents: tuple[str, ...]
+    weights: tuple[np.ndarray, ...] = field(repr=False)
+    bias: np.ndarray = field(repr=False)
+    cov: np.ndarray = field(repr=False)
+    chol: np.ndarray = field(repr=False)
+
+    def __init__(
+        self,
+        variable: str,
+        parents: Sequence[str],
+        weights: Sequence[ArrayLike],
+        bias: ArrayLike,
+        cov: ArrayLike,
+    ) -> None:
+        parents_t = _parents_tuple(variable, parents)
+        b = np.atleast_1d(np.asarray(bias, dtype=np.float64))
+        d = b.shape[0]
+        if b.ndim != 1:
+            raise CPDShapeError(f"CPD of {variable!r}: bias must be a vector, got shape {b.shape}")
+        S = np.atleast_2d(np.asarray(cov, dtype=np.float64))
+        if S.shape != (d, d):
+            raise CPDShapeError(f"CPD of {variable!r}: cov shape {S.shape}, expected {(d, d)}")
+        if not np.all(np.isfinite(S)) or not np.allclose(S, S.T, atol=1e-12):
+            raise ModelError(f"CPD of {variable!r}: cov must be finite and symmetric")
+        try:
+            L = np.linalg.cholesky(S)
+        except np.linalg.LinAlgError:
+            raise ModelError(f"CPD of {variable!r}: cov is not positive definite") from None
+        if len(weights) != len(parents_t):
+            raise CPDShapeError(
+                f"CPD of {variable!r}: {len(weights)} weight matrices for {len(parents_t)} parents"
+            )
+        W = []
+        for p, w in zip(parents_t, weights):
+            w = np.atleast_2d(np.asarray(w, dtype=np.float64))
+            if w.shape[0] != d:
+                raise CPDShapeError(
+                    f"CPD of {variable!r}: weight of parent {p!r} has shape {w.shape}, needs {d} rows"
+                )
+            w.setflags(write=False)
+            W.append(w)
+        for a in (b, S, L):
+            a.setflags(write=False)
+        object.__setattr__(self, "variable", variable)
+        object.__setattr__(self, "parents", parents_t)
+        object.__setattr__(self, "weights", tuple(W))
+        object.__setattr__(self, "bias", b)
+        object.__setattr__(self, "cov", S)
+        object.__setattr__(self, "chol", L)
+
+    @property
+    def dim(self) -> int:
+        return int(self.bias.shape[0])
+
+    def mean(self, parent_values: dict[str, Any]) -> np.ndarray:
+        """``bias + sum_p W_p u_p``; shape ``(..., d)`` (parents may carry batch axes)."""
+        m = self.bias
+        for p, w in zip(self.parents, self.weights):
+            m = m + np.asarray(parent_values[p]) @ w.T
+        return m
+
+    def sample(self, key: Any, parent_values: dict[str, Any]) -> np.ndarray:
+        """One draw, ``mean + L eps`` with ``eps ~ N(0, I)`` from the jax key ``key``."""
+        import jax
+
+        m = self.mean(parent_values)
+        eps = np.asarray(jax.random.normal(key, np.shape(m), dtype=np.float64))
+        return m + eps @ self.chol.T
+
+    def log_prob(self, value: ArrayLike, parent_values: dict[str, Any]) -> np.ndarray:
+        """Gaussian log density by a Cholesky solve; shape ``value.shape[:-1]``."""
+        from scipy.linalg import solve_triangular
+
+        r = np.asarray(value, dtype=np.float64) - self.mean(parent_values)
+        z = solve_triangular(self.chol, np.moveaxis(np.atleast_2d(r), -1, 0), lower=True)
+        maha = np.sum(z**2, axis=0).reshape(np.shape(r)[:-1])
+        logdet = 2.0 * np.sum(np.log(np.diag(self.chol)))
+        return -0.5 * (maha + logdet + self.dim * np.log(2.0 * np.pi))
+
+
+DiscreteCPD = TabularCPD | DeterministicCPD

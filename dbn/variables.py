@@ -1,0 +1,94 @@
+"""Random variables: discrete (cardinality, state names) and continuous (dimension)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dbn.errors import EvidenceError, ModelError
+
+__all__ = ["DiscreteVariable", "ContinuousVariable", "Variable"]
+
+
+def _check_name(name: object) -> str:
+    if not isinstance(name, str) or not name:
+        raise ModelError(f"variable name must be a non-empty string, got {name!r}")
+    return name
+
+
+@dataclass(frozen=True)
+class DiscreteVariable:
+    """A discrete random variable with ``cardinality`` states.
+
+    Parameters
+    ----------
+    name : str
+        Unique name in its model.
+    cardinality : int
+        Number of states (>= 1).
+    state_names : tuple of str, optional
+        One name per state; defaults to ``("0", "1", ...)``.
+    """
+
+    name: str
+    cardinality: int
+    state_names: tuple[str, ...] | None = None
+
+    def __post_init__(self) -> None:
+        _check_name(self.name)
+        card = self.cardinality
+        if isinstance(card, bool) or not isinstance(card, int | np.integer) or card < 1:
+            raise ModelError(
+                f"variable {self.name!r}: cardinality must be an integer >= 1, got {card!r}"
+            )
+        object.__setattr__(self, "cardinality", int(card))
+        if self.state_names is None:
+            object.__setattr__(self, "state_names", tuple(str(i) for i in range(card)))
+        else:
+            names = tuple(str(s) for s in self.state_names)
+            if len(names) != card:
+                raise ModelError(
+                    f"variable {self.name!r}: {len(names)} state names for cardinality {card}"
+                )
+            if len(set(names)) != len(names):
+                raise ModelError(f"variable {self.name!r}: duplicate state names {names}")
+            object.__setattr__(self, "state_names", names)
+
+    def index(self, state: int | str) -> int:
+        """Index of a state given by its index or its name."""
+        if isinstance(state, str):
+            try:
+                return self.state_names.index(state)  # type: ignore[union-attr]
+            except ValueError:
+                raise EvidenceError(
+                    f"variable {self.name!r} has no state named {state!r} "
+                    f"(states: {self.state_names})"
+                ) from None
+        if isinstance(state, bool) or not isinstance(state, int | np.integer):
+            raise EvidenceError(
+                f"variable {self.name!r}: state must be an int or a name, got {state!r}"
+            )
+        if not 0 <= int(state) < self.cardinality:
+            raise EvidenceError(
+                f"variable {self.name!r}: state {state} out of range 0..{self.cardinality - 1}"
+            )
+        return int(state)
+
+
+@dataclass(frozen=True)
+class ContinuousVariable:
+    """A real vector-valued random variable of dimension ``dim``."""
+
+    name: str
+    dim: int = 1
+
+    def __post_init__(self) -> None:
+        _check_name(self.name)
+        if isinstance(self.dim, bool) or not isinstance(self.dim, int) or self.dim < 1:
+            raise ModelError(
+                f"variable {self.name!r}: dim must be an integer >= 1, got {self.dim!r}"
+            )
+
+
+Variable = DiscreteVariable | ContinuousVariable
