@@ -1,0 +1,354 @@
+"""Generic Metropolis-Hastings and reversible-jump Metropolis-Hastings steps.
+
+Seed 003, eq. 11 (after Green's reversible jump, the form used by Khan et al. and Smith
+et al.): a move type ``m`` is chosen with probability ``p_m``, a new state ``x'`` is
+drawn from ``q_m(x' | x)``, and it is accepted with probability ``min(1, a)`` where
+
+.. math::
+
+    a = \\frac{\\pi(x')}{\\pi(x)} \\, \\frac{p_{m'}}{p_m} \\,
+        \\frac{q_{m'}(x ; x')}{q_m(x' ; x)},
+
+``m'`` being the reverse move of ``m`` (the move that can bring ``x'`` back to ``x``).
+Dimension-changing moves whose new coordinates are drawn directly from ``q`` (birth and
+death style, as in seed 003) have unit Jacobian, which is what this kernel assumes; a
+move with a deterministic non-volume-preserving map folds its log-Jacobian into
+``log_q_reverse``.
+
+States are opaque: any Python object. A proposal function returns a :class:`Proposal`
+holding the new state, ``log q_m(x' | x)``, ``log q_{m'}(x | x')`` and, optionally, the
+log target difference ``log pi(x') - log pi(x)`` when the caller can compute it
+incrementally (seed 003's incremental likelihood); otherwise the kernel calls
+``log_target``.
+
+Conventions for impossible states: a move from a state of target ``-inf`` to a state of
+finite target is always accepted (the chain leaves an impossible state as soon as it
+can); a proposal to a state of target ``-inf`` is always rejected. A move that cannot be
+made from ``x`` (its proposal returns ``None``) counts as a rejection, which keeps
+detailed balance as long as the reverse move is equally impossible or its proposal
+probability accounts for it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from dbn.errors import InputError, NegativeProbabilityError, NotNormalizedError
+
+__all__ = [
+    "MHInfo",
+    "Move",
+    "Proposal",
+    "RJInfo",
+    "log_acceptance_ratio",
+    "metropolis_accept",
+    "mh_step",
+    "rj_step",
+    "run_chain",
+    "select_move",
+]
+
+
+class Proposal(NamedTuple):
+    """A proposed state with the two proposal log densities (seed 003, eq. 11).
+
+    Attributes
+    ----------
+    state : Any
+        The proposed state ``x'``.
+    log_q_forward : float
+        ``log q_m(x' | x)``: log density (or probability) of proposing ``x'`` from ``x``.
+    log_q_reverse : float
+        ``log q_{m'}(x | x')``: that of the reverse move proposing ``x`` back from ``x'``.
+    log_target_delta : float or None
+        ``log pi(x') - log pi(x)`` when the proposal computed it (incrementally);
+        ``None`` makes the kernel evaluate ``log_target`` on both states.
+    """
+
+    state: Any
+    log_q_forward: float
+    log_q_reverse: float
+    log_target_delta: float | None = None
+
+
+class Move(NamedTuple):
+    """One move type of a reversible-jump sampler, paired with its reverse move.
+
+    Attributes
+    ----------
+    name : str
+        Human-readable name (``"birth"``, ``"update"``, ...).
+    propose : callable
+        ``propose(rng, state) -> Proposal | None``; ``None`` when the move cannot be made
+        from ``state`` (counted as a rejection).
+    reverse : int
+        Index, in the move list, of the move that undoes this one (itself for a
+        dimension-preserving move such as a random-walk update or a swap).
+    """
+
+    name: str
+    propose: Callable[[np.random.Generator, Any], Proposal | None]
+    reverse: int
+
+
+class MHInfo(NamedTuple):
+    """What a Metropolis-Hastings step did.
+
+    Attributes
+    ----------
+    accepted : bool
+        Whether the proposal was accepted.
+    log_accept_ratio : float
+        ``log a`` of the proposal (``-inf`` when impossible).
+    log_target : float
+        ``log pi`` of the state returned.
+    """
+
+    accepted: bool
+    log_accept_ratio: float
+    log_target: float
+
+
+class RJInfo(NamedTuple):
+    """What a reversible-jump step did: the move index, then as :class:`MHInfo`."""
+
+    move: int
+    accepted: bool
+    log_accept_ratio: float
+    log_target: float
+
+
+def _target_delta(log_target_new: float, log_target_old: float) -> float:
+    """``log pi(x') - log pi(x)`` with the impossible-state conventions of this module."""
+    if log_target_new == -math.inf:
+        return -math.inf
+    if log_target_old == -math.inf:
+        return math.inf
+    return log_target_new - log_target_old
+
+
+def log_acceptance_ratio(
+    log_target_delta: float,
+    log_q_forward: float,
+    log_q_reverse: float,
+    log_p_move: float = 0.0,
+    log_p_reverse_move: float = 0.0,
+) -> float:
+    """Log of the reversible-jump acceptance ratio ``a`` (seed 003, eq. 11).
+
+    .. math::
+
+        \\log a = [\\log\\pi(x') - \\log\\pi(x)] + [\\log p_{m'} - \\log p_m]
+                  + [\\log q_{m'}(x; x') - \\log q_m(x'; x)]
+
+    Parameters
+    ----------
+    log_target_delta : float
+        ``log pi(x') - log pi(x)`` (``+inf`` leaves an impossible state, ``-inf`` enters
+        one).
+    log_q_forward, log_q_reverse : float
+        Proposal log densities of the move and of its reverse.
+    log_p_move, log_p_reverse_move : float
+        Log selection probabilities ``log p_m`` and ``log p_{m'}``.
+
+    Returns
+    -------
+    float
+        ``log a``; may be ``+inf`` or ``-inf``, never NaN.
+    """
+    if log_target_delta == -math.inf or log_q_reverse == -math.inf:
+        return -math.inf
+    if log_target_delta == math.inf:
+        return math.inf
+    value = (
+        log_target_delta
+        + (log_p_reverse_move - log_p_move)
+        + (log_q_reverse - log_q_forward)
+    )
+    return -math.inf if math.isnan(value) else float(value)
+
+
+def metropolis_accept(rng: np.random.Generator, log_accept_ratio: float) -> bool:
+    """Accept with probability ``min(1, exp(log_accept_ratio))``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Explicit source of randomness (one uniform is drawn, always, so the stream does
+        not depend on the value of the ratio).
+    log_accept_ratio : float
+        ``log a`` from :func:`log_acceptance_ratio`.
+    """
+    u = rng.random()
+    if log_accept_ratio >= 0.0:
+        return True
+    return bool(math.log(u) < log_accept_ratio) if u > 0.0 else True
+
+
+def _check_move_probs(move_probs: np.ndarray, num_moves: int) -> np.ndarray:
+    probs = np.asarray(move_probs, dtype=np.float64)
+    if probs.shape != (num_moves,):
+        raise InputError(f"move_probs has shape {probs.shape}, expected ({num_moves},)")
+    if np.any(~np.isfinite(probs)) or np.any(probs < 0):
+        raise NegativeProbabilityError(f"move_probs={probs.tolist()} has a negative or NaN entry")
+    if abs(probs.sum() - 1.0) > 1e-9:
+        raise NotNormalizedError(f"move_probs={probs.tolist()} sums to {probs.sum()}, not 1")
+    return probs
+
+
+def select_move(rng: np.random.Generator, move_probs: np.ndarray) -> int:
+    """Draw a move index with probabilities ``move_probs`` (``p_m`` of seed 003, eq. 11).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Explicit source of randomness (one uniform is drawn).
+    move_probs : ndarray, shape (num_moves,)
+        Selection probabilities, summing to one.
+    """
+    u = rng.random()
+    idx = int(np.searchsorted(np.cumsum(move_probs), u, side="right"))
+    return min(idx, len(move_probs) - 1)
+
+
+def mh_step(
+    rng: np.random.Generator,
+    state: Any,
+    propose: Callable[[np.random.Generator, Any], Proposal | None],
+    log_target: Callable[[Any], float],
+    log_target_value: float | None = None,
+) -> tuple[Any, MHInfo]:
+    """One Metropolis-Hastings step (seed 003, eq. 11 with a single move type).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Explicit source of randomness.
+    state : Any
+        Current state ``x`` (not mutated).
+    propose : callable
+        ``propose(rng, state) -> Proposal | None``: new state with
+        ``(log q(x'|x), log q(x|x'))`` and optionally the log target difference.
+    log_target : callable
+        Unnormalised log target ``log pi(x)``.
+    log_target_value : float, optional
+        ``log pi(state)`` if already known (saves one evaluation).
+
+    Returns
+    -------
+    state : Any
+        ``x'`` if accepted, else ``state``.
+    info : MHInfo
+    """
+    one = Move("mh", propose, 0)
+    new_state, info = rj_step(rng, state, [one], log_target, np.ones(1), log_target_value)
+    return new_state, MHInfo(info.accepted, info.log_accept_ratio, info.log_target)
+
+
+def rj_step(
+    rng: np.random.Generator,
+    state: Any,
+    moves: Sequence[Move],
+    log_target: Callable[[Any], float],
+    move_probs: np.ndarray,
+    log_target_value: float | None = None,
+) -> tuple[Any, RJInfo]:
+    """One reversible-jump Metropolis-Hastings step (seed 003, eq. 11).
+
+    Chooses move ``m`` with probability ``move_probs[m]``, proposes with
+    ``moves[m].propose`` and accepts with :func:`log_acceptance_ratio`, using
+    ``p_{m'} = move_probs[moves[m].reverse]``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Explicit source of randomness (the only one used).
+    state : Any
+        Current state (not mutated).
+    moves : sequence of Move, length num_moves
+        The move types; ``moves[m].reverse`` indexes the reverse move.
+    log_target : callable
+        Unnormalised log target ``log pi(x)``; may return ``-inf``.
+    move_probs : ndarray, shape (num_moves,)
+        Move selection probabilities ``p_m`` (sum to one).
+    log_target_value : float, optional
+        ``log pi(state)`` if known.
+
+    Returns
+    -------
+    state : Any
+        The next state of the chain.
+    info : RJInfo
+        Move index, acceptance, ``log a`` and ``log pi`` of the returned state.
+    """
+    probs = _check_move_probs(move_probs, len(moves))
+    for m, mv in enumerate(moves):
+        if not 0 <= mv.reverse < len(moves):
+            raise InputError(f"moves[{m}].reverse={mv.reverse} is not a move index")
+    current = float(log_target(state)) if log_target_value is None else float(log_target_value)
+    m = select_move(rng, probs)
+    proposal = moves[m].propose(rng, state)
+    if proposal is None:
+        rng.random()  # keep the random stream aligned with an evaluated proposal
+        return state, RJInfo(m, False, -math.inf, current)
+    if proposal.log_target_delta is None:
+        new_value = float(log_target(proposal.state))
+        delta = _target_delta(new_value, current)
+    else:
+        delta = float(proposal.log_target_delta)
+        new_value = current + delta if math.isfinite(current) else (
+            math.inf if delta == math.inf else -math.inf
+        )
+    log_a = log_acceptance_ratio(
+        delta,
+        proposal.log_q_forward,
+        proposal.log_q_reverse,
+        math.log(probs[m]) if probs[m] > 0 else -math.inf,
+        math.log(probs[moves[m].reverse]) if probs[moves[m].reverse] > 0 else -math.inf,
+    )
+    if metropolis_accept(rng, log_a):
+        return proposal.state, RJInfo(m, True, log_a, new_value)
+    return state, RJInfo(m, False, log_a, current)
+
+
+def run_chain(
+    rng: np.random.Generator,
+    state: Any,
+    num_steps: int,
+    moves: Sequence[Move],
+    log_target: Callable[[Any], float],
+    move_probs: np.ndarray,
+) -> tuple[list[Any], list[RJInfo]]:
+    """Run ``num_steps`` reversible-jump steps (seed 003, eq. 11) from ``state``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Explicit source of randomness.
+    state : Any
+        Initial state.
+    num_steps : int
+        Number of steps (>= 1).
+    moves, log_target, move_probs
+        As in :func:`rj_step`.
+
+    Returns
+    -------
+    states : list, length num_steps
+        The chain after each step.
+    infos : list of RJInfo, length num_steps
+    """
+    if int(num_steps) < 1:
+        raise InputError(f"num_steps={num_steps} must be >= 1")
+    value = float(log_target(state))
+    states, infos = [], []
+    for _ in range(int(num_steps)):
+        state, info = rj_step(rng, state, moves, log_target, move_probs, value)
+        value = info.log_target
+        states.append(state)
+        infos.append(info)
+    return states, infos
