@@ -1,9 +1,16 @@
-"""Junction-tree calibration: every single-node posterior marginal in one pass.
+"""Junction-tree calibration: every single-node marginal in one pass.
 
 Build once per net (:class:`JunctionTree`), calibrate per evidence set
-(:meth:`JunctionTree.calibrate`). Shafer-Shenoy message passing in log space on a tree of
-the maximal cliques of a min-fill triangulation of the moral graph: a collect pass to the
-root and a distribute pass back, ``2 (num_cliques - 1)`` messages in all.
+(:meth:`JunctionTree.calibrate`). The tree is compiled for the set of hard-evidence
+*variables* (observed nodes are indexed away before triangulating, so evidence shrinks the
+cliques) and cached: calibrating again with the same variables observed, whatever their
+values, reuses it.
+
+Message passing is Hugin's collect/distribute schedule on a tree of the maximal cliques of
+a min-fill triangulation, ``2 (num_cliques - 1)`` messages in all. Tables are kept in
+linear space *scaled to a maximum of 1*, with the log scales summed separately: a log-space
+computation in effect (nothing underflows however long the chain of messages), at the
+cost of plain sums and products instead of logsumexp.
 """
 
 from __future__ import annotations
@@ -17,8 +24,8 @@ from numpy.typing import ArrayLike
 
 from dbn.bayesnet import BayesNet, check_evidence
 from dbn.errors import EvidenceError, ModelError
-from inference.exact.factor import Factor, logsumexp, product
-from inference.exact.graph import elimination_order, moral_graph
+from inference.exact.factor import Factor
+from inference.exact.graph import elimination_order, interaction_graph
 
 __all__ = ["JunctionTree", "Calibration", "marginals"]
 
@@ -33,13 +40,20 @@ class Calibration:
         ``P(X_v | e)`` for every node (a point mass for hard-evidence nodes).
     log_evidence : float
         ``log P(e)`` with soft-evidence likelihoods multiplied in.
-    clique_beliefs : tuple of Factor
-        Normalised posterior of every clique.
+    cliques : tuple of tuple of str
+        Variables of every clique of the tree used (observed variables excluded).
+    clique_tables : tuple of ndarray
+        Normalised posterior of every clique, axes in ``cliques`` order.
     """
 
     marginals: dict[str, np.ndarray]
     log_evidence: float
-    clique_beliefs: tuple[Factor, ...]
+    cliques: tuple[tuple[str, ...], ...]
+    clique_tables: tuple[np.ndarray, ...]
+
+    def clique_belief(self, i: int) -> Factor:
+        """Posterior of clique ``i`` as a log-space :class:`Factor`."""
+        return Factor.from_table(self.cliques[i], self.clique_tables[i])
 
 
 @dataclass(frozen=True)
@@ -47,8 +61,30 @@ class _Edge:
     src: int
     dst: int
     sum_axes: tuple[int, ...]  # axes of the source clique summed out
-    perm: tuple[int, ...]  # order the separator's remaining axes into dst order
+    kept_shape: tuple[int, ...]  # separator shape in the source's order
+    perm: tuple[int, ...]  # order the separator's axes into the destination's order
     shape: tuple[int, ...]  # broadcast shape in the destination clique
+
+
+@dataclass(frozen=True)
+class _Placement:
+    """Where a CPD goes: its home clique, the hard-evidence index, and the layout."""
+
+    node: str
+    home: int
+    index: tuple[object, ...]  # per CPD axis: slice(None) or the name of an observed var
+    perm: tuple[int, ...]
+    shape: tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class _Structure:
+    cliques: tuple[tuple[str, ...], ...]
+    placements: tuple[_Placement, ...]
+    home: dict[str, int]
+    collect: tuple[_Edge, ...]
+    distribute: tuple[_Edge, ...]
+    max_clique_size: int
 
 
 class JunctionTree:
@@ -64,22 +100,38 @@ class JunctionTree:
     Attributes
     ----------
     cliques : tuple of tuple of str
-        The maximal cliques (variables of each in axis order).
-    tree : networkx.Graph
-        Edges between clique indices, with the separator as edge attribute ``sep``.
+        The maximal cliques of the tree with no evidence.
     max_clique_size : int
-        Number of entries of the largest clique table.
+        Number of entries of its largest clique table.
     """
 
     def __init__(self, bn: BayesNet, heuristic: str = "min_fill") -> None:
         if not bn.is_discrete:
             raise ModelError("a junction tree needs a discrete Bayes net")
         self.bn = bn
-        cards = {n: bn.cardinality(n) for n in bn.nodes}
-        self._cards = cards
-        moral = moral_graph(bn)
-        order = elimination_order(moral, cards, heuristic=heuristic)
-        g = {n: set(moral.neighbors(n)) for n in moral.nodes}
+        self.heuristic = heuristic
+        self._cards = {n: bn.cardinality(n) for n in bn.nodes}
+        self._cache: dict[frozenset[str], _Structure] = {}
+        base = self._structure(frozenset())
+        self.cliques = base.cliques
+        self.max_clique_size = base.max_clique_size
+
+    def __repr__(self) -> str:
+        return f"JunctionTree({len(self.cliques)} cliques, largest table {self.max_clique_size})"
+
+    # --- compilation --------------------------------------------------------------------
+    def _structure(self, observed: frozenset[str]) -> _Structure:
+        cached = self._cache.get(observed)
+        if cached is not None:
+            return cached
+        bn, cards = self.bn, self._cards
+        nodes = bn.nodes
+        scopes = {n: tuple(v for v in (*bn.parents(n), n) if v not in observed) for n in nodes}
+        hidden = [n for n in nodes if n not in observed]
+        graph = interaction_graph(scopes.values())
+        graph.add_nodes_from(hidden)
+        order = elimination_order(graph, cards, hidden, self.heuristic)
+        g = {n: set(graph.neighbors(n)) for n in graph.nodes}
         raw: list[frozenset[str]] = []
         for n in order:
             raw.append(frozenset({n} | g[n]))
@@ -87,60 +139,64 @@ class JunctionTree:
                 g[a] |= g[n] - {a}
                 g[a].discard(n)
             del g[n]
-        maximal = [c for c in raw if not any(c < d for d in raw)]
         cliques: list[tuple[str, ...]] = []
-        for c in maximal:
-            t = tuple(sorted(c, key=bn.nodes.index))
-            if t not in cliques:
-                cliques.append(t)
-        self.cliques = tuple(cliques)
-
-        full = nx.Graph()
-        full.add_nodes_from(range(len(cliques)))
+        for c in raw:
+            if not any(c < d for d in raw):
+                t = tuple(sorted(c, key=nodes.index))
+                if t not in cliques:
+                    cliques.append(t)
+        if not cliques:
+            cliques = [()]
+        tree = nx.Graph()
+        tree.add_nodes_from(range(len(cliques)))
         for i in range(len(cliques)):
             for j in range(i + 1, len(cliques)):
-                sep = set(cliques[i]) & set(cliques[j])
-                full.add_edge(i, j, weight=len(sep), sep=tuple(v for v in cliques[i] if v in sep))
-        self.tree = nx.maximum_spanning_tree(full, weight="weight") if len(cliques) > 1 else full
-        self.max_clique_size = max(int(np.prod([cards[v] for v in c])) for c in cliques)
+                tree.add_edge(i, j, weight=len(set(cliques[i]) & set(cliques[j])))
+        tree = nx.maximum_spanning_tree(tree, weight="weight")
 
-        # assign every CPD family to the smallest clique that holds it
-        potentials = [Factor((), np.zeros(())) for _ in cliques]
-        assigned: list[list[Factor]] = [[] for _ in cliques]
-        for n in bn.nodes:
-            family = set(bn.parents(n)) | {n}
-            home = min(
-                (i for i, c in enumerate(cliques) if family <= set(c)),
+        def smallest_holding(vars_: set[str]) -> int:
+            return min(
+                (i for i, c in enumerate(cliques) if vars_ <= set(c)),
                 key=lambda i: (len(cliques[i]), i),
             )
-            assigned[home].append(Factor.from_table((*bn.parents(n), n), bn.table(n)))
-        for i, c in enumerate(cliques):
-            base = Factor(c, np.zeros([cards[v] for v in c]))
-            potentials[i] = product([base, *assigned[i]]).transpose(c)
-        self._potentials = tuple(p.log_values for p in potentials)
-        self._home = {
-            n: min((i for i, c in enumerate(cliques) if n in c), key=lambda i: (len(cliques[i]), i))
-            for n in bn.nodes
-        }
 
-        # message schedule: collect towards clique 0, then distribute
-        self._root = 0
-        bfs = list(nx.bfs_edges(self.tree, self._root)) if len(cliques) > 1 else []
-        self._collect = [self._edge(j, i) for i, j in reversed(bfs)]
-        self._distribute = [self._edge(i, j) for i, j in bfs]
-        self._neighbours = {i: set(self.tree.neighbors(i)) for i in range(len(cliques))}
+        placements = []
+        for n in nodes:
+            full = (*bn.parents(n), n)
+            home = smallest_holding(set(scopes[n]))
+            clique = cliques[home]
+            kept = scopes[n]
+            perm = tuple(sorted(range(len(kept)), key=lambda k: clique.index(kept[k])))
+            shape = tuple(cards[v] if v in kept else 1 for v in clique)
+            index = tuple(v if v in observed else slice(None) for v in full)
+            placements.append(_Placement(n, home, index, perm, shape))
+        home = {n: smallest_holding({n}) for n in hidden}
 
-    def _edge(self, src: int, dst: int) -> _Edge:
-        cs, cd = self.cliques[src], self.cliques[dst]
-        sep = [v for v in cs if v in cd]
-        sum_axes = tuple(i for i, v in enumerate(cs) if v not in cd)
-        perm = tuple(sorted(range(len(sep)), key=lambda k: cd.index(sep[k])))
-        shape = tuple(self._cards[v] if v in sep else 1 for v in cd)
-        return _Edge(src, dst, sum_axes, perm, shape)
+        def edge(src: int, dst: int) -> _Edge:
+            cs, cd = cliques[src], cliques[dst]
+            sep = [v for v in cs if v in cd]
+            return _Edge(
+                src,
+                dst,
+                tuple(i for i, v in enumerate(cs) if v not in cd),
+                tuple(cards[v] for v in sep),
+                tuple(sorted(range(len(sep)), key=lambda k: cd.index(sep[k]))),
+                tuple(cards[v] if v in sep else 1 for v in cd),
+            )
 
-    def __repr__(self) -> str:
-        return f"JunctionTree({len(self.cliques)} cliques, largest table {self.max_clique_size})"
+        bfs = list(nx.bfs_edges(tree, 0)) if len(cliques) > 1 else []
+        structure = _Structure(
+            cliques=tuple(cliques),
+            placements=tuple(placements),
+            home=home,
+            collect=tuple(edge(j, i) for i, j in reversed(bfs)),
+            distribute=tuple(edge(i, j) for i, j in bfs),
+            max_clique_size=max(int(np.prod([cards[v] for v in c])) for c in cliques),
+        )
+        self._cache[observed] = structure
+        return structure
 
+    # --- calibration --------------------------------------------------------------------
     def calibrate(
         self,
         evidence: Mapping[str, int | str] | None = None,
@@ -148,63 +204,80 @@ class JunctionTree:
     ) -> Calibration:
         """Posterior marginal of every node and the log evidence.
 
+        Parameters
+        ----------
+        evidence, soft_evidence
+            See :func:`dbn.bayesnet.check_evidence`.
+
         Raises
         ------
         EvidenceError
             Invalid evidence, or evidence of probability zero.
         """
         hard, soft = check_evidence(self.bn, evidence, soft_evidence)
-        pots = list(self._potentials)
-        for name, state in hard.items():
-            i = self._home[name]
-            ind = np.full(self._cards[name], -np.inf)
-            ind[state] = 0.0
-            pots[i] = pots[i] + self._along(i, name, ind)
+        st = self._structure(frozenset(hard))
+        cards = self._cards
+        pots = [np.ones([cards[v] for v in c]) for c in st.cliques]
+        for pl in st.placements:
+            idx = tuple(hard[i] if isinstance(i, str) else i for i in pl.index)
+            table = self.bn.table(pl.node)[idx]
+            pots[pl.home] = pots[pl.home] * np.transpose(table, pl.perm).reshape(pl.shape)
+        log_scale = 0.0
         for name, lik in soft.items():
-            i = self._home[name]
-            with np.errstate(divide="ignore"):
-                pots[i] = pots[i] + self._along(i, name, np.log(lik))
+            top = float(lik.max())
+            log_scale += np.log(top)
+            if name in hard:
+                log_scale += float(np.log(lik[hard[name]] / top))
+                continue
+            i = st.home[name]
+            shape = [1] * len(st.cliques[i])
+            shape[st.cliques[i].index(name)] = lik.shape[0]
+            pots[i] = pots[i] * (lik / top).reshape(shape)
+        for i, p in enumerate(pots):
+            top = p.max()
+            if top <= 0.0:
+                raise EvidenceError("the evidence has probability zero")
+            pots[i] = p / top
+            log_scale += float(np.log(top))
 
-        messages: dict[tuple[int, int], np.ndarray] = {}
-
-        def send(e: _Edge) -> None:
-            belief = pots[e.src]
-            for k in self._neighbours[e.src]:
-                if k != e.dst:
-                    belief = belief + messages[(k, e.src)]
-            msg = logsumexp(belief, axis=e.sum_axes) if e.sum_axes else belief
-            messages[(e.src, e.dst)] = np.transpose(msg, e.perm).reshape(e.shape)
-
-        for e in self._collect:
-            send(e)
-        for e in self._distribute:
-            send(e)
-
-        beliefs = []
-        for i in range(len(self.cliques)):
-            b = pots[i]
-            for k in self._neighbours[i]:
-                b = b + messages[(k, i)]
-            beliefs.append(b)
-        log_z = float(logsumexp(beliefs[self._root]))
-        if not np.isfinite(log_z):
+        # Hugin: collect (children before parents), then distribute, dividing out what the
+        # receiving child sent during collect. Messages are rescaled to max 1.
+        up: dict[int, np.ndarray] = {}
+        for e in st.collect:
+            kept = pots[e.src].sum(axis=e.sum_axes, keepdims=True)
+            top = kept.max()
+            if top <= 0.0:
+                raise EvidenceError("the evidence has probability zero")
+            kept = kept / top
+            log_scale += float(np.log(top))
+            up[e.src] = kept  # in the sender's layout: the shape its parent's reply will have
+            msg = np.transpose(kept.reshape(e.kept_shape), e.perm).reshape(e.shape)
+            pots[e.dst] = pots[e.dst] * msg
+        for e in st.distribute:
+            kept = pots[e.src].sum(axis=e.sum_axes)
+            msg = np.transpose(kept, e.perm).reshape(e.shape)
+            sent = up[e.dst]
+            ratio = np.divide(msg, sent, out=np.zeros_like(msg), where=sent > 0)
+            pots[e.dst] = pots[e.dst] * ratio
+        root_sum = float(pots[0].sum())
+        if root_sum <= 0.0:
             raise EvidenceError("the evidence has probability zero")
+        log_z = log_scale + float(np.log(root_sum))
+
         marg: dict[str, np.ndarray] = {}
         for n in self.bn.nodes:
-            i = self._home[n]
-            ax = self.cliques[i].index(n)
-            others = tuple(a for a in range(len(self.cliques[i])) if a != ax)
-            lm = logsumexp(beliefs[i], axis=others) if others else beliefs[i]
-            p = np.exp(lm - logsumexp(lm))
-            marg[n] = p / p.sum()
-        clique_beliefs = tuple(Factor(c, b - log_z) for c, b in zip(self.cliques, beliefs))
-        return Calibration(marg, log_z, clique_beliefs)
-
-    def _along(self, clique: int, name: str, vec: np.ndarray) -> np.ndarray:
-        c = self.cliques[clique]
-        shape = [1] * len(c)
-        shape[c.index(name)] = vec.shape[0]
-        return vec.reshape(shape)
+            if n in hard:
+                m = np.zeros(cards[n])
+                m[hard[n]] = 1.0
+            else:
+                i = st.home[n]
+                c = st.cliques[i]
+                others = tuple(a for a, v in enumerate(c) if v != n)
+                m = pots[i].sum(axis=others) if others else pots[i]
+                m = m / m.sum()
+            marg[n] = m
+        tables = tuple(p / p.sum() for p in pots)
+        return Calibration(marg, log_z, st.cliques, tables)
 
 
 def marginals(

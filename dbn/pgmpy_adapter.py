@@ -1,0 +1,261 @@
+"""The one module that touches pgmpy: conversions, BIF reading, and pgmpy's own engines
+(wrapped so that tests and benchmarks can compare against them without importing pgmpy).
+
+Table layout: pgmpy stores ``P(child | parents)`` as ``(card, prod(parent_cards))`` with the
+first parent varying slowest; this library stores ``(*parent_cards, card)``. A pgmpy
+:class:`~pgmpy.models.DynamicBayesianNetwork` names nodes ``(name, 0)`` / ``(name, 1)``;
+here slice-1 parents in the previous slice are written ``prev(name)``.
+
+pgmpy 1.1.2 marks ``get_example_model`` deprecated (removed in 1.3.0; its replacement
+downloads from a hub and fails offline). :func:`example_network` reads the BIF files
+bundled with pgmpy directly instead, offline; the project pins ``pgmpy<1.3`` until that
+is checked against the next release.
+"""
+
+from __future__ import annotations
+
+import gzip
+import warnings
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dbn.bayesnet import BayesNet
+from dbn.cpds import TabularCPD
+from dbn.dbn import TwoSliceDBN, is_prev, prev, unprev
+from dbn.errors import ModelError
+from dbn.variables import DiscreteVariable
+
+__all__ = [
+    "EXAMPLE_NETWORKS",
+    "to_pgmpy",
+    "from_pgmpy",
+    "dbn_to_pgmpy",
+    "dbn_from_pgmpy",
+    "read_bif",
+    "example_network",
+    "pgmpy_marginals",
+    "pgmpy_map",
+    "pgmpy_dbn_forward",
+]
+
+EXAMPLE_NETWORKS = (
+    "asia",
+    "cancer",
+    "earthquake",
+    "sachs",
+    "survey",
+    "alarm",
+    "child",
+    "insurance",
+)
+"""Discrete example networks bundled with pgmpy that the tests and benchmarks use."""
+
+
+@contextmanager
+def _quiet() -> Iterator[None]:
+    """Silence pgmpy's deprecation and future warnings inside the adapter."""
+    with warnings.catch_warnings():
+        for category in (DeprecationWarning, FutureWarning, UserWarning):
+            warnings.simplefilter("ignore", category)
+        yield
+
+
+def _pgmpy_cpd(
+    name: Any, parents: Sequence[Any], table: np.ndarray, names: dict[Any, tuple[str, ...]]
+):
+    from pgmpy.factors.discrete import TabularCPD as PgmpyCPD
+
+    card = table.shape[-1]
+    values = table.reshape(-1, card).T
+    return PgmpyCPD(
+        variable=name,
+        variable_card=card,
+        values=values,
+        evidence=list(parents) or None,
+        evidence_card=list(table.shape[:-1]) or None,
+        state_names={n: list(names[n]) for n in [name, *parents]},
+    )
+
+
+def to_pgmpy(bn: BayesNet):
+    """A ``pgmpy.models.DiscreteBayesianNetwork`` equal to a discrete :class:`BayesNet`
+    (deterministic CPDs become 0/1 tables; state names carried over)."""
+    from pgmpy.models import DiscreteBayesianNetwork
+
+    if not bn.is_discrete:
+        raise ModelError("only discrete Bayes nets convert to pgmpy")
+    names = {n: bn.variable(n).state_names for n in bn.nodes}
+    model = DiscreteBayesianNetwork()
+    model.add_nodes_from(bn.nodes)
+    model.add_edges_from((p, n) for n in bn.nodes for p in bn.parents(n))
+    model.add_cpds(*(_pgmpy_cpd(n, bn.parents(n), bn.table(n), names) for n in bn.nodes))
+    with _quiet():
+        model.check_model()
+    return model
+
+
+def _cpd_table(cpd) -> tuple[Any, list[Any], np.ndarray, list[str]]:
+    """(child, parents, table (*parent_cards, card), child state names) of a pgmpy CPD."""
+    child = cpd.variable
+    parents = list(cpd.variables[1:])
+    cards = [int(k) for k in cpd.cardinality]
+    values = np.asarray(cpd.get_values(), dtype=np.float64)  # (card, prod parent cards)
+    table = values.T.reshape(*cards[1:], cards[0])
+    state_names = [str(s) for s in cpd.state_names.get(child, range(cards[0]))]
+    return child, parents, table, state_names
+
+
+def _renormalized(name: Any, table: np.ndarray, tol: float) -> np.ndarray:
+    """Rows within ``tol`` of summing to 1 divided by their sum (files print ~8 digits)."""
+    sums = table.sum(axis=-1, keepdims=True)
+    if tol > 0 and np.all(np.abs(sums - 1.0) <= tol) and np.all(sums > 0):
+        return table / sums
+    return table  # let TabularCPD report the offending row
+
+
+def from_pgmpy(model, renormalize_tol: float = 1e-6) -> BayesNet:
+    """A :class:`BayesNet` from a pgmpy ``DiscreteBayesianNetwork`` (node names as str).
+
+    Parameters
+    ----------
+    renormalize_tol : float
+        Tables whose rows all sum to 1 within this tolerance are divided by their row sums
+        (published BIF files round to a few digits: sachs has rows summing to 0.99999998);
+        a row further off raises :class:`~dbn.errors.NotNormalizedError`. 0 disables it.
+    """
+    variables, cpds = [], []
+    for cpd in model.get_cpds():
+        child, parents, table, states = _cpd_table(cpd)
+        table = _renormalized(child, table, renormalize_tol)
+        variables.append(DiscreteVariable(str(child), table.shape[-1], tuple(states)))
+        cpds.append(TabularCPD(str(child), [str(p) for p in parents], table))
+    return BayesNet(variables, cpds)
+
+
+def read_bif(path: str | Path) -> BayesNet:
+    """Read a BIF file (optionally ``.gz``) through pgmpy's ``BIFReader``."""
+    from pgmpy.readwrite import BIFReader
+
+    path = Path(path)
+    opener = gzip.open if path.suffix == ".gz" else open
+    with opener(path, "rt", encoding="utf-8") as f:
+        text = f.read()
+    with _quiet():
+        model = BIFReader(string=text).get_model()
+    return from_pgmpy(model)
+
+
+def example_network(name: str) -> BayesNet:
+    """One of the discrete example networks bundled with pgmpy, read offline.
+
+    Reads ``pgmpy/utils/example_models/<name>.bif.gz`` from the installed package; falls
+    back to ``pgmpy.utils.get_example_model`` if the file is not where 1.1.x keeps it.
+    """
+    ref = resources.files("pgmpy") / "utils" / "example_models" / f"{name}.bif.gz"
+    if ref.is_file():
+        with resources.as_file(ref) as path:
+            return read_bif(path)
+    from pgmpy.utils import get_example_model
+
+    with _quiet():
+        return from_pgmpy(get_example_model(name))
+
+
+def dbn_to_pgmpy(dbn: TwoSliceDBN):
+    """A ``pgmpy.models.DynamicBayesianNetwork`` (nodes ``(name, 0)``, ``(name, 1)``)."""
+    from pgmpy.models import DynamicBayesianNetwork
+
+    names: dict[Any, tuple[str, ...]] = {}
+    for v in dbn.variables:
+        if not isinstance(v, DiscreteVariable):
+            raise ModelError(f"variable {v.name!r} is continuous: pgmpy DBNs are discrete")
+        names[(v.name, 0)] = names[(v.name, 1)] = v.state_names
+    edges = []
+    for c in dbn.initial_cpds:
+        edges += [((p, 0), (c.variable, 0)) for p in c.parents]
+    for c in dbn.transition_cpds:
+        edges += [((unprev(p), 0) if is_prev(p) else (p, 1), (c.variable, 1)) for p in c.parents]
+    model = DynamicBayesianNetwork()
+    model.add_nodes_from(v.name for v in dbn.variables)
+    model.add_edges_from(edges)
+    cpds = []
+    for n in dbn.names:
+        parents = [(p, 0) for p in dbn.initial_net.parents(n)]
+        cpds.append(_pgmpy_cpd((n, 0), parents, dbn.initial_net.table(n), names))
+        tparents = [(unprev(p), 0) if is_prev(p) else (p, 1) for p in dbn.transition_net.parents(n)]
+        cpds.append(_pgmpy_cpd((n, 1), tparents, dbn.transition_net.table(n), names))
+    with _quiet():
+        model.add_cpds(*cpds)
+        model.initialize_initial_state()
+    return model
+
+
+def dbn_from_pgmpy(model) -> TwoSliceDBN:
+    """A :class:`TwoSliceDBN` from a pgmpy ``DynamicBayesianNetwork``."""
+    variables: dict[str, DiscreteVariable] = {}
+    initial, transition = [], []
+    for cpd in model.get_cpds():
+        child, parents, table, states = _cpd_table(cpd)
+        name, t = child
+        table = _renormalized(child, table, 1e-6)
+        variables.setdefault(str(name), DiscreteVariable(str(name), table.shape[-1], tuple(states)))
+        if t == 0:
+            initial.append(TabularCPD(str(name), [str(p) for p, _ in parents], table))
+        else:
+            pnames = [prev(str(p)) if pt == 0 else str(p) for p, pt in parents]
+            transition.append(TabularCPD(str(name), pnames, table))
+    return TwoSliceDBN(list(variables.values()), initial, transition)
+
+
+# --- pgmpy's engines, for comparisons ---------------------------------------------------
+def pgmpy_marginals(
+    model, nodes: Sequence[str], evidence: Mapping[str, str] | None = None
+) -> dict[str, np.ndarray]:
+    """pgmpy ``VariableElimination`` queried node by node; each result in our state order.
+
+    ``model`` is a pgmpy model (from :func:`to_pgmpy`); ``evidence`` maps names to state names.
+    """
+    from pgmpy.inference import VariableElimination
+
+    engine = VariableElimination(model)
+    out = {}
+    with _quiet():
+        for n in nodes:
+            f = engine.query([n], evidence=dict(evidence or {}), show_progress=False)
+            order = [f.state_names[n].index(s) for s in model.get_cpds(n).state_names[n]]
+            out[n] = np.asarray(f.values, dtype=np.float64)[order]
+    return out
+
+
+def pgmpy_map(model, evidence: Mapping[str, str] | None = None) -> dict[str, str]:
+    """pgmpy's MAP over all unobserved variables (``VariableElimination.map_query``);
+    values are state names."""
+    from pgmpy.inference import VariableElimination
+
+    engine = VariableElimination(model)
+    hidden = [n for n in model.nodes() if n not in (evidence or {})]
+    with _quiet():
+        return dict(engine.map_query(hidden, evidence=dict(evidence or {}), show_progress=False))
+
+
+def pgmpy_dbn_forward(
+    model, query: Sequence[tuple[str, int]], evidence: Mapping[tuple[str, int], str]
+) -> dict[tuple[str, int], np.ndarray]:
+    """pgmpy ``DBNInference.forward_inference`` (one call, several slices allowed);
+    results in our state order."""
+    from pgmpy.inference import DBNInference
+
+    engine = DBNInference(model)
+    with _quiet():
+        res = engine.forward_inference(list(query), dict(evidence))
+    out = {}
+    for q, f in res.items():
+        f_names = f.state_names[q]
+        ours = model.get_cpds(node=(q[0], 0)).state_names[(q[0], 0)]
+        out[q] = np.asarray(f.values, dtype=np.float64)[[f_names.index(s) for s in ours]]
+    return out
