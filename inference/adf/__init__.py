@@ -1,0 +1,39 @@
+"""Assumed-density filtering pieces (seed 002, section 1.2.2): categorical marginals,
+Gaussian moment matching, the Normal-Inverse-Wishart KL projection (jax, vmap, jit,
+float64) and the Student-t predictive."""
+
+from inference.adf.niw import (
+    NIW,
+    niw_expected_stats,
+    niw_expected_stats_np,
+    niw_from_stats,
+    niw_log_evidence_masked_np,
+    niw_log_evidence_np,
+    niw_predictive_logpdf,
+    niw_predictive_logpdf_np,
+    niw_project,
+    niw_project_cached,
+    niw_project_np,
+    niw_update,
+    niw_update_np,
+    student_t_logpdf,
+    student_t_logpdf_np,
+)
+
+__all__ = [
+    "NIW",
+    "niw_expected_stats",
+    "niw_expected_stats_np",
+    "niw_from_stats",
+    "niw_log_evidence_masked_np",
+    "niw_log_evidence_np",
+    "niw_predictive_logpdf",
+    "niw_predictive_logpdf_np",
+    "niw_project",
+    "niw_project_cached",
+    "niw_project_np",
+    "niw_update",
+    "niw_update_np",
+    "student_t_logpdf",
+    "student_t_logpdf_np",
+]

@@ -1,0 +1,8 @@
+"""Zajdel multi-camera tracker (seeds 000 and 002): re-identification of people across
+non-overlapping cameras with an unknown number of people.
+
+Modules: ``data`` (observations), ``path`` (path model), ``params``, ``scores``
+(closed-form track and partition scores), ``metrics`` (partition accuracy q, objects,
+pairwise F1), ``oracle`` (exact enumeration), ``greedy`` (single-hypothesis baseline),
+``simulate`` (office-building generator, SIMULATED data), ``tracker`` (the ADF).
+"""

@@ -1,0 +1,200 @@
+r"""The path model of the multi-camera tracker (seed 002, eq. 1.19; seed 000, eq. 2):
+where and when a person re-appears after leaving a camera.
+
+* Returning person, last seen at observation j:
+  :math:`p_\delta(d_k \mid d_j) = P(l_k, b^e_k \mid l_j, b^q_j)\;
+  \mathrm{TN}(t^e_k - t^q_j;\ \mu(l_j,l_k),\ \sigma^2(l_j,l_k),\ [0, t_{max}])`:
+  a camera-and-border transition table times a truncated-normal travel time.
+* New person: :math:`p_{\delta_0}(d_k) = P(l_k, b^e_k) / W`, the entry table times a
+  uniform density of the entry time over a window of length W (units 1/time, so that
+  "continue a track" and "new person" are both densities in time: rescaling every time,
+  travel-time parameter and W by one factor leaves every posterior unchanged).
+
+Impossible moves (transition probability 0, negative or over-long travel time) give a
+log-probability of ``-inf``, never NaN. The quit border and the dwell time in a field
+of view are not modelled (constant factors, seed 000 section 3).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax.numpy as jnp
+import numpy as np
+from jax.scipy.special import log_ndtr as _jlog_ndtr
+from scipy.special import log_ndtr as _log_ndtr
+
+from dbn.errors import CPDShapeError, ModelError, NegativeProbabilityError, NotNormalizedError
+
+__all__ = [
+    "PathModel",
+    "make_path_model",
+    "log_p_delta",
+    "log_p_delta_jax",
+    "log_p_delta0",
+    "pairwise_path_logprob",
+]
+
+_HALF_LOG_2PI = 0.5 * float(np.log(2.0 * np.pi))
+
+
+class PathModel(NamedTuple):
+    """Parameters of the path model (arrays; ``C`` cameras, ``B`` borders per camera).
+
+    Attributes
+    ----------
+    log_trans : (C, B, C, B)  log P(l_k, be_k | l_j, bq_j); for each (l_j, bq_j) the
+        last two axes sum to 1 in probability
+    log_entry : (C, B)        log P(l_k, be_k) of a new person (sums to 1)
+    travel_mean : (C, C)      mu(l_j, l_k), time units
+    travel_std : (C, C)       sigma(l_j, l_k) > 0
+    max_travel : ()           upper truncation of the travel time (may be inf)
+    window : ()               W, length of the entry-time window of a new person
+    """
+
+    log_trans: np.ndarray
+    log_entry: np.ndarray
+    travel_mean: np.ndarray
+    travel_std: np.ndarray
+    max_travel: np.ndarray
+    window: np.ndarray
+
+    @property
+    def num_cameras(self) -> int:
+        return int(np.shape(self.log_entry)[0])
+
+    @property
+    def num_borders(self) -> int:
+        return int(np.shape(self.log_entry)[1])
+
+    def rescale_time(self, factor: float) -> PathModel:
+        """The same model in a time unit ``factor`` times smaller (times multiplied)."""
+        return self._replace(
+            travel_mean=np.asarray(self.travel_mean) * factor,
+            travel_std=np.asarray(self.travel_std) * factor,
+            max_travel=np.asarray(self.max_travel) * factor,
+            window=np.asarray(self.window) * factor,
+        )
+
+
+def make_path_model(
+    trans: np.ndarray,
+    entry: np.ndarray,
+    travel_mean: np.ndarray,
+    travel_std: np.ndarray,
+    window: float,
+    max_travel: float = np.inf,
+) -> PathModel:
+    """Validate probability tables and travel-time parameters and build a :class:`PathModel`.
+
+    Parameters
+    ----------
+    trans : (C, B, C, B) probabilities P(l_k, be_k | l_j, bq_j)
+    entry : (C, B) probabilities P(l_k, be_k) of a new person
+    travel_mean, travel_std : (C, C)
+    window : W > 0
+    max_travel : upper bound of a travel time (> 0, may be inf)
+    """
+    trans = np.asarray(trans, float)
+    entry = np.asarray(entry, float)
+    if entry.ndim != 2:
+        raise CPDShapeError(f"entry: expected shape (num_cameras, num_borders), got {entry.shape}")
+    C, B = entry.shape
+    if trans.shape != (C, B, C, B):
+        raise CPDShapeError(f"trans: expected shape {(C, B, C, B)}, got {trans.shape}")
+    for name, t in (("trans", trans), ("entry", entry)):
+        if not np.isfinite(t).all() or (t < 0).any():
+            raise NegativeProbabilityError(f"{name}: holds a negative or non-finite entry")
+    rows = trans.reshape(C * B, C * B).sum(1)
+    if np.abs(rows - 1).max() > 1e-9:
+        i = int(np.argmax(np.abs(rows - 1)))
+        raise NotNormalizedError(f"trans[{i // B}, {i % B}] sums to {rows[i]}, not 1")
+    if abs(entry.sum() - 1) > 1e-9:
+        raise NotNormalizedError(f"entry sums to {entry.sum()}, not 1")
+    mu = np.broadcast_to(np.asarray(travel_mean, float), (C, C)).copy()
+    sd = np.broadcast_to(np.asarray(travel_std, float), (C, C)).copy()
+    if not np.isfinite(mu).all() or not np.isfinite(sd).all() or (sd <= 0).any():
+        raise ModelError("travel_mean / travel_std: must be finite with travel_std > 0")
+    if not (np.isfinite(window) and window > 0):
+        raise ModelError(f"window = {window}: must be finite and > 0")
+    if not max_travel > 0:
+        raise ModelError(f"max_travel = {max_travel}: must be > 0")
+    with np.errstate(divide="ignore"):
+        return PathModel(
+            np.log(trans), np.log(entry), mu, sd, np.float64(max_travel), np.float64(window)
+        )
+
+
+def _trunc_normal_logpdf(xp, log_ndtr, x, mu, sd, upper):
+    """log TN(x; mu, sd^2, [0, upper]); -inf outside [0, upper]; never NaN."""
+    ok = (x >= 0) & (x <= upper)
+    xs = xp.where(ok, x, mu)
+    z = (xs - mu) / sd
+    a = mu / sd  # Phi(mu/sd) = P(X > 0)
+    lo = log_ndtr(a)
+    b = (mu - upper) / sd  # P(X > upper) = Phi(b)
+    hi = log_ndtr(xp.where(xp.isfinite(b), b, -40.0))
+    lognorm = lo + xp.log1p(-xp.exp(xp.minimum(hi - lo, 0.0)) * xp.isfinite(b))
+    val = -0.5 * z * z - _HALF_LOG_2PI - xp.log(sd) - lognorm
+    return xp.where(ok, val, -xp.inf)
+
+
+def _log_p_delta(xp, log_ndtr, path, cam_j, bq_j, tq_j, cam, be, te):
+    lt = path.log_trans[cam_j, bq_j, cam, be]
+    mu = path.travel_mean[cam_j, cam]
+    sd = path.travel_std[cam_j, cam]
+    tn = _trunc_normal_logpdf(xp, log_ndtr, te - tq_j, mu, sd, path.max_travel)
+    return xp.where(xp.isfinite(lt), lt + tn, -xp.inf)
+
+
+def log_p_delta(path: PathModel, cam_j, bq_j, tq_j, cam, be, te) -> np.ndarray:
+    r"""log p_delta(d_k | d_j) (numpy, broadcasting), seed 002 eq. 1.19 / seed 000 eq. 2.
+
+    Parameters
+    ----------
+    path : PathModel
+    cam_j, bq_j, tq_j : camera, quit border, quit time of the earlier observation j
+    cam, be, te : camera, enter border, enter time of observation k
+
+    Returns
+    -------
+    array of the broadcast shape; -inf for an impossible move.
+    """
+    p = PathModel(*(np.asarray(x) for x in path))
+    return _log_p_delta(np, _log_ndtr, p, np.asarray(cam_j), np.asarray(bq_j),
+                        np.asarray(tq_j, float), np.asarray(cam), np.asarray(be),
+                        np.asarray(te, float))
+
+
+def log_p_delta_jax(path: PathModel, cam_j, bq_j, tq_j, cam, be, te):
+    """jax twin of :func:`log_p_delta` (jit-able)."""
+    return _log_p_delta(jnp, _jlog_ndtr, path, cam_j, bq_j, tq_j, cam, be, te)
+
+
+def log_p_delta0(path: PathModel, cam, be) -> np.ndarray:
+    r""":math:`\log p_{\delta_0}(d_k) = \log P(l_k, b^e_k) - \log W` (numpy, broadcasting)."""
+    return np.asarray(path.log_entry)[np.asarray(cam), np.asarray(be)] - np.log(path.window)
+
+
+def pairwise_path_logprob(obs, path: PathModel) -> tuple[np.ndarray, np.ndarray]:
+    """Path log-probabilities of every (earlier, later) pair of a batch of observations.
+
+    Parameters
+    ----------
+    obs : :class:`models.zajdel.data.Observations` with ``num_obs`` observations
+    path : PathModel
+
+    Returns
+    -------
+    logp0 : (num_obs,)            log p_delta0(d_k) (starts a track)
+    logpd : (num_obs, num_obs)    logpd[j, k] = log p_delta(d_k | d_j) for j < k, -inf else
+    """
+    K = obs.num_obs
+    lp = log_p_delta(
+        path,
+        obs.camera[:, None], obs.border_quit[:, None], obs.t_quit[:, None],
+        obs.camera[None, :], obs.border_enter[None, :], obs.t_enter[None, :],
+    )
+    j, k = np.indices((K, K))
+    logpd = np.where(j < k, lp, -np.inf)
+    return log_p_delta0(path, obs.camera, obs.border_enter), logpd
