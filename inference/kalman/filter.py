@@ -1,0 +1,198 @@
+r"""Kalman filter in float64 numpy with Cholesky solves: the oracle of the particle tests.
+
+The linear-Gaussian state-space model (one time convention shared with
+:mod:`inference.particle`: the prior is at step 0, observations start at step 1):
+
+.. math::
+
+    s_0 \sim N(m_0, P_0), \quad s_k = F s_{k-1} + q_k,\ q_k \sim N(0, Q), \quad
+    y_k = H s_k + r_k,\ r_k \sim N(0, R), \quad k = 1..T.
+
+This is the Gaussian instance of the Bayesian filter of seed 002, eqs. 1.3-1.4
+(predict with eq. 1.3, condition with eq. 1.4; :math:`L_k` is the one-step likelihood).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from scipy.linalg import cho_factor, cho_solve
+
+from dbn.errors import NonFiniteError, ShapeError
+
+__all__ = [
+    "LinearGaussianParams",
+    "KalmanResult",
+    "kalman_filter",
+    "lgssm_sample",
+    "lgssm_joint_log_likelihood",
+]
+
+
+class LinearGaussianParams(NamedTuple):
+    """Parameters of a linear-Gaussian state-space model.
+
+    Attributes
+    ----------
+    F : (state_dim, state_dim) transition matrix
+    Q : (state_dim, state_dim) transition noise covariance
+    H : (obs_dim, state_dim) observation matrix
+    R : (obs_dim, obs_dim) observation noise covariance
+    m0 : (state_dim,) prior mean
+    P0 : (state_dim, state_dim) prior covariance
+    """
+
+    F: np.ndarray
+    Q: np.ndarray
+    H: np.ndarray
+    R: np.ndarray
+    m0: np.ndarray
+    P0: np.ndarray
+
+
+class KalmanResult(NamedTuple):
+    """Output of :func:`kalman_filter`.
+
+    Attributes
+    ----------
+    filtered_means : (num_timesteps, state_dim)
+    filtered_covs : (num_timesteps, state_dim, state_dim)
+    predicted_means : (num_timesteps, state_dim)
+    predicted_covs : (num_timesteps, state_dim, state_dim)
+    log_likelihoods : (num_timesteps,) one-step :math:`\\log p(y_k|y_{1:k-1})`
+    log_likelihood : float, :math:`\\log p(y_{1:T})`
+    """
+
+    filtered_means: np.ndarray
+    filtered_covs: np.ndarray
+    predicted_means: np.ndarray
+    predicted_covs: np.ndarray
+    log_likelihoods: np.ndarray
+    log_likelihood: float
+
+
+def _check(params: LinearGaussianParams, observations: np.ndarray) -> np.ndarray:
+    d = np.asarray(params.m0).shape[0]
+    shapes = {"F": (d, d), "Q": (d, d), "P0": (d, d)}
+    for name, shape in shapes.items():
+        if np.shape(getattr(params, name)) != shape:
+            raise ShapeError(
+                f"{name} has shape {np.shape(getattr(params, name))}, expected {shape}"
+            )
+    m = np.shape(params.H)[0]
+    if np.shape(params.H) != (m, d) or np.shape(params.R) != (m, m):
+        raise ShapeError(
+            f"H {np.shape(params.H)} / R {np.shape(params.R)} do not fit state_dim {d}"
+        )
+    y = np.asarray(observations, dtype=np.float64)
+    if y.ndim != 2 or y.shape[1] != m:
+        raise ShapeError(f"observations has shape {y.shape}, expected (num_timesteps, {m})")
+    if not np.all(np.isfinite(y)):
+        bad = np.argwhere(~np.isfinite(y))[0]
+        raise NonFiniteError(f"observations[{bad[0]}, {bad[1]}] = {y[tuple(bad)]} is not finite")
+    return y
+
+
+def _predict(m: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray):
+    m = F @ m
+    P = F @ P @ F.T + Q
+    return m, 0.5 * (P + P.T)
+
+
+def _condition_on(m: np.ndarray, P: np.ndarray, H: np.ndarray, R: np.ndarray, y: np.ndarray):
+    S = H @ P @ H.T + R
+    c = cho_factor(0.5 * (S + S.T), lower=True)
+    resid = y - H @ m
+    K = cho_solve(c, H @ P).T  # P H^T S^-1  (S symmetric)
+    m_new = m + K @ resid
+    IKH = np.eye(m.shape[0]) - K @ H
+    P_new = IKH @ P @ IKH.T + K @ R @ K.T  # Joseph form
+    logdet = 2.0 * np.sum(np.log(np.diag(c[0])))
+    ll = -0.5 * (resid @ cho_solve(c, resid) + logdet + y.shape[0] * math.log(2 * math.pi))
+    return m_new, 0.5 * (P_new + P_new.T), float(ll)
+
+
+def kalman_filter(params: LinearGaussianParams, observations: np.ndarray) -> KalmanResult:
+    r"""Filtered moments and log-likelihood of a linear-Gaussian model (seed 002, eqs. 1.3-1.4).
+
+    Parameters
+    ----------
+    params : LinearGaussianParams
+    observations : array, shape (num_timesteps, obs_dim)
+        :math:`y_1..y_T`.
+
+    Returns
+    -------
+    KalmanResult
+        Moments of :math:`p(s_k|y_{1:k})` and :math:`p(s_k|y_{1:k-1})`, the one-step
+        log-likelihoods :math:`\log L_k` and their sum :math:`\log p(y_{1:T})`.
+
+    Raises
+    ------
+    ShapeError, NonFiniteError
+    """
+    y = _check(params, observations)
+    F, Q, H, R = (np.asarray(a, dtype=np.float64) for a in params[:4])
+    m = np.asarray(params.m0, dtype=np.float64)
+    P = np.asarray(params.P0, dtype=np.float64)
+    T, d = y.shape[0], m.shape[0]
+    fm, fP = np.zeros((T, d)), np.zeros((T, d, d))
+    pm, pP = np.zeros((T, d)), np.zeros((T, d, d))
+    lls = np.zeros(T)
+    for k in range(T):
+        m, P = _predict(m, P, F, Q)
+        pm[k], pP[k] = m, P
+        m, P, lls[k] = _condition_on(m, P, H, R, y[k])
+        fm[k], fP[k] = m, P
+    return KalmanResult(fm, fP, pm, pP, lls, float(lls.sum()))
+
+
+def lgssm_sample(
+    seed: int, params: LinearGaussianParams, num_timesteps: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Simulate states ``(num_timesteps, state_dim)`` and observations ``(num_timesteps, obs_dim)``.
+
+    Parameters
+    ----------
+    seed : int
+        Seed of a local ``numpy.random.Generator``.
+    params : LinearGaussianParams
+    num_timesteps : int
+    """
+    rng = np.random.default_rng(seed)
+    s = rng.multivariate_normal(params.m0, params.P0)
+    xs, ys = [], []
+    for _ in range(num_timesteps):
+        s = params.F @ s + rng.multivariate_normal(np.zeros(len(s)), params.Q)
+        xs.append(s)
+        ys.append(params.H @ s + rng.multivariate_normal(np.zeros(params.H.shape[0]), params.R))
+    return np.array(xs), np.array(ys)
+
+
+def lgssm_joint_log_likelihood(params: LinearGaussianParams, observations: np.ndarray) -> float:
+    r""":math:`\log p(y_{1:T})` by a direct solve of the joint Gaussian (brute force, O(T^3)).
+
+    Builds the mean and covariance of the stacked :math:`(y_1..y_T)` and evaluates the
+    multivariate normal density with a Cholesky factor. For checking :func:`kalman_filter`.
+    """
+    y = _check(params, observations)
+    F, Q, H, R = (np.asarray(a, dtype=np.float64) for a in params[:4])
+    T, m, d = y.shape[0], H.shape[0], F.shape[0]
+    # s_k = F^k s_0 + sum_{j<=k} F^{k-j} q_j
+    Fp = [np.linalg.matrix_power(F, k) for k in range(T + 1)]
+    mean = np.concatenate([H @ Fp[k + 1] @ params.m0 for k in range(T)])
+    cov = np.zeros((T * m, T * m))
+    for a in range(T):
+        for b in range(T):
+            ka, kb = a + 1, b + 1
+            c = Fp[ka] @ params.P0 @ Fp[kb].T
+            for j in range(1, min(ka, kb) + 1):
+                c = c + Fp[ka - j] @ Q @ Fp[kb - j].T
+            cov[a * m : (a + 1) * m, b * m : (b + 1) * m] = H @ c @ H.T + (R if a == b else 0.0)
+    c = cho_factor(cov, lower=True)
+    r = y.reshape(-1) - mean
+    logdet = 2.0 * np.sum(np.log(np.diag(c[0])))
+    _ = d
+    return float(-0.5 * (r @ cho_solve(c, r) + logdet + T * m * math.log(2 * math.pi)))

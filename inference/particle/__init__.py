@@ -1,0 +1,51 @@
+"""Particle filters: bootstrap (SIR) and auxiliary (seed 002, section 1.3.1), resamplers, ESS.
+
+Usage::
+
+    pf = auxiliary_filter(model, num_particles=1000, dtype=jnp.float32)
+    final, infos, means = run(jax.random.key(0), pf, observations, actions)
+    log_evidence = infos.log_likelihood.sum()
+"""
+
+import inference  # noqa: F401  (64-bit mode)
+from inference.particle.filters import (
+    ParticleFilter,
+    ParticleInfo,
+    ParticleState,
+    auxiliary_filter,
+    bootstrap_filter,
+    ess,
+    run,
+    weighted_cov,
+    weighted_mean,
+)
+from inference.particle.linear_gaussian import LinearGaussianSSM
+from inference.particle.model import StateSpaceModel
+from inference.particle.resampling import (
+    RESAMPLERS,
+    multinomial,
+    normalized_weights,
+    residual,
+    stratified,
+    systematic,
+)
+
+__all__ = [
+    "ParticleFilter",
+    "ParticleInfo",
+    "ParticleState",
+    "StateSpaceModel",
+    "LinearGaussianSSM",
+    "auxiliary_filter",
+    "bootstrap_filter",
+    "ess",
+    "run",
+    "weighted_cov",
+    "weighted_mean",
+    "RESAMPLERS",
+    "multinomial",
+    "normalized_weights",
+    "residual",
+    "stratified",
+    "systematic",
+]

@@ -1,0 +1,347 @@
+r"""Bootstrap (SIR) and auxiliary particle filters as ``init`` / ``step`` / ``run``.
+
+The algorithms follow seed 002, section 1.3.1: the bootstrap filter samples the
+predictive mixture (eq. 1.8) and weights by the likelihood (eq. 1.9); the auxiliary filter
+(Pitt & Shephard) first resamples ancestors with the look-ahead weights
+:math:`\pi_{k-1}^i p(y_k|\mu_k^i)` (eq. 1.12) and then weights the moved particles by
+:math:`p(y_k|s_k^j) / p(y_k|\mu_k^{i_j})` (eq. 1.13).
+
+Both resample adaptively: only when the effective sample size (of the first-stage weights
+for the auxiliary filter) falls below ``ess_threshold * num_particles``;
+``ess_threshold >= 1`` resamples at every step. Weights are kept as normalised log
+weights, and each step's info carries the one-step log-likelihood estimate
+:math:`\log \hat p(y_k | y_{1:k-1})` (the ``logsumexp(logw) - log N`` form), whose
+exponential is unbiased.
+
+Steps are pure and jit-able; :func:`run` scans a step over time with ``lax.scan``.
+The float dtype (float32 or float64) is chosen by ``dtype`` and kept throughout.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from functools import partial
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+from jax import Array
+from jax.scipy.special import logsumexp
+
+from inference.particle.model import StateSpaceModel
+from inference.particle.resampling import Resampler, systematic
+
+__all__ = [
+    "ParticleState",
+    "ParticleInfo",
+    "ParticleFilter",
+    "bootstrap_filter",
+    "auxiliary_filter",
+    "run",
+    "ess",
+    "weighted_mean",
+    "weighted_cov",
+]
+
+
+class ParticleState(NamedTuple):
+    """Weighted particle cloud approximating :math:`p(s_k | y_{1:k})` (seed 002, eq. 1.7).
+
+    Attributes
+    ----------
+    particles : Array, shape (num_particles, state_dim)
+    log_weights : Array, shape (num_particles,)
+        Normalised: ``logsumexp(log_weights) == 0``.
+    """
+
+    particles: Array
+    log_weights: Array
+
+
+class ParticleInfo(NamedTuple):
+    """What one step did.
+
+    Attributes
+    ----------
+    log_likelihood : Array, shape ()
+        :math:`\\log \\hat p(y_k | y_{1:k-1})` (``-inf`` if every particle got weight zero).
+    ess : Array, shape ()
+        Effective sample size that decided the resampling (first-stage weights for the
+        auxiliary filter), in particles.
+    ancestors : Array, shape (num_particles,), int32
+        Index at step ``k-1`` of each particle's parent (``arange`` if not resampled).
+    resampled : Array, shape (), bool
+    """
+
+    log_likelihood: Array
+    ess: Array
+    ancestors: Array
+    resampled: Array
+
+
+class ParticleFilter(NamedTuple):
+    """An algorithm as a pair of pure functions (blackjax style).
+
+    ``init(key) -> ParticleState``;
+    ``step(key, state, observation, action=None) -> (ParticleState, ParticleInfo)``.
+    """
+
+    init: Callable[..., ParticleState]
+    step: Callable[..., tuple[ParticleState, ParticleInfo]]
+
+
+def ess(log_weights: Array) -> Array:
+    r"""Effective sample size :math:`(\sum_i w_i)^2 / \sum_i w_i^2` from log weights.
+
+    Parameters
+    ----------
+    log_weights : Array, shape (num_particles,)
+        Unnormalised log weights.
+
+    Returns
+    -------
+    Array, shape ()
+        In ``[1, num_particles]``; 0 when every weight is zero.
+    """
+    value = jnp.exp(2.0 * logsumexp(log_weights) - logsumexp(2.0 * log_weights))
+    return jnp.where(jnp.isfinite(value), value, jnp.zeros_like(value))
+
+
+def weighted_mean(state: ParticleState) -> Array:
+    r"""Filtered mean :math:`\sum_i W_i s^i`; shape ``(state_dim,)``."""
+    w = jnp.exp(state.log_weights)
+    return w @ state.particles
+
+
+def weighted_cov(state: ParticleState) -> Array:
+    r"""Filtered covariance :math:`\sum_i W_i (s^i - m)(s^i - m)^T`; shape ``(state_dim, state_dim)``."""
+    w = jnp.exp(state.log_weights)
+    d = state.particles - w @ state.particles
+    return (d * w[:, None]).T @ d
+
+
+def _clean(log_w: Array) -> Array:
+    return jnp.where(jnp.isnan(log_w), -jnp.inf, log_w)
+
+
+def _normalise(log_w: Array) -> tuple[Array, Array]:
+    """(normalised log weights, logsumexp); uniform weights when all are zero."""
+    total = logsumexp(log_w)
+    ok = jnp.isfinite(total)
+    uniform = jnp.full_like(log_w, -math.log(log_w.shape[0]))
+    return jnp.where(ok, log_w - jnp.where(ok, total, 0.0), uniform), total
+
+
+def _init(key: Array, model: StateSpaceModel, num_particles: int, dtype: Any) -> ParticleState:
+    x = jnp.asarray(model.sample_initial(key, num_particles, dtype), dtype=dtype)
+    if x.ndim != 2 or x.shape[0] != num_particles:
+        raise ValueError(
+            f"model.sample_initial returned shape {x.shape}; expected ({num_particles}, state_dim)"
+        )
+    lw = jnp.full((num_particles,), -math.log(num_particles), dtype=dtype)
+    return ParticleState(x, lw)
+
+
+def _check_threshold(ess_threshold: float) -> None:
+    if not (ess_threshold >= 0.0):
+        raise ValueError(f"ess_threshold must be >= 0, got {ess_threshold!r}")
+
+
+def bootstrap_filter(
+    model: StateSpaceModel,
+    num_particles: int,
+    *,
+    resampler: Resampler = systematic,
+    ess_threshold: float = 0.5,
+    dtype: Any = jnp.float64,
+) -> ParticleFilter:
+    r"""The bootstrap / SIR particle filter (seed 002, eqs. 1.7-1.9).
+
+    Step :math:`k`: if :math:`\mathrm{ESS}(\pi_{k-1}) < \tau N`, resample ancestors
+    :math:`a^j \sim \pi_{k-1}`; propagate :math:`s_k^j \sim p(s_k|s_{k-1}^{a^j}, u_k)`; weight
+    :math:`\pi_k^j \propto \pi_{k-1}^{a^j} p(y_k|s_k^j)`.
+
+    Parameters
+    ----------
+    model : StateSpaceModel
+        Declares ``sample_initial``, ``sample_transition``, ``log_likelihood``.
+    num_particles : int
+        :math:`N` (static).
+    resampler : callable
+        ``(key, log_weights, n) -> ancestors`` (:mod:`inference.particle.resampling`).
+    ess_threshold : float
+        :math:`\tau`; resample when ESS < tau N; ``>= 1`` resamples every step.
+    dtype : float dtype
+        ``jnp.float32`` or ``jnp.float64`` for particles and weights.
+
+    Returns
+    -------
+    ParticleFilter
+        ``init(key)`` and ``step(key, state, observation, action=None)``.
+    """
+    _check_threshold(ess_threshold)
+    n = int(num_particles)
+    log_n = math.log(n)
+
+    def init(key: Array) -> ParticleState:
+        return _init(key, model, n, dtype)
+
+    def step(
+        key: Array, state: ParticleState, observation: Any, action: Any = None
+    ) -> tuple[ParticleState, ParticleInfo]:
+        k_res, k_move = jax.random.split(key)
+        lw = state.log_weights
+        cur_ess = ess(lw)
+
+        def resample(_):
+            anc = resampler(k_res, lw, n)
+            return anc, state.particles[anc], jnp.full_like(lw, -log_n)
+
+        def keep(_):
+            return jnp.arange(n, dtype=jnp.int32), state.particles, lw
+
+        if ess_threshold >= 1.0:
+            do = jnp.asarray(True)
+            anc, x, base = resample(None)
+        else:
+            do = cur_ess < ess_threshold * n
+            anc, x, base = jax.lax.cond(do, resample, keep, None)
+        x_new = model.sample_transition(k_move, x, action).astype(dtype)
+        log_w = _clean(base + model.log_likelihood(x_new, observation).astype(dtype))
+        new_lw, total = _normalise(log_w)
+        return ParticleState(x_new, new_lw), ParticleInfo(total, cur_ess, anc, do)
+
+    return ParticleFilter(init, step)
+
+
+def auxiliary_filter(
+    model: StateSpaceModel,
+    num_particles: int,
+    *,
+    resampler: Resampler = systematic,
+    ess_threshold: float = 0.5,
+    dtype: Any = jnp.float64,
+) -> ParticleFilter:
+    r"""The auxiliary particle filter of Pitt & Shephard (seed 002, eqs. 1.11-1.13).
+
+    Step :math:`k`: first-stage weights :math:`\pi_{k-1}^i \eta^i` with
+    :math:`\eta^i = p(y_k|\mu_k^i)` (``model.log_eta``, by default the likelihood at the
+    transition mean, eq. 1.12). If their ESS is below :math:`\tau N`, resample ancestors
+    :math:`a^j` from them, propagate :math:`s_k^j \sim p(s_k|s_{k-1}^{a^j}, u_k)` and weight
+    :math:`\pi_k^j \propto p(y_k|s_k^j) / \eta^{a^j}` (eq. 1.13); otherwise propagate every
+    particle and weight :math:`\pi_k^i \propto \pi_{k-1}^i p(y_k|s_k^i)`. The one-step
+    log-likelihood is
+    :math:`\log\sum_i \pi_{k-1}^i\eta^i + \log \frac1N\sum_j p(y_k|s_k^j)/\eta^{a^j}`
+    after resampling.
+
+    Parameters and return as :func:`bootstrap_filter`; the model must also declare a
+    look-ahead (``transition_mean``, ``lookahead`` or ``log_eta``).
+    """
+    _check_threshold(ess_threshold)
+    n = int(num_particles)
+    log_n = math.log(n)
+
+    def init(key: Array) -> ParticleState:
+        return _init(key, model, n, dtype)
+
+    def step(
+        key: Array, state: ParticleState, observation: Any, action: Any = None
+    ) -> tuple[ParticleState, ParticleInfo]:
+        k_res, k_move = jax.random.split(key)
+        lw = state.log_weights
+        log_eta = _clean(model.log_eta(state.particles, observation, action).astype(dtype))
+        lw1 = lw + log_eta
+        lse1 = logsumexp(lw1)
+        # a look-ahead that gives every particle weight zero carries no information: ignore it
+        eta_ok = jnp.isfinite(lse1)
+        log_eta = jnp.where(eta_ok, log_eta, jnp.zeros_like(log_eta))
+        lw1 = jnp.where(eta_ok, lw1, lw)
+        lse1 = jnp.where(eta_ok, lse1, jnp.zeros_like(lse1))
+        cur_ess = ess(lw1)
+
+        def resample(_):
+            anc = resampler(k_res, lw1, n)
+            return anc, state.particles[anc], (lse1 - log_n) - log_eta[anc]
+
+        def keep(_):
+            return jnp.arange(n, dtype=jnp.int32), state.particles, lw
+
+        if ess_threshold >= 1.0:
+            do = jnp.asarray(True)
+            anc, x, base = resample(None)
+        else:
+            do = cur_ess < ess_threshold * n
+            anc, x, base = jax.lax.cond(do, resample, keep, None)
+        x_new = model.sample_transition(k_move, x, action).astype(dtype)
+        log_w = _clean(base + model.log_likelihood(x_new, observation).astype(dtype))
+        new_lw, total = _normalise(log_w)
+        return ParticleState(x_new, new_lw), ParticleInfo(total, cur_ess, anc, do)
+
+    return ParticleFilter(init, step)
+
+
+@partial(jax.jit, static_argnames=("pf", "summary", "keep_ancestors"))
+def _run(
+    key: Array,
+    state: ParticleState,
+    observations: Any,
+    actions: Any,
+    pf: ParticleFilter,
+    summary: Callable[[ParticleState], Any] | None,
+    keep_ancestors: bool,
+):
+    num_steps = jax.tree_util.tree_leaves(observations)[0].shape[0]
+    keys = jax.random.split(key, num_steps)
+
+    def body(carry, inp):
+        k, obs, act = inp
+        new, info = pf.step(k, carry, obs, act)
+        if not keep_ancestors:
+            info = info._replace(ancestors=None)
+        out = summary(new) if summary is not None else None
+        return new, (info, out)
+
+    final, (infos, outs) = jax.lax.scan(body, state, (keys, observations, actions))
+    return final, infos, outs
+
+
+def run(
+    key: Array,
+    pf: ParticleFilter,
+    observations: Any,
+    actions: Any = None,
+    *,
+    initial_state: ParticleState | None = None,
+    summary: Callable[[ParticleState], Any] | None = weighted_mean,
+    keep_ancestors: bool = False,
+) -> tuple[ParticleState, ParticleInfo, Any]:
+    """Run a filter over ``num_timesteps`` steps with ``lax.scan`` (jit-compiled).
+
+    Parameters
+    ----------
+    key : PRNG key
+        Split into the initial draw (unless ``initial_state`` is given) and one key per step.
+    pf : ParticleFilter
+        From :func:`bootstrap_filter` or :func:`auxiliary_filter`.
+    observations : pytree of arrays, leading axis num_timesteps
+    actions : pytree of arrays with leading axis num_timesteps, or None
+    initial_state : ParticleState, optional
+        Start here instead of ``pf.init``.
+    summary : callable, optional
+        ``ParticleState -> pytree`` recorded after every step (default the weighted mean,
+        shape ``(num_timesteps, state_dim)``); ``None`` records nothing.
+    keep_ancestors : bool
+        Keep the ``(num_timesteps, num_particles)`` ancestor table in the infos.
+
+    Returns
+    -------
+    final_state : ParticleState
+    infos : ParticleInfo
+        Stacked over time (``ancestors`` is None unless ``keep_ancestors``).
+    summaries : pytree
+        ``summary`` of each filtered state, stacked over time.
+    """
+    k0, k_steps = jax.random.split(key)
+    state = pf.init(k0) if initial_state is None else initial_state
+    return _run(k_steps, state, observations, actions, pf, summary, keep_ancestors)
