@@ -55,7 +55,9 @@ def test_filtered_moments_match_kalman(algo: str, lg_data) -> None:
     pf = ALGOS[algo](LinearGaussianSSM(params), 2000, ess_threshold=0.5)
     reps = 32
     keys = jax.random.split(jax.random.key(1), reps)
-    _, infos, (means, covs) = jax.vmap(lambda k: run(k, pf, jnp.asarray(ys), summary=_moments))(keys)
+    _, infos, (means, covs) = jax.vmap(lambda k: run(k, pf, jnp.asarray(ys), summary=_moments))(
+        keys
+    )
     means, covs = np.asarray(means), np.asarray(covs)
     for est, ref in ((means, kf.filtered_means), (covs, kf.filtered_covs)):
         avg = est.mean(0)
@@ -96,7 +98,9 @@ def test_step_jit_equals_eager(algo: str, lg_data) -> None:
     np.testing.assert_array_equal(eager_info.ancestors, jit_info.ancestors)
     assert float(eager_info.log_likelihood) == pytest.approx(float(jit_info.log_likelihood))
     assert bool(eager_info.resampled)
-    assert float(jax.scipy.special.logsumexp(eager_state.log_weights)) == pytest.approx(0.0, abs=1e-12)
+    assert float(jax.scipy.special.logsumexp(eager_state.log_weights)) == pytest.approx(
+        0.0, abs=1e-12
+    )
 
 
 @pytest.mark.parametrize("algo", sorted(ALGOS))
@@ -117,7 +121,9 @@ def test_never_resampling_is_importance_sampling(lg_data) -> None:
     pf = bootstrap_filter(LinearGaussianSSM(params), 100, ess_threshold=0.0)
     _, infos, _ = run(jax.random.key(0), pf, jnp.asarray(ys), keep_ancestors=True)
     assert not np.any(np.asarray(infos.resampled))
-    np.testing.assert_array_equal(np.asarray(infos.ancestors), np.tile(np.arange(100), (len(ys), 1)))
+    np.testing.assert_array_equal(
+        np.asarray(infos.ancestors), np.tile(np.arange(100), (len(ys), 1))
+    )
 
 
 class _Hopeless(LinearGaussianSSM):

@@ -65,9 +65,7 @@ def test_counts_are_unbiased(name: str) -> None:
 
 @settings(max_examples=40, deadline=None)
 @given(
-    st.lists(
-        st.one_of(st.floats(-800.0, 50.0), st.just(-np.inf)), min_size=1, max_size=30
-    ),
+    st.lists(st.one_of(st.floats(-800.0, 50.0), st.just(-np.inf)), min_size=1, max_size=30),
     st.integers(1, 40),
     st.sampled_from(NAMES),
     st.integers(0, 2**31 - 1),
