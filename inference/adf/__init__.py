@@ -2,6 +2,8 @@
 Gaussian moment matching, the Normal-Inverse-Wishart KL projection (jax, vmap, jit,
 float64) and the Student-t predictive."""
 
+from inference.adf.categorical import categorical_marginals, mix_categoricals, normalize_log
+from inference.adf.gaussian import gaussian_moment_match
 from inference.adf.niw import (
     NIW,
     niw_expected_stats,
@@ -21,6 +23,10 @@ from inference.adf.niw import (
 )
 
 __all__ = [
+    "categorical_marginals",
+    "mix_categoricals",
+    "normalize_log",
+    "gaussian_moment_match",
     "NIW",
     "niw_expected_stats",
     "niw_expected_stats_np",
