@@ -255,7 +255,12 @@ def pgmpy_dbn_forward(
         res = engine.forward_inference(list(query), dict(evidence))
     out = {}
     for q, f in res.items():
-        f_names = f.state_names[q]
+        f_names = list(f.state_names[q])
         ours = model.get_cpds(node=(q[0], 0)).state_names[(q[0], 0)]
-        out[q] = np.asarray(f.values, dtype=np.float64)[[f_names.index(s) for s in ours]]
+        values = np.asarray(f.values, dtype=np.float64)
+        if all(s in f_names for s in ours):
+            values = values[[f_names.index(s) for s in ours]]
+        elif f_names != list(range(len(ours))):  # pgmpy 1.1.2 returns positions 0..K-1
+            raise ModelError(f"cannot match pgmpy's states {f_names} of {q} to {ours}")
+        out[q] = values
     return out
