@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from dbn.bayesnet import BayesNet
-from dbn.cpds import TabularCPD
+from dbn.cpds import ROW_TOLERANCE, TabularCPD
 from dbn.dbn import TwoSliceDBN, is_prev, prev, unprev
 from dbn.errors import ModelError
 from dbn.variables import DiscreteVariable
@@ -113,6 +113,8 @@ def _cpd_table(cpd) -> tuple[Any, list[Any], np.ndarray, list[str]]:
 def _renormalized(name: Any, table: np.ndarray, tol: float) -> np.ndarray:
     """Rows within ``tol`` of summing to 1 divided by their sum (files print ~8 digits)."""
     sums = table.sum(axis=-1, keepdims=True)
+    if np.all(np.abs(sums - 1.0) <= ROW_TOLERANCE):
+        return table  # already valid: keep every bit
     if tol > 0 and np.all(np.abs(sums - 1.0) <= tol) and np.all(sums > 0):
         return table / sums
     return table  # let TabularCPD report the offending row

@@ -1,0 +1,150 @@
+"""The declarative layer: variables, CPDs, BayesNet and two-slice DBN validation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.stats import multivariate_normal
+
+import inference  # noqa: F401  (jax in 64-bit mode)
+from dbn.bayesnet import BayesNet, check_evidence
+from dbn.cpds import DeterministicCPD, LinearGaussianCPD, TabularCPD
+from dbn.dbn import TwoSliceDBN, prev, slice_name
+from dbn.errors import (
+    CPDShapeError,
+    CycleError,
+    DuplicateNameError,
+    EvidenceError,
+    ModelError,
+    NegativeProbabilityError,
+    NotNormalizedError,
+    UnknownVariableError,
+)
+from dbn.variables import ContinuousVariable, DiscreteVariable
+
+A = DiscreteVariable("a", 2)
+B = DiscreteVariable("b", 3, ("lo", "mid", "hi"))
+
+
+def test_variable_validation() -> None:
+    with pytest.raises(ModelError, match="cardinality"):
+        DiscreteVariable("x", 0)
+    with pytest.raises(ModelError, match="state names"):
+        DiscreteVariable("x", 2, ("only",))
+    with pytest.raises(ModelError, match="dim"):
+        ContinuousVariable("y", 0)
+    assert B.index("hi") == 2 and B.index(1) == 1
+    with pytest.raises(EvidenceError, match="no state named 'top'"):
+        B.index("top")
+    with pytest.raises(EvidenceError, match="out of range"):
+        B.index(3)
+
+
+def test_row_not_summing_to_one_names_node_row_and_value() -> None:
+    with pytest.raises(NotNormalizedError, match=r"'b'.*a=1.*0\.9"):
+        TabularCPD("b", ["a"], [[0.2, 0.3, 0.5], [0.2, 0.3, 0.4]])
+    TabularCPD("b", ["a"], [[0.2, 0.3, 0.5], [0.2, 0.3, 0.5 + 5e-10]])  # within 1e-9
+
+
+def test_negative_entry_names_node_and_value() -> None:
+    with pytest.raises(NegativeProbabilityError, match=r"'a'.*-0\.1"):
+        TabularCPD("a", [], [1.1, -0.1])
+    with pytest.raises(NegativeProbabilityError):
+        TabularCPD("a", [], [np.nan, 1.0])
+
+
+def test_shape_mismatch_cycle_unknown_parent_duplicates() -> None:
+    good_a = TabularCPD("a", [], [0.5, 0.5])
+    with pytest.raises(CPDShapeError, match=r"'b'.*\(3, 3\).*\(2, 3\)"):
+        BayesNet([A, B], [good_a, TabularCPD("b", ["a"], np.full((3, 3), 1 / 3))])
+    with pytest.raises(UnknownVariableError, match="'zz'"):
+        BayesNet([A, B], [good_a, TabularCPD("b", ["zz"], np.full((2, 3), 1 / 3))])
+    with pytest.raises(CycleError, match="cycle"):
+        BayesNet(
+            [A, B],
+            [TabularCPD("a", ["b"], np.full((3, 2), 0.5)), TabularCPD("b", ["a"], np.full((2, 3), 1 / 3))],
+        )
+    with pytest.raises(DuplicateNameError, match="'a'"):
+        BayesNet([A, DiscreteVariable("a", 3)], [good_a])
+    with pytest.raises(DuplicateNameError, match="'a'"):
+        BayesNet([A], [good_a, good_a])
+    with pytest.raises(ModelError, match="no CPD"):
+        BayesNet([A, B], [good_a])
+
+
+def test_tables_are_read_only_values() -> None:
+    table = np.array([0.5, 0.5])
+    cpd = TabularCPD("a", [], table)
+    table[0] = 0.9  # the CPD copied it
+    assert cpd.table[0] == 0.5
+    with pytest.raises(ValueError):
+        cpd.table[0] = 0.1
+
+
+def test_deterministic_cpd_counter() -> None:
+    c = DiscreteVariable("c", 4)
+    new = DiscreteVariable("new", 2)
+    cpd = DeterministicCPD("c", ["c0", "new"], lambda c0, n: np.minimum(c0 + n, 3))
+    bn = BayesNet(
+        [DiscreteVariable("c0", 4), new, c],
+        [TabularCPD("c0", [], np.full(4, 0.25)), TabularCPD("new", [], [0.7, 0.3]), cpd],
+    )
+    table = bn.table("c")
+    assert table.shape == (4, 2, 4)
+    assert table[1, 1, 2] == 1.0 and table[3, 1, 3] == 1.0 and table[2, 0, 2] == 1.0
+    np.testing.assert_allclose(table.sum(axis=-1), 1.0)
+    bad = DeterministicCPD("c", ["c0", "new"], lambda c0, n: c0 + n)  # reaches 4
+    with pytest.raises(CPDShapeError, match="state 4"):
+        BayesNet([DiscreteVariable("c0", 4), new, c], [bn.cpd("c0"), bn.cpd("new"), bad])
+
+
+def test_linear_gaussian_log_prob_matches_scipy_and_sample_moments() -> None:
+    import jax
+
+    W = np.array([[1.0, 0.5], [0.0, 2.0]])
+    cov = np.array([[1.0, 0.3], [0.3, 0.5]])
+    cpd = LinearGaussianCPD("x", ["u"], [W], [0.1, -0.2], cov)
+    u = np.array([0.3, -1.0])
+    x = np.array([[0.2, 0.1], [1.0, -3.0]])
+    expected = multivariate_normal(W @ u + [0.1, -0.2], cov).logpdf(x)
+    np.testing.assert_allclose(cpd.log_prob(x, {"u": u}), expected, rtol=1e-12)
+    keys = jax.random.split(jax.random.PRNGKey(3), 4000)
+    draws = np.stack([cpd.sample(k, {"u": u}) for k in keys[:2000]])
+    se = np.sqrt(np.diag(cov) / len(draws))
+    assert np.all(np.abs(draws.mean(0) - (W @ u + [0.1, -0.2])) < 4 * se)
+    with pytest.raises(ModelError, match="positive definite"):
+        LinearGaussianCPD("x", [], [], [0.0, 0.0], [[1.0, 2.0], [2.0, 1.0]])
+
+
+def test_evidence_validation() -> None:
+    bn = BayesNet([A, B], [TabularCPD("a", [], [0.5, 0.5]), TabularCPD("b", ["a"], np.full((2, 3), 1 / 3))])
+    hard, soft = check_evidence(bn, {"b": "mid"}, {"a": [0.2, 1.0]})
+    assert hard == {"b": 1} and soft["a"].tolist() == [0.2, 1.0]
+    for bad, match in [({"c": 0}, "unknown"), ({"b": 5}, "out of range"), ({"b": "x"}, "no state")]:
+        with pytest.raises(EvidenceError, match=match):
+            check_evidence(bn, bad)
+    for lik, match in [([1.0], "shape"), ([-1.0, 1.0], "nonnegative"), ([0.0, 0.0], "all zero")]:
+        with pytest.raises(EvidenceError, match=match):
+            check_evidence(bn, None, {"a": lik})
+
+
+def test_two_slice_dbn_unroll_structure() -> None:
+    x, y = DiscreteVariable("x", 3), DiscreteVariable("y", 2)
+    T = np.full((3, 3), 1 / 3)
+    E = np.full((3, 2), 0.5)
+    dbn = TwoSliceDBN(
+        [x, y],
+        [TabularCPD("x", [], np.full(3, 1 / 3)), TabularCPD("y", ["x"], E)],
+        [TabularCPD("x", [prev("x")], T), TabularCPD("y", ["x"], E)],
+    )
+    assert dbn.interface == ("x",)
+    bn = dbn.unroll(4)
+    assert len(bn) == 8
+    assert bn.parents(slice_name("x", 3)) == (slice_name("x", 2),)
+    assert bn.parents(slice_name("y", 2)) == (slice_name("x", 2),)
+    with pytest.raises(UnknownVariableError, match="transition slice.*'z\\[t-1\\]'"):
+        TwoSliceDBN([x, y], dbn.initial_cpds, [TabularCPD("x", [prev("z")], T), dbn.transition_cpds[1]])
+    with pytest.raises(CPDShapeError, match="transition slice"):
+        TwoSliceDBN([x, y], dbn.initial_cpds, [TabularCPD("x", [prev("y")], T), dbn.transition_cpds[1]])
+    with pytest.raises(ModelError):
+        dbn.unroll(0)
