@@ -85,7 +85,8 @@ def _pgmpy_cpd(
 def to_pgmpy(bn: BayesNet):
     """A ``pgmpy.models.DiscreteBayesianNetwork`` equal to a discrete :class:`BayesNet`
     (deterministic CPDs become 0/1 tables; state names carried over)."""
-    from pgmpy.models import DiscreteBayesianNetwork
+    with _quiet():
+        from pgmpy.models import DiscreteBayesianNetwork
 
     if not bn.is_discrete:
         raise ModelError("only discrete Bayes nets convert to pgmpy")
@@ -141,7 +142,8 @@ def from_pgmpy(model, renormalize_tol: float = 1e-6) -> BayesNet:
 
 def read_bif(path: str | Path) -> BayesNet:
     """Read a BIF file (optionally ``.gz``) through pgmpy's ``BIFReader``."""
-    from pgmpy.readwrite import BIFReader
+    with _quiet():
+        from pgmpy.readwrite import BIFReader
 
     path = Path(path)
     opener = gzip.open if path.suffix == ".gz" else open
@@ -162,7 +164,8 @@ def example_network(name: str) -> BayesNet:
     if ref.is_file():
         with resources.as_file(ref) as path:
             return read_bif(path)
-    from pgmpy.utils import get_example_model
+    with _quiet():
+        from pgmpy.utils import get_example_model
 
     with _quiet():
         return from_pgmpy(get_example_model(name))
@@ -170,7 +173,8 @@ def example_network(name: str) -> BayesNet:
 
 def dbn_to_pgmpy(dbn: TwoSliceDBN):
     """A ``pgmpy.models.DynamicBayesianNetwork`` (nodes ``(name, 0)``, ``(name, 1)``)."""
-    from pgmpy.models import DynamicBayesianNetwork
+    with _quiet():
+        from pgmpy.models import DynamicBayesianNetwork
 
     names: dict[Any, tuple[str, ...]] = {}
     for v in dbn.variables:
@@ -222,7 +226,8 @@ def pgmpy_marginals(
 
     ``model`` is a pgmpy model (from :func:`to_pgmpy`); ``evidence`` maps names to state names.
     """
-    from pgmpy.inference import VariableElimination
+    with _quiet():
+        from pgmpy.inference import VariableElimination
 
     engine = VariableElimination(model)
     out = {}
@@ -237,7 +242,8 @@ def pgmpy_marginals(
 def pgmpy_map(model, evidence: Mapping[str, str] | None = None) -> dict[str, str]:
     """pgmpy's MAP over all unobserved variables (``VariableElimination.map_query``);
     values are state names."""
-    from pgmpy.inference import VariableElimination
+    with _quiet():
+        from pgmpy.inference import VariableElimination
 
     engine = VariableElimination(model)
     hidden = [n for n in model.nodes() if n not in (evidence or {})]
@@ -250,7 +256,8 @@ def pgmpy_dbn_forward(
 ) -> dict[tuple[str, int], np.ndarray]:
     """pgmpy ``DBNInference.forward_inference`` (one call, several slices allowed);
     results in our state order."""
-    from pgmpy.inference import DBNInference
+    with _quiet():
+        from pgmpy.inference import DBNInference
 
     engine = DBNInference(model)
     with _quiet():
