@@ -1,0 +1,9 @@
+"""Jorge, Marques & Abrantes (seed 004): labelling strokes of pedestrians and their groups
+with a Bayes net built on the fly (restriction nodes, merge/split labels, on-line mode).
+
+Modules: :mod:`strokes` (ground-truth loaders and the simulated low-level tracker),
+:mod:`labels` (admissible label sets and the CPDs of the basic structures),
+:mod:`network` (the Bayes net and its exact MAP / marginals), :mod:`online` (periodic
+inference with bounded memory, eq. 12 labelling, scoring and the colour-only baseline),
+:mod:`simulate` (a synthetic sequence when the real ground truth is absent).
+"""

@@ -1,0 +1,470 @@
+r"""Group labels of seed 004: admissible label sets (eqs. 2, 7-9), the CPDs of the basic
+structures (fig. 3; eqs. 3-5 and 10), the colour model (eq. 6) and label pruning.
+
+A *label* is a frozenset of object ids: ``{3}`` is object 3 alone, ``{1, 2}`` the group
+of objects 1 and 2. Objects are born at strokes: the new label ``l_new`` of stroke ``k``
+is ``{k}`` ("the object first seen in stroke k"), as in Table 2 of seed 004.
+
+The seven basic structures
+--------------------------
+Seed 004 limits a node to two parents and two hidden children, and states that seven
+basic structures follow (fig. 3, not reproduced in the text we have), giving only
+eqs. 3, 4, 5 and 10 and leaving the rest to its reference [10]. We define them by what a
+child's CPD depends on, its number of parents and whether each parent is *shared* (has a
+second child, i.e. splits):
+
+====  ===================  ========  =========================================
+ id   name                 parents   CPD
+====  ===================  ========  =========================================
+ a    ROOT                 0         :func:`root_table`
+ b    OCCLUSION            1         :func:`child_table`, parent not shared
+ c    SPLIT                1         :func:`child_table`, parent shared
+ d    MERGE                2         :func:`child_table`, none shared
+ e    MERGE_ONE_SPLITTING  2         :func:`child_table`, one shared
+ f    MERGE_BOTH_SPLITTING 2         :func:`child_table`, both shared
+ g    RESTRICTION          2 labels  :func:`restriction_table` (eq. 5)
+====  ===================  ========  =========================================
+
+All hidden-node CPDs come from one generative rule. A parent :math:`p` hands its child a
+*piece* :math:`s` of its label, with the piece law
+
+.. math::
+    \pi_p(s \mid x_p) = \begin{cases}
+        \delta(s = x_p) & p \text{ not shared, or } |x_p| = 1 \\
+        (1 - P_{split})\,\delta(s = x_p)
+          + \frac{P_{split}}{2^{|x_p|} - 2}\,[\emptyset \ne s \subsetneq x_p]
+          & p \text{ shared (eq. 9)}
+    \end{cases}
+
+and the child is
+
+.. math::
+    p(x_k \mid x_{pa}) \propto P_{new}\,\delta(x_k = l_{new})
+      + \frac{1 - P_{new} - m P_{merge}}{n}\sum_{p} \pi_p(x_k \mid x_p)
+      + m P_{merge} \sum_{a \cup b = x_k} \pi_1(a \mid x_1)\,\pi_2(b \mid x_2)
+
+with :math:`n` the number of parents and :math:`m = [n = 2]`. With one unshared parent
+this is eq. 10 exactly (eq. 3 for the new label); with two parents and
+:math:`P_{merge} = 0` it is eq. 4. Mass on labels outside the child's domain (a union
+larger than the maximum group size, a union of overlapping pieces, which eq. 8 excludes,
+or a label pruned away) is dropped and the row renormalised; the new label is always in
+the domain, so no row is empty.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import gammaln
+
+from dbn.errors import InputError, ModelError
+
+__all__ = [
+    "Label",
+    "LabelParams",
+    "STRUCTURES",
+    "structure_of",
+    "format_label",
+    "proper_subsets",
+    "pieces",
+    "admissible_labels",
+    "root_table",
+    "child_table",
+    "restriction_table",
+    "colour_log_likelihood",
+    "prune_labels",
+]
+
+Label = frozenset
+
+STRUCTURES = (
+    "ROOT",
+    "OCCLUSION",
+    "SPLIT",
+    "MERGE",
+    "MERGE_ONE_SPLITTING",
+    "MERGE_BOTH_SPLITTING",
+    "RESTRICTION",
+)
+
+
+@dataclass(frozen=True)
+class LabelParams:
+    """Parameters of the label CPDs and domains (seed 004, section 4.2).
+
+    Attributes
+    ----------
+    p_new : float
+        :math:`P_{new}`, probability that a stroke is a new object (eqs. 3, 10).
+    p_merge : float
+        :math:`P_{merge}`, probability that a two-parent stroke is the union of its
+        parents' pieces (a group forms).
+    p_split : float
+        :math:`P_{split}`, probability that a child of a splitting group takes a proper
+        part of it rather than all of it.
+    max_group_size : int
+        Largest admissible group (labels with more objects are not admitted).
+    """
+
+    p_new: float = 0.05
+    p_merge: float = 0.4
+    p_split: float = 0.8
+    max_group_size: int = 3
+
+    def __post_init__(self) -> None:
+        for name in ("p_new", "p_merge", "p_split"):
+            v = getattr(self, name)
+            if not 0.0 <= v <= 1.0 or not np.isfinite(v):
+                raise ModelError(f"LabelParams.{name} must be in [0, 1], got {v}")
+        if not 0.0 < self.p_new < 1.0:
+            raise ModelError(f"LabelParams.p_new must be in (0, 1), got {self.p_new}")
+        if self.p_new + self.p_merge >= 1.0:
+            raise ModelError(
+                f"LabelParams: p_new + p_merge must be < 1, got {self.p_new} + {self.p_merge}"
+            )
+        if isinstance(self.max_group_size, bool) or int(self.max_group_size) < 1:
+            raise ModelError(f"LabelParams.max_group_size must be >= 1, got {self.max_group_size}")
+
+
+def structure_of(num_parents: int, shared: Sequence[bool]) -> str:
+    """Name of the basic structure (fig. 3) of a hidden node.
+
+    Parameters
+    ----------
+    num_parents : int
+        0, 1 or 2.
+    shared : sequence of bool, length num_parents
+        Whether each parent has a second child.
+    """
+    if num_parents == 0:
+        return "ROOT"
+    if num_parents == 1:
+        return "SPLIT" if shared[0] else "OCCLUSION"
+    if num_parents == 2:
+        return ("MERGE", "MERGE_ONE_SPLITTING", "MERGE_BOTH_SPLITTING")[int(sum(map(bool, shared)))]
+    raise ModelError(f"a node has at most 2 parents (seed 004, sec. 4), got {num_parents}")
+
+
+def format_label(label: Label) -> str:
+    """``{1}`` -> ``'1'``, ``{1, 2}`` -> ``'(1,2)'`` (the notation of seed 004, Table 2)."""
+    items = sorted(label)
+    return str(items[0]) if len(items) == 1 else "(" + ",".join(map(str, items)) + ")"
+
+
+def _sort_key(label: Label) -> tuple:
+    return (len(label), tuple(sorted(label)))
+
+
+def proper_subsets(label: Label) -> list[Label]:
+    """Non-empty proper subsets of a label, smallest first."""
+    items = sorted(label)
+    return [
+        frozenset(c) for r in range(1, len(items)) for c in itertools.combinations(items, r)
+    ]
+
+
+def pieces(domain: Sequence[Label], shared: bool) -> list[Label]:
+    """What a parent with admissible labels ``domain`` can hand one child.
+
+    Not shared: its labels (eq. 7). Shared (its region splits): every non-empty subset of
+    each label (eq. 9, :math:`\\mathcal{P}(L_i)` without the empty set).
+    """
+    if not shared:
+        return list(dict.fromkeys(domain))
+    out: dict[Label, None] = {}
+    for lab in domain:
+        out[lab] = None
+        for s in proper_subsets(lab):
+            out[s] = None
+    return list(out)
+
+
+def admissible_labels(
+    parent_domains: Sequence[Sequence[Label]],
+    parent_shared: Sequence[bool],
+    new_label: Label,
+    max_group_size: int,
+) -> list[Label]:
+    r"""Admissible labels :math:`L_k` of a node (seed 004, eqs. 2 and 7-9).
+
+    .. math::
+        L_k = \{l_{new}\} \cup S_1 \cup S_2 \cup
+              \{a \cup b : a \in S_1, b \in S_2, a \cap b = \emptyset\}
+
+    with :math:`S_p` the pieces of parent :math:`p` (:func:`pieces`); labels with more
+    than ``max_group_size`` objects are left out.
+
+    Parameters
+    ----------
+    parent_domains : sequence (length 0-2) of sequences of Label
+    parent_shared : sequence of bool, same length
+    new_label : Label
+        ``{k}`` for node ``k``.
+    max_group_size : int
+
+    Returns
+    -------
+    list of Label
+        ``l_new`` first, then the others by size and ids (deterministic order).
+    """
+    if len(parent_domains) != len(parent_shared):
+        raise ModelError(
+            f"admissible_labels: {len(parent_domains)} parent domains but "
+            f"{len(parent_shared)} shared flags"
+        )
+    if len(parent_domains) > 2:
+        raise ModelError(f"a node has at most 2 parents, got {len(parent_domains)}")
+    parts = [pieces(d, s) for d, s in zip(parent_domains, parent_shared)]
+    found: set[Label] = set()
+    for p in parts:
+        found.update(p)
+    if len(parts) == 2:
+        for a in parts[0]:
+            for b in parts[1]:
+                if not (a & b) and len(a) + len(b) <= max_group_size:
+                    found.add(a | b)
+    found.discard(new_label)
+    others = sorted((lab for lab in found if len(lab) <= max_group_size), key=_sort_key)
+    return [new_label, *others]
+
+
+def root_table(domain: Sequence[Label], new_label: Label) -> np.ndarray:
+    """CPD of structure (a) ROOT: a stroke with no parent is a new object.
+
+    ======================  =====
+    :math:`x_k`             p
+    ======================  =====
+    :math:`l_{new} = \\{k\\}`  1
+    any other label         0
+    ======================  =====
+
+    Returns
+    -------
+    ndarray, shape (num_labels,)
+    """
+    t = np.array([1.0 if lab == new_label else 0.0 for lab in domain])
+    if t.sum() != 1.0:
+        raise ModelError(f"root_table: new label {set(new_label)} not in the domain")
+    return t
+
+
+def _piece_law(label: Label, shared: bool, p_split: float) -> list[tuple[Label, float]]:
+    if not shared or len(label) == 1:
+        return [(label, 1.0)]
+    subs = proper_subsets(label)
+    return [(label, 1.0 - p_split)] + [(s, p_split / len(subs)) for s in subs]
+
+
+def child_table(
+    parent_domains: Sequence[Sequence[Label]],
+    parent_shared: Sequence[bool],
+    domain: Sequence[Label],
+    new_label: Label,
+    params: LabelParams,
+) -> np.ndarray:
+    r"""CPD of a hidden node with 1 or 2 parents: structures (b)-(f) of fig. 3.
+
+    The rule is in the module docstring. Per structure, for parent labels
+    :math:`x_1, x_2` (piece laws :math:`\pi` as there):
+
+    ===  =======================  ============================================================
+     b   OCCLUSION (eq. 10)       :math:`x_k = x_1`: :math:`1-P_{new}`; :math:`l_{new}`: :math:`P_{new}`
+     c   SPLIT (eq. 9)            :math:`x_k = x_1`: :math:`(1-P_{new})(1-P_{split})` if
+                                  :math:`|x_1|>1` (else :math:`1-P_{new}`); each non-empty proper
+                                  subset: :math:`(1-P_{new})P_{split}/(2^{|x_1|}-2)`;
+                                  :math:`l_{new}`: :math:`P_{new}`
+     d   MERGE (eqs. 4, 8)        :math:`x_1` and :math:`x_2`: :math:`(1-P_{new}-P_{merge})/2` each;
+                                  :math:`x_1\cup x_2`: :math:`P_{merge}`; :math:`l_{new}`: :math:`P_{new}`
+     e   MERGE_ONE_SPLITTING      as d, the shared parent handing a piece drawn from its piece law
+     f   MERGE_BOTH_SPLITTING     as d, both parents handing pieces
+    ===  =======================  ============================================================
+
+    then restricted to ``domain`` and each row renormalised (module docstring).
+
+    Parameters
+    ----------
+    parent_domains : sequence (length 1 or 2) of sequences of Label
+        Admissible labels of the parents (the CPD's parent states, in order).
+    parent_shared : sequence of bool
+        Whether each parent has a second child.
+    domain : sequence of Label
+        The child's admissible labels (its states); must contain ``new_label``.
+    new_label : Label
+    params : LabelParams
+
+    Returns
+    -------
+    ndarray, shape (len(L_1), [len(L_2),] len(domain))
+        Last axis the child; every row sums to 1.
+    """
+    n = len(parent_domains)
+    if n not in (1, 2) or len(parent_shared) != n:
+        raise ModelError(f"child_table: need 1 or 2 parents with flags, got {n} / {len(parent_shared)}")
+    index = {lab: i for i, lab in enumerate(domain)}
+    if new_label not in index:
+        raise ModelError(f"child_table: new label {set(new_label)} not in the child's domain")
+    inew = index[new_label]
+    p_new, p_merge = params.p_new, (params.p_merge if n == 2 else 0.0)
+    w_single = (1.0 - p_new - p_merge) / n
+    laws = [
+        [_piece_law(lab, sh, params.p_split) for lab in dom]
+        for dom, sh in zip(parent_domains, parent_shared)
+    ]
+    shape = tuple(len(d) for d in parent_domains) + (len(domain),)
+    table = np.zeros(shape)
+    table[..., inew] = p_new
+    # single-parent inheritance: one slab per parent, broadcast over the other parent
+    for p in range(n):
+        slab = np.zeros((len(parent_domains[p]), len(domain)))
+        for i, law in enumerate(laws[p]):
+            for s, w in law:
+                j = index.get(s)
+                if j is not None:
+                    slab[i, j] += w_single * w
+        if n == 1:
+            table += slab
+        elif p == 0:
+            table += slab[:, None, :]
+        else:
+            table += slab[None, :, :]
+    if n == 2 and p_merge > 0:
+        for i, law1 in enumerate(laws[0]):
+            for j, law2 in enumerate(laws[1]):
+                for a, wa in law1:
+                    for b, wb in law2:
+                        if a & b:
+                            continue  # eq. 8: only disjoint unions
+                        c = index.get(a | b)
+                        if c is not None:
+                            table[i, j, c] += p_merge * wa * wb
+    return table / table.sum(axis=-1, keepdims=True)
+
+
+def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label]) -> np.ndarray:
+    r"""CPD of structure (g), the restriction node :math:`r_{ij}` (eq. 5).
+
+    ===============================  ==============  ==============
+    parents                          :math:`r = 0`   :math:`r = 1`
+    ===============================  ==============  ==============
+    :math:`x_i \cap x_j = \emptyset`  0               1
+    :math:`x_i \cap x_j \ne \emptyset` 1               0
+    ===============================  ==============  ==============
+
+    Observed :math:`r_{ij} = 1`, it forbids two children of one parent to share an object.
+
+    Returns
+    -------
+    ndarray, shape (len(domain_i), len(domain_j), 2)
+    """
+    disjoint = np.array([[not (a & b) for b in domain_j] for a in domain_i], dtype=np.float64)
+    disjoint = disjoint.reshape(len(domain_i), len(domain_j))
+    return np.stack([1.0 - disjoint, disjoint], axis=-1)
+
+
+def _log_binom(n: np.ndarray, total: int, p: np.ndarray) -> np.ndarray:
+    p = np.clip(p, 1e-12, 1 - 1e-12)
+    return (
+        gammaln(total + 1) - gammaln(n + 1) - gammaln(total - n + 1)
+        + n * np.log(p) + (total - n) * np.log1p(-p)
+    )
+
+
+def colour_log_likelihood(
+    colours: np.ndarray,
+    palettes: np.ndarray,
+    is_new: np.ndarray,
+    match_prob: float,
+    pool_size: int,
+    mode: str = "ratio",
+) -> np.ndarray:
+    r"""Soft evidence of a stroke's dominant colours on each candidate label (eq. 6).
+
+    With :math:`n` the number of the stroke's :math:`N` colours found in the label's
+    palette (the union of its objects' palettes, each taken from the stroke where the
+    object was born), :math:`P` the match probability and :math:`q = m / \text{pool}` the
+    chance that a colour falls in a palette of :math:`m` colours:
+
+    * ``mode="ratio"`` (default): the proper likelihood ratio of the colours under the
+      label against chance matches,
+      :math:`\log \mathrm{Bin}(n; N, P) - \log \mathrm{Bin}(n; N, q)`; a new label
+      carries no colour information (ratio 1, log 0).
+    * ``mode="eq6"``: seed 004 eq. 6 as written,
+      :math:`\log \binom{N}{n} P^n (1-P)^{N-n}`, for every label, the new one included
+      (its palette is the one it gets from this very stroke). For :math:`P = 0.8` this peaks
+      at :math:`n = 4`, so it prefers a label matching 4 colours over one matching 5.
+
+    Parameters
+    ----------
+    colours : ndarray of int, shape (num_colours,)
+        The stroke's dominant colours (pool indices).
+    palettes : ndarray of bool, shape (num_labels, pool_size)
+        Palette of each candidate label.
+    is_new : ndarray of bool, shape (num_labels,)
+        Which candidate is the stroke's own new label.
+    match_prob : float
+        :math:`P`.
+    pool_size : int
+    mode : {"ratio", "eq6"}
+
+    Returns
+    -------
+    ndarray, shape (num_labels,)
+        Log likelihood (up to a constant common to all labels of the stroke).
+    """
+    palettes = np.asarray(palettes, dtype=bool)
+    colours = np.asarray(colours)
+    if colours.size == 0:
+        raise InputError("colour_log_likelihood: empty colour set")
+    total = colours.size
+    n = palettes[:, colours].sum(axis=1).astype(np.float64)
+    if mode == "eq6":
+        return _log_binom(n, total, np.full_like(n, match_prob))
+    if mode != "ratio":
+        raise ModelError(f"colour model mode must be 'ratio' or 'eq6', got {mode!r}")
+    q = palettes.sum(axis=1) / pool_size
+    out = _log_binom(n, total, np.full_like(n, match_prob)) - _log_binom(n, total, q)
+    return np.where(is_new, 0.0, out)
+
+
+def prune_labels(
+    domain: Sequence[Label],
+    posterior: np.ndarray,
+    threshold: float,
+    keep: Sequence[Label] = (),
+    max_labels: int | None = None,
+) -> list[Label]:
+    """Labels whose posterior at the last inference is at least ``threshold`` (sec. 5).
+
+    The labels in ``keep`` (the node's new label) stay; at most ``max_labels`` are kept,
+    the most probable first; the original order is kept.
+
+    Parameters
+    ----------
+    domain : sequence of Label, length num_labels
+    posterior : ndarray, shape (num_labels,)
+    threshold : float
+    keep : sequence of Label
+    max_labels : int, optional
+
+    Returns
+    -------
+    list of Label
+        Never empty: the most probable label always stays.
+    """
+    posterior = np.asarray(posterior, dtype=np.float64)
+    if posterior.shape != (len(domain),):
+        raise InputError(f"prune_labels: posterior shape {posterior.shape} for {len(domain)} labels")
+    order = np.argsort(-posterior, kind="stable")
+    chosen = {int(order[0])}
+    chosen.update(int(i) for i in np.flatnonzero(posterior >= threshold))
+    keep_set = set(keep)
+    forced = {i for i, lab in enumerate(domain) if lab in keep_set}
+    if max_labels is not None and len(chosen | forced) > max_labels:
+        room = max(1, max_labels - len(forced))
+        chosen = {int(i) for i in order if int(i) in chosen}
+        chosen = set(sorted(chosen, key=lambda i: -posterior[i])[:room])
+    chosen |= forced
+    return [lab for i, lab in enumerate(domain) if i in chosen]

@@ -1,0 +1,524 @@
+r"""The label network of seed 004 (section 4), built with :mod:`dbn` and solved with
+:mod:`inference.exact`.
+
+Nodes: a hidden label node ``x{k}`` per stroke ``k`` (its states are the admissible labels
+:math:`L_k`, :mod:`models.jorge.labels`), a binary restriction node ``r{i}_{j}`` for every
+pair of children sharing a parent (observed :math:`r = 1`, eq. 5, hard evidence), and the
+stroke's dominant colours as soft (virtual) evidence on ``x{k}`` (eq. 6; proper likelihood
+ratio by default, the equation as written as an option).
+
+Links (seed 004, sec. 4): ``i -> j`` when stroke ``j`` starts after ``i`` ends and the gap
+is physically possible. A region's centre jumps when regions merge or split, so we admit
+``distance <= radius + v_max * gap`` (``radius`` is our addition; the seed gives only the
+speed bound) and ``gap <= max_gap_frames``. A node has at most 2 parents and 2 children;
+candidates are taken by increasing spatial gap (the seed's pruning preference), greedily
+in start order, as an on-line builder must.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dbn.bayesnet import BayesNet
+from dbn.cpds import TabularCPD
+from dbn.errors import InputError, ModelError, TimeOrderError, UnknownVariableError
+from dbn.variables import DiscreteVariable
+from inference.exact import JunctionTree, map_assignment
+from models.jorge.labels import (
+    Label,
+    LabelParams,
+    admissible_labels,
+    child_table,
+    colour_log_likelihood,
+    format_label,
+    restriction_table,
+    root_table,
+    structure_of,
+)
+from models.jorge.strokes import Stroke, _check_colours
+
+__all__ = [
+    "NetworkConfig",
+    "LabelGraph",
+    "WindowNet",
+    "Inference",
+    "node_name",
+    "restriction_name",
+    "colour_name",
+    "solve",
+]
+
+
+def node_name(k: int) -> str:
+    """Name of the hidden label node of stroke ``k``."""
+    return f"x{k}"
+
+
+def restriction_name(i: int, j: int) -> str:
+    """Name of the restriction node of the sibling pair ``i < j``."""
+    return f"r{min(i, j)}_{max(i, j)}"
+
+
+def colour_name(k: int) -> str:
+    """Name of the explicit colour node (only in :meth:`WindowNet.with_colour_nodes`)."""
+    return f"y{k}"
+
+
+@dataclass(frozen=True)
+class NetworkConfig:
+    """Structure, CPD and colour-model settings of the label network.
+
+    Attributes
+    ----------
+    v_max : float
+        Maximum speed through a gap, pixels per frame.
+    radius : float
+        Slack in pixels added to ``v_max * gap`` (region centres jump at merges/splits).
+    max_gap_frames : int
+        Longest gap between a parent's end and a child's start.
+    max_parents, max_children : int
+        At most 2 each (seed 004, sec. 4).
+    sibling_window : int
+        A stroke can become a second child of a parent only if it starts within this many
+        frames of the parent's first child (both are the parts of one split); otherwise
+        every stroke would stay a candidate parent until it had two children.
+    labels : LabelParams
+        :math:`P_{new}, P_{merge}, P_{split}` and the maximum group size.
+    colour_mode : {"ratio", "eq6"}
+        Colour model (see :func:`models.jorge.labels.colour_log_likelihood`).
+    match_prob : float
+        :math:`P` of eq. 6.
+    pool_size : int
+        Number of colours in the pool.
+    """
+
+    v_max: float = 2.5
+    radius: float = 20.0
+    max_gap_frames: int = 30
+    max_parents: int = 2
+    max_children: int = 2
+    sibling_window: int = 3
+    labels: LabelParams = field(default_factory=LabelParams)
+    colour_mode: str = "ratio"
+    match_prob: float = 0.8
+    pool_size: int = 12
+
+    def __post_init__(self) -> None:
+        if self.v_max <= 0 or not np.isfinite(self.v_max):
+            raise ModelError(f"NetworkConfig.v_max must be > 0, got {self.v_max}")
+        if self.radius < 0:
+            raise ModelError(f"NetworkConfig.radius must be >= 0, got {self.radius}")
+        if self.max_gap_frames < 1:
+            raise ModelError(f"NetworkConfig.max_gap_frames must be >= 1, got {self.max_gap_frames}")
+        if not 1 <= self.max_parents <= 2 or not 1 <= self.max_children <= 2:
+            raise ModelError(
+                "NetworkConfig: at most 2 parents and 2 children per node (seed 004), got "
+                f"{self.max_parents} / {self.max_children}"
+            )
+        if self.colour_mode not in ("ratio", "eq6"):
+            raise ModelError(f"NetworkConfig.colour_mode must be 'ratio' or 'eq6', got {self.colour_mode!r}")
+        if not 0.0 < self.match_prob < 1.0:
+            raise ModelError(f"NetworkConfig.match_prob must be in (0, 1), got {self.match_prob}")
+
+
+@dataclass
+class _Node:
+    stroke: Stroke
+    parents: tuple[int, ...]
+    children: list[int]
+    domain: tuple[Label, ...]
+    frozen: Label | None = None
+
+
+class LabelGraph:
+    """The growing graph of strokes, links and label domains (seed 004, secs. 4-5).
+
+    Strokes are added in start order (:meth:`add_stroke`); each new node gets its parents
+    among the strokes that ended before it started and its admissible labels from its
+    parents' current domains. Nodes can be frozen to one label (:meth:`freeze`) and
+    domains pruned (:meth:`set_domain`); :meth:`window` turns a set of active nodes into a
+    :class:`WindowNet` for exact inference.
+
+    Parameters
+    ----------
+    config : NetworkConfig
+    """
+
+    def __init__(self, config: NetworkConfig | None = None) -> None:
+        self.config = NetworkConfig() if config is None else config
+        self.nodes: list[_Node] = []
+        n0 = 16
+        self._end = np.zeros(n0, dtype=np.int64)
+        self._end_pos = np.zeros((n0, 2))
+        self._nchild = np.zeros(n0, dtype=np.int64)
+        self._palettes = np.zeros((n0, self.config.pool_size), dtype=bool)
+        self._first_child_start = np.zeros(n0, dtype=np.int64)
+
+    # --- growth --------------------------------------------------------------------------
+    def __len__(self) -> int:
+        return len(self.nodes)
+
+    def _grow(self) -> None:
+        n = self._end.shape[0] * 2
+        for name in ("_end", "_end_pos", "_nchild", "_palettes", "_first_child_start"):
+            old = getattr(self, name)
+            new = np.zeros((n, *old.shape[1:]), dtype=old.dtype)
+            new[: old.shape[0]] = old
+            setattr(self, name, new)
+
+    def check_stroke(self, stroke: Stroke) -> None:
+        """Raise if ``stroke`` cannot be the next node (nothing is changed).
+
+        Raises
+        ------
+        InputError
+            Wrong index, bad colours.
+        TimeOrderError
+            Ends before it starts, or starts before the previous stroke.
+        """
+        k = len(self.nodes)
+        if stroke.index != k:
+            raise InputError(f"stroke index {stroke.index}: the next stroke must have index {k}")
+        if stroke.end < stroke.start:
+            raise TimeOrderError(f"stroke {k}: end frame {stroke.end} is before start frame {stroke.start}")
+        if self.nodes and stroke.start < self.nodes[-1].stroke.start:
+            raise TimeOrderError(
+                f"stroke {k} starts at frame {stroke.start}, before stroke {k - 1} "
+                f"(frame {self.nodes[-1].stroke.start}): strokes must come in start order"
+            )
+        _check_colours(k, stroke.colours, self.config.pool_size)
+        pos = np.asarray(stroke.positions)
+        if pos.ndim != 2 or pos.shape[1] != 2 or pos.shape[0] < 1:
+            raise InputError(f"stroke {k}: positions must have shape (num_points, 2), got {pos.shape}")
+        if not np.all(np.isfinite(pos)):
+            raise InputError(f"stroke {k}: non-finite position")
+
+    def candidate_parents(self, stroke: Stroke) -> np.ndarray:
+        r"""Parents of a new stroke: ended before it starts, reachable, with a free child
+        slot; at most ``max_parents``, by increasing spatial gap (seed 004, sec. 4).
+
+        A stroke ``i`` can precede ``j`` when
+        :math:`0 < t^{start}_j - t^{end}_i \le` ``max_gap_frames`` and
+        :math:`\|p^{start}_j - p^{end}_i\| \le` ``radius`` + ``v_max`` :math:`(t^{start}_j - t^{end}_i)`.
+
+        Returns
+        -------
+        ndarray of int, shape (num_parents,)
+            Parent stroke indices, nearest first.
+        """
+        n = len(self.nodes)
+        if n == 0:
+            return np.zeros(0, dtype=np.int64)
+        cfg = self.config
+        gap = stroke.start - self._end[:n]
+        dist = np.linalg.norm(self._end_pos[:n] - stroke.positions[0], axis=1)
+        ok = (gap > 0) & (gap <= cfg.max_gap_frames) & (dist <= cfg.radius + cfg.v_max * gap)
+        ok &= self._nchild[:n] < cfg.max_children
+        # a parent's children are siblings of one split: they start within
+        # ``sibling_window`` frames of each other
+        ok &= (self._nchild[:n] == 0) | (stroke.start - self._first_child_start[:n] <= cfg.sibling_window)
+        cand = np.flatnonzero(ok)
+        # a candidate whose child is also a candidate is superseded by that child (the
+        # new stroke continues the child, it is not the child's sibling)
+        cset = set(cand.tolist())
+        superseded = {p for c in cand.tolist() for p in self.nodes[c].parents if p in cset}
+        cand = np.array([c for c in cand.tolist() if c not in superseded], dtype=np.int64)
+        order = np.lexsort((cand, dist[cand]))
+        return cand[order][: cfg.max_parents]
+
+    def add_stroke(self, stroke: Stroke) -> tuple[int, list[int]]:
+        """Add the node of a new stroke (validated first: nothing changes on error).
+
+        Returns
+        -------
+        k : int
+            The node index (= stroke index).
+        widened : list of int
+            Earlier children of the new node's parents whose domain grew because their
+            parent now splits (eq. 9).
+        """
+        self.check_stroke(stroke)
+        k = len(self.nodes)
+        parents = tuple(int(p) for p in sorted(self.candidate_parents(stroke)))
+        if k >= self._end.shape[0]:
+            self._grow()
+        self._end[k] = stroke.end
+        self._end_pos[k] = stroke.positions[-1]
+        self._palettes[k, stroke.palette] = True
+        for p in parents:
+            if self._nchild[p] == 0:
+                self._first_child_start[p] = stroke.start
+            self._nchild[p] += 1
+            self.nodes[p].children.append(k)
+        node = _Node(stroke, parents, [], ())
+        self.nodes.append(node)
+        node.domain = self._admissible(k)
+        # a parent that now splits changes its other child's structure: widen that domain
+        widened = []
+        for p in parents:
+            for c in self.nodes[p].children:
+                if c != k and self.nodes[c].frozen is None and len(self.nodes[p].children) == 2:
+                    wider = self._admissible(c)
+                    have = set(self.nodes[c].domain)
+                    extra = [lab for lab in wider if lab not in have]
+                    if extra:
+                        self.nodes[c].domain = tuple(self.nodes[c].domain) + tuple(extra)
+                        widened.append(c)
+        return k, widened
+
+    # --- accessors -----------------------------------------------------------------------
+    def parent_domains(self, k: int) -> list[tuple[Label, ...]]:
+        return [self.current_domain(p) for p in self.nodes[k].parents]
+
+    def shared(self, k: int) -> list[bool]:
+        """For each parent of ``k``: whether it has a second child."""
+        return [len(self.nodes[p].children) >= 2 for p in self.nodes[k].parents]
+
+    def current_domain(self, k: int) -> tuple[Label, ...]:
+        """The node's domain, or its frozen label alone."""
+        node = self.nodes[k]
+        return (node.frozen,) if node.frozen is not None else node.domain
+
+    def structure(self, k: int) -> str:
+        """Basic structure (fig. 3) of node ``k``."""
+        return structure_of(len(self.nodes[k].parents), self.shared(k))
+
+    def siblings(self, k: int) -> list[int]:
+        """Other children of ``k``'s parents."""
+        out = []
+        for p in self.nodes[k].parents:
+            out += [c for c in self.nodes[p].children if c != k and c not in out]
+        return out
+
+    def _admissible(self, k: int) -> tuple[Label, ...]:
+        return tuple(
+            admissible_labels(self.parent_domains(k), self.shared(k), frozenset({k}),
+                              self.config.labels.max_group_size)
+        )
+
+    def palettes(self, domain: Sequence[Label]) -> np.ndarray:
+        """Palette of each label (union of its objects' birth-stroke colours).
+
+        Returns
+        -------
+        ndarray of bool, shape (num_labels, pool_size)
+        """
+        out = np.zeros((len(domain), self.config.pool_size), dtype=bool)
+        for i, lab in enumerate(domain):
+            out[i] = self._palettes[list(lab)].any(axis=0)
+        return out
+
+    def colour_loglik(self, k: int, domain: Sequence[Label] | None = None, mode: str | None = None) -> np.ndarray:
+        """Colour log-likelihood of stroke ``k`` for each label of ``domain`` (eq. 6).
+
+        Returns
+        -------
+        ndarray, shape (num_labels,)
+        """
+        domain = self.nodes[k].domain if domain is None else domain
+        new = frozenset({k})
+        is_new = np.array([lab == new for lab in domain])
+        # a new label's palette comes from this stroke itself (seed 004, sec. 4.1)
+        # (``Stroke.palette``)
+        return colour_log_likelihood(
+            self.nodes[k].stroke.colours, self.palettes(domain), is_new, self.config.match_prob,
+            self.config.pool_size, self.config.colour_mode if mode is None else mode,
+        )
+
+    def cpd_table(self, k: int) -> np.ndarray:
+        """CPD table of (non-frozen) node ``k`` over its parents' current domains.
+
+        Returns
+        -------
+        ndarray, shape (*parent_domain_sizes, domain_size)
+        """
+        node = self.nodes[k]
+        if node.parents:
+            return child_table(self.parent_domains(k), self.shared(k), node.domain,
+                               frozenset({k}), self.config.labels)
+        return root_table(node.domain, frozenset({k}))
+
+    # --- freezing and pruning --------------------------------------------------------------
+    def freeze(self, k: int, label: Label) -> None:
+        """Fix node ``k`` to ``label`` (seed 004, sec. 5: dead nodes keep their MAP label)."""
+        node = self.nodes[k]
+        if label not in node.domain:
+            raise InputError(f"node {k}: cannot freeze to {set(label)}, not in its domain")
+        node.frozen = label
+
+    def set_domain(self, k: int, domain: Sequence[Label]) -> None:
+        """Replace the (pruned) domain of an active node; its new label always stays."""
+        node = self.nodes[k]
+        if node.frozen is not None:
+            raise InputError(f"node {k} is frozen; its domain cannot change")
+        new = frozenset({k})
+        dom = tuple(domain)
+        if new not in dom:
+            dom = (new, *dom)
+        if not set(dom) <= set(node.domain):
+            raise InputError(f"node {k}: a pruned domain must be a subset of the domain")
+        if len(set(dom)) != len(dom):
+            raise InputError(f"node {k}: repeated labels in the domain")
+        node.domain = dom
+
+    # --- the network of a window -----------------------------------------------------------
+    def window(self, active: Sequence[int]) -> WindowNet:
+        """The Bayes net of the active nodes (seed 004, eq. 11 over the active window).
+
+        Frozen parents and frozen siblings of active nodes enter as one-state variables,
+        so the active nodes' CPDs and restriction nodes see their fixed labels; all other
+        frozen nodes are left out (they are constants).
+
+        Parameters
+        ----------
+        active : sequence of int
+            Node indices, none frozen.
+
+        Returns
+        -------
+        WindowNet
+        """
+        active = sorted(int(a) for a in active)
+        act = set(active)
+        for a in active:
+            if not 0 <= a < len(self.nodes):
+                raise UnknownVariableError(f"window: unknown node {a}")
+            if self.nodes[a].frozen is not None:
+                raise InputError(f"window: node {a} is frozen and cannot be active")
+        boundary: set[int] = set()
+        pairs: set[tuple[int, int]] = set()
+        for a in active:
+            for p in self.nodes[a].parents:
+                if p not in act:
+                    if self.nodes[p].frozen is None:
+                        raise InputError(
+                            f"window: parent {p} of active node {a} is neither active nor frozen"
+                        )
+                    boundary.add(p)
+            for s in self.siblings(a):
+                pairs.add((min(a, s), max(a, s)))
+                if s not in act:
+                    boundary.add(s)
+        # a sibling outside the window that is not frozen yet (a later node) stays out
+        boundary = {b for b in boundary if self.nodes[b].frozen is not None}
+        pairs = {(i, j) for i, j in pairs if (i in act or i in boundary) and (j in act or j in boundary)}
+        variables, cpds = [], []
+        domains: dict[str, tuple[Label, ...]] = {}
+        for b in sorted(boundary):
+            name = node_name(b)
+            lab = self.nodes[b].frozen
+            domains[name] = (lab,)
+            variables.append(DiscreteVariable(name, 1, (format_label(lab),)))
+            cpds.append(TabularCPD(name, [], np.ones(1)))
+        soft: dict[str, np.ndarray] = {}
+        for a in active:
+            name = node_name(a)
+            dom = self.nodes[a].domain
+            domains[name] = dom
+            variables.append(DiscreteVariable(name, len(dom), tuple(format_label(x) for x in dom)))
+            parents = [node_name(p) for p in self.nodes[a].parents]
+            cpds.append(TabularCPD(name, parents, self.cpd_table(a)))
+            ll = self.colour_loglik(a)
+            soft[name] = np.exp(ll - ll.max())
+        evidence: dict[str, int] = {}
+        for i, j in sorted(pairs):
+            name = restriction_name(i, j)
+            di, dj = domains[node_name(i)], domains[node_name(j)]
+            variables.append(DiscreteVariable(name, 2, ("0", "1")))
+            cpds.append(TabularCPD(name, [node_name(i), node_name(j)], restriction_table(di, dj)))
+            evidence[name] = 1
+        bn = BayesNet(variables, cpds)
+        return WindowNet(bn, evidence, soft, domains, tuple(active), tuple(sorted(boundary)))
+
+
+@dataclass(frozen=True)
+class Inference:
+    """Result of exact inference on a window.
+
+    Attributes
+    ----------
+    labels : dict int -> Label
+        MAP label of every active node (eq. 1 / eq. 11).
+    log_prob : float
+        :math:`\\log P(x^*, r = 1)` times the colour likelihoods (scaled to max 1 per node).
+    marginals : dict int -> ndarray (num_labels,)
+        Posterior of every active node's labels.
+    log_evidence : float
+    """
+
+    labels: dict
+    log_prob: float
+    marginals: dict
+    log_evidence: float
+
+
+@dataclass(frozen=True)
+class WindowNet:
+    """A Bayes net of one inference window and its evidence.
+
+    Attributes
+    ----------
+    bn : BayesNet
+    evidence : dict name -> int
+        ``r = 1`` for every restriction node.
+    soft_evidence : dict name -> ndarray
+        Colour likelihood of every active node (scaled to max 1).
+    domains : dict name -> tuple of Label
+        States of every label node (one label for frozen boundary nodes).
+    active, boundary : tuple of int
+    """
+
+    bn: BayesNet
+    evidence: dict
+    soft_evidence: dict
+    domains: dict
+    active: tuple
+    boundary: tuple
+
+    def with_colour_nodes(self) -> tuple[BayesNet, dict]:
+        """The same model with the colour evidence as explicit binary children ``y{k}``
+        observed 1, ``p(y = 1 | x) = lambda(x)`` (virtual evidence as a node), for engines
+        without soft evidence (pgmpy). Its joint with the evidence equals ours exactly.
+
+        Returns
+        -------
+        bn : BayesNet
+        evidence : dict name -> int
+        """
+        variables = list(self.bn.variables.values())
+        cpds = list(self.bn.cpds.values())
+        evidence = dict(self.evidence)
+        for name, lik in self.soft_evidence.items():
+            k = int(name[1:])
+            y = colour_name(k)
+            variables.append(DiscreteVariable(y, 2, ("0", "1")))
+            cpds.append(TabularCPD(y, [name], np.stack([1.0 - lik, lik], axis=-1)))
+            evidence[y] = 1
+        return BayesNet(variables, cpds), evidence
+
+
+def solve(win: WindowNet, marginals: bool = True) -> Inference:
+    """MAP labelling and marginals of a window with :mod:`inference.exact`.
+
+    Parameters
+    ----------
+    win : WindowNet
+    marginals : bool
+        Also calibrate a junction tree for every active node's posterior.
+
+    Returns
+    -------
+    Inference
+    """
+    assignment, log_prob = map_assignment(win.bn, win.evidence, win.soft_evidence)
+    labels = {k: win.domains[node_name(k)][assignment[node_name(k)]] for k in win.active}
+    marg: dict[int, np.ndarray] = {}
+    log_ev = float("nan")
+    if marginals:
+        cal = JunctionTree(win.bn).calibrate(win.evidence, win.soft_evidence)
+        marg = {k: cal.marginals[node_name(k)] for k in win.active}
+        log_ev = cal.log_evidence
+    return Inference(labels, log_prob, marg, log_ev)

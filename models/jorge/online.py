@@ -1,0 +1,464 @@
+r"""On-line labelling (seed 004, section 5), scoring and the colour-only baseline.
+
+Periodic inference
+    Every ``period_s`` seconds (T) the active window is solved exactly (eq. 11): the
+    ``max_active`` (N) most recent nodes are active, every older node is frozen to the
+    label it holds (its MAP label at the last inference it took part in). After each
+    inference every active node's domain is pruned to the labels whose posterior is at
+    least ``prune_threshold`` (at most ``max_labels``; its MAP and new labels always stay),
+    so with at most N nodes, at most ``max_labels`` labels each and at most 2 parents per
+    node, the cost of one inference is bounded whatever the length of the sequence.
+
+Instant labelling between inferences (eq. 12)
+    A node created after the last inference has a uniform prior (seed 004); the new
+    information is its colours (eq. 6) and its links to the already labelled past: the
+    CPD given its parents' current labels, and the restriction nodes against its
+    already labelled siblings (a label sharing an object with one has probability 0).
+    It takes :math:`\arg\max_{x} p(y | x)\, p(x | x_{pa}) \prod_s p(r_{s} = 1 | x, x_s)`.
+    Nodes that took part in the last inference keep their MAP label until the next one.
+
+Scoring
+    An object id ``o`` is the object first seen in stroke ``o``. It stands for the person
+    of that stroke if the stroke held one person not already claimed by an earlier object;
+    otherwise it stands for nobody. A stroke is a labelling error (LE) when the people its
+    label stands for differ from its true set. Identity switches: over each person's
+    one-person strokes in time order, the number of consecutive pairs given different
+    labels.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dbn.errors import InputError, ModelError
+from inference.exact import JunctionTree, map_assignment
+from models.jorge.labels import Label, colour_log_likelihood, prune_labels
+from models.jorge.network import LabelGraph, NetworkConfig, node_name
+from models.jorge.strokes import Stroke, StrokeSet
+
+__all__ = [
+    "OnlineConfig",
+    "OnlineLabeller",
+    "InferenceRecord",
+    "Score",
+    "label_online",
+    "score",
+    "colour_only_labels",
+    "object_people",
+]
+
+
+@dataclass(frozen=True)
+class OnlineConfig:
+    """Settings of the on-line labeller (seed 004, sec. 5).
+
+    Attributes
+    ----------
+    period_s : float
+        T, seconds between periodic inferences.
+    max_active : int
+        N, most recent nodes kept active; older ones are frozen.
+    prune_threshold : float
+        Labels whose posterior fell below this at the last inference are dropped.
+    max_labels : int
+        Largest domain kept after pruning.
+    marginals : bool
+        Compute every active node's marginal at each inference (junction tree); needed
+        for pruning by posterior. Without it, domains are pruned to ``max_labels`` by
+        nothing but the MAP (not recommended).
+    network : NetworkConfig
+    """
+
+    period_s: float = 1.0
+    max_active: int = 16
+    prune_threshold: float = 1e-3
+    max_labels: int = 12
+    marginals: bool = True
+    network: NetworkConfig = field(default_factory=NetworkConfig)
+
+    def __post_init__(self) -> None:
+        if not self.period_s > 0:
+            raise ModelError(f"OnlineConfig.period_s must be > 0, got {self.period_s}")
+        if self.max_active < 1:
+            raise ModelError(f"OnlineConfig.max_active must be >= 1, got {self.max_active}")
+        if not 0.0 <= self.prune_threshold < 1.0:
+            raise ModelError(f"OnlineConfig.prune_threshold must be in [0, 1), got {self.prune_threshold}")
+        if self.max_labels < 2:
+            raise ModelError(f"OnlineConfig.max_labels must be >= 2, got {self.max_labels}")
+
+
+@dataclass(frozen=True)
+class InferenceRecord:
+    """One periodic inference: when, how big, how long.
+
+    Attributes
+    ----------
+    frame : int
+    num_active, num_boundary : int
+    max_domain : int
+        Largest active domain.
+    max_clique_entries : int
+        Entries of the largest junction-tree clique table (0 without marginals).
+    seconds : float
+        Wall time of building the window net and solving it.
+    log_prob : float
+        MAP log probability.
+    """
+
+    frame: int
+    num_active: int
+    num_boundary: int
+    max_domain: int
+    max_clique_entries: int
+    seconds: float
+    log_prob: float
+
+
+class OnlineLabeller:
+    """Incremental labeller: add strokes as they start, infer every T seconds.
+
+    Parameters
+    ----------
+    config : OnlineConfig
+    fps : float
+        Frame rate (to turn ``period_s`` into frames).
+    keep_windows : bool
+        Keep every window net (for cross-checks; costs memory).
+
+    Attributes
+    ----------
+    graph : LabelGraph
+    labels : dict int -> Label
+        Current label of every node.
+    records : list of InferenceRecord
+    """
+
+    def __init__(self, config: OnlineConfig | None = None, fps: float = 25.0,
+                 keep_windows: bool = False) -> None:
+        self.config = OnlineConfig() if config is None else config
+        if not fps > 0:
+            raise ModelError(f"fps must be > 0, got {fps}")
+        self.fps = float(fps)
+        self.graph = LabelGraph(self.config.network)
+        self.labels: dict[int, Label] = {}
+        self.beliefs: dict[int, np.ndarray] = {}
+        self.records: list[InferenceRecord] = []
+        self.windows: list = []
+        self.keep_windows = keep_windows
+        self._period_frames = self.config.period_s * self.fps
+        self._next_inference: float | None = None
+        self._inferred: set[int] = set()
+
+    # --- eq. 12 ------------------------------------------------------------------------------
+    def belief_of(self, k: int) -> np.ndarray:
+        """Current belief over node ``k``'s current domain: its marginal at the last
+        inference, its eq. 12 posterior if created since, a point mass if frozen."""
+        if self.graph.nodes[k].frozen is not None:
+            return np.ones(1)
+        return self.beliefs[k]
+
+    def instant_posterior(self, k: int) -> np.ndarray:
+        r"""Eq. 12 posterior of node ``k`` over its domain.
+
+        .. math::
+            P(x_k \mid \cdot) \propto p(y_k \mid x_k)
+              \sum_{x_{pa}} p(x_k \mid x_{pa}) \prod_p b_p(x_p)
+              \prod_{s} [x_k \cap \ell_s = \emptyset]
+
+        with :math:`b_p` the parents' beliefs at the last inference (or their own eq. 12
+        posteriors) and :math:`\ell_s` the current labels of its labelled siblings.
+
+        Returns
+        -------
+        ndarray, shape (num_labels,)
+        """
+        g = self.graph
+        node = g.nodes[k]
+        domain = node.domain
+        score = g.colour_loglik(k)
+        if node.parents:
+            table = g.cpd_table(k)
+            beliefs = [self.belief_of(p) for p in node.parents]
+            prior = np.einsum("i,ik->k", beliefs[0], table) if len(beliefs) == 1 else \
+                np.einsum("i,j,ijk->k", beliefs[0], beliefs[1], table)
+            with np.errstate(divide="ignore"):
+                score = score + np.log(prior)
+        for sib in g.siblings(k):
+            if sib in self.labels:
+                clash = np.array([bool(lab & self.labels[sib]) for lab in domain])
+                if not clash.all():
+                    score = np.where(clash, -np.inf, score)
+        score = score - score.max()
+        post = np.exp(score)
+        return post / post.sum()
+
+    def _relabel(self, k: int) -> None:
+        """Eq. 12 posterior of ``k``, its domain capped to ``max_labels``, its label."""
+        g = self.graph
+        post = self.instant_posterior(k)
+        domain = g.nodes[k].domain
+        keep = [frozenset({k})] + ([self.labels[k]] if k in self.labels else [])
+        kept = prune_labels(domain, post, 0.0, keep=keep, max_labels=self.config.max_labels)
+        if len(kept) < len(domain):
+            idx = [domain.index(lab) for lab in kept]
+            g.set_domain(k, kept)
+            post = post[idx] / post[idx].sum()
+        self.beliefs[k] = post
+        self.labels[k] = g.nodes[k].domain[int(np.argmax(post))]
+
+    def add_stroke(self, stroke: Stroke) -> Label:
+        """Add a stroke that starts now; run any periodic inference due first.
+
+        Returns
+        -------
+        Label
+            Its instant label (eq. 12).
+
+        Raises
+        ------
+        InputError, TimeOrderError
+            Bad stroke (nothing changes).
+        """
+        self.graph.check_stroke(stroke)
+        if self._next_inference is None:
+            self._next_inference = stroke.start + self._period_frames
+        while stroke.start >= self._next_inference:
+            self.infer(int(np.floor(self._next_inference)))
+            self._next_inference += self._period_frames
+        k, widened = self.graph.add_stroke(stroke)
+        for c in widened:
+            self._relabel(c)
+        self._relabel(k)
+        return self.labels[k]
+
+    # --- eq. 11 ------------------------------------------------------------------------------
+    def infer(self, frame: int) -> InferenceRecord | None:
+        """Periodic inference over the active window; freezes older nodes, prunes domains."""
+        g = self.graph
+        n = len(g)
+        if n == 0:
+            return None
+        t0 = time.perf_counter()
+        cfg = self.config
+        first_active = max(0, n - cfg.max_active)
+        for k in range(first_active):
+            if g.nodes[k].frozen is None:
+                g.freeze(k, self.labels[k])
+        active = list(range(first_active, n))
+        win = g.window(active)
+        assignment, log_prob = map_assignment(win.bn, win.evidence, win.soft_evidence)
+        clique = 0
+        marg = None
+        if cfg.marginals:
+            jt = JunctionTree(win.bn)
+            clique = jt.max_clique_size
+            marg = jt.calibrate(win.evidence, win.soft_evidence).marginals
+        for k in active:
+            name = node_name(k)
+            lab = win.domains[name][assignment[name]]
+            self.labels[k] = lab
+            if marg is not None:
+                keep = [frozenset({k}), lab]
+                dom = win.domains[name]
+                kept = prune_labels(dom, marg[name], cfg.prune_threshold, keep=keep,
+                                    max_labels=cfg.max_labels)
+                idx = [dom.index(x) for x in kept]
+                g.set_domain(k, kept)
+                b = marg[name][idx]
+                self.beliefs[k] = b / b.sum() if b.sum() > 0 else np.full(len(idx), 1.0 / len(idx))
+        self._inferred.update(active)
+        seconds = time.perf_counter() - t0
+        rec = InferenceRecord(frame, len(active), len(win.boundary),
+                              max(len(win.domains[node_name(k)]) for k in active), clique,
+                              seconds, log_prob)
+        self.records.append(rec)
+        if self.keep_windows:
+            self.windows.append(win)
+        return rec
+
+    def finish(self, frame: int | None = None) -> dict[int, Label]:
+        """Final inference at the end of the sequence; returns every node's label."""
+        last = frame if frame is not None else max((nd.stroke.end for nd in self.graph.nodes), default=0)
+        self.infer(int(last))
+        return dict(self.labels)
+
+
+@dataclass(frozen=True)
+class OnlineResult:
+    """Labels of a whole sequence and the inference log.
+
+    Attributes
+    ----------
+    labels : list of Label
+        Final label per stroke.
+    instant : list of Label
+        Eq. 12 label given when each stroke started.
+    records : list of InferenceRecord
+    seconds : float
+        Total labelling time (network building and inference).
+    labeller : OnlineLabeller
+    """
+
+    labels: list
+    instant: list
+    records: list
+    seconds: float
+    labeller: OnlineLabeller
+
+
+def label_online(strokes: StrokeSet | Sequence[Stroke], config: OnlineConfig | None = None,
+                 fps: float = 25.0, keep_windows: bool = False) -> OnlineResult:
+    """Run the on-line labeller over a stroke set (seed 004, sec. 5).
+
+    Parameters
+    ----------
+    strokes : StrokeSet or sequence of Stroke
+        In start order.
+    config : OnlineConfig, optional
+    fps : float
+    keep_windows : bool
+
+    Returns
+    -------
+    OnlineResult
+    """
+    if isinstance(strokes, StrokeSet):
+        fps = strokes.fps
+    lab = OnlineLabeller(config, fps, keep_windows)
+    t0 = time.perf_counter()
+    instant = [lab.add_stroke(s) for s in strokes]
+    final = lab.finish()
+    seconds = time.perf_counter() - t0
+    return OnlineResult([final[k] for k in range(len(final))], instant, lab.records, seconds, lab)
+
+
+# --------------------------------------------------------------------------------------------
+# scoring
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Score:
+    """Labelling errors (seed 004, Table 3) and identity switches.
+
+    Attributes
+    ----------
+    label_errors : int
+        LE, strokes whose label stands for a set of people other than the true set.
+    num_strokes : int
+        NT.
+    error_rate : float
+        LE / NT.
+    id_switches : int
+    errors : tuple of int
+        Indices of the mislabelled strokes.
+    """
+
+    label_errors: int
+    num_strokes: int
+    error_rate: float
+    id_switches: int
+    errors: tuple
+
+
+def object_people(strokes: Sequence[Stroke]) -> dict[int, int | None]:
+    """Who each object id stands for (module docstring): ``o -> person`` or ``None``."""
+    out: dict[int, int | None] = {}
+    claimed: set[int] = set()
+    for s in strokes:
+        if len(s.truth) == 1:
+            (p,) = tuple(s.truth)
+            if p not in claimed:
+                out[s.index] = p
+                claimed.add(p)
+                continue
+        out[s.index] = None
+    return out
+
+
+def score(strokes: Sequence[Stroke], labels: Sequence[Label]) -> Score:
+    """LE, LE / NT and identity switches of a labelling.
+
+    Parameters
+    ----------
+    strokes : sequence of Stroke, length num_strokes
+        With their true sets.
+    labels : sequence of Label, length num_strokes
+        Label of each stroke (sets of object ids, object ``o`` = first seen in stroke ``o``).
+
+    Returns
+    -------
+    Score
+    """
+    strokes = list(strokes)
+    labels = list(labels)
+    if len(labels) != len(strokes):
+        raise InputError(f"score: {len(labels)} labels for {len(strokes)} strokes")
+    people = object_people(strokes)
+    errors = []
+    for s, lab in zip(strokes, labels):
+        unknown = [o for o in lab if o not in people]
+        if unknown:
+            raise InputError(f"score: stroke {s.index} has label with unknown object ids {unknown}")
+        meant = {people[o] if people[o] is not None else ("nobody", o) for o in lab}
+        if meant != set(s.truth):
+            errors.append(s.index)
+    switches = 0
+    last: dict[int, Label] = {}
+    for s, lab in zip(strokes, labels):
+        if len(s.truth) == 1:
+            (p,) = tuple(s.truth)
+            if p in last and last[p] != lab:
+                switches += 1
+            last[p] = lab
+    n = len(strokes)
+    return Score(len(errors), n, len(errors) / n if n else 0.0, switches, tuple(errors))
+
+
+def colour_only_labels(strokes: Iterable[Stroke], max_group_size: int = 3, match_prob: float = 0.8,
+                       pool_size: int = 12, mode: str = "ratio") -> list[Label]:
+    """Baseline without the network: each stroke takes the label whose palette matches
+    its colours best (eq. 6 alone), among the objects seen so far, their groups of up to
+    ``max_group_size``, and a new object (log-likelihood ratio 0 in the default mode).
+
+    Parameters
+    ----------
+    strokes : iterable of Stroke
+        In start order.
+    max_group_size : int
+    match_prob : float
+    pool_size : int
+    mode : {"ratio", "eq6"}
+
+    Returns
+    -------
+    list of Label
+        One per stroke; a stroke labelled new founds object ``stroke.index``.
+    """
+    objects: list[int] = []
+    palettes: dict[int, np.ndarray] = {}
+    out: list[Label] = []
+    for s in strokes:
+        new = frozenset({s.index})
+        own = np.zeros(pool_size, dtype=bool)
+        own[s.palette] = True
+        cands: list[Label] = [new]
+        blocks = [own[None]]
+        obj_pal = np.array([palettes[o] for o in objects]).reshape(len(objects), pool_size)
+        for r in range(1, min(max_group_size, len(objects)) + 1):
+            idx = np.array(list(itertools.combinations(range(len(objects)), r)), dtype=np.int64)
+            cands += [frozenset(objects[i] for i in row) for row in idx]
+            blocks.append(obj_pal[idx].any(axis=1))
+        pal = np.concatenate(blocks, axis=0)
+        is_new = np.zeros(len(cands), dtype=bool)
+        is_new[0] = True
+        ll = colour_log_likelihood(s.colours, pal, is_new, match_prob, pool_size, mode)
+        best = cands[int(np.argmax(ll))]
+        if best == new:
+            objects.append(s.index)
+            palettes[s.index] = own
+        out.append(best)
+    return out
