@@ -41,6 +41,7 @@ from models.rjmcmc3d.geometry import (
 __all__ = [
     "BODY_HALF_AXES",
     "BODY_Z",
+    "BoxProjector",
     "Frame",
     "FrameTruth",
     "Scene",
@@ -64,6 +65,8 @@ BODY_Z = np.array([[0.0, 0.48], [0.48, 0.86], [0.86, 1.0]])
 BODY_HALF_AXES = np.array([[0.12, 0.17], [0.13, 0.22], [0.11, 0.10]])
 _NUM_ANGLES = 8
 _ANG = np.linspace(0.0, 2.0 * np.pi, _NUM_ANGLES, endpoint=False)
+_CT = BODY_HALF_AXES[:, 0, None] * np.cos(_ANG)[None, :]  # (3, A) along the facing
+_CW = BODY_HALF_AXES[:, 1, None] * np.sin(_ANG)[None, :]  # (3, A) across it
 
 
 class Scene(NamedTuple):
@@ -297,32 +300,82 @@ def part_boxes(
     boxes : ndarray, shape (num_views, num_people, 3, 4), int64
         ``(x0, y0, x1, y1)`` half-open pixel boxes; empty (``x1 <= x0``) when not seen.
     """
-    n = u.shape[0]
-    ca, sa = np.cos(alpha), np.sin(alpha)
-    # ellipse offsets (n, 3, A, 2): thickness along facing (ca, sa), width across it
-    ct = BODY_HALF_AXES[None, :, 0, None] * np.cos(_ANG)[None, None, :]
-    cw = BODY_HALF_AXES[None, :, 1, None] * np.sin(_ANG)[None, None, :]
-    ox = ct * ca[:, None, None] - cw * sa[:, None, None]
-    oy = ct * sa[:, None, None] + cw * ca[:, None, None]
-    z = BODY_Z[None, :, :] * h[:, None, None]  # (n, 3, 2)
-    X = np.empty((n, 3, 2, _NUM_ANGLES, 4))
-    X[..., 0] = (u[:, 0, None, None] + ox)[:, :, None, :]
-    X[..., 1] = (u[:, 1, None, None] + oy)[:, :, None, :]
-    X[..., 2] = z[..., None]
-    X[..., 3] = 1.0
-    proj = np.einsum("vij,npzaj->vnpzai", P, X).reshape(P.shape[0], n, 3, 2 * _NUM_ANGLES, 3)
+    V = P.shape[0]
+    ca, sa = np.cos(alpha)[:, None, None], np.sin(alpha)[:, None, None]
+    gx = u[:, 0, None, None] + (_CT * ca - _CW * sa)  # (n, 3, A)
+    gy = u[:, 1, None, None] + (_CT * sa + _CW * ca)
+    Pt = np.moveaxis(P, 2, 0).reshape(4, 3 * V)  # column k of every view's P
+    base = gx[..., None] * Pt[0] + gy[..., None] * Pt[1] + Pt[3]  # (n, 3, A, 3V)
+    z = BODY_Z[None] * h[:, None, None]  # (n, 3, 2)
+    proj = base[:, :, None] + z[:, :, :, None, None] * Pt[2]  # (n, 3, 2, A, 3V)
+    proj = proj.reshape(u.shape[0], 3, 2 * _NUM_ANGLES, V, 3)
     w = proj[..., 2]
-    front = np.all(w > 1e-6, axis=-1)  # (v, n, 3)
+    front = (w > 1e-6).all(axis=2)  # (n, 3, V)
     safe_w = np.where(w > 1e-6, w, 1.0)
     px = proj[..., 0] / safe_w
     py = proj[..., 1] / safe_w
-    with np.errstate(invalid="ignore"):
-        x0 = np.clip(np.floor(px.min(-1)), 0, width)
-        x1 = np.clip(np.ceil(px.max(-1)), 0, width)
-        y0 = np.clip(np.floor(py.min(-1)), 0, height)
-        y1 = np.clip(np.ceil(py.max(-1)), 0, height)
-    boxes = np.stack([x0, y0, x1, y1], axis=-1)
-    return np.where(front[..., None], boxes, 0.0).astype(np.int64)
+    lo_x = np.minimum(np.maximum(np.floor(px.min(2)), 0), width)
+    hi_x = np.minimum(np.maximum(np.ceil(px.max(2)), 0), width)
+    lo_y = np.minimum(np.maximum(np.floor(py.min(2)), 0), height)
+    hi_y = np.minimum(np.maximum(np.ceil(py.max(2)), 0), height)
+    boxes = np.stack([lo_x, lo_y, hi_x, hi_y], axis=-1)  # (n, 3, V, 4)
+    boxes = np.where(front[..., None], boxes, 0.0).astype(np.int64)
+    return np.ascontiguousarray(np.moveaxis(boxes, 2, 0).swapaxes(1, 2).swapaxes(1, 2))
+
+
+class BoxProjector:
+    """Fast :func:`part_boxes` for one person (the per-move hot path of the tracker).
+
+    Gives exactly the boxes of :func:`part_boxes` (same points, same rounding) as
+    nested lists ``boxes[v][part] = [x0, y0, x1, y1]``, with the union box per view
+    and the distance to each camera.
+    """
+
+    def __init__(self, scene: Scene) -> None:
+        V = scene.num_views
+        self.V = V
+        self.P = scene.P
+        Pt = np.moveaxis(scene.P, 2, 0).reshape(4, 3 * V)
+        self.P013 = Pt[[0, 1, 3]].copy()
+        self.P2 = Pt[2].copy()
+        self.offsets = np.stack([_CT.ravel(), _CW.ravel()], axis=1)  # (3 A, 2)
+        self.zf = BODY_Z.reshape(3, 2, 1, 1)
+        self.hi = np.array([scene.width, scene.height, scene.width, scene.height], dtype=float)
+        self.width, self.height = scene.width, scene.height
+        self.centers = scene.centers[:, :2].tolist()
+        self.g = np.empty((3 * _NUM_ANGLES, 3))
+
+    def one(self, x: float, y: float, h: float, a: float) -> tuple[list, list, list]:
+        """Boxes (V, 3, 4), union boxes (V, 4) and camera distances (V,) as lists."""
+        ca, sa = math.cos(a), math.sin(a)
+        g = self.g
+        g[:, :2] = self.offsets @ np.array([[ca, sa], [-sa, ca]])
+        g[:, 0] += x
+        g[:, 1] += y
+        g[:, 2] = 1.0
+        proj = ((g @ self.P013).reshape(3, 1, _NUM_ANGLES, 3 * self.V) + (self.zf * h) * self.P2)
+        proj = proj.reshape(3, 2 * _NUM_ANGLES, self.V, 3)
+        w = proj[..., 2]
+        if not (w > 1e-6).all():
+            b = part_boxes(self.P, np.array([[x, y]]), np.array([h]), np.array([a]),
+                           self.width, self.height)[:, 0]
+        else:
+            px = proj[..., 0] / w
+            py = proj[..., 1] / w
+            ext = np.stack([np.floor(px.min(1)), np.floor(py.min(1)),
+                            np.ceil(px.max(1)), np.ceil(py.max(1))], axis=-1)  # (3, V, 4)
+            b = np.minimum(np.maximum(ext, 0.0), self.hi).astype(np.int64).swapaxes(0, 1)
+        boxes = b.tolist()
+        bbox = []
+        for parts in boxes:
+            ne = [bx for bx in parts if bx[2] > bx[0] and bx[3] > bx[1]]
+            if ne:
+                bbox.append([min(q[0] for q in ne), min(q[1] for q in ne),
+                             max(q[2] for q in ne), max(q[3] for q in ne)])
+            else:
+                bbox.append([0, 0, 0, 0])
+        depth = [math.hypot(x - cx, y - cy) for cx, cy in self.centers]
+        return boxes, bbox, depth
 
 
 def depths(centers: np.ndarray, u: np.ndarray) -> np.ndarray:

@@ -1,0 +1,449 @@
+"""Foreground (seed 003, eq. 9) and colour (eq. 10) likelihoods, incremental and full.
+
+The log likelihood of a joint configuration, summed over views (eq. 8), is
+
+.. math::
+
+    \\log p(Z | \\tilde X) = \\sum_v \\Big[ c_1 \\sum_{x \\in S_v} (D_v(x) - c_2)
+      - \\lambda_{im} \\sum_{i \\in \\mathcal K} \\sum_{b=1}^3 |R_{i,b}^v|
+        (D_c(I_v, D_v, R_{i,b}^v) - D_{min}) \\Big] + \\text{const},
+
+with ``S_v`` the union of the body boxes of the existing people in view ``v`` and
+``R_{i,b}^v`` the pixels of body region ``b`` of person ``i`` not covered by a person
+closer to the camera. ``D_c = (1 - lambda_f) D_h^2(H_b) + lambda_f D_h^2(h_b)`` with
+``H_b`` the histogram of all pixels of the region, ``h_b`` that of its foreground pixels
+(``D > c_2``), ``D_h(H) = min_k D_bh(H, ref_k)`` over the person's K reference
+histograms of that region and ``D_bh^2 = 1 - BC`` (Bhattacharyya coefficient). People
+without reference histograms yet (born in the current frame) have no colour term.
+
+:class:`IncrementalLikelihood` keeps per-view coverage counts and per-person colour
+terms, and a move recomputes only the pixels inside the boxes of the people it changes
+(plus the colour terms of people overlapping them); :func:`full_loglik` recomputes
+everything from scratch (the baseline and the oracle of the incremental one).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from models.rjmcmc3d.model import TrackerParams
+from models.rjmcmc3d.scene import Frame
+
+__all__ = [
+    "Config",
+    "FrameData",
+    "IncrementalLikelihood",
+    "colour_cost",
+    "full_loglik",
+    "histograms_of",
+    "prepare_frame",
+]
+
+
+class FrameData(NamedTuple):
+    """Per-frame images the likelihood reads.
+
+    Attributes
+    ----------
+    fgw : ndarray, shape (num_views, height, width), float64
+        ``c1 (D(x) - c2)``: the per-pixel foreground gain of eq. 9.
+    code : ndarray, shape (num_views, height, width), int64
+        Colour bin ``+ num_bins * [D(x) > c2]``.
+    num_bins : int
+        Colour bins per histogram (``colour_levels^3``).
+    ii : ndarray, shape (num_views, (height + 1) * (width + 1))
+        Flattened integral images of ``fgw`` (zero first row and column).
+    """
+
+    fgw: np.ndarray
+    code: np.ndarray
+    num_bins: int
+    ii: np.ndarray
+
+
+class Config(NamedTuple):
+    """Image-side description of a joint configuration.
+
+    Attributes
+    ----------
+    boxes : ndarray, shape (num_views, M, 3, 4), int64
+        Body part boxes ``(x0, y0, x1, y1)`` (empty when not seen).
+    bbox : ndarray, shape (num_views, M, 4), int64
+        Union box of each person's parts.
+    depth : ndarray, shape (num_views, M)
+        Distance to each camera (smaller occludes larger; ties by index).
+    present : ndarray, shape (M,), bool
+        Existence flags ``k_i``.
+    """
+
+    boxes: np.ndarray
+    bbox: np.ndarray
+    depth: np.ndarray
+    present: np.ndarray
+
+
+def prepare_frame(params: TrackerParams, frame: Frame) -> FrameData:
+    """Quantise the colour images and weight the foreground maps of one frame."""
+    L = params.colour_levels
+    q = np.clip((frame.image * L).astype(np.int64), 0, L - 1)
+    bins = (q[..., 0] * L + q[..., 1]) * L + q[..., 2]
+    nb = L**3
+    fg = frame.D > params.c2
+    code = bins + nb * fg
+    fgw = params.c1 * (frame.D.astype(np.float64) - params.c2)
+    V, H, W = fgw.shape
+    ii = np.zeros((V, H + 1, W + 1))
+    np.cumsum(np.cumsum(fgw, axis=1), axis=2, out=ii[:, 1:, 1:])
+    return FrameData(fgw, code, nb, ii.reshape(V, -1))
+
+
+def union_bbox(boxes: np.ndarray) -> np.ndarray:
+    """Union of the part boxes (..., 3, 4) -> (..., 4), empty parts ignored."""
+    empty = (boxes[..., 2] <= boxes[..., 0]) | (boxes[..., 3] <= boxes[..., 1])
+    big = np.iinfo(np.int64).max
+    x0 = np.where(empty, big, boxes[..., 0]).min(-1)
+    y0 = np.where(empty, big, boxes[..., 1]).min(-1)
+    x1 = np.where(empty, -1, boxes[..., 2]).max(-1)
+    y1 = np.where(empty, -1, boxes[..., 3]).max(-1)
+    allempty = empty.all(-1)
+    out = np.stack([x0, y0, x1, y1], axis=-1)
+    return np.where(allempty[..., None], 0, out)
+
+
+def colour_cost(
+    params: TrackerParams, counts: np.ndarray, sref: np.ndarray, nref: np.ndarray
+) -> np.ndarray:
+    """Colour log-likelihood term of eq. 10 per person, from region histograms.
+
+    Parameters
+    ----------
+    counts : ndarray, shape (..., 3, 2, num_bins)
+        Pixel counts per region, background/foreground pixel, colour bin.
+    sref : ndarray, shape (..., 3, K, num_bins)
+        Square roots of the normalised reference histograms.
+    nref : ndarray, shape (..., 3), int
+        Number of valid references per region (0: no colour term).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``-lambda_im sum_b |R_b| (D_c - D_min)``.
+    """
+    counts = counts.astype(np.float64)
+    H = counts[..., 0, :] + counts[..., 1, :]
+    hf = counts[..., 1, :]
+    nR = H.sum(-1)
+    nF = hf.sum(-1)
+    sH = np.sqrt(H / np.maximum(nR, 1.0)[..., None])
+    sh = np.sqrt(hf / np.maximum(nF, 1.0)[..., None])
+    K = sref.shape[-2]
+    valid = np.arange(K) < nref[..., None]
+    bcH = np.where(valid, np.einsum("...kc,...c->...k", sref, sH), -1.0).max(-1)
+    bch = np.where(valid, np.einsum("...kc,...c->...k", sref, sh), -1.0).max(-1)
+    d2H = np.clip(1.0 - bcH, 0.0, 1.0)
+    d2h = np.where(nF > 0, np.clip(1.0 - bch, 0.0, 1.0), d2H)
+    dc = (1.0 - params.lambda_f) * d2H + params.lambda_f * d2h
+    term = np.where((nref > 0) & (nR > 0), -params.lambda_im * nR * (dc - params.d_min), 0.0)
+    return term.sum(-1)
+
+
+def _owner_map(cfg: Config, v: int, height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """Painter's algorithm: owner region ``3 j + b`` per pixel (-1: none), coverage count."""
+    owner = np.full((height, width), -1, dtype=np.int64)
+    count = np.zeros((height, width), dtype=np.int16)
+    idx = np.flatnonzero(cfg.present)
+    # far to near; among equal depths the smaller index is nearer (painted last)
+    order = idx[np.lexsort((-idx, -cfg.depth[v, idx]))]
+    for j in order:
+        for b in range(3):
+            x0, y0, x1, y1 = cfg.boxes[v, j, b]
+            if x1 > x0 and y1 > y0:
+                owner[y0:y1, x0:x1] = 3 * j + b
+                count[y0:y1, x0:x1] += 1
+    return owner, count
+
+
+def histograms_of(data: FrameData, cfg: Config) -> np.ndarray:
+    """Region histograms of every person in every view, from scratch.
+
+    Returns
+    -------
+    ndarray, shape (num_views, M, 3, 2, num_bins), int64
+    """
+    V, H, W = data.fgw.shape
+    M = cfg.present.shape[0]
+    nb = data.num_bins
+    out = np.zeros((V, M, 3, 2, nb), dtype=np.int64)
+    for v in range(V):
+        owner, _ = _owner_map(cfg, v, H, W)
+        sel = owner >= 0
+        lab = owner[sel] * (2 * nb) + data.code[v][sel]
+        out[v] = np.bincount(lab, minlength=M * 3 * 2 * nb).reshape(M, 3, 2, nb)
+    return out
+
+
+def full_loglik(
+    params: TrackerParams, data: FrameData, cfg: Config, sref: np.ndarray, nref: np.ndarray
+) -> float:
+    """Eqs. 8-10 recomputed from scratch over every pixel of every view (the baseline).
+
+    Parameters
+    ----------
+    data : FrameData
+    cfg : Config
+    sref : ndarray, shape (M, 3, K, num_bins)
+    nref : ndarray, shape (M, 3)
+    """
+    V, H, W = data.fgw.shape
+    M = cfg.present.shape[0]
+    nb = data.num_bins
+    total = 0.0
+    active = nref * cfg.present[:, None]
+    for v in range(V):
+        owner, count = _owner_map(cfg, v, H, W)
+        total += float(data.fgw[v][count > 0].sum())
+        sel = owner >= 0
+        lab = owner[sel] * (2 * nb) + data.code[v][sel]
+        counts = np.bincount(lab, minlength=M * 3 * 2 * nb).reshape(M, 3, 2, nb)
+        total += float(colour_cost(params, counts, sref, active).sum())
+    return total
+
+
+def _rect_sum(get, st: int, x0: int, y0: int, x1: int, y1: int) -> float:
+    """Sum over ``[y0, y1) x [x0, x1)`` from a flattened integral image (row stride ``st``)."""
+    if x1 <= x0 or y1 <= y0:
+        return 0.0
+    return get(y1 * st + x1) - get(y0 * st + x1) - get(y1 * st + x0) + get(y0 * st + x0)
+
+
+def _union_sum(get, st: int, boxes: list) -> float:
+    """Sum over the union of up to three boxes by inclusion-exclusion."""
+    total = 0.0
+    n = len(boxes)
+    for a in range(n):
+        total += _rect_sum(get, st, *boxes[a])
+        for b in range(a + 1, n):
+            A, B = boxes[a], boxes[b]
+            ab = (max(A[0], B[0]), max(A[1], B[1]), min(A[2], B[2]), min(A[3], B[3]))
+            total -= _rect_sum(get, st, *ab)
+            for c in range(b + 1, n):
+                C = boxes[c]
+                total += _rect_sum(
+                    get, st, max(ab[0], C[0]), max(ab[1], C[1]), min(ab[2], C[2]), min(ab[3], C[3])
+                )
+    return total
+
+
+class _Pending(NamedTuple):
+    delta: float
+    patches: list
+    colour: list
+    ov: dict
+
+
+class IncrementalLikelihood:
+    """The likelihood of eqs. 8-10 maintained incrementally over moves.
+
+    Keeps, per view, the coverage count of every pixel (how many body boxes cover it),
+    the foreground sum of eq. 9 and each person's colour term of eq. 10. A proposal
+    reads only the pixels inside the union box of the changed people's old and new
+    boxes, and recomputes the colour terms of the people whose boxes meet it.
+
+    Parameters
+    ----------
+    params : TrackerParams
+    data : FrameData
+    cfg : Config
+        Initial configuration (computed from scratch once).
+    sref : ndarray, shape (M, 3, K, num_bins)
+    nref : ndarray, shape (M, 3)
+    """
+
+    def __init__(
+        self, params: TrackerParams, data: FrameData, cfg: Config, sref: np.ndarray, nref: np.ndarray
+    ) -> None:
+        self.params = params
+        self.data = data
+        self.sref = sref
+        self.nref_l = nref.tolist()
+        self.active_l = (nref.sum(1) > 0).tolist()
+        V, H, W = data.fgw.shape
+        self.num_views = V
+        self.count = np.zeros((V, H, W), dtype=np.int16)
+        self.fg = np.zeros(V)
+        M = cfg.present.shape[0]
+        self.M = M
+        self.cc = [[0.0] * M for _ in range(V)]
+        hist = histograms_of(data, cfg)
+        for v in range(V):
+            _, self.count[v] = _owner_map(cfg, v, H, W)
+            self.fg[v] = float(data.fgw[v][self.count[v] > 0].sum())
+            self.cc[v] = colour_cost(params, hist[v], sref, nref * cfg.present[:, None]).tolist()
+        self.boxes_l = cfg.boxes.tolist()
+        self.bbox_l = cfg.bbox.tolist()
+        self.depth_l = cfg.depth.tolist()
+        self.present_l = cfg.present.tolist()
+        self.total = float(self.fg.sum() + sum(map(sum, self.cc)))
+        nb = data.num_bins
+        self._dump = 3 * 2 * nb  # label of covered pixels: a bin beyond the 3 regions
+
+    def _colour_one(self, counts: np.ndarray, j: int) -> float:
+        """:func:`colour_cost` of one person from its (3, 2, num_bins) counts (fast path)."""
+        p = self.params
+        Y = np.empty((3, counts.shape[2], 2))
+        Y[:, :, 0] = counts[:, 0]
+        Y[:, :, 0] += counts[:, 1]
+        Y[:, :, 1] = counts[:, 1]
+        n = Y.sum(1).tolist()  # (3, 2): |R_b| and its foreground pixel count
+        np.sqrt(Y, out=Y)
+        bc = (self.sref[j] @ Y).tolist()  # (3, K, 2): unnormalised Bhattacharyya coefficients
+        nref = self.nref_l[j]
+        total = 0.0
+        lf = p.lambda_f
+        for b in range(3):
+            k = nref[b]
+            nR, nF = n[b]
+            if k == 0 or nR == 0:
+                continue
+            bcb = bc[b][:k]
+            d2H = min(1.0, max(0.0, 1.0 - max(r[0] for r in bcb) / math.sqrt(nR)))
+            if nF > 0:
+                d2h = min(1.0, max(0.0, 1.0 - max(r[1] for r in bcb) / math.sqrt(nF)))
+            else:
+                d2h = d2H
+            total -= p.lambda_im * nR * ((1.0 - lf) * d2H + lf * d2h - p.d_min)
+        return total
+
+    def _slot_cost(self, v: int, j: int, ov: dict) -> float:
+        """Colour term of person ``j`` in view ``v`` (with ``ov`` overriding changed people)."""
+        present, boxes, bbox, depth = self._get(v, ov)
+        x0, y0, x1, y1 = bbox[j]
+        if x1 <= x0 or y1 <= y0:
+            return 0.0
+        nb = self.data.num_bins
+        reg = np.full((y1 - y0, x1 - x0), self._dump, dtype=np.int64)
+        for b, (bx0, by0, bx1, by1) in enumerate(boxes[j]):
+            if bx1 > bx0 and by1 > by0:
+                reg[by0 - y0 : by1 - y0, bx0 - x0 : bx1 - x0] = b * 2 * nb
+        dj = depth[j]
+        for k in range(self.M):
+            if k == j or not present[k]:
+                continue
+            dk = depth[k]
+            if dk > dj or (dk == dj and k > j):
+                continue
+            kx0, ky0, kx1, ky1 = bbox[k]
+            if kx0 >= x1 or kx1 <= x0 or ky0 >= y1 or ky1 <= y0:
+                continue
+            for bx0, by0, bx1, by1 in boxes[k]:
+                cx0, cy0 = max(bx0, x0), max(by0, y0)
+                cx1, cy1 = min(bx1, x1), min(by1, y1)
+                if cx1 > cx0 and cy1 > cy0:
+                    reg[cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0] = self._dump
+        lab = reg + self.data.code[v, y0:y1, x0:x1]
+        counts = np.bincount(lab.ravel(), minlength=4 * 2 * nb)[: 3 * 2 * nb].reshape(3, 2, nb)
+        return self._colour_one(counts, j)
+
+    def _get(self, v: int, ov: dict):
+        """Per-view lists (present, boxes, bbox, depth) with the overrides applied."""
+        if not ov:
+            return self.present_l, self.boxes_l[v], self.bbox_l[v], self.depth_l[v]
+        present = list(self.present_l)
+        boxes = list(self.boxes_l[v])
+        bbox = list(self.bbox_l[v])
+        depth = list(self.depth_l[v])
+        for j, (pr, bx, bb, dp) in ov.items():
+            present[j] = pr
+            boxes[j] = bx[v]
+            bbox[j] = bb[v]
+            depth[j] = dp[v]
+        return present, boxes, bbox, depth
+
+    def propose(self, ov: dict) -> tuple[float, _Pending]:
+        """Log-likelihood change when the people in ``ov`` change (the others stay).
+
+        ``ov[j] = (present, boxes (V, 3, 4), bbox (V, 4), depth (V,))`` as lists: person
+        ``j``'s new existence flag and image geometry.
+
+        Only the pixels inside the union box of the changed people's old and new boxes
+        are read for eq. 9, and only the colour terms of people whose boxes meet that
+        union box are recomputed for eq. 10.
+
+        Returns
+        -------
+        delta : float
+            ``log p(Z | new) - log p(Z | current)``.
+        pending : object
+            Pass to :meth:`commit` if the move is accepted.
+        """
+        changed = list(ov)
+        delta = 0.0
+        patches = []
+        colour = []
+        active = self.active_l
+        for v in range(self.num_views):
+            signed = []
+            for j in changed:
+                if self.present_l[j]:
+                    signed += [(bx, -1) for bx in self.boxes_l[v][j] if bx[2] > bx[0] and bx[3] > bx[1]]
+                if ov[j][0]:
+                    signed += [(bx, 1) for bx in ov[j][1][v] if bx[2] > bx[0] and bx[3] > bx[1]]
+            if not signed:
+                continue
+            X0 = min(bx[0] for bx, _ in signed)
+            Y0 = min(bx[1] for bx, _ in signed)
+            X1 = max(bx[2] for bx, _ in signed)
+            Y1 = max(bx[3] for bx, _ in signed)
+            present, _, bbox, _ = self._get(v, ov)
+            others = []  # unchanged people whose boxes meet the changed area
+            for j in range(self.M):
+                if j in ov or not present[j]:
+                    continue
+                kx0, ky0, kx1, ky1 = bbox[j]
+                if kx0 >= X1 or kx1 <= X0 or ky0 >= Y1 or ky1 <= Y0:
+                    continue
+                others.append(j)
+            if not others and len(changed) == 1:
+                # nobody else covers these pixels: eq. 9 change from the integral image
+                get = self.data.ii[v].item
+                st = self.data.fgw.shape[2] + 1
+                d_fg = _union_sum(get, st, [b for b, sg in signed if sg > 0]) - _union_sum(
+                    get, st, [b for b, sg in signed if sg < 0]
+                )
+            else:
+                cold = self.count[v, Y0:Y1, X0:X1]
+                cnew = cold.copy()
+                for (bx0, by0, bx1, by1), sign in signed:
+                    cnew[by0 - Y0 : by1 - Y0, bx0 - X0 : bx1 - X0] += sign
+                gain = (cnew > 0).view(np.int8) - (cold > 0).view(np.int8)
+                d_fg = float(np.vdot(gain, self.data.fgw[v, Y0:Y1, X0:X1]))
+            delta += d_fg
+            patches.append((v, signed, d_fg))
+            for j in list(changed) + others:
+                if not active[j]:
+                    continue
+                c_new = self._slot_cost(v, j, ov) if present[j] else 0.0
+                delta += c_new - self.cc[v][j]
+                colour.append((v, j, c_new))
+        return delta, _Pending(delta, patches, colour, ov)
+
+    def commit(self, pending: _Pending) -> None:
+        """Make the proposed configuration current."""
+        for v, signed, d_fg in pending.patches:
+            cv = self.count[v]
+            for (bx0, by0, bx1, by1), sign in signed:
+                cv[by0:by1, bx0:bx1] += sign
+            self.fg[v] += d_fg
+        ov = pending.ov
+        for v, j, c in pending.colour:
+            self.cc[v][j] = c
+        for j, (pr, bx, bb, dp) in ov.items():
+            self.present_l[j] = pr
+            for v in range(self.num_views):
+                self.boxes_l[v][j] = bx[v]
+                self.bbox_l[v][j] = bb[v]
+                self.depth_l[v][j] = dp[v]
+        self.total += pending.delta

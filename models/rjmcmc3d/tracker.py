@@ -1,0 +1,775 @@
+"""The seed 003 tracker: RJ-MCMC filtering of a varying number of people in 3-D.
+
+Per frame (seed 003, eq. 2) a Markov chain over joint configurations ``(X, k)`` targets
+
+.. math::
+
+    \\pi(\\tilde X_t) \\propto p(Z_t | \\tilde X_t)\\; p_0(X_t | k_t)
+      \\prod_i p(X_{i,t} | \\cdot)\\; p(k_t | k_{t-1}, X_{t-1})
+
+with the likelihood of eqs. 8-10 (:mod:`models.rjmcmc3d.likelihood`), the interaction
+prior ``p_0`` of sec. 3.2, and each person's previous-frame posterior summarised by a
+Gaussian over ``(u, u_dot)`` predicted through eq. 7 (a moment-matched form of the sum
+over chain samples in eq. 2). The six moves of sec. 3.4 (add/delete driven by the
+detector, stay/leave for people of the previous frame, switch, update as a mixture of a
+``Sigma(u) = C(u) C(u)^T`` random walk and a detection-driven jump) are accepted with
+eq. 11 through :mod:`inference.mcmc`. The likelihood is incremental: a move recomputes
+only the pixels of the people it changes (``likelihood="full"`` recomputes everything
+per move, for the baseline; both give the same chain for the same seed).
+
+The API is the trio ``init_state`` / ``step(seed, state, frame)`` / ``run``; ``step``
+never mutates the state it is given.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from typing import NamedTuple
+
+import numpy as np
+from scipy.special import i0e
+from tqdm.auto import tqdm
+
+from dbn.errors import InputError, ShapeError
+from inference.mcmc import log_acceptance_ratio, metropolis_accept, select_move
+from models.rjmcmc3d.likelihood import (
+    Config,
+    IncrementalLikelihood,
+    full_loglik,
+    histograms_of,
+    prepare_frame,
+)
+from models.rjmcmc3d.model import (
+    LOG_2PI,
+    GroundNoiseMap,
+    TrackerParams,
+    gauss2_logpdf,
+    ground_noise_map,
+    predict,
+)
+from models.rjmcmc3d.scene import BoxProjector, Frame, Scene
+
+__all__ = ["FrameResult", "RJMCMCTracker", "TrackState", "MOVE_NAMES"]
+
+MOVE_NAMES = ("add", "delete", "stay", "leave", "switch", "update")
+ADD, DELETE, STAY, LEAVE, SWITCH, UPDATE = range(6)
+REVERSE = (DELETE, ADD, LEAVE, STAY, SWITCH, UPDATE)
+
+
+class TrackState(NamedTuple):
+    """Posterior summary carried between frames (one row per slot, M slots).
+
+    Attributes
+    ----------
+    alive : ndarray, shape (M,), bool
+        ``k_{i,t-1}``.
+    label : ndarray, shape (M,), int
+        Track identity of each slot (-1 when free).
+    mean : ndarray, shape (M, 4)
+        Posterior mean of ``(x, y, vx, vy)``.
+    cov : ndarray, shape (M, 4, 4)
+    h, alpha : ndarray, shape (M,)
+        Height and orientation estimates.
+    refs : ndarray, shape (M, 3, K, num_bins)
+        Normalised reference colour histograms per body region.
+    nref : ndarray, shape (M, 3), int
+        Number of valid references.
+    ref_weight : ndarray, shape (M, 3, K)
+        Usage weights of the references.
+    next_label : int
+    """
+
+    alive: np.ndarray
+    label: np.ndarray
+    mean: np.ndarray
+    cov: np.ndarray
+    h: np.ndarray
+    alpha: np.ndarray
+    refs: np.ndarray
+    nref: np.ndarray
+    ref_weight: np.ndarray
+    next_label: int
+
+
+class FrameResult(NamedTuple):
+    """Estimate of one frame.
+
+    Attributes
+    ----------
+    ids : ndarray, shape (n,)
+        Track labels.
+    X : ndarray, shape (n, 6)
+        ``(x, y, vx, vy, h, alpha)`` per track (seed 003, eq. 3).
+    presence : ndarray, shape (n,)
+        Posterior existence probability.
+    accept_rate : ndarray, shape (6,)
+        Acceptance rate of each move type (NaN if never tried).
+    log_target : float
+        Log target of the chain's last state (up to a constant).
+    """
+
+    ids: np.ndarray
+    X: np.ndarray
+    presence: np.ndarray
+    accept_rate: np.ndarray
+    log_target: float
+
+
+def _vonmises_logpdf(x: float, mu: float, kappa: float) -> float:
+    return kappa * (math.cos(x - mu) - 1.0) - math.log(2 * math.pi * i0e(kappa))
+
+
+class _Chain:
+    """Working state of one frame's chain (mutated in place; private)."""
+
+    def __init__(self, tracker: RJMCMCTracker, state: TrackState, frame: Frame, likelihood: str):
+        p = tracker.params
+        self.p = p
+        self.t = tracker
+        M = p.max_objects
+        self.M = M
+        self.scene = tracker.scene
+        self.proj = tracker.projector
+        self.data = prepare_frame(p, frame)
+        self.likelihood = likelihood
+        fl = self.scene.floor
+        self.floor = fl.tolist()
+        self.log_area = math.log((fl[1] - fl[0]) * (fl[3] - fl[2]))
+        self.ta = p.tau * p.a
+        # previous-frame summary -> prediction (eq. 7)
+        self.prev = state.alive.copy()
+        self.prev_l = self.prev.tolist()
+        m, P = predict(p, tracker.noise, state.mean, state.cov)
+        self.m = m
+        self.P = P
+        Puu = P[:, :2, :2] + 1e-9 * np.eye(2)
+        self.Luu = np.linalg.cholesky(Puu)
+        # gain of u_dot given u: G = P_vu P_uu^{-1} (Cholesky solve)
+        self.Gain = np.swapaxes(np.linalg.solve(Puu, np.swapaxes(P[:, 2:, :2], -1, -2)), -1, -2)
+        self.m_l = m.tolist()
+        self.Luu_l = self.Luu.tolist()
+        self.Gain_l = self.Gain.tolist()
+        self.h_pred = p.h_mean + p.h_rho * (state.h - p.h_mean)
+        speed = np.hypot(m[:, 2], m[:, 3])
+        wv = np.minimum(speed / 0.5, 2.0)
+        self.alpha_pred = np.arctan2(
+            np.sin(state.alpha) + wv * m[:, 3] / np.maximum(speed, 1e-9),
+            np.cos(state.alpha) + wv * m[:, 2] / np.maximum(speed, 1e-9),
+        )
+        inside = self._signed_inside(m[:, :2])
+        z = np.clip(inside / (p.leave_ramp / 4.0), -50, 50)
+        self.p_leave = p.p_leave_inside + (0.999 - p.p_leave_inside) / (1.0 + np.exp(z))
+        self.log_vm = -math.log(2 * math.pi * i0e(p.alpha_kappa))
+        # detections inside the floor, with their single-view covariances
+        sel = self._signed_inside(frame.det_ground) > 0
+        self.det = frame.det_ground[sel]
+        self.det_l = self.det.tolist()
+        dv = frame.det_view[sel]
+        if p.ground_noise:
+            i, j = tracker.noise.index(self.det)
+            cov = tracker.noise.view_cov[dv, i, j] + p.min_sd**2 * np.eye(2)
+        else:
+            cov = np.broadcast_to(p.fixed_sd**2 * np.eye(2), (len(dv), 2, 2)).copy()
+        self.det_L = np.linalg.cholesky(cov) if len(dv) else np.zeros((0, 2, 2))
+        gate_cov = cov + 0.3**2 * np.eye(2)
+        self.det_gate_L = np.linalg.cholesky(gate_cov) if len(dv) else np.zeros((0, 2, 2))
+        # colour references
+        self.refs = state.refs
+        self.nref = state.nref
+        self.sref = np.sqrt(state.refs)
+        # initial configuration: previous people at their predicted means if inside
+        self.present = self.prev & (self._signed_inside(m[:, :2]) > 0)
+        self.S = np.zeros((M, 4))  # x, y, h, alpha
+        self.S[:, :2] = m[:, :2]
+        self.S[:, 2] = np.where(self.prev, self.h_pred, p.h_mean)
+        self.S[:, 3] = self.alpha_pred
+        self.h_pred_l = self.h_pred.tolist()
+        self.alpha_pred_l = self.alpha_pred.tolist()
+        self.p_leave_l = self.p_leave.tolist()
+        self.lp = [self._slot_prior(i, self.S[i].tolist(), bool(self.present[i])) for i in range(M)]
+        self.upr = [self._upr(i, self.S[i, 0], self.S[i, 1]) for i in range(M)]
+        self.boxdata = [self.proj.one(*self.S[i].tolist()) for i in range(M)]
+        cfg = self._config_from_boxdata(self.boxdata, self.present)
+        self.G = self._interaction_matrix()
+        if likelihood == "incremental":
+            self.lik = IncrementalLikelihood(p, self.data, cfg, self.sref, self.nref)
+            self.loglik = self.lik.total
+        else:
+            self.lik = None
+            self.loglik = full_loglik(p, self.data, cfg, self.sref, self.nref)
+        self.log_probs = np.log(np.asarray(p.move_probs)).tolist()
+        self.probs = np.asarray(p.move_probs)
+
+    # ---- geometry helpers --------------------------------------------------------------
+    def _signed_inside(self, u: np.ndarray) -> np.ndarray:
+        fl = self.floor
+        u = np.asarray(u).reshape(-1, 2)
+        return np.minimum.reduce(
+            [u[:, 0] - fl[0], fl[1] - u[:, 0], u[:, 1] - fl[2], fl[3] - u[:, 1]]
+        )
+
+    def _inside(self, x: float, y: float) -> bool:
+        fl = self.floor
+        return fl[0] < x < fl[1] and fl[2] < y < fl[3]
+
+    def _config_from_boxdata(self, boxdata: list, present: np.ndarray) -> Config:
+        boxes = np.array([b[0] for b in boxdata], dtype=np.int64).swapaxes(0, 1)
+        bbox = np.array([b[1] for b in boxdata], dtype=np.int64).swapaxes(0, 1)
+        depth = np.array([b[2] for b in boxdata]).T
+        return Config(boxes, bbox, depth, present.copy())
+
+    def _config(self, S: np.ndarray, present: np.ndarray) -> Config:
+        return self._config_from_boxdata([self.proj.one(*row) for row in S.tolist()], present)
+
+    # ---- prior pieces --------------------------------------------------------------------
+    def _upr(self, i: int, x: float, y: float) -> tuple[float, float]:
+        """Predicted next position ``u + tau a u_dot`` with ``u_dot = E[u_dot | u]``."""
+        if not self.prev_l[i]:
+            return (x, y)
+        m = self.m_l[i]
+        G = self.Gain_l[i]
+        dx, dy = x - m[0], y - m[1]
+        vx = m[2] + G[0][0] * dx + G[0][1] * dy
+        vy = m[3] + G[1][0] * dx + G[1][1] * dy
+        return (x + self.ta * vx, y + self.ta * vy)
+
+    def _slot_prior(self, i: int, s: list, present: bool) -> float:
+        """log of the prior factors of slot ``i`` (eqs. 5-7 and the existence term)."""
+        p = self.p
+        if not present:
+            return math.log(self.p_leave_l[i]) if self.prev_l[i] else 0.0
+        x, y, h, a = s
+        if not self._inside(x, y) or not 0.5 < h < 2.5:
+            return -math.inf
+        if self.prev_l[i]:
+            L = self.Luu_l[i]
+            m = self.m_l[i]
+            z1 = (x - m[0]) / L[0][0]
+            z2 = (y - m[1] - L[1][0] * z1) / L[1][1]
+            lu = -0.5 * (z1 * z1 + z2 * z2) - math.log(L[0][0] * L[1][1]) - LOG_2PI
+            zh = (h - self.h_pred_l[i]) / p.h_sd
+            lh = -0.5 * zh * zh - math.log(p.h_sd) - 0.5 * LOG_2PI
+            la = p.alpha_kappa * (math.cos(a - self.alpha_pred_l[i]) - 1.0) + self.log_vm
+            return lu + lh + la + math.log1p(-self.p_leave_l[i])
+        zh = (h - p.h_mean) / p.h_sd0
+        lh = -0.5 * zh * zh - math.log(p.h_sd0) - 0.5 * LOG_2PI
+        return -self.log_area + lh - LOG_2PI + p.log_p_birth
+
+    def _pair(self, si: list, upi: tuple, sj: list, upj: tuple) -> float:
+        """``g(X_i, X_j)`` of sec. 3.2 (see :func:`interaction_penalty`), scalar."""
+        s_al, s_ac = self.p.shape_sd
+        total = 0.0
+        for dx, dy in ((si[0] - sj[0], si[1] - sj[1]), (upi[0] - upj[0], upi[1] - upj[1])):
+            if dx * dx + dy * dy > 9.0:  # psi < 1e-21 beyond 3 m
+                continue
+            for a in (si[3], sj[3]):
+                c, s = math.cos(a), math.sin(a)
+                al = (dx * c + dy * s) / s_al
+                ac = (-dx * s + dy * c) / s_ac
+                total += math.exp(-0.5 * (al * al + ac * ac))
+        return total
+
+    def _interaction_matrix(self) -> list:
+        S = self.S.tolist()
+        pr = self.present.tolist()
+        G = [[0.0] * self.M for _ in range(self.M)]
+        for i in range(self.M):
+            for j in range(i + 1, self.M):
+                if pr[i] and pr[j]:
+                    G[i][j] = G[j][i] = self._pair(S[i], self.upr[i], S[j], self.upr[j])
+        return G
+
+    # ---- the move machinery ------------------------------------------------------------
+    def _evaluate(self, S_new: np.ndarray, present_new: np.ndarray, changed: list[int]):
+        """Log target change of a proposal changing ``changed`` slots, and what to commit."""
+        rows_s = {i: S_new[i].tolist() for i in changed}
+        pr_new = present_new.tolist()
+        lp_new = {i: self._slot_prior(i, rows_s[i], pr_new[i]) for i in changed}
+        d_prior = sum(lp_new[i] - self.lp[i] for i in changed)
+        if d_prior == -math.inf:
+            return -math.inf, None
+        upr_new = {i: self._upr(i, rows_s[i][0], rows_s[i][1]) for i in changed}
+        # interaction energy change: rows of the changed slots (pairs counted once)
+        S_l = self.S.tolist()
+        rows = {}
+        d_e = 0.0
+        for c in changed:
+            row = [0.0] * self.M
+            if pr_new[c]:
+                for j in range(self.M):
+                    if j == c or not pr_new[j]:
+                        continue
+                    if j in rows_s:
+                        row[j] = self._pair(rows_s[c], upr_new[c], rows_s[j], upr_new[j])
+                    else:
+                        row[j] = self._pair(rows_s[c], upr_new[c], S_l[j], self.upr[j])
+            rows[c] = row
+            old = self.G[c]
+            d_e += sum(row[j] - old[j] for j in range(self.M) if j not in rows_s)
+        if len(changed) == 2:
+            a, b = changed
+            d_e += rows[a][b] - self.G[a][b]
+        d_int = -2.0 * self.p.lambda_g * d_e
+        boxdata = {i: self.proj.one(*rows_s[i]) for i in changed}
+        if self.lik is not None:
+            ov = {i: (pr_new[i], *boxdata[i]) for i in changed}
+            d_lik, pending = self.lik.propose(ov)
+        else:
+            bd = [boxdata.get(i, self.boxdata[i]) for i in range(self.M)]
+            cfg = self._config_from_boxdata(bd, present_new)
+            new_total = full_loglik(self.p, self.data, cfg, self.sref, self.nref)
+            d_lik, pending = new_total - self.loglik, None
+        commit = (S_new, present_new, changed, lp_new, upr_new, rows, boxdata, pending, d_lik)
+        return d_prior + d_int + d_lik, commit
+
+    def _commit(self, commit) -> None:
+        S_new, present_new, changed, lp_new, upr_new, rows, boxdata, pending, d_lik = commit
+        self.S = S_new
+        self.present = present_new
+        for i in changed:
+            self.lp[i] = lp_new[i]
+            self.upr[i] = upr_new[i]
+            self.boxdata[i] = boxdata[i]
+            row = rows[i]
+            self.G[i] = row
+            for j in range(self.M):
+                self.G[j][i] = row[j]
+        if self.lik is not None:
+            self.lik.commit(pending)
+        self.loglik += d_lik
+
+    # ---- proposal densities -------------------------------------------------------------
+    def _eligible(self, present: np.ndarray) -> np.ndarray:
+        """Detections far (Mahalanobis) from every present person (the add move)."""
+        nd = self.det.shape[0]
+        if nd == 0:
+            return np.zeros(0, dtype=bool)
+        idx = np.flatnonzero(present)
+        if idx.size == 0:
+            return np.ones(nd, dtype=bool)
+        lp = gauss2_logpdf(self.S[None, idx, :2], self.det[:, None, :], self.det_gate_L[:, None])
+        L = self.det_gate_L
+        maha2 = -2.0 * (lp + np.log(L[:, 0, 0] * L[:, 1, 1])[:, None] + LOG_2PI)
+        return np.all(maha2 > self.p.add_gate**2, axis=1)
+
+    def _log_q_add(self, u: np.ndarray, h: float, elig: np.ndarray) -> float:
+        if not elig.any():
+            return -math.inf
+        lp = gauss2_logpdf(u[None, :], self.det[elig], self.det_L[elig])
+        mx = lp.max()
+        lq = mx + math.log(np.exp(lp - mx).mean())
+        zh = (h - self.p.h_mean) / self.p.h_sd0
+        return float(lq) - 0.5 * zh * zh - math.log(self.p.h_sd0) - 0.5 * LOG_2PI - LOG_2PI
+
+    def _log_pred(self, i: int, s: list) -> float:
+        L = self.Luu_l[i]
+        m = self.m_l[i]
+        z1 = (s[0] - m[0]) / L[0][0]
+        z2 = (s[1] - m[1] - L[1][0] * z1) / L[1][1]
+        lu = -0.5 * (z1 * z1 + z2 * z2) - math.log(L[0][0] * L[1][1]) - LOG_2PI
+        zh = (s[2] - self.h_pred_l[i]) / self.p.h_sd
+        lh = -0.5 * zh * zh - math.log(self.p.h_sd) - 0.5 * LOG_2PI
+        la = self.p.alpha_kappa * (math.cos(s[3] - self.alpha_pred_l[i]) - 1.0) + self.log_vm
+        return lu + lh + la
+
+    def _near(self, x: float, y: float, L: tuple) -> list:
+        """Detections within the Mahalanobis gate of ``Sigma(u)`` around ``(x, y)``."""
+        l00, l10, l11 = L
+        g2 = self.p.det_gate**2
+        out = []
+        for dx, dy in self.det_l:
+            z1 = (dx - x) / l00
+            z2 = (dy - y - l10 * z1) / l11
+            if z1 * z1 + z2 * z2 < g2:
+                out.append((dx, dy))
+        return out
+
+    @staticmethod
+    def _lg(x: float, y: float, mx: float, my: float, L: tuple) -> float:
+        l00, l10, l11 = L
+        z1 = (x - mx) / l00
+        z2 = (y - my - l10 * z1) / l11
+        return -0.5 * (z1 * z1 + z2 * z2) - math.log(l00 * l11) - LOG_2PI
+
+    def _log_q_update(self, x1: float, y1: float, x0: float, y0: float) -> float:
+        """``log q(u1 | u0)`` of the update mixture (random walk + detection-driven)."""
+        L = self.t.update_chol(x0, y0)
+        near = self._near(x0, y0, L)
+        l_rw = self._lg(x1, y1, x0, y0, L)
+        if not near:
+            return l_rw
+        ls = [self._lg(x1, y1, dx, dy, L) for dx, dy in near]
+        mx = max(max(ls), l_rw)
+        w = self.p.p_det_update
+        mix = (1 - w) * math.exp(l_rw - mx) + w * sum(math.exp(v - mx) for v in ls) / len(ls)
+        return mx + math.log(mix)
+
+    # ---- the six moves (seed 003, sec. 3.4) ---------------------------------------------
+    def propose(self, rng: np.random.Generator, move: int):
+        """Return ``(S_new, present_new, changed, log_q_fwd, log_q_rev)`` or ``None``."""
+        p = self.p
+        present = self.present
+        if move == ADD:
+            free = np.flatnonzero(~present & ~self.prev)
+            elig = self._eligible(present)
+            if free.size == 0 or not elig.any():
+                return None
+            cand = np.flatnonzero(elig)
+            d = int(cand[int(rng.random() * cand.size)])
+            i = int(free[0])
+            u = self.det[d] + self.det_L[d] @ rng.normal(size=2)
+            h = p.h_mean + p.h_sd0 * rng.normal()
+            a = rng.uniform(-math.pi, math.pi)
+            S = self.S.copy()
+            S[i] = (u[0], u[1], h, a)
+            pr = present.copy()
+            pr[i] = True
+            n_born = int((pr & ~self.prev).sum())
+            return S, pr, [i], self._log_q_add(u, h, elig), -math.log(n_born)
+        if move == DELETE:
+            born = np.flatnonzero(present & ~self.prev)
+            if born.size == 0:
+                return None
+            i = int(born[int(rng.random() * born.size)])
+            pr = present.copy()
+            pr[i] = False
+            lq_rev = self._log_q_add(self.S[i, :2], float(self.S[i, 2]), self._eligible(pr))
+            return self.S.copy(), pr, [i], -math.log(born.size), lq_rev
+        if move == STAY:
+            left = np.flatnonzero(self.prev & ~present)
+            if left.size == 0:
+                return None
+            i = int(left[int(rng.random() * left.size)])
+            u = self.m[i, :2] + self.Luu[i] @ rng.normal(size=2)
+            h = self.h_pred_l[i] + p.h_sd * rng.normal()
+            a = float(rng.vonmises(self.alpha_pred_l[i], p.alpha_kappa))
+            S = self.S.copy()
+            S[i] = (u[0], u[1], h, a)
+            pr = present.copy()
+            pr[i] = True
+            n_stay = int((pr & self.prev).sum())
+            lq = -math.log(left.size) + self._log_pred(i, S[i].tolist())
+            return S, pr, [i], lq, -math.log(n_stay)
+        if move == LEAVE:
+            stay = np.flatnonzero(self.prev & present)
+            if stay.size == 0:
+                return None
+            i = int(stay[int(rng.random() * stay.size)])
+            pr = present.copy()
+            pr[i] = False
+            n_left = int((self.prev & ~pr).sum())
+            lq_rev = -math.log(n_left) + self._log_pred(i, self.S[i].tolist())
+            return self.S.copy(), pr, [i], -math.log(stay.size), lq_rev
+        if move == SWITCH:
+            idx = np.flatnonzero(present)
+            if idx.size < 2:
+                return None
+            U = self.S[idx, :2]
+            dist = np.hypot(U[:, None, 0] - U[None, :, 0], U[:, None, 1] - U[None, :, 1])
+            ii, jj = np.nonzero(np.triu(dist < p.switch_dist, 1))
+            if ii.size == 0:
+                return None
+            k = int(rng.random() * ii.size)
+            a, b = int(idx[ii[k]]), int(idx[jj[k]])
+            S = self.S.copy()
+            S[[a, b]] = S[[b, a]]
+            return S, present.copy(), [a, b], 0.0, 0.0
+        # UPDATE
+        idx = np.flatnonzero(present)
+        if idx.size == 0:
+            return None
+        i = int(idx[int(rng.random() * idx.size)])
+        x0, y0, h0, a0 = self.S[i].tolist()
+        L = self.t.update_chol(x0, y0)
+        near = self._near(x0, y0, L)
+        if near and rng.random() < p.p_det_update:
+            cx, cy = near[int(rng.random() * len(near))]
+        else:
+            cx, cy = x0, y0
+        w1, w2, w3, w4 = rng.normal(size=4).tolist()
+        x1 = cx + L[0] * w1
+        y1 = cy + L[1] * w1 + L[2] * w2
+        S = self.S.copy()
+        S[i] = (x1, y1, h0 + 0.01 * w3, (a0 + 0.3 * w4 + math.pi) % (2 * math.pi) - math.pi)
+        if not self._inside(x1, y1):
+            return S, present.copy(), [i], 0.0, -math.inf  # impossible: rejected
+        lq_f = self._log_q_update(x1, y1, x0, y0)
+        lq_r = self._log_q_update(x0, y0, x1, y1)
+        return S, present.copy(), [i], lq_f, lq_r
+
+    def run(self, rng: np.random.Generator) -> dict:
+        p = self.p
+        M = self.M
+        tried = np.zeros(6)
+        acc = np.zeros(6)
+        n_kept = p.num_moves - p.burn_in
+        cnt = np.zeros(M)
+        su = np.zeros((M, 2))
+        suu = np.zeros((M, 2, 2))
+        sh = np.zeros(M)
+        sc = np.zeros((M, 2))
+        last = p.burn_in
+
+        def flush(upto: int) -> None:
+            nonlocal last
+            w = upto - last
+            if w <= 0:
+                return
+            pm = self.present.astype(float) * w
+            cnt[:] += pm
+            su[:] += pm[:, None] * self.S[:, :2]
+            suu[:] += pm[:, None, None] * self.S[:, :2, None] * self.S[:, None, :2]
+            sh[:] += pm * self.S[:, 2]
+            sc[:, 0] += pm * np.cos(self.S[:, 3])
+            sc[:, 1] += pm * np.sin(self.S[:, 3])
+            last = upto
+
+        cum = np.cumsum(self.probs)
+        for it in range(p.num_moves):
+            m = select_move(rng, self.probs) if it == 0 else min(
+                int(np.searchsorted(cum, rng.random(), side="right")), 5
+            )
+            tried[m] += 1
+            prop = self.propose(rng, m)
+            if prop is None:
+                rng.random()
+                continue
+            S_new, pr_new, changed, lq_f, lq_r = prop
+            if lq_r == -math.inf:
+                rng.random()
+                continue
+            delta, commit = self._evaluate(S_new, pr_new, changed)
+            log_a = log_acceptance_ratio(
+                delta, lq_f, lq_r, self.log_probs[m], self.log_probs[REVERSE[m]]
+            )
+            if metropolis_accept(rng, log_a):
+                if it >= p.burn_in:
+                    flush(it)
+                self._commit(commit)
+                acc[m] += 1
+        flush(p.num_moves)
+        with np.errstate(invalid="ignore"):
+            rates = acc / tried
+        return {
+            "presence": cnt / n_kept,
+            "cnt": cnt,
+            "su": su,
+            "suu": suu,
+            "sh": sh,
+            "sc": sc,
+            "accept_rate": rates,
+        }
+
+
+class RJMCMCTracker:
+    """Multi-camera multi-person 3-D tracker with RJ-MCMC (seed 003).
+
+    Parameters
+    ----------
+    scene : Scene
+        Calibrated cameras and floor.
+    params : TrackerParams, optional
+    noise : GroundNoiseMap, optional
+        Precomputed ``C(u)`` (built from the scene if omitted).
+    likelihood : {"incremental", "full"}
+        ``"full"`` recomputes eqs. 8-10 from scratch at every move (baseline).
+
+    Examples
+    --------
+    >>> tracker = RJMCMCTracker(scene)                                   # doctest: +SKIP
+    >>> state = tracker.init_state()                                     # doctest: +SKIP
+    >>> state, result = tracker.step(0, state, frame)                    # doctest: +SKIP
+    """
+
+    def __init__(
+        self,
+        scene: Scene,
+        params: TrackerParams | None = None,
+        noise: GroundNoiseMap | None = None,
+        likelihood: str = "incremental",
+    ) -> None:
+        self.params = (params or TrackerParams()).validate()
+        if likelihood not in ("incremental", "full"):
+            raise InputError(f"likelihood={likelihood!r} must be 'incremental' or 'full'")
+        self.scene = scene
+        self.noise = noise if noise is not None else ground_noise_map(scene, self.params)
+        self.likelihood = likelihood
+        self.num_bins = self.params.colour_levels**3
+        self.projector = BoxProjector(scene)
+        p = self.params
+        if p.ground_noise:
+            upd = self.noise.cov + p.min_sd**2 * np.eye(2)
+        else:
+            upd = np.broadcast_to(p.fixed_sd**2 * np.eye(2), self.noise.cov.shape)
+        L = np.linalg.cholesky(upd)
+        self._upd = np.stack([L[..., 0, 0], L[..., 1, 0], L[..., 1, 1]], axis=-1).tolist()
+        self._origin = self.noise.origin.tolist()
+        self._step = self.noise.step
+        self._shape = self.noise.cov.shape[:2]
+
+    def update_chol(self, x: float, y: float) -> tuple:
+        """Cholesky factor ``(l00, l10, l11)`` of the update kernel ``Sigma(u)`` at ``(x, y)``.
+
+        ``Sigma(u) = C(u) C(u)^T + min_sd^2 I`` (seed 003, sec. 3.4, update move), or
+        ``fixed_sd^2 I`` without the ground-plane noise map.
+        """
+        i = min(max(int(round((x - self._origin[0]) / self._step)), 0), self._shape[0] - 1)
+        j = min(max(int(round((y - self._origin[1]) / self._step)), 0), self._shape[1] - 1)
+        return self._upd[i][j]
+
+    def init_state(self) -> TrackState:
+        """No one tracked yet."""
+        M, K, nb = self.params.max_objects, self.params.num_refs, self.num_bins
+        return TrackState(
+            np.zeros(M, dtype=bool),
+            np.full(M, -1, dtype=np.int64),
+            np.zeros((M, 4)),
+            np.tile(np.eye(4), (M, 1, 1)),
+            np.full(M, self.params.h_mean),
+            np.zeros(M),
+            np.zeros((M, 3, K, nb)),
+            np.zeros((M, 3), dtype=np.int64),
+            np.zeros((M, 3, K)),
+            0,
+        )
+
+    def _check_frame(self, frame: Frame) -> None:
+        sc = self.scene
+        shape = (sc.num_views, sc.height, sc.width)
+        if frame.D.shape != shape:
+            raise ShapeError(f"frame.D has shape {frame.D.shape}, expected {shape}")
+        if frame.image.shape != (*shape, 3):
+            raise ShapeError(f"frame.image has shape {frame.image.shape}, expected {(*shape, 3)}")
+        if not (np.all(np.isfinite(frame.D)) and np.all(np.isfinite(frame.det_ground))):
+            from dbn.errors import NonFiniteError
+
+            raise NonFiniteError("frame.D or frame.det_ground holds NaN or infinity")
+        if frame.det_ground.shape != (frame.det_view.shape[0], 2):
+            raise ShapeError(
+                f"frame.det_ground has shape {frame.det_ground.shape}, "
+                f"expected ({frame.det_view.shape[0]}, 2)"
+            )
+        if frame.det_view.size and (frame.det_view.min() < 0 or frame.det_view.max() >= sc.num_views):
+            raise InputError(f"frame.det_view holds a view outside 0..{sc.num_views - 1}")
+
+    def step(self, seed: int, state: TrackState, frame: Frame) -> tuple[TrackState, FrameResult]:
+        """Filter one frame: run the RJ-MCMC chain (seed 003, eqs. 2 and 11).
+
+        Parameters
+        ----------
+        seed : int
+            Seed of this frame's chain (explicit; same seed, same result).
+        state : TrackState
+            Previous posterior summary (not mutated).
+        frame : Frame
+            Observations (``D``, colour images, detections).
+
+        Returns
+        -------
+        state : TrackState
+        result : FrameResult
+        """
+        self._check_frame(frame)
+        rng = np.random.default_rng(seed)
+        chain = _Chain(self, state, frame, self.likelihood)
+        out = chain.run(rng)
+        return self._posterior(state, chain, out)
+
+    def _posterior(self, state: TrackState, chain: _Chain, out: dict) -> tuple[TrackState, FrameResult]:
+        p = self.params
+        exist = out["presence"] > 0.5
+        cnt = np.maximum(out["cnt"], 1.0)
+        mu = out["su"] / cnt[:, None]
+        S = out["suu"] / cnt[:, None, None] - mu[:, :, None] * mu[:, None, :]
+        S = 0.5 * (S + np.swapaxes(S, -1, -2)) + 0.02**2 * np.eye(2)
+        h = out["sh"] / cnt
+        alpha = np.arctan2(out["sc"][:, 1], out["sc"][:, 0])
+        mean = np.zeros((p.max_objects, 4))
+        cov = np.tile(np.eye(4), (p.max_objects, 1, 1))
+        mean[:, :2] = mu
+        cov[:, :2, :2] = S
+        cont = exist & chain.prev
+        G = chain.Gain
+        mean[cont, 2:] = chain.m[cont, 2:] + np.einsum("mij,mj->mi", G[cont], mu[cont] - chain.m[cont, :2])
+        P = chain.P[cont]
+        GS = np.einsum("mij,mjk->mik", G[cont], S[cont])
+        cov[cont, 2:, 2:] = P[:, 2:, 2:] - np.einsum("mij,mkj->mik", G[cont], P[:, 2:, :2]) + \
+            np.einsum("mij,mkj->mik", GS, G[cont])
+        cov[cont, 2:, :2] = GS
+        cov[cont, :2, 2:] = np.swapaxes(GS, -1, -2)
+        born = exist & ~chain.prev
+        cov[born, 2:, 2:] = p.vbar**2 * np.eye(2)
+        cov = 0.5 * (cov + np.swapaxes(cov, -1, -2))
+        label = np.where(exist, state.label, -1)
+        next_label = state.next_label
+        for i in np.flatnonzero(born):
+            label[i] = next_label
+            next_label += 1
+        refs, nref, rw = self._update_refs(chain, state, exist, mu, h, alpha)
+        new_state = TrackState(exist, label, mean, cov, h, alpha, refs, nref, rw, next_label)
+        idx = np.flatnonzero(exist)
+        X = np.concatenate([mean[idx], h[idx, None], alpha[idx, None]], axis=1)
+        result = FrameResult(
+            label[idx], X, out["presence"][idx], out["accept_rate"], chain.loglik + float(sum(chain.lp))
+        )
+        return new_state, result
+
+    def _update_refs(self, chain: _Chain, state: TrackState, exist, mu, h, alpha):
+        """Reference histogram update from the mean state (seed 003, sec. 3.3)."""
+        p = self.params
+        refs = np.where(exist[:, None, None, None], state.refs, 0.0)
+        nref = np.where(exist[:, None], state.nref, 0)
+        rw = np.where(exist[:, None, None], state.ref_weight, 0.0)
+        if not exist.any():
+            return refs, nref, rw
+        S = np.stack([mu[:, 0], mu[:, 1], h, alpha], axis=1)
+        cfg = chain._config(S, exist)
+        hist = histograms_of(chain.data, cfg).sum(-2).astype(np.float64)  # (V, M, 3, nb)
+        rw *= 0.95
+        for v in range(hist.shape[0]):
+            for i in np.flatnonzero(exist):
+                for b in range(3):
+                    n = hist[v, i, b].sum()
+                    if n < 20:
+                        continue
+                    obs = hist[v, i, b] / n
+                    k = nref[i, b]
+                    if k:
+                        bc = np.sqrt(refs[i, b, :k]) @ np.sqrt(obs)
+                        best = int(np.argmax(bc))
+                        if math.sqrt(max(0.0, 1 - bc[best])) < p.ref_match:
+                            refs[i, b, best] = (1 - p.ref_rate) * refs[i, b, best] + p.ref_rate * obs
+                            rw[i, b, best] += 1.0
+                            continue
+                    if k < p.num_refs:
+                        refs[i, b, k] = obs
+                        rw[i, b, k] = 1.0
+                        nref[i, b] = k + 1
+                    else:
+                        worst = int(np.argmin(rw[i, b]))
+                        refs[i, b, worst] = obs
+                        rw[i, b, worst] = 1.0
+        return refs, nref, rw
+
+    def run(
+        self, seed: int, frames: Iterable[Frame], num_frames: int | None = None, progress: bool = False
+    ) -> list[FrameResult]:
+        """Track a sequence; frame ``t`` uses the seed ``[seed, t]``.
+
+        Parameters
+        ----------
+        seed : int
+        frames : iterable of Frame
+        num_frames : int, optional
+            Length (for the progress bar).
+        progress : bool
+            Show a tqdm bar.
+        """
+        state = self.init_state()
+        results = []
+        it = tqdm(frames, total=num_frames, disable=not progress, desc="rjmcmc3d")
+        for t, frame in enumerate(it):
+            state, res = self.step(int(np.random.SeedSequence([seed, t]).generate_state(1)[0]), state, frame)
+            results.append(res)
+        return results
