@@ -30,3 +30,15 @@ def test_quick_benchmark_contract(name: str) -> None:
     for key in ("name", "quick", "seed", "ok"):
         assert key in result, f"{name}: key {key!r} missing from {last}"
     assert result["name"] == name and result["quick"] is True and result["ok"] is True
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", available())
+def test_full_benchmark_contract(name: str) -> None:
+    """The full-size run (``pytest -m slow``): same contract, no time limit here."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "benchmarks", name], cwd=ROOT, capture_output=True, text=True
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert result["name"] == name and result["quick"] is False and result["ok"] is True
