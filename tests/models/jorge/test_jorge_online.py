@@ -1,0 +1,92 @@
+"""On-line labelling with bounded memory, scoring and the colour-only baseline."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dbn.errors import InputError, TimeOrderError
+from models.jorge.online import (
+    OnlineConfig,
+    OnlineLabeller,
+    colour_only_labels,
+    label_online,
+    object_people,
+    score,
+)
+from models.jorge.simulate import simulate_ground_truth
+from models.jorge.strokes import build_strokes, load_caviar, make_stroke
+
+F = frozenset
+
+
+def _strokes():
+    return [
+        make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2, 3, 4], {0}),
+        make_stroke(1, 0, 10, (100, 0), (110, 0), [5, 6, 7, 8, 9], {1}),
+        make_stroke(2, 15, 20, (12, 0), (20, 0), [0, 1, 2, 3, 4], {0}),
+        make_stroke(3, 16, 20, (112, 0), (120, 0), [5, 6, 7, 8, 9], {1}),
+    ]
+
+
+def test_score_by_hand():
+    s = _strokes()
+    assert object_people(s) == {0: 0, 1: 1, 2: None, 3: None}
+    good = score(s, [F({0}), F({1}), F({0}), F({1})])
+    assert good.label_errors == 0 and good.id_switches == 0
+    bad = score(s, [F({0}), F({1}), F({2}), F({0})])
+    assert bad.label_errors == 2 and bad.errors == (2, 3) and bad.id_switches == 2
+    assert bad.error_rate == 0.5
+    with pytest.raises(InputError):
+        score(s, [F({0})])
+
+
+def test_colour_only_and_network_on_an_easy_case():
+    s = _strokes()
+    assert colour_only_labels(s) == [F({0}), F({1}), F({0}), F({1})]
+    res = label_online(s)
+    assert res.labels == [F({0}), F({1}), F({0}), F({1})]
+
+
+def test_bounded_memory_on_a_long_simulated_sequence():
+    truth = simulate_ground_truth(5, num_people=8, num_frames=1200)
+    strokes = build_strokes(5, truth)
+    cfg = OnlineConfig(max_active=8, max_labels=6, period_s=1.0)
+    res = label_online(strokes, cfg)
+    g = res.labeller.graph
+    assert len(res.labels) == len(strokes)
+    assert all(r.num_active <= 8 for r in res.records)
+    assert all(r.max_domain <= 6 for r in res.records)
+    # inside the bound: every clique has at most (6 labels) ** (largest family) entries
+    assert max(r.max_clique_entries for r in res.records) <= 6 ** 4
+    frozen = [k for k, n in enumerate(g.nodes) if n.frozen is not None]
+    assert len(frozen) >= len(strokes) - 8
+    for k, n in enumerate(g.nodes):
+        assert res.labels[k] in g.current_domain(k) or res.labels[k] == n.frozen
+    # same input, same result
+    again = label_online(strokes, cfg)
+    assert again.labels == res.labels
+
+
+def test_rejected_stroke_leaves_labeller_unchanged():
+    lab = OnlineLabeller()
+    for s in _strokes():
+        lab.add_stroke(s)
+    before = (dict(lab.labels), len(lab.graph), len(lab.records))
+    with pytest.raises(TimeOrderError):
+        lab.add_stroke(make_stroke(4, 5, 30, (0, 0), (1, 1), [1, 2]))
+    with pytest.raises(InputError):
+        lab.add_stroke(make_stroke(7, 50, 60, (0, 0), (1, 1), [1, 2]))
+    assert (dict(lab.labels), len(lab.graph), len(lab.records)) == before
+
+
+def test_real_sequence_runs_on_line(shared_data):
+    """Accuracy is measured (and reported) by ``benchmarks/jorge.py``; here: it runs,
+    every label is admissible, and faster than real time."""
+    truth = load_caviar(shared_data / "caviar" / "ms3ggt.xml.gz")
+    st = build_strokes(0, truth)
+    res = label_online(st)
+    sc = score(st, res.labels)
+    assert sc.num_strokes == len(st) and 0 <= sc.label_errors <= len(st)
+    assert res.seconds < truth.duration_s
+    assert np.isfinite([r.log_prob for r in res.records]).all()
