@@ -26,7 +26,7 @@ from dbn.cpds import DeterministicCPD, LinearGaussianCPD, TabularCPD
 from dbn.errors import ModelError, UnknownVariableError
 from dbn.variables import DiscreteVariable, Variable
 
-__all__ = ["prev", "is_prev", "unprev", "TwoSliceDBN", "slice_name"]
+__all__ = ["prev", "is_prev", "unprev", "TwoSliceDBN", "PreviousSliceCPD", "slice_name"]
 
 _PREV = "[t-1]"
 
@@ -61,10 +61,33 @@ def _renamed(cpd: CPD, mapping: dict[str, str]) -> CPD:
         return DeterministicCPD(child, parents, cpd.fn)
     if isinstance(cpd, LinearGaussianCPD):
         return LinearGaussianCPD(child, parents, cpd.weights, cpd.bias, cpd.cov)
+    rename = getattr(cpd, "renamed", None)
+    if callable(rename):
+        return rename(child, parents)
     raise ModelError(
-        f"CPD of {cpd.variable!r}: cannot rename a {type(cpd).__name__}; unrolling supports "
-        "tabular, deterministic and linear-Gaussian CPDs"
+        f"CPD of {cpd.variable!r}: cannot rename a {type(cpd).__name__}; unrolling needs a "
+        "tabular, deterministic or linear-Gaussian CPD, or a method renamed(variable, parents)"
     )
+
+
+class PreviousSliceCPD:
+    """Placeholder prior of a continuous previous-slice variable in ``transition_net``.
+
+    Conditional queries on the transition slice never use it; it has no density of its
+    own, so :meth:`sample` and :meth:`log_prob` raise.
+    """
+
+    def __init__(self, variable: str) -> None:
+        self.variable = variable
+        self.parents: tuple[str, ...] = ()
+
+    def sample(self, key, parent_values):  # noqa: D401
+        raise ModelError(
+            f"{self.variable!r} is the previous slice: condition on it, do not sample it"
+        )
+
+    def log_prob(self, value, parent_values):
+        raise ModelError(f"{self.variable!r} is the previous slice: condition on it")
 
 
 class TwoSliceDBN:
@@ -91,7 +114,8 @@ class TwoSliceDBN:
         Slice 0 alone.
     transition_net : BayesNet
         Slice ``t`` with the interface of slice ``t - 1`` as extra root nodes named
-        ``prev(name)`` (uniform priors, which conditional queries never use).
+        ``prev(name)`` (uniform priors for discrete ones, a :class:`PreviousSliceCPD`
+        placeholder for continuous ones; conditional queries never use them).
     interface : tuple of str
         Variables of slice ``t - 1`` that are parents of slice ``t`` (declaration order).
     """
@@ -134,11 +158,10 @@ class TwoSliceDBN:
                 prev_cpds.append(
                     TabularCPD(pv.name, [], np.full(v.cardinality, 1.0 / v.cardinality))
                 )
-            else:
-                raise ModelError(
-                    f"transition slice: continuous interface variable {base!r} is not supported "
-                    "by the discrete template (declare continuous dynamics with a model of its own)"
-                )
+            else:  # continuous: conditioned on, never given a prior of its own
+                pv = type(v)(prev(base), v.dim)
+                prev_vars.append(pv)
+                prev_cpds.append(PreviousSliceCPD(pv.name))
         try:
             transition_net = BayesNet(prev_vars + variables, prev_cpds + list(transition_cpds))
         except ModelError as exc:

@@ -148,3 +148,22 @@ def test_two_slice_dbn_unroll_structure() -> None:
         TwoSliceDBN([x, y], dbn.initial_cpds, [TabularCPD("x", [prev("y")], T), dbn.transition_cpds[1]])
     with pytest.raises(ModelError):
         dbn.unroll(0)
+
+
+def test_continuous_two_slice_dbn_unrolls_and_exact_filter_refuses_it() -> None:
+    from inference.exact.dbn_filter import DBNFilter
+
+    x, y = ContinuousVariable("x", 2), ContinuousVariable("y", 1)
+    obs = LinearGaussianCPD("y", ["x"], [np.ones((1, 2))], [0.0], [[1.0]])
+    dbn = TwoSliceDBN(
+        [x, y],
+        [LinearGaussianCPD("x", [], [], [0.0, 0.0], np.eye(2)), obs],
+        [LinearGaussianCPD("x", [prev("x")], [0.9 * np.eye(2)], [0.0, 0.0], 0.1 * np.eye(2)), obs],
+    )
+    assert dbn.interface == ("x",)
+    bn = dbn.unroll(3)
+    cpd = bn.cpd(slice_name("x", 2))
+    assert cpd.parents == (slice_name("x", 1),)
+    np.testing.assert_allclose(cpd.mean({slice_name("x", 1): np.ones(2)}), [0.9, 0.9])
+    with pytest.raises(ModelError, match="continuous"):
+        DBNFilter(dbn)
