@@ -288,18 +288,27 @@ class IncrementalLikelihood:
         self.present_l = cfg.present.tolist()
         self.total = float(self.fg.sum() + sum(map(sum, self.cc)))
         nb = data.num_bins
-        self._dump = 3 * 2 * nb  # label of covered pixels: a bin beyond the 3 regions
+        self._dump = 3 * 2 * nb
+        # per view and person: sum of c1 (D - c2) over the union of its boxes
+        st = W + 1
+        self.usum = [
+            [
+                _union_sum(data.ii[v].item, st, [b for b in self.boxes_l[v][j] if b[2] > b[0] and b[3] > b[1]])
+                if self.present_l[j]
+                else 0.0
+                for j in range(M)
+            ]
+            for v in range(V)
+        ]  # label of covered pixels: a bin beyond the 3 regions
 
     def _colour_one(self, counts: np.ndarray, j: int) -> float:
         """:func:`colour_cost` of one person from its (3, 2, num_bins) counts (fast path)."""
         p = self.params
-        Y = np.empty((3, counts.shape[2], 2))
-        Y[:, :, 0] = counts[:, 0]
-        Y[:, :, 0] += counts[:, 1]
-        Y[:, :, 1] = counts[:, 1]
-        n = Y.sum(1).tolist()  # (3, 2): |R_b| and its foreground pixel count
-        np.sqrt(Y, out=Y)
-        bc = (self.sref[j] @ Y).tolist()  # (3, K, 2): unnormalised Bhattacharyya coefficients
+        C = counts.astype(np.float64)
+        C[:, 0] += C[:, 1]  # C[:, 0] is now H_b (all pixels), C[:, 1] h_b (foreground)
+        n = C.sum(2).tolist()  # (3, 2): |R_b| and its foreground pixel count
+        np.sqrt(C, out=C)
+        bc = (self.sref[j] @ C.transpose(0, 2, 1)).tolist()  # (3, K, 2), unnormalised
         nref = self.nref_l[j]
         total = 0.0
         lf = p.lambda_f
@@ -393,10 +402,13 @@ class IncrementalLikelihood:
                     signed += [(bx, 1) for bx in ov[j][1][v] if bx[2] > bx[0] and bx[3] > bx[1]]
             if not signed:
                 continue
-            X0 = min(bx[0] for bx, _ in signed)
-            Y0 = min(bx[1] for bx, _ in signed)
-            X1 = max(bx[2] for bx, _ in signed)
-            Y1 = max(bx[3] for bx, _ in signed)
+            X0 = Y0 = 1 << 40
+            X1 = Y1 = -1
+            for (b0, b1, b2, b3), _ in signed:
+                X0 = b0 if b0 < X0 else X0
+                Y0 = b1 if b1 < Y0 else Y0
+                X1 = b2 if b2 > X1 else X1
+                Y1 = b3 if b3 > Y1 else Y1
             present, _, bbox, _ = self._get(v, ov)
             others = []  # unchanged people whose boxes meet the changed area
             for j in range(self.M):
@@ -406,13 +418,16 @@ class IncrementalLikelihood:
                 if kx0 >= X1 or kx1 <= X0 or ky0 >= Y1 or ky1 <= Y0:
                     continue
                 others.append(j)
+            get = self.data.ii[v].item
+            st = self.data.fgw.shape[2] + 1
+            new_usum = {}
+            for j in changed:
+                nbx = [b for b in ov[j][1][v] if b[2] > b[0] and b[3] > b[1]] if ov[j][0] else []
+                new_usum[j] = _union_sum(get, st, nbx) if nbx else 0.0
             if not others and len(changed) == 1:
                 # nobody else covers these pixels: eq. 9 change from the integral image
-                get = self.data.ii[v].item
-                st = self.data.fgw.shape[2] + 1
-                d_fg = _union_sum(get, st, [b for b, sg in signed if sg > 0]) - _union_sum(
-                    get, st, [b for b, sg in signed if sg < 0]
-                )
+                j = changed[0]
+                d_fg = new_usum[j] - (self.usum[v][j] if self.present_l[j] else 0.0)
             else:
                 cold = self.count[v, Y0:Y1, X0:X1]
                 cnew = cold.copy()
@@ -421,7 +436,7 @@ class IncrementalLikelihood:
                 gain = (cnew > 0).view(np.int8) - (cold > 0).view(np.int8)
                 d_fg = float(np.vdot(gain, self.data.fgw[v, Y0:Y1, X0:X1]))
             delta += d_fg
-            patches.append((v, signed, d_fg))
+            patches.append((v, signed, d_fg, new_usum))
             for j in list(changed) + others:
                 if not active[j]:
                     continue
@@ -432,7 +447,9 @@ class IncrementalLikelihood:
 
     def commit(self, pending: _Pending) -> None:
         """Make the proposed configuration current."""
-        for v, signed, d_fg in pending.patches:
+        for v, signed, d_fg, new_usum in pending.patches:
+            for j, u in new_usum.items():
+                self.usum[v][j] = u
             cv = self.count[v]
             for (bx0, by0, bx1, by1), sign in signed:
                 cv[by0:by1, bx0:bx1] += sign

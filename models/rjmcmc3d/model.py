@@ -64,10 +64,10 @@ class TrackerParams(NamedTuple):
     alpha_kappa: float = 2.0
     lambda_g: float = 2.0
     shape_sd: tuple[float, float] = (0.2, 0.3)
-    log_p_birth: float = math.log(0.02)
+    log_p_birth: float = math.log(0.1)
     p_leave_inside: float = 0.01
     leave_ramp: float = 0.4
-    c1: float = 0.25
+    c1: float = 0.4
     c2: float = 0.45
     lambda_im: float = 0.1
     lambda_f: float = 0.5

@@ -368,12 +368,15 @@ class BoxProjector:
         boxes = b.tolist()
         bbox = []
         for parts in boxes:
-            ne = [bx for bx in parts if bx[2] > bx[0] and bx[3] > bx[1]]
-            if ne:
-                bbox.append([min(q[0] for q in ne), min(q[1] for q in ne),
-                             max(q[2] for q in ne), max(q[3] for q in ne)])
-            else:
-                bbox.append([0, 0, 0, 0])
+            x0 = y0 = 1 << 40
+            x1 = y1 = -1
+            for b0, b1, b2, b3 in parts:
+                if b2 > b0 and b3 > b1:
+                    x0 = b0 if b0 < x0 else x0
+                    y0 = b1 if b1 < y0 else y0
+                    x1 = b2 if b2 > x1 else x1
+                    y1 = b3 if b3 > y1 else y1
+            bbox.append([x0, y0, x1, y1] if x1 >= 0 else [0, 0, 0, 0])
         depth = [math.hypot(x - cx, y - cy) for cx, cy in self.centers]
         return boxes, bbox, depth
 
