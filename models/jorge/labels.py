@@ -30,11 +30,19 @@ All hidden-node CPDs come from one generative rule. A parent :math:`p` hands its
 
 .. math::
     \pi_p(s \mid x_p) = \begin{cases}
-        \delta(s = x_p) & p \text{ not shared, or } |x_p| = 1 \\
+        \delta(s = x_p) & |x_p| = 1 \\
         (1 - P_{split})\,\delta(s = x_p)
           + \frac{P_{split}}{2^{|x_p|} - 2}\,[\emptyset \ne s \subsetneq x_p]
-          & p \text{ shared (eq. 9)}
+          & p \text{ shared (eq. 9)} \\
+        (1 - P_{part})\,\delta(s = x_p)
+          + \frac{P_{part}}{2^{|x_p|} - 2}\,[\emptyset \ne s \subsetneq x_p]
+          & p \text{ not shared}
     \end{cases}
+
+:math:`P_{part}` (our addition, default 0.3; 0 gives the seed's eq. 10 exactly) is the
+probability that the only visible child of a group is a part of it: the group split
+while its other part was hidden (by the background or a gap of the low-level tracker),
+which the seed's occlusion structure cannot express.
 
 and the child is
 
@@ -44,7 +52,7 @@ and the child is
       + m P_{merge} \sum_{a \cup b = x_k} \pi_1(a \mid x_1)\,\pi_2(b \mid x_2)
 
 with :math:`n` the number of parents and :math:`m = [n = 2]`. With one unshared parent
-this is eq. 10 exactly (eq. 3 for the new label); with two parents and
+and :math:`P_{part} = 0` this is eq. 10 exactly (eq. 3 for the new label); with two parents and
 :math:`P_{merge} = 0` it is eq. 4. Mass on labels outside the child's domain (a union
 larger than the maximum group size, a union of overlapping pieces, which eq. 8 excludes,
 or a label pruned away) is dropped and the row renormalised; the new label is always in
@@ -105,17 +113,21 @@ class LabelParams:
     p_split : float
         :math:`P_{split}`, probability that a child of a splitting group takes a proper
         part of it rather than all of it.
+    p_part : float
+        :math:`P_{part}`, the same for the only child of a group (its other part hidden);
+        0 gives eq. 10 of the seed exactly. Our addition.
     max_group_size : int
         Largest admissible group (labels with more objects are not admitted).
     """
 
-    p_new: float = 0.05
-    p_merge: float = 0.4
+    p_new: float = 0.02
+    p_merge: float = 0.6
     p_split: float = 0.8
     max_group_size: int = 3
+    p_part: float = 0.3
 
     def __post_init__(self) -> None:
-        for name in ("p_new", "p_merge", "p_split"):
+        for name in ("p_new", "p_merge", "p_split", "p_part"):
             v = getattr(self, name)
             if not 0.0 <= v <= 1.0 or not np.isfinite(v):
                 raise ModelError(f"LabelParams.{name} must be in [0, 1], got {v}")
@@ -166,13 +178,14 @@ def proper_subsets(label: Label) -> list[Label]:
     ]
 
 
-def pieces(domain: Sequence[Label], shared: bool) -> list[Label]:
+def pieces(domain: Sequence[Label], shared: bool, partial: bool = False) -> list[Label]:
     """What a parent with admissible labels ``domain`` can hand one child.
 
-    Not shared: its labels (eq. 7). Shared (its region splits): every non-empty subset of
-    each label (eq. 9, :math:`\\mathcal{P}(L_i)` without the empty set).
+    Not shared: its labels (eq. 7), and with ``partial`` (:math:`P_{part} > 0`) also their
+    non-empty subsets. Shared (its region splits): every non-empty subset of each label
+    (eq. 9, :math:`\\mathcal{P}(L_i)` without the empty set).
     """
-    if not shared:
+    if not shared and not partial:
         return list(dict.fromkeys(domain))
     out: dict[Label, None] = {}
     for lab in domain:
@@ -187,6 +200,7 @@ def admissible_labels(
     parent_shared: Sequence[bool],
     new_label: Label,
     max_group_size: int,
+    partial: bool = False,
 ) -> list[Label]:
     r"""Admissible labels :math:`L_k` of a node (seed 004, eqs. 2 and 7-9).
 
@@ -204,6 +218,8 @@ def admissible_labels(
     new_label : Label
         ``{k}`` for node ``k``.
     max_group_size : int
+    partial : bool
+        Whether an unshared parent may hand a part of a group (:math:`P_{part} > 0`).
 
     Returns
     -------
@@ -217,7 +233,7 @@ def admissible_labels(
         )
     if len(parent_domains) > 2:
         raise ModelError(f"a node has at most 2 parents, got {len(parent_domains)}")
-    parts = [pieces(d, s) for d, s in zip(parent_domains, parent_shared)]
+    parts = [pieces(d, s, partial) for d, s in zip(parent_domains, parent_shared)]
     found: set[Label] = set()
     for p in parts:
         found.update(p)
@@ -251,11 +267,12 @@ def root_table(domain: Sequence[Label], new_label: Label) -> np.ndarray:
     return t
 
 
-def _piece_law(label: Label, shared: bool, p_split: float) -> list[tuple[Label, float]]:
-    if not shared or len(label) == 1:
+def _piece_law(label: Label, shared: bool, params: LabelParams) -> list[tuple[Label, float]]:
+    p = params.p_split if shared else params.p_part
+    if len(label) == 1 or p == 0.0:
         return [(label, 1.0)]
     subs = proper_subsets(label)
-    return [(label, 1.0 - p_split)] + [(s, p_split / len(subs)) for s in subs]
+    return [(label, 1.0 - p)] + [(s, p / len(subs)) for s in subs]
 
 
 def child_table(
@@ -272,6 +289,8 @@ def child_table(
 
     ===  =======================  ============================================================
      b   OCCLUSION (eq. 10)       :math:`x_k = x_1`: :math:`1-P_{new}`; :math:`l_{new}`: :math:`P_{new}`
+                                  (for a group :math:`x_1`, :math:`P_{part}` of the inherited mass
+                                  goes to its proper parts, as in c)
      c   SPLIT (eq. 9)            :math:`x_k = x_1`: :math:`(1-P_{new})(1-P_{split})` if
                                   :math:`|x_1|>1` (else :math:`1-P_{new}`); each non-empty proper
                                   subset: :math:`(1-P_{new})P_{split}/(2^{|x_1|}-2)`;
@@ -310,7 +329,7 @@ def child_table(
     p_new, p_merge = params.p_new, (params.p_merge if n == 2 else 0.0)
     w_single = (1.0 - p_new - p_merge) / n
     laws = [
-        [_piece_law(lab, sh, params.p_split) for lab in dom]
+        [_piece_law(lab, sh, params) for lab in dom]
         for dom, sh in zip(parent_domains, parent_shared)
     ]
     shape = tuple(len(d) for d in parent_domains) + (len(domain),)

@@ -82,9 +82,9 @@ class NetworkConfig:
     max_parents, max_children : int
         At most 2 each (seed 004, sec. 4).
     sibling_window : int
-        A stroke can become a second child of a parent only if it starts within this many
-        frames of the parent's first child (both are the parts of one split); otherwise
-        every stroke would stay a candidate parent until it had two children.
+        A stroke can become the second child of a parent only if it starts within this
+        many frames of the parent's end (both children are the parts of one split);
+        otherwise every stroke would stay a candidate parent until it had two children.
     labels : LabelParams
         :math:`P_{new}, P_{merge}, P_{split}` and the maximum group size.
     colour_mode : {"ratio", "eq6"}
@@ -100,7 +100,7 @@ class NetworkConfig:
     max_gap_frames: int = 30
     max_parents: int = 2
     max_children: int = 2
-    sibling_window: int = 3
+    sibling_window: int = 20
     labels: LabelParams = field(default_factory=LabelParams)
     colour_mode: str = "ratio"
     match_prob: float = 0.8
@@ -155,7 +155,6 @@ class LabelGraph:
         self._end_pos = np.zeros((n0, 2))
         self._nchild = np.zeros(n0, dtype=np.int64)
         self._palettes = np.zeros((n0, self.config.pool_size), dtype=bool)
-        self._first_child_start = np.zeros(n0, dtype=np.int64)
 
     # --- growth --------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -163,7 +162,7 @@ class LabelGraph:
 
     def _grow(self) -> None:
         n = self._end.shape[0] * 2
-        for name in ("_end", "_end_pos", "_nchild", "_palettes", "_first_child_start"):
+        for name in ("_end", "_end_pos", "_nchild", "_palettes"):
             old = getattr(self, name)
             new = np.zeros((n, *old.shape[1:]), dtype=old.dtype)
             new[: old.shape[0]] = old
@@ -217,17 +216,25 @@ class LabelGraph:
         dist = np.linalg.norm(self._end_pos[:n] - stroke.positions[0], axis=1)
         ok = (gap > 0) & (gap <= cfg.max_gap_frames) & (dist <= cfg.radius + cfg.v_max * gap)
         ok &= self._nchild[:n] < cfg.max_children
-        # a parent's children are siblings of one split: they start within
-        # ``sibling_window`` frames of each other
-        ok &= (self._nchild[:n] == 0) | (stroke.start - self._first_child_start[:n] <= cfg.sibling_window)
+        # a second child (the other part of a split) must start within ``sibling_window``
+        # frames of the parent's end
+        ok &= (self._nchild[:n] == 0) | (gap <= cfg.sibling_window)
         cand = np.flatnonzero(ok)
-        # a candidate whose child is also a candidate is superseded by that child (the
-        # new stroke continues the child, it is not the child's sibling)
+        # a candidate that is an ancestor of another candidate is superseded by it (the
+        # new stroke continues the descendant, it is not its sibling)
         cset = set(cand.tolist())
-        superseded = {p for c in cand.tolist() for p in self.nodes[c].parents if p in cset}
+        superseded = {a for c in cand.tolist() for a in self._ancestors(c, 3) if a in cset}
         cand = np.array([c for c in cand.tolist() if c not in superseded], dtype=np.int64)
         order = np.lexsort((cand, dist[cand]))
         return cand[order][: cfg.max_parents]
+
+    def _ancestors(self, k: int, depth: int) -> set[int]:
+        out: set[int] = set()
+        front = set(self.nodes[k].parents)
+        for _ in range(depth):
+            out |= front
+            front = {p for f in front for p in self.nodes[f].parents} - out
+        return out
 
     def add_stroke(self, stroke: Stroke) -> tuple[int, list[int]]:
         """Add the node of a new stroke (validated first: nothing changes on error).
@@ -249,8 +256,6 @@ class LabelGraph:
         self._end_pos[k] = stroke.positions[-1]
         self._palettes[k, stroke.palette] = True
         for p in parents:
-            if self._nchild[p] == 0:
-                self._first_child_start[p] = stroke.start
             self._nchild[p] += 1
             self.nodes[p].children.append(k)
         node = _Node(stroke, parents, [], ())
@@ -296,7 +301,7 @@ class LabelGraph:
     def _admissible(self, k: int) -> tuple[Label, ...]:
         return tuple(
             admissible_labels(self.parent_domains(k), self.shared(k), frozenset({k}),
-                              self.config.labels.max_group_size)
+                              self.config.labels.max_group_size, self.config.labels.p_part > 0)
         )
 
     def palettes(self, domain: Sequence[Label]) -> np.ndarray:

@@ -18,10 +18,12 @@ Instant labelling between inferences (eq. 12)
     Nodes that took part in the last inference keep their MAP label until the next one.
 
 Scoring
-    An object id ``o`` is the object first seen in stroke ``o``. It stands for the person
-    of that stroke if the stroke held one person not already claimed by an earlier object;
-    otherwise it stands for nobody. A stroke is a labelling error (LE) when the people its
-    label stands for differ from its true set. Identity switches: over each person's
+    An object id ``o`` is the object first seen in stroke ``o``. Objects are matched one to
+    one with people, by default with the matching that maximises co-occurrences (as IDF1
+    matches identities); with ``mapping="first_seen"`` an object stands for the person of
+    the stroke where it was first seen, if that stroke held one person not already
+    claimed. A stroke is a labelling error (LE) when the people its label stands for
+    differ from its true set. Identity switches: over each person's
     one-person strokes in time order, the number of consecutive pairs given different
     labels.
 """
@@ -34,6 +36,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from dbn.errors import InputError, ModelError
 from inference.exact import JunctionTree, map_assignment
@@ -50,6 +53,7 @@ __all__ = [
     "score",
     "colour_only_labels",
     "object_people",
+    "optimal_people",
 ]
 
 
@@ -231,7 +235,7 @@ class OnlineLabeller:
             self.infer(int(np.floor(self._next_inference)))
             self._next_inference += self._period_frames
         k, widened = self.graph.add_stroke(stroke)
-        for c in widened:
+        for c in sorted(set(widened)):  # parents before children
             self._relabel(c)
         self._relabel(k)
         return self.labels[k]
@@ -379,7 +383,31 @@ def object_people(strokes: Sequence[Stroke]) -> dict[int, int | None]:
     return out
 
 
-def score(strokes: Sequence[Stroke], labels: Sequence[Label]) -> Score:
+def optimal_people(strokes: Sequence[Stroke], labels: Sequence[Label]) -> dict[int, int | None]:
+    """Who each object id stands for under the best one-to-one matching of objects and
+    people (as IDF1 does for identities): the matching maximises the number of strokes in
+    which object and person occur together (Hungarian algorithm); unmatched objects stand
+    for nobody."""
+    objects = sorted({o for lab in labels for o in lab})
+    persons = sorted({p for s in strokes for p in s.truth})
+    out: dict[int, int | None] = {o: None for o in objects}
+    if not objects or not persons:
+        return out
+    oi = {o: i for i, o in enumerate(objects)}
+    pi = {p: j for j, p in enumerate(persons)}
+    weight = np.zeros((len(objects), len(persons)))
+    for s, lab in zip(strokes, labels):
+        rows = [oi[o] for o in lab]
+        cols = [pi[p] for p in s.truth]
+        weight[np.ix_(rows, cols)] += 1.0
+    r, c = linear_sum_assignment(weight, maximize=True)
+    for i, j in zip(r, c):
+        if weight[i, j] > 0:
+            out[objects[i]] = persons[j]
+    return out
+
+
+def score(strokes: Sequence[Stroke], labels: Sequence[Label], mapping: str = "optimal") -> Score:
     """LE, LE / NT and identity switches of a labelling.
 
     Parameters
@@ -388,6 +416,11 @@ def score(strokes: Sequence[Stroke], labels: Sequence[Label]) -> Score:
         With their true sets.
     labels : sequence of Label, length num_strokes
         Label of each stroke (sets of object ids, object ``o`` = first seen in stroke ``o``).
+    mapping : {"optimal", "first_seen"}
+        How object ids are matched to people: the best one-to-one matching
+        (:func:`optimal_people`, default) or the person of the stroke where the object was
+        first seen, if not already claimed (:func:`object_people`, stricter: one early
+        mistake makes every later stroke of that person an error).
 
     Returns
     -------
@@ -397,13 +430,20 @@ def score(strokes: Sequence[Stroke], labels: Sequence[Label]) -> Score:
     labels = list(labels)
     if len(labels) != len(strokes):
         raise InputError(f"score: {len(labels)} labels for {len(strokes)} strokes")
-    people = object_people(strokes)
+    known = {s.index for s in strokes}
+    for s, lab in zip(strokes, labels):
+        unknown = [o for o in lab if o not in known]
+        if unknown or not lab:
+            raise InputError(f"score: stroke {s.index} has label {set(lab)} with unknown object ids {unknown}")
+    if mapping == "optimal":
+        people = optimal_people(strokes, labels)
+    elif mapping == "first_seen":
+        people = object_people(strokes)
+    else:
+        raise InputError(f"score: mapping must be 'optimal' or 'first_seen', got {mapping!r}")
     errors = []
     for s, lab in zip(strokes, labels):
-        unknown = [o for o in lab if o not in people]
-        if unknown:
-            raise InputError(f"score: stroke {s.index} has label with unknown object ids {unknown}")
-        meant = {people[o] if people[o] is not None else ("nobody", o) for o in lab}
+        meant = {people[o] if people.get(o) is not None else ("nobody", o) for o in lab}
         if meant != set(s.truth):
             errors.append(s.index)
     switches = 0

@@ -12,6 +12,7 @@ from models.jorge.online import (
     colour_only_labels,
     label_online,
     object_people,
+    optimal_people,
     score,
 )
 from models.jorge.simulate import simulate_ground_truth
@@ -32,11 +33,22 @@ def _strokes():
 def test_score_by_hand():
     s = _strokes()
     assert object_people(s) == {0: 0, 1: 1, 2: None, 3: None}
+    assert optimal_people(s, [F({0}), F({1}), F({0}), F({1})]) == {0: 0, 1: 1}
     good = score(s, [F({0}), F({1}), F({0}), F({1})])
     assert good.label_errors == 0 and good.id_switches == 0
-    bad = score(s, [F({0}), F({1}), F({2}), F({0})])
+    bad = score(s, [F({0}), F({1}), F({2}), F({0})], mapping="first_seen")
     assert bad.label_errors == 2 and bad.errors == (2, 3) and bad.id_switches == 2
     assert bad.error_rate == 0.5
+    # the best one-to-one matching: object 0 is person 0 (2 strokes), object 1 person 1
+    best = score(s, [F({0}), F({1}), F({2}), F({0})])
+    assert best.errors == (2, 3)
+    # an early mistake: first-seen mapping blames every later stroke, optimal only one
+    late = [F({0}), F({1}), F({2}), F({1})]
+    swapped = [make_stroke(4, 30, 40, (20, 0), (30, 0), [0, 1], {0})]
+    assert score(s + swapped, late + [F({2})], mapping="first_seen").errors == (2, 4)
+    assert score(s + swapped, late + [F({2})]).errors == (0,)
+    with pytest.raises(InputError):
+        score(s, [F({0}), F({1}), F({2}), F({77})])
     with pytest.raises(InputError):
         score(s, [F({0})])
 
