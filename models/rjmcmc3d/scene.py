@@ -355,15 +355,13 @@ class BoxProjector:
         g[:, 2] = 1.0
         proj = ((g @ self.P013).reshape(3, 1, _NUM_ANGLES, 3 * self.V) + (self.zf * h) * self.P2)
         proj = proj.reshape(3, 2 * _NUM_ANGLES, self.V, 3)
-        w = proj[..., 2]
-        if not (w > 1e-6).all():
+        w = proj[..., 2:3]
+        if not w.min() > 1e-6:
             b = part_boxes(self.P, np.array([[x, y]]), np.array([h]), np.array([a]),
                            self.width, self.height)[:, 0]
         else:
-            px = proj[..., 0] / w
-            py = proj[..., 1] / w
-            ext = np.stack([np.floor(px.min(1)), np.floor(py.min(1)),
-                            np.ceil(px.max(1)), np.ceil(py.max(1))], axis=-1)  # (3, V, 4)
+            pxy = proj[..., :2] / w  # (3, 2A, V, 2)
+            ext = np.concatenate([np.floor(pxy.min(1)), np.ceil(pxy.max(1))], axis=-1)  # (3, V, 4)
             b = np.minimum(np.maximum(ext, 0.0), self.hi).astype(np.int64).swapaxes(0, 1)
         boxes = b.tolist()
         bbox = []

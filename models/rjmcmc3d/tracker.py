@@ -24,6 +24,7 @@ never mutates the state it is given.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Iterable
 from typing import NamedTuple
 
@@ -200,6 +201,8 @@ class _Chain:
             self.loglik = full_loglik(p, self.data, cfg, self.sref, self.nref)
         self.log_probs = np.log(np.asarray(p.move_probs)).tolist()
         self.probs = np.asarray(p.move_probs)
+        self._near_cache = (math.nan, math.nan, [])
+        self.lik_time = 0.0  # seconds spent projecting boxes and evaluating the likelihood
 
     # ---- geometry helpers --------------------------------------------------------------
     def _signed_inside(self, u: np.ndarray) -> np.ndarray:
@@ -311,6 +314,7 @@ class _Chain:
             a, b = changed
             d_e += rows[a][b] - self.G[a][b]
         d_int = -2.0 * self.p.lambda_g * d_e
+        t0 = time.perf_counter()
         boxdata = {i: self.proj.one(*rows_s[i]) for i in changed}
         if self.lik is not None:
             ov = {i: (pr_new[i], *boxdata[i]) for i in changed}
@@ -320,6 +324,7 @@ class _Chain:
             cfg = self._config_from_boxdata(bd, present_new)
             new_total = full_loglik(self.p, self.data, cfg, self.sref, self.nref)
             d_lik, pending = new_total - self.loglik, None
+        self.lik_time += time.perf_counter() - t0
         commit = (S_new, present_new, changed, lp_new, upr_new, rows, boxdata, pending, d_lik)
         return d_prior + d_int + d_lik, commit
 
@@ -395,7 +400,8 @@ class _Chain:
     def _log_q_update(self, x1: float, y1: float, x0: float, y0: float) -> float:
         """``log q(u1 | u0)`` of the update mixture (random walk + detection-driven)."""
         L = self.t.update_chol(x0, y0)
-        near = self._near(x0, y0, L)
+        cache = self._near_cache
+        near = cache[2] if cache[0] == x0 and cache[1] == y0 else self._near(x0, y0, L)
         l_rw = self._lg(x1, y1, x0, y0, L)
         if not near:
             return l_rw
@@ -483,6 +489,7 @@ class _Chain:
         x0, y0, h0, a0 = self.S[i].tolist()
         L = self.t.update_chol(x0, y0)
         near = self._near(x0, y0, L)
+        self._near_cache = (x0, y0, near)
         if near and rng.random() < p.p_det_update:
             cx, cy = near[int(rng.random() * len(near))]
         else:
