@@ -276,6 +276,7 @@ class LabelGraph:
 
     # --- accessors -----------------------------------------------------------------------
     def parent_domains(self, k: int) -> list[tuple[Label, ...]]:
+        """Current domains of node ``k``'s parents (a frozen parent: its label alone)."""
         return [self.current_domain(p) for p in self.nodes[k].parents]
 
     def shared(self, k: int) -> list[bool]:

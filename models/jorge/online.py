@@ -47,6 +47,7 @@ from models.jorge.strokes import Stroke, StrokeSet
 __all__ = [
     "OnlineConfig",
     "OnlineLabeller",
+    "OnlineResult",
     "InferenceRecord",
     "Score",
     "label_online",
