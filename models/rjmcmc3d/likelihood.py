@@ -224,16 +224,24 @@ def _union_sum(get, st: int, boxes: list) -> float:
     total = 0.0
     n = len(boxes)
     for a in range(n):
-        total += _rect_sum(get, st, *boxes[a])
+        A = boxes[a]
+        total += _rect_sum(get, st, A[0], A[1], A[2], A[3])
         for b in range(a + 1, n):
-            A, B = boxes[a], boxes[b]
-            ab = (max(A[0], B[0]), max(A[1], B[1]), min(A[2], B[2]), min(A[3], B[3]))
-            total -= _rect_sum(get, st, *ab)
+            B = boxes[b]
+            x0 = A[0] if A[0] > B[0] else B[0]
+            y0 = A[1] if A[1] > B[1] else B[1]
+            x1 = A[2] if A[2] < B[2] else B[2]
+            y1 = A[3] if A[3] < B[3] else B[3]
+            if x1 <= x0 or y1 <= y0:
+                continue
+            total -= _rect_sum(get, st, x0, y0, x1, y1)
             for c in range(b + 1, n):
                 C = boxes[c]
-                total += _rect_sum(
-                    get, st, max(ab[0], C[0]), max(ab[1], C[1]), min(ab[2], C[2]), min(ab[3], C[3])
-                )
+                cx0 = x0 if x0 > C[0] else C[0]
+                cy0 = y0 if y0 > C[1] else C[1]
+                cx1 = x1 if x1 < C[2] else C[2]
+                cy1 = y1 if y1 < C[3] else C[3]
+                total += _rect_sum(get, st, cx0, cy0, cx1, cy1)
     return total
 
 
@@ -317,10 +325,15 @@ class IncrementalLikelihood:
             nR, nF = n[b]
             if k == 0 or nR == 0:
                 continue
-            bcb = bc[b][:k]
-            d2H = min(1.0, max(0.0, 1.0 - max(r[0] for r in bcb) / math.sqrt(nR)))
+            bH = bh = -1.0
+            for r0, r1 in bc[b][:k]:
+                bH = r0 if r0 > bH else bH
+                bh = r1 if r1 > bh else bh
+            d2H = 1.0 - bH / math.sqrt(nR)
+            d2H = 0.0 if d2H < 0.0 else (1.0 if d2H > 1.0 else d2H)
             if nF > 0:
-                d2h = min(1.0, max(0.0, 1.0 - max(r[1] for r in bcb) / math.sqrt(nF)))
+                d2h = 1.0 - bh / math.sqrt(nF)
+                d2h = 0.0 if d2h < 0.0 else (1.0 if d2h > 1.0 else d2h)
             else:
                 d2h = d2H
             total -= p.lambda_im * nR * ((1.0 - lf) * d2H + lf * d2h - p.d_min)

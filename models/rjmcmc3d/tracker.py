@@ -297,19 +297,21 @@ class _Chain:
         S_l = self.S.tolist()
         rows = {}
         d_e = 0.0
+        live = [j for j in range(self.M) if pr_new[j]]
         for c in changed:
             row = [0.0] * self.M
             if pr_new[c]:
-                for j in range(self.M):
-                    if j == c or not pr_new[j]:
+                sc, uc = rows_s[c], upr_new[c]
+                for j in live:
+                    if j == c:
                         continue
                     if j in rows_s:
-                        row[j] = self._pair(rows_s[c], upr_new[c], rows_s[j], upr_new[j])
+                        row[j] = self._pair(sc, uc, rows_s[j], upr_new[j])
                     else:
-                        row[j] = self._pair(rows_s[c], upr_new[c], S_l[j], self.upr[j])
+                        row[j] = self._pair(sc, uc, S_l[j], self.upr[j])
             rows[c] = row
             old = self.G[c]
-            d_e += sum(row[j] - old[j] for j in range(self.M) if j not in rows_s)
+            d_e += sum(row) - sum(old) - sum(row[j] - old[j] for j in changed)
         if len(changed) == 2:
             a, b = changed
             d_e += rows[a][b] - self.G[a][b]
