@@ -117,10 +117,6 @@ class FrameResult(NamedTuple):
     log_target: float
 
 
-def _vonmises_logpdf(x: float, mu: float, kappa: float) -> float:
-    return kappa * (math.cos(x - mu) - 1.0) - math.log(2 * math.pi * i0e(kappa))
-
-
 class _Chain:
     """Working state of one frame's chain (mutated in place; private)."""
 

@@ -190,3 +190,19 @@ def test_prediction_with_and_without_ground_noise(scene) -> None:
     i, j = noise.index(mean[:, :2])
     assert np.allclose(P1[0, :2, :2] - P0[0, :2, :2], noise.cov[i[0], j[0]])
     assert np.all(np.linalg.eigvalsh(P0[0]) > 0)
+
+
+def test_scalar_interaction_matches_vectorised(scene, tracker) -> None:
+    """The chain's scalar pair penalty equals the documented g(X_i, X_j) of sec. 3.2."""
+    from models.rjmcmc3d.model import interaction_penalty
+
+    truth = simulate_walkers(5, scene, 3, 5)
+    chain = _Chain(tracker, tracker.init_state(), render_frame(6, scene, truth, 0), "incremental")
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        si = [*rng.uniform(0, 3, 2), 1.7, rng.uniform(-3, 3)]
+        sj = [*rng.uniform(0, 3, 2), 1.7, rng.uniform(-3, 3)]
+        ui, uj = tuple(rng.uniform(0, 3, 2)), tuple(rng.uniform(0, 3, 2))
+        ref = interaction_penalty(chain.p, np.array(si[:2]), np.array(si[3]), np.array(ui),
+                                  np.array(sj[:2]), np.array(sj[3]), np.array(uj))
+        assert chain._pair(si, ui, sj, uj) == pytest.approx(float(ref), abs=1e-15)
