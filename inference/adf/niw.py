@@ -22,9 +22,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax.scipy.special import digamma as _jdigamma
 from jax.scipy.special import gammaln as _jgammaln
-from jax.scipy.special import polygamma as _jpolygamma
 from scipy.special import digamma as _digamma
 from scipy.special import gammaln as _gammaln
 from scipy.special import multigammaln as _multigammaln
@@ -257,14 +255,37 @@ def niw_predictive_logpdf(o: jnp.ndarray, a, kappa, eta, Cinv, logdetC) -> jnp.n
 
 
 # ------------------------------------------------------------- expected statistics
+def _jdigamma(x):
+    """psi(x) for x > 0: ten recurrence steps then the asymptotic series (|err| < 1e-14)."""
+    acc = jnp.zeros_like(x)
+    for i in range(10):
+        acc = acc + 1.0 / (x + i)
+    y = x + 10.0
+    y2 = 1.0 / (y * y)
+    series = y2 * (1 / 12 - y2 * (1 / 120 - y2 * (1 / 252 - y2 * (1 / 240 - y2 * (1 / 132)))))
+    return jnp.log(y) - 0.5 / y - series - acc
+
+
+def _jtrigamma(x):
+    """psi'(x) for x > 0: ten recurrence steps then the asymptotic series."""
+    acc = jnp.zeros_like(x)
+    for i in range(10):
+        acc = acc + 1.0 / ((x + i) * (x + i))
+    y = x + 10.0
+    iy = 1.0 / y
+    y2 = iy * iy
+    series = iy + 0.5 * y2 + iy * y2 * (1 / 6 - y2 * (1 / 30 - y2 * (1 / 42 - y2 * (1 / 30))))
+    return series + acc
+
+
 def _sum_digamma_j(eta, r):
-    i = jnp.arange(r, dtype=jnp.result_type(eta, jnp.float32))
+    i = jnp.arange(r, dtype=jnp.asarray(eta).dtype)
     return _jdigamma(0.5 * (eta[..., None] - i)).sum(-1)
 
 
 def _sum_trigamma_j(eta, r):
-    i = jnp.arange(r, dtype=jnp.result_type(eta, jnp.float32))
-    return _jpolygamma(1, 0.5 * (eta[..., None] - i)).sum(-1)
+    i = jnp.arange(r, dtype=jnp.asarray(eta).dtype)
+    return _jtrigamma(0.5 * (eta[..., None] - i)).sum(-1)
 
 
 def niw_expected_stats(a, kappa, eta, Cinv, logdetC):
@@ -335,12 +356,18 @@ def niw_from_stats(P, h, s, g):
         dfe = r / eta - 0.5 * _sum_trigamma_j(eta, r)
         return f, dfe * (eta - (r - 1.0))
 
-    def body(_, x):
+    def cond(carry):
+        i, _, step = carry
+        return (i < _NEWTON_ITERS) & jnp.any(jnp.abs(step) > 1e-14)
+
+    def body(carry):
+        i, x, _ = carry
         f, df = f_and_df(x)
         step = jnp.clip(f / df, -2.0, 2.0)
-        return jnp.where(jnp.isfinite(step), x - step, x)
+        step = jnp.where(jnp.isfinite(step), step, 0.0)
+        return i + 1, x - step, step
 
-    x = jax.lax.fori_loop(0, _NEWTON_ITERS, body, x0)
+    _, x, _ = jax.lax.while_loop(cond, body, (0, x0, jnp.ones_like(x0)))
     eta = (r - 1.0) + jnp.exp(x)
     eye = jnp.broadcast_to(jnp.eye(r, dtype=P.dtype), P.shape)
     Pinv = jax.scipy.linalg.cho_solve((Lp, True), eye)

@@ -1,0 +1,168 @@
+"""The Zajdel ADF tracker against the exact oracle, and its invariants."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import inference  # noqa: F401
+from dbn.errors import InputError, NonFiniteError, ShapeError, TimeOrderError
+from models.zajdel.data import Observations, take
+from models.zajdel.oracle import exact_filtering
+from models.zajdel.simulate import simulate_office
+from models.zajdel.tracker import ADFConfig, ADFState, ZajdelADF, chain_decode
+
+CFG = ADFConfig(max_open=12, persons_per_slot=8, init_persons=32, chunk=8, link_out=12, label_out=12)
+
+
+def scenario(seed: int, k: int, p_new="sparse"):
+    sc = simulate_office(seed)
+    params = sc.params if p_new == "sparse" else sc.params._replace(p_new=None)
+    return take(sc.obs, slice(0, k)), params
+
+
+def pointer_rows(state: ADFState) -> np.ndarray:
+    rows = np.asarray(state.never) + np.asarray(state.closed)
+    np.add.at(rows, np.asarray(state.slot_person).ravel(), np.asarray(state.slot_pprob).ravel())
+    return rows
+
+
+def assert_state_equal(a: ADFState, b: ADFState) -> None:
+    for f in ADFState._fields:
+        np.testing.assert_array_equal(np.asarray(getattr(a, f)), np.asarray(getattr(b, f)), err_msg=f)
+
+
+@pytest.mark.parametrize("prior", ["sparse", "uniform"])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_adf_equals_oracle_at_two_observations(prior, seed):
+    obs, params = scenario(seed, 2, prior)
+    tr = ZajdelADF(params, CFG)
+    _, res = tr.run(obs)
+    ora = exact_filtering(obs, params)
+    np.testing.assert_allclose(res.link_matrix(), ora.link_post, atol=1e-12)
+    lab = res.label_matrix()
+    np.testing.assert_allclose(lab, ora.label_post[:, : lab.shape[1]], atol=1e-12)
+    np.testing.assert_allclose(res.loglik.cumsum(), ora.log_evidence, rtol=1e-10)
+
+
+@pytest.mark.parametrize("old_update", ["seed", "keep"])
+def test_adf_close_to_oracle_at_eight_observations(old_update):
+    gaps, agree = [], []
+    for seed in range(4):
+        obs, params = scenario(seed, 8)
+        _, res = ZajdelADF(params, CFG._replace(old_update=old_update)).run(obs)
+        A, O = res.link_matrix(), exact_filtering(obs, params).link_post
+        gaps.append(np.abs(A - O).sum(1).mean() / 2)
+        agree.append((A.argmax(1) == O.argmax(1)).mean())
+    assert np.mean(gaps) < 0.05 and np.mean(agree) >= 0.9
+
+
+def test_time_rescaling_leaves_posteriors_unchanged():
+    obs, params = scenario(5, 20)
+    _, res = ZajdelADF(params, CFG).run(obs)
+    f = 1.0 / 60.0  # seconds -> minutes
+    obs2 = obs._replace(t_enter=obs.t_enter * f, t_quit=obs.t_quit * f)
+    params2 = params._replace(path=params.path.rescale_time(f))
+    _, res2 = ZajdelADF(params2, CFG).run(obs2)
+    np.testing.assert_allclose(res.link_matrix(), res2.link_matrix(), atol=1e-8)
+    np.testing.assert_allclose(res.counter_mean, res2.counter_mean, atol=1e-8)
+
+
+@settings(max_examples=8, deadline=None)
+@given(seed=st.integers(0, 1000), k=st.integers(5, 40))
+def test_pointer_rows_sum_to_one(seed, k):
+    obs, params = scenario(seed, k)
+    tr = ZajdelADF(params, CFG._replace(prune_eps=1e-4))  # pruning and the 12-slot cap active
+    state = tr.init()
+    _, res = tr.run(obs, state=state)
+    state, _ = tr.run(obs)
+    rows = pointer_rows(state)
+    np.testing.assert_allclose(rows, 1.0, atol=1e-12)
+    assert (np.asarray(state.slot_pprob) >= 0).all()
+    assert int(np.asarray(state.slot_valid).sum()) <= CFG.max_open
+    assert np.asarray(state.counter).sum() == pytest.approx(1.0, abs=1e-12)
+    np.testing.assert_allclose(res.link_prob.sum(1) + res.new_prob, 1.0, atol=1e-9)
+
+
+def test_link_posterior_rows_sum_to_one_without_truncation():
+    obs, params = scenario(3, 10)
+    _, res = ZajdelADF(params, CFG).run(obs)
+    np.testing.assert_allclose(res.link_matrix().sum(1), 1.0, atol=1e-12)
+
+
+def _bad_inputs(obs: Observations):
+    one = take(obs, slice(5, 6))
+    yield TimeOrderError, take(obs, slice(0, 1))  # earlier than the last quit time
+    yield ShapeError, one._replace(appearance=one.appearance[:, :5])
+    app = one.appearance.copy()
+    app[0, 2] = np.nan
+    yield NonFiniteError, one._replace(appearance=app)
+    yield NonFiniteError, one._replace(t_enter=np.array([np.inf]))
+    yield ShapeError, one._replace(camera=np.array([99]))
+    yield ShapeError, one._replace(border_enter=np.array([-1]))
+    yield TimeOrderError, one._replace(t_enter=one.t_quit + 5.0)  # quit before enter
+
+
+def test_bad_input_raises_and_leaves_state_unchanged(tmp_path):
+    obs, params = scenario(0, 8)
+    tr = ZajdelADF(params, CFG)
+    state, _ = tr.run(take(obs, slice(0, 5)))
+    before = ADFState(*(np.array(x) for x in state))
+    for err, bad in _bad_inputs(obs):
+        with pytest.raises(err):
+            tr.step(state, bad)
+        with pytest.raises(err):
+            tr.run(bad, state=state)
+        assert_state_equal(state, before)
+    with pytest.raises(InputError):
+        tr.run(take(obs, slice(5, 8)), state=state, lag=-1)
+    # and the tracker continues exactly as if nothing had happened
+    s1, r1 = tr.run(take(obs, slice(5, 8)), state=state)
+    s2, r2 = tr.run(take(obs, slice(5, 8)), state=ADFState(*before))
+    assert_state_equal(s1, s2)
+
+
+def test_save_load_resume_is_bit_identical(tmp_path):
+    obs, params = scenario(4, 30)
+    tr = ZajdelADF(params, CFG)
+    full_state, full = tr.run(obs)
+    s, first = tr.run(take(obs, slice(0, 13)))
+    tr.save(s, tmp_path / "state.npz")
+    s2 = ZajdelADF(params, CFG).load(tmp_path / "state.npz")
+    s3, second = tr.run(take(obs, slice(13, 30)), state=s2)
+    assert_state_equal(full_state, s3)
+    for f in ("link_obs", "link_prob", "new_prob", "label_person", "label_prob", "counter_mean", "loglik"):
+        a = getattr(full, f)
+        b = np.concatenate([getattr(first, f), getattr(second, f)])
+        np.testing.assert_array_equal(a, b, err_msg=f)
+
+
+def test_step_matches_run_and_lag_zero_is_plain_filter():
+    obs, params = scenario(6, 6)
+    tr = ZajdelADF(params, CFG)
+    _, res = tr.run(obs)
+    _, res0 = tr.run(obs, lag=0)
+    np.testing.assert_array_equal(res.link_prob, res0.link_prob)
+    state = tr.init()
+    for k in range(6):
+        state, info = tr.step(state, take(obs, slice(k, k + 1)))
+        np.testing.assert_allclose(np.asarray(info.link_prob), res.link_prob[k], atol=1e-12)
+
+
+def test_fixed_lag_gives_valid_posteriors():
+    obs, params = scenario(2, 12)
+    _, res = ZajdelADF(params, CFG).run(obs, lag=2)
+    np.testing.assert_allclose(res.link_matrix().sum(1), 1.0, atol=1e-9)
+    assert (res.link_prob >= 0).all()
+
+
+def test_chain_decoding_continues_each_observation_at_most_once():
+    link_obs = np.array([[-1, -1], [0, -1], [0, 1], [0, 2]])
+    link_prob = np.array([[0, 0], [0.9, 0], [0.8, 0.1], [0.7, 0.2]])
+    new_prob = np.array([1.0, 0.1, 0.1, 0.1])
+    lab = chain_decode(link_obs, link_prob, new_prob)
+    # 1 takes 0 (0.9); 2 cannot take 0 any more -> 1 (0.1 ties new 0.1) ; 3 -> 2 (0.2)
+    assert lab[1] == lab[0]
+    assert lab[3] == lab[2]
