@@ -254,6 +254,7 @@ class _Terms(NamedTuple):
     logp0: np.ndarray  # (K,) start factor (floored)
     logpd: np.ndarray  # (K, K) link factor (floored; -inf for j >= k)
     single: np.ndarray  # (K,) log evidence of each observation alone (appearance only)
+    onehot: np.ndarray  # (K, C) camera indicator
 
 
 def _spd_inverse(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -292,7 +293,8 @@ def _terms(obs: Observations, params: LSParams, floor: float = IMPOSSIBLE_LOG_PR
     upper = np.triu(np.ones((K, K), bool), 1)
     logpd = np.where(upper, np.maximum(logpd, floor), -np.inf)
     single = _evidence(Rinv + Sinv[cam], h0 + u, c, c0)
-    return _Terms(Sinv, Rinv, h0, c0, u, c, cam, logp0, logpd, single)
+    onehot = np.eye(Sinv.shape[0])[cam]
+    return _Terms(Sinv, Rinv, h0, c0, u, c, cam, logp0, logpd, single, onehot)
 
 
 def track_log_evidence(appearance: np.ndarray, camera: np.ndarray, masks: np.ndarray,
@@ -320,9 +322,9 @@ def track_log_evidence(appearance: np.ndarray, camera: np.ndarray, masks: np.nda
 def _mask_evidence(t: _Terms, masks: np.ndarray) -> np.ndarray:
     """Evidence of tracks given as bool masks (..., K) over the observations of ``t``."""
     m = masks.astype(float)
-    ncam = t.Sinv.shape[0]
-    counts = m @ np.eye(ncam)[t.cam]  # (..., C)
-    P = t.Rinv + np.einsum("...c,cij->...ij", counts, t.Sinv)
+    counts = m @ t.onehot  # (..., C)
+    r = t.h0.shape[0]
+    P = t.Rinv + (counts @ t.Sinv.reshape(t.Sinv.shape[0], r * r)).reshape(counts.shape[:-1] + (r, r))
     h = t.h0 + m @ t.u
     csum = m @ t.c
     return _evidence(P, h, csum, t.c0)
@@ -564,7 +566,7 @@ def _beam_from_labels(labels: np.ndarray, n: int, K: int, t: _Terms, p_new) -> _
 
 def _scores_from_terms_prefix(labels, t: _Terms, n: int, p_new) -> np.ndarray:
     sub = _Terms(t.Sinv, t.Rinv, t.h0, t.c0, t.u[:n], t.c[:n], t.cam[:n], t.logp0[:n],
-                 t.logpd[:n, :n], t.single[:n])
+                 t.logpd[:n, :n], t.single[:n], t.onehot[:n])
     return _scores_from_terms(labels, sub, p_new, canonical=True)
 
 

@@ -122,6 +122,8 @@ class MCMCResult(NamedTuple):
     accept_rate : (4,) acceptance rate of each move type (nan if never tried)
     final : ChainState after the last step
     score_trace : (num_samples, num_chains) log score after each step
+    best_at : dict n -> (canonical labels (num_obs,), score) of the best sample among
+        the first n steps, for each requested checkpoint n (a run of n samples)
     """
 
     best_labels: np.ndarray
@@ -130,6 +132,7 @@ class MCMCResult(NamedTuple):
     accept_rate: np.ndarray
     final: ChainState
     score_trace: np.ndarray
+    best_at: dict
 
 
 # ----------------------------------------------------------------------------- scores
@@ -138,9 +141,10 @@ def _slot_prior(labels: np.ndarray, p_new: float | None) -> np.ndarray:
     M, K = labels.shape
     if p_new is None:
         return np.zeros(M)
-    j = np.arange(K)
-    earlier = (labels[:, :, None] == labels[:, None, :]) & (j[None, None, :] < j[None, :, None])
-    new = ~earlier.any(2)  # (M, K) first observation of its track
+    key = (labels + K * np.arange(M)[:, None]).ravel()
+    firsts = np.full(M * K, K)
+    np.minimum.at(firsts, key, np.tile(np.arange(K), M))
+    new = firsts[key].reshape(M, K) == np.arange(K)  # (M, K) first observation of its track
     cprev = np.cumsum(new, axis=1) - new  # tracks among 0..k-1
     term = np.where(new, np.log(p_new), np.log1p(-p_new) - np.log(np.maximum(cprev, 1)))
     term[:, 0] = 0.0
@@ -175,9 +179,7 @@ def chain_init(labels: np.ndarray, obs: Observations, params: LSParams) -> Chain
 # ----------------------------------------------------------------------------- proposals
 def _sizes(lab: np.ndarray) -> np.ndarray:
     M, K = lab.shape
-    n = np.zeros((M, K), np.int64)
-    np.add.at(n, (np.repeat(np.arange(M), K), lab.ravel()), 1)
-    return n
+    return np.bincount((lab + K * np.arange(M)[:, None]).ravel(), minlength=M * K).reshape(M, K)
 
 
 def _pick(rng: np.random.Generator, weights: np.ndarray) -> np.ndarray:
@@ -301,15 +303,22 @@ def chain_step(rng: np.random.Generator, state: ChainState, t: _Terms, p_new: fl
     probs = np.asarray(move_probs, float)
     lab = state.labels
     M, K = lab.shape
-    moves = rng.choice(4, size=M, p=probs) if move is None else np.full(M, int(move))
-    new = lab.copy()
-    slots = np.zeros((M, 2), np.int64)
-    ok = np.zeros(M, bool)
-    ratio = np.zeros(M)
-    for mv in range(4):  # the 4 move types, each vectorised over its chains
-        sel = np.nonzero(moves == mv)[0]
-        if sel.size:
-            new[sel], slots[sel], ok[sel], ratio[sel] = _propose(rng, mv, lab[sel], probs)
+    if move is None:
+        cdf = np.cumsum(probs)
+        moves = np.minimum(np.searchsorted(cdf / cdf[-1], rng.random(M), side="right"), 3)
+    else:
+        moves = np.full(M, int(move))
+    present = np.unique(moves)
+    if present.size == 1:
+        new, slots, ok, ratio = _propose(rng, int(present[0]), lab, probs)
+    else:
+        new = lab.copy()
+        slots = np.zeros((M, 2), np.int64)
+        ok = np.zeros(M, bool)
+        ratio = np.zeros(M)
+        for mv in present:  # the move types drawn, each vectorised over its chains
+            sel = np.nonzero(moves == mv)[0]
+            new[sel], slots[sel], ok[sel], ratio[sel] = _propose(rng, int(mv), lab[sel], probs)
     rows = np.arange(M)[:, None]
     ok &= slots[:, 0] != slots[:, 1]
     masks = new[:, None, :] == slots[:, :, None]  # (M, 2, K)
@@ -331,7 +340,8 @@ def chain_step(rng: np.random.Generator, state: ChainState, t: _Terms, p_new: fl
 # ----------------------------------------------------------------------------- driver
 def partition_mcmc(seed, obs: Observations, params: LSParams, num_samples: int,
                    config: MCMCConfig | None = None, num_chains: int = 1,
-                   init_labels: np.ndarray | None = None, progress: bool = False) -> MCMCResult:
+                   init_labels: np.ndarray | None = None, checkpoints=(),
+                   progress: bool = False) -> MCMCResult:
     """Metropolis-Hastings sampling of partitions (seed 000, section 5.4, with split,
     merge and move so the number of objects can change).
 
@@ -344,6 +354,8 @@ def partition_mcmc(seed, obs: Observations, params: LSParams, num_samples: int,
     config : MCMCConfig (move probabilities, init "greedy" / "random", burn-in)
     num_chains : chains run side by side (vectorised)
     init_labels : (num_obs,) or (num_chains, num_obs) starting labels, overriding init
+    checkpoints : step counts n at which the best sample so far is recorded (the result
+        of a shorter run with the same seed)
     progress : tqdm bar over the steps
 
     Returns
@@ -380,10 +392,13 @@ def partition_mcmc(seed, obs: Observations, params: LSParams, num_samples: int,
     best_score = state.score.copy()
     best = state.labels.copy()
     co = np.zeros((K, K))
+    co_now = (state.labels[:, :, None] == state.labels[:, None, :]).sum(0)
     kept = 0
     tried = np.zeros(4)
     acc = np.zeros(4)
     trace = np.empty((num_samples, num_chains))
+    marks = {int(n) for n in checkpoints if 1 <= int(n) <= num_samples}
+    best_at = {}
     it = range(num_samples)
     if progress:
         from tqdm import tqdm
@@ -398,12 +413,16 @@ def partition_mcmc(seed, obs: Observations, params: LSParams, num_samples: int,
         if better.any():
             best_score = np.where(better, state.score, best_score)
             best[better] = state.labels[better]
+        if s + 1 in marks:
+            c = int(np.argmax(best_score))
+            best_at[s + 1] = (_canonical(best[c][None])[0], float(best_score[c]))
+        if accepted.any():
+            co_now = (state.labels[:, :, None] == state.labels[:, None, :]).sum(0)
         if s >= cfg.burn_in:
-            eq = state.labels[:, :, None] == state.labels[:, None, :]
-            co += eq.sum(0)
+            co += co_now
             kept += num_chains
     c = int(np.argmax(best_score))
     with np.errstate(invalid="ignore", divide="ignore"):
         rate = acc / tried
     return MCMCResult(_canonical(best[c][None])[0], float(best_score[c]),
-                      co / max(kept, 1), rate, state, trace)
+                      co / max(kept, 1), rate, state, trace, best_at)

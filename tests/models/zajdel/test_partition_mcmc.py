@@ -142,8 +142,10 @@ def test_partition_mcmc_result_and_reproducibility():
     obs, params = small_problem(4)
     parts, pi, ls = exact(obs, params)
     cfg = MCMCConfig(init="random", burn_in=50)
-    r1 = partition_mcmc(5, obs, params, 400, cfg, num_chains=4)
+    r1 = partition_mcmc(5, obs, params, 400, cfg, num_chains=4, checkpoints=(100,))
     r2 = partition_mcmc(5, obs, params, 400, cfg, num_chains=4)
+    r3 = partition_mcmc(5, obs, params, 100, cfg, num_chains=4)
+    np.testing.assert_array_equal(r1.best_at[100][0], r3.best_labels)  # a shorter run
     np.testing.assert_array_equal(r1.best_labels, r2.best_labels)
     np.testing.assert_array_equal(r1.coassign, r2.coassign)
     assert r1.best_score == pytest.approx(float(partition_log_scores(r1.best_labels, obs, params)))

@@ -1,0 +1,134 @@
+"""Benchmark ``zajdel_learnsearch`` (issue 6): seed 000's EM learn-search over partitions
+and its Metropolis-Hastings baseline on the default office scenario of the ADF issue
+(SIMULATED data, :func:`models.zajdel.simulate.simulate_office`, seeds ``seed ..``).
+
+Keys (means over the seeds; q = partition accuracy, seed 000 eqs. 7-8; F1 = pairwise F1):
+
+* ``q_T1``, ``q_T5``, ``q_T10``, ``q_T20``: learn-search with T kept partitions,
+  parameters learned by EM (n0 = 6, R = 2, unbiased model, as seed 000's Table 1);
+  ``f1_T20``, ``objects_abs_err_T20`` (mean |objects found - true objects|);
+* ``q_T5_biased``: the biased model (camera bias b(l) learned too);
+* ``q_T20_true_params``: T = 20 with the simulator's parameters, no learning;
+* ``q_mcmc_1e3``, ``q_mcmc_1e4``: best sample of a Metropolis-Hastings chain (swap, move,
+  split, merge) of 10^3 / 10^4 steps (the 10^3 figure is the best of the first 10^3
+  steps of the same chain, i.e. a 10^3-step run with the same seed), greedy (T = 1)
+  initialisation, parameters learned by the T = 20 learn-search on the same data;
+* ``q_greedy``, ``f1_greedy``: the single-hypothesis greedy baseline of the ADF issue
+  (:func:`models.zajdel.greedy.greedy_labels`) on the same data;
+* ``f1_adf_lag3``: the ADF tracker of the ADF issue with fixed-lag revision L = 3, chain
+  decoding (``null`` with ``f1_adf_lag3_reason`` when the tracker cannot run);
+* ``time_T10_s``: median wall time of one learned T = 10 run over the 70 observations;
+  ``time_mcmc_1e4_s``: median wall time of one 10^4-step chain. Times are taken on a
+  shared machine; the ratio ``speedup_T10_vs_mcmc_1e4`` puts them side by side.
+
+``ok``: the incremental scores of the kept partitions equal their from-scratch scores
+(1e-6), every MCMC best score equals its from-scratch score, every partition is valid.
+Quick mode: fewer seeds (``num_seeds``, ``num_mcmc_seeds`` in the JSON), the same keys.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+import inference  # noqa: F401  (jax float64)
+from benchmarks._common import log
+from models.zajdel.data import take
+from models.zajdel.greedy import greedy_labels
+from models.zajdel.learnsearch import (
+    LearnSearchConfig,
+    initial_params,
+    learn_search,
+    params_from_zajdel,
+    partition_log_scores,
+)
+from models.zajdel.mcmc import MCMCConfig, partition_mcmc
+from models.zajdel.metrics import num_objects, pairwise_prf, partition_accuracy
+from models.zajdel.simulate import simulate_office
+
+N0, BATCH = 6, 2
+
+
+def _adf_lag3(scenarios) -> tuple[list[float] | None, str | None]:
+    try:
+        from models.zajdel.tracker import ZajdelADF
+
+        out = []
+        for sc in scenarios:
+            _, res = ZajdelADF(sc.params).run(sc.obs, lag=3)
+            out.append(pairwise_prf(res.labels_chain(), sc.labels)[2])
+        return out, None
+    except Exception as exc:  # report, do not hide: the key becomes null with the reason
+        return None, f"{type(exc).__name__}: {exc}"
+
+
+def run(quick: bool, seed: int) -> dict:
+    num_seeds = 5 if quick else 10
+    num_mcmc_seeds = 2 if quick else 10
+    seeds = list(range(seed, seed + num_seeds))
+    scen = [simulate_office(s) for s in seeds]
+    ok = True
+    acc: dict[str, list[float]] = {}
+    times_t10: list[float] = []
+    learned = []
+
+    def add(key, value):
+        acc.setdefault(key, []).append(float(value))
+
+    for s, sc in zip(seeds, scen):
+        p0 = initial_params(take(sc.obs, slice(0, N0)), sc.params.path, sc.params.p_new)
+        true_objects = num_objects(sc.labels)
+        for T in (1, 5, 10, 20):
+            cfg = LearnSearchConfig(num_hypotheses=T, n0=N0, batch=BATCH)
+            t0 = time.perf_counter()
+            res = learn_search(sc.obs, p0, cfg)
+            dt = time.perf_counter() - t0
+            if T == 10:
+                times_t10.append(dt)
+                check = partition_log_scores(res.hypotheses, sc.obs, res.params)
+                ok &= bool(np.allclose(check, res.log_scores, rtol=0, atol=1e-6))
+            if T == 20:
+                learned.append(res.params)
+                add("f1_T20", pairwise_prf(res.labels, sc.labels)[2])
+                add("objects_abs_err_T20", abs(num_objects(res.labels) - true_objects))
+            ok &= res.labels.shape == sc.labels.shape
+            add(f"q_T{T}", partition_accuracy(res.labels, sc.labels))
+        res = learn_search(sc.obs, p0, LearnSearchConfig(num_hypotheses=5, biased=True))
+        add("q_T5_biased", partition_accuracy(res.labels, sc.labels))
+        pt = params_from_zajdel(sc.params)
+        res = learn_search(sc.obs, pt, LearnSearchConfig(num_hypotheses=20, learn=False))
+        add("q_T20_true_params", partition_accuracy(res.labels, sc.labels))
+        add("f1_T20_true_params", pairwise_prf(res.labels, sc.labels)[2])
+        g = greedy_labels(sc.obs, sc.params)
+        add("q_greedy", partition_accuracy(g, sc.labels))
+        add("f1_greedy", pairwise_prf(g, sc.labels)[2])
+        log(f"seed {s}: q_T1 {acc['q_T1'][-1]:.3f} q_T20 {acc['q_T20'][-1]:.3f} "
+            f"q_greedy {acc['q_greedy'][-1]:.3f} T10 {times_t10[-1]:.2f}s")
+
+    times_mcmc = []
+    for s, sc, th in list(zip(seeds, scen, learned))[:num_mcmc_seeds]:
+        t0 = time.perf_counter()
+        r = partition_mcmc(s, sc.obs, th, 10_000, MCMCConfig(init="greedy"), checkpoints=(1000,))
+        times_mcmc.append(time.perf_counter() - t0)
+        ok &= bool(abs(float(partition_log_scores(r.best_labels, sc.obs, th)) - r.best_score) < 1e-6)
+        add("q_mcmc_1e3", partition_accuracy(r.best_at[1000][0], sc.labels))
+        add("q_mcmc_1e4", partition_accuracy(r.best_labels, sc.labels))
+        add("objects_mcmc_1e4", num_objects(r.best_labels))
+        log(f"seed {s}: mcmc 1e4 q {acc['q_mcmc_1e4'][-1]:.3f} in {times_mcmc[-1]:.1f}s")
+
+    t0 = time.perf_counter()
+    f1_adf, reason = _adf_lag3(scen)
+    log(f"ADF lag 3: {time.perf_counter() - t0:.1f}s")
+    out = {k: float(np.mean(v)) for k, v in acc.items()}
+    out["f1_adf_lag3"] = float(np.mean(f1_adf)) if f1_adf is not None else None
+    if reason is not None:
+        out["f1_adf_lag3_reason"] = reason
+    out["time_T10_s"] = float(np.median(times_t10))
+    out["time_mcmc_1e4_s"] = float(np.median(times_mcmc))
+    out["speedup_T10_vs_mcmc_1e4"] = out["time_mcmc_1e4_s"] / out["time_T10_s"]
+    out["num_seeds"] = num_seeds
+    out["num_mcmc_seeds"] = num_mcmc_seeds
+    out["data"] = "simulated (models.zajdel.simulate.simulate_office, default config)"
+    out["ok"] = bool(ok)
+    return out
