@@ -109,8 +109,10 @@ def run(quick: bool, seed: int) -> dict:
     params = TrackerParams(num_moves=1500, burn_in=500)
     tracker = RJMCMCTracker(scene, params)
     ablation = RJMCMCTracker(scene, params._replace(ground_noise=False), tracker.noise)
-    log(f"rjmcmc3d: SIMULATED 3-camera scene, {num_people} people, {num_frames} frames, "
-        f"seeds {seeds}, {params.num_moves} moves/frame ({params.burn_in} burn-in)")
+    log(
+        f"rjmcmc3d: SIMULATED 3-camera scene, {num_people} people, {num_frames} frames, "
+        f"seeds {seeds}, {params.num_moves} moves/frame ({params.burn_in} burn-in)"
+    )
     cov = coverage_fractions(scene, step=0.2)
     log(f"floor seen by 0/1/2/3 cameras: {np.round(cov, 3).tolist()}")
     ours, abl, walls, cpus = [], [], [], []
@@ -122,9 +124,11 @@ def run(quick: bool, seed: int) -> dict:
         m = evaluate(truth.frames, res)
         res0, _, _, _ = _track(ablation, s, scene, truth, s + 1000, f"seed {s} C(u)=0")
         m0 = evaluate(truth.frames, res0)
-        log(f"seed {s}: with C(u) mota={m['mota']:.3f} idf1={m['idf1']:.3f} sw={m['id_switches']}"
+        log(
+            f"seed {s}: with C(u) mota={m['mota']:.3f} idf1={m['idf1']:.3f} sw={m['id_switches']}"
             f" | C(u)=0 mota={m0['mota']:.3f} idf1={m0['idf1']:.3f} sw={m0['id_switches']}"
-            f" | {wall:.0f} ms/frame wall, {cpu:.0f} ms cpu")
+            f" | {wall:.0f} ms/frame wall, {cpu:.0f} ms cpu"
+        )
         ours.append(m)
         abl.append(m0)
         walls.append(wall)

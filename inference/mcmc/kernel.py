@@ -164,11 +164,7 @@ def log_acceptance_ratio(
         return -math.inf
     if log_target_delta == math.inf:
         return math.inf
-    value = (
-        log_target_delta
-        + (log_p_reverse_move - log_p_move)
-        + (log_q_reverse - log_q_forward)
-    )
+    value = log_target_delta + (log_p_reverse_move - log_p_move) + (log_q_reverse - log_q_forward)
     return -math.inf if math.isnan(value) else float(value)
 
 
@@ -300,8 +296,10 @@ def rj_step(
         delta = _target_delta(new_value, current)
     else:
         delta = float(proposal.log_target_delta)
-        new_value = current + delta if math.isfinite(current) else (
-            math.inf if delta == math.inf else -math.inf
+        new_value = (
+            current + delta
+            if math.isfinite(current)
+            else (math.inf if delta == math.inf else -math.inf)
         )
     log_a = log_acceptance_ratio(
         delta,

@@ -45,13 +45,19 @@ def _pets_rectification() -> None:
     Pr, rect = rectified_projection(cam)
     x0 = np.array([cam.width, cam.height]) / 2
     J = homography_jacobian(rect.H, x0)
-    print(f"PETS2009 View_001 (real Tsai calibration, {cam.width}x{cam.height}): vertical "
-          f"vanishing point at ({v[0] / v[2]:.0f}, {v[1] / v[2]:.0f}) px;")
-    print(f"  after H = G R T it is at infinity (w = {(rect.H @ v)[2]:.1e}); Jacobian at the "
-          f"image centre = rotation by {np.degrees(np.arctan2(J[1, 0], J[0, 0])):.2f} deg")
+    print(
+        f"PETS2009 View_001 (real Tsai calibration, {cam.width}x{cam.height}): vertical "
+        f"vanishing point at ({v[0] / v[2]:.0f}, {v[1] / v[2]:.0f}) px;"
+    )
+    print(
+        f"  after H = G R T it is at infinity (w = {(rect.H @ v)[2]:.1e}); Jacobian at the "
+        f"image centre = rotation by {np.degrees(np.arctan2(J[1, 0], J[0, 0])):.2f} deg"
+    )
     corner = np.array([30.0, 30.0])
-    print(f"  a corner pixel {corner.tolist()} moves to "
-          f"{np.round(apply_homography(rect.H, corner), 1).tolist()}")
+    print(
+        f"  a corner pixel {corner.tolist()} moves to "
+        f"{np.round(apply_homography(rect.H, corner), 1).tolist()}"
+    )
 
 
 def run_demo(quick: bool = True) -> None:
@@ -60,8 +66,10 @@ def run_demo(quick: bool = True) -> None:
     params = TrackerParams(num_moves=600 if quick else 1500, burn_in=200 if quick else 500)
     scene = default_scene(0)
     cov = coverage_fractions(scene, step=0.25)
-    print("SIMULATED scene: 20 m x 8 m hall, 3 cameras; floor seen by 0/1/2/3 cameras: "
-          + " / ".join(f"{100 * c:.0f}%" for c in cov))
+    print(
+        "SIMULATED scene: 20 m x 8 m hall, 3 cameras; floor seen by 0/1/2/3 cameras: "
+        + " / ".join(f"{100 * c:.0f}%" for c in cov)
+    )
     _pets_rectification()
     truth = simulate_walkers(1, scene, num_frames, 4)
     tracker = RJMCMCTracker(scene, params)
@@ -74,12 +82,19 @@ def run_demo(quick: bool = True) -> None:
         results.append(res)
     dt = (time.perf_counter() - t0) / num_frames
     m = evaluate(truth.frames, results)
-    print(f"tracked {num_frames} frames, {params.num_moves} RJ-MCMC moves/frame, "
-          f"{1000 * dt:.0f} ms/frame")
-    print(f"MOTA {m['mota']:.3f}  IDF1 {m['idf1']:.3f}  ID switches {m['id_switches']}  "
-          f"(ground plane, 0.5 m, py-motmetrics)")
+    print(
+        f"tracked {num_frames} frames, {params.num_moves} RJ-MCMC moves/frame, "
+        f"{1000 * dt:.0f} ms/frame"
+    )
+    print(
+        f"MOTA {m['mota']:.3f}  IDF1 {m['idf1']:.3f}  ID switches {m['id_switches']}  "
+        f"(ground plane, 0.5 m, py-motmetrics)"
+    )
     last = results[-1]
-    print("last frame: track  x [m]  y [m]  height [m]   (truth: "
-          + ", ".join(f"({x:.1f}, {y:.1f})" for x, y in truth.frames[-1].u) + ")")
+    print(
+        "last frame: track  x [m]  y [m]  height [m]   (truth: "
+        + ", ".join(f"({x:.1f}, {y:.1f})" for x, y in truth.frames[-1].u)
+        + ")"
+    )
     for i, X in zip(last.ids, last.X, strict=True):
         print(f"  {i:3d}  {X[0]:6.2f} {X[1]:6.2f} {X[4]:6.2f}")

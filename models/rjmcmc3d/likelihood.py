@@ -271,7 +271,12 @@ class IncrementalLikelihood:
     """
 
     def __init__(
-        self, params: TrackerParams, data: FrameData, cfg: Config, sref: np.ndarray, nref: np.ndarray
+        self,
+        params: TrackerParams,
+        data: FrameData,
+        cfg: Config,
+        sref: np.ndarray,
+        nref: np.ndarray,
     ) -> None:
         self.params = params
         self.data = data
@@ -301,7 +306,11 @@ class IncrementalLikelihood:
         st = W + 1
         self.usum = [
             [
-                _union_sum(data.ii[v].item, st, [b for b in self.boxes_l[v][j] if b[2] > b[0] and b[3] > b[1]])
+                _union_sum(
+                    data.ii[v].item,
+                    st,
+                    [b for b in self.boxes_l[v][j] if b[2] > b[0] and b[3] > b[1]],
+                )
                 if self.present_l[j]
                 else 0.0
                 for j in range(M)
@@ -410,7 +419,9 @@ class IncrementalLikelihood:
             signed = []
             for j in changed:
                 if self.present_l[j]:
-                    signed += [(bx, -1) for bx in self.boxes_l[v][j] if bx[2] > bx[0] and bx[3] > bx[1]]
+                    signed += [
+                        (bx, -1) for bx in self.boxes_l[v][j] if bx[2] > bx[0] and bx[3] > bx[1]
+                    ]
                 if ov[j][0]:
                     signed += [(bx, 1) for bx in ov[j][1][v] if bx[2] > bx[0] and bx[3] > bx[1]]
             if not signed:

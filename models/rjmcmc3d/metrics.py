@@ -47,8 +47,16 @@ def evaluate(
         dist = mm.distances.norm2squared_matrix(ft.u, hyp, max_d2=threshold**2)
         acc.update(list(map(int, ft.ids)), list(map(int, res.ids)), np.sqrt(dist))
     mh = mm.metrics.create()
-    names = ["mota", "idf1", "num_switches", "num_misses", "num_false_positives",
-             "num_objects", "precision", "recall"]
+    names = [
+        "mota",
+        "idf1",
+        "num_switches",
+        "num_misses",
+        "num_false_positives",
+        "num_objects",
+        "precision",
+        "recall",
+    ]
     summary = mh.compute(acc, metrics=names, name="seq")
     row = summary.loc["seq"]
     return {

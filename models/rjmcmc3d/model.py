@@ -227,8 +227,9 @@ def ground_noise_map(
         hom = np.concatenate([flat, np.ones((flat.shape[0], 1))], axis=1) @ Hg.T
         px = hom[:, :2] / hom[:, 2:3]
         sig = px[:, None, :] + scene.sigma_px[v] * offsets[None, :, :]  # (n, 5, 2)
-        back = np.linalg.solve(Hg, np.concatenate([sig, np.ones((*sig.shape[:2], 1))], -1)
-                               .reshape(-1, 3).T).T.reshape(*sig.shape[:2], 3)
+        back = np.linalg.solve(
+            Hg, np.concatenate([sig, np.ones((*sig.shape[:2], 1))], -1).reshape(-1, 3).T
+        ).T.reshape(*sig.shape[:2], 3)
         g = back[..., :2] / back[..., 2:3]
         mean = (weights[None, :, None] * g).sum(1)
         d = g - mean[:, None, :]
@@ -240,8 +241,10 @@ def ground_noise_map(
     num_seen = seen.sum(0)
     fused = np.where(
         (num_seen > 0)[..., None, None],
-        np.linalg.solve(info + (num_seen == 0)[..., None, None] * np.eye(2),
-                        np.broadcast_to(np.eye(2), info.shape)),
+        np.linalg.solve(
+            info + (num_seen == 0)[..., None, None] * np.eye(2),
+            np.broadcast_to(np.eye(2), info.shape),
+        ),
         params.unseen_sd**2 * np.eye(2),
     )
     fused = 0.5 * (fused + np.swapaxes(fused, -1, -2))

@@ -199,7 +199,9 @@ def load_tsai_xml(path: str | Path, scale: float = 1.0) -> tuple[Camera, float]:
     t = np.array([e["tx"], e["ty"], e["tz"]]) / 1000.0
     fx = i["sx"] * i["focal"] / g["dpx"]
     fy = i["focal"] / g["dpy"]
-    K = np.array([[fx * scale, 0.0, i["cx"] * scale], [0.0, fy * scale, i["cy"] * scale], [0, 0, 1]])
+    K = np.array(
+        [[fx * scale, 0.0, i["cx"] * scale], [0.0, fy * scale, i["cy"] * scale], [0, 0, 1]]
+    )
     cam = Camera(K, R, t, int(round(g["width"] * scale)), int(round(g["height"] * scale)))
     return cam, i["kappa1"]
 
@@ -265,9 +267,15 @@ def default_scene(seed: int = 0, width: int = 384, height: int = 288) -> Scene:
     """
     s = width / 384.0
     cams = [
-        look_at_camera(np.array([4.5, -3.0, 8.7]), np.array([4.5, 3.4, 0.0]), 300 * s, width, height),
-        look_at_camera(np.array([16.7, 11.0, 6.7]), np.array([16.7, 3.1, 0.0]), 445 * s, width, height),
-        look_at_camera(np.array([9.9, -1.5, 3.7]), np.array([9.9, 4.2, 0.0]), 360 * s, width, height),
+        look_at_camera(
+            np.array([4.5, -3.0, 8.7]), np.array([4.5, 3.4, 0.0]), 300 * s, width, height
+        ),
+        look_at_camera(
+            np.array([16.7, 11.0, 6.7]), np.array([16.7, 3.1, 0.0]), 445 * s, width, height
+        ),
+        look_at_camera(
+            np.array([9.9, -1.5, 3.7]), np.array([9.9, 4.2, 0.0]), 360 * s, width, height
+        ),
     ]
     gain = np.array([[1.0, 1.0, 1.0], [1.15, 0.97, 0.82], [0.85, 1.0, 1.18]])
     return scene_from_cameras(seed, cams, np.array([0.0, 20.0, 0.0, 8.0]), gain, np.full(3, 3.0))
@@ -353,12 +361,13 @@ class BoxProjector:
         g[:, 0] += x
         g[:, 1] += y
         g[:, 2] = 1.0
-        proj = ((g @ self.P013).reshape(3, 1, _NUM_ANGLES, 3 * self.V) + (self.zf * h) * self.P2)
+        proj = (g @ self.P013).reshape(3, 1, _NUM_ANGLES, 3 * self.V) + (self.zf * h) * self.P2
         proj = proj.reshape(3, 2 * _NUM_ANGLES, self.V, 3)
         w = proj[..., 2:3]
         if not w.min() > 1e-6:
-            b = part_boxes(self.P, np.array([[x, y]]), np.array([h]), np.array([a]),
-                           self.width, self.height)[:, 0]
+            b = part_boxes(
+                self.P, np.array([[x, y]]), np.array([h]), np.array([a]), self.width, self.height
+            )[:, 0]
         else:
             pxy = proj[..., :2] / w  # (3, 2A, V, 2)
             ext = np.concatenate([np.floor(pxy.min(1)), np.ceil(pxy.max(1))], axis=-1)  # (3, V, 4)
@@ -508,7 +517,9 @@ def simulate_walkers(
     def new_walker(inside: bool) -> dict:
         nonlocal next_id
         if inside:
-            start = np.array([rng.uniform(floor[0] + 1, floor[1] - 1), rng.uniform(floor[2] + 1, floor[3] - 1)])
+            start = np.array(
+                [rng.uniform(floor[0] + 1, floor[1] - 1), rng.uniform(floor[2] + 1, floor[3] - 1)]
+            )
             side = int(rng.integers(4))
         else:
             start, side = _random_boundary_point(rng, floor)
@@ -529,8 +540,14 @@ def simulate_walkers(
                 1,
             )
         )
-        w = {"id": next_id, "u": start, "v": v, "goal": goal, "pref": np.linalg.norm(v),
-             "h": float(np.clip(rng.normal(1.72, 0.08), 1.5, 1.95))}
+        w = {
+            "id": next_id,
+            "u": start,
+            "v": v,
+            "goal": goal,
+            "pref": np.linalg.norm(v),
+            "h": float(np.clip(rng.normal(1.72, 0.08), 1.5, 1.95)),
+        }
         next_id += 1
         return w
 

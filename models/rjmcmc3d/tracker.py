@@ -532,8 +532,10 @@ class _Chain:
 
         cum = np.cumsum(self.probs)
         for it in range(p.num_moves):
-            m = select_move(rng, self.probs) if it == 0 else min(
-                int(np.searchsorted(cum, rng.random(), side="right")), 5
+            m = (
+                select_move(rng, self.probs)
+                if it == 0
+                else min(int(np.searchsorted(cum, rng.random(), side="right")), 5)
             )
             tried[m] += 1
             prop = self.propose(rng, m)
@@ -655,7 +657,9 @@ class RJMCMCTracker:
                 f"frame.det_ground has shape {frame.det_ground.shape}, "
                 f"expected ({frame.det_view.shape[0]}, 2)"
             )
-        if frame.det_view.size and (frame.det_view.min() < 0 or frame.det_view.max() >= sc.num_views):
+        if frame.det_view.size and (
+            frame.det_view.min() < 0 or frame.det_view.max() >= sc.num_views
+        ):
             raise InputError(f"frame.det_view holds a view outside 0..{sc.num_views - 1}")
 
     def step(self, seed: int, state: TrackState, frame: Frame) -> tuple[TrackState, FrameResult]:
@@ -681,7 +685,9 @@ class RJMCMCTracker:
         out = chain.run(rng)
         return self._posterior(state, chain, out)
 
-    def _posterior(self, state: TrackState, chain: _Chain, out: dict) -> tuple[TrackState, FrameResult]:
+    def _posterior(
+        self, state: TrackState, chain: _Chain, out: dict
+    ) -> tuple[TrackState, FrameResult]:
         p = self.params
         exist = out["presence"] > 0.5
         cnt = np.maximum(out["cnt"], 1.0)
@@ -696,11 +702,16 @@ class RJMCMCTracker:
         cov[:, :2, :2] = S
         cont = exist & chain.prev
         G = chain.Gain
-        mean[cont, 2:] = chain.m[cont, 2:] + np.einsum("mij,mj->mi", G[cont], mu[cont] - chain.m[cont, :2])
+        mean[cont, 2:] = chain.m[cont, 2:] + np.einsum(
+            "mij,mj->mi", G[cont], mu[cont] - chain.m[cont, :2]
+        )
         P = chain.P[cont]
         GS = np.einsum("mij,mjk->mik", G[cont], S[cont])
-        cov[cont, 2:, 2:] = P[:, 2:, 2:] - np.einsum("mij,mkj->mik", G[cont], P[:, 2:, :2]) + \
-            np.einsum("mij,mkj->mik", GS, G[cont])
+        cov[cont, 2:, 2:] = (
+            P[:, 2:, 2:]
+            - np.einsum("mij,mkj->mik", G[cont], P[:, 2:, :2])
+            + np.einsum("mij,mkj->mik", GS, G[cont])
+        )
         cov[cont, 2:, :2] = GS
         cov[cont, :2, 2:] = np.swapaxes(GS, -1, -2)
         born = exist & ~chain.prev
@@ -716,7 +727,11 @@ class RJMCMCTracker:
         idx = np.flatnonzero(exist)
         X = np.concatenate([mean[idx], h[idx, None], alpha[idx, None]], axis=1)
         result = FrameResult(
-            label[idx], X, out["presence"][idx], out["accept_rate"], chain.loglik + float(sum(chain.lp))
+            label[idx],
+            X,
+            out["presence"][idx],
+            out["accept_rate"],
+            chain.loglik + float(sum(chain.lp)),
         )
         return new_state, result
 
@@ -744,7 +759,9 @@ class RJMCMCTracker:
                         bc = np.sqrt(refs[i, b, :k]) @ np.sqrt(obs)
                         best = int(np.argmax(bc))
                         if math.sqrt(max(0.0, 1 - bc[best])) < p.ref_match:
-                            refs[i, b, best] = (1 - p.ref_rate) * refs[i, b, best] + p.ref_rate * obs
+                            refs[i, b, best] = (1 - p.ref_rate) * refs[
+                                i, b, best
+                            ] + p.ref_rate * obs
                             rw[i, b, best] += 1.0
                             continue
                     if k < p.num_refs:
@@ -758,7 +775,11 @@ class RJMCMCTracker:
         return refs, nref, rw
 
     def run(
-        self, seed: int, frames: Iterable[Frame], num_frames: int | None = None, progress: bool = False
+        self,
+        seed: int,
+        frames: Iterable[Frame],
+        num_frames: int | None = None,
+        progress: bool = False,
     ) -> list[FrameResult]:
         """Track a sequence; frame ``t`` uses the seed ``[seed, t]``.
 
@@ -775,6 +796,8 @@ class RJMCMCTracker:
         results = []
         it = tqdm(frames, total=num_frames, disable=not progress, desc="rjmcmc3d")
         for t, frame in enumerate(it):
-            state, res = self.step(int(np.random.SeedSequence([seed, t]).generate_state(1)[0]), state, frame)
+            state, res = self.step(
+                int(np.random.SeedSequence([seed, t]).generate_state(1)[0]), state, frame
+            )
             results.append(res)
         return results

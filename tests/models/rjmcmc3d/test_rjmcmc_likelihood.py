@@ -33,8 +33,9 @@ def test_foreground_term_closed_form() -> None:
     boxes = np.zeros((1, 2, 3, 4), dtype=np.int64)
     boxes[0, 0, 0] = (3, 10, 9, 18)
     boxes[0, 0, 1] = (2, 4, 10, 11)  # overlaps the first box by one row
-    cfg = Config(boxes, np.array([[[2, 4, 10, 18], [0, 0, 0, 0]]]), np.zeros((1, 2)),
-                 np.array([True, False]))
+    cfg = Config(
+        boxes, np.array([[[2, 4, 10, 18], [0, 0, 0, 0]]]), np.zeros((1, 2)), np.array([True, False])
+    )
     nref = np.zeros((2, 3), dtype=np.int64)
     sref = np.zeros((2, 3, 2, data.num_bins))
     mask = np.zeros((20, 30), bool)
@@ -92,9 +93,12 @@ def test_incremental_equals_full_over_random_moves(chain_setup) -> None:
         delta, commit = chain._evaluate(S_new, pr_new, changed)
         if commit is None:
             continue
-        before = full_loglik(chain.p, chain.data, chain._config(chain.S, chain.present),
-                             chain.sref, chain.nref)
-        after = full_loglik(chain.p, chain.data, chain._config(S_new, pr_new), chain.sref, chain.nref)
+        before = full_loglik(
+            chain.p, chain.data, chain._config(chain.S, chain.present), chain.sref, chain.nref
+        )
+        after = full_loglik(
+            chain.p, chain.data, chain._config(S_new, pr_new), chain.sref, chain.nref
+        )
         d_lik = commit[-1]
         assert d_lik == pytest.approx(after - before, abs=1e-7), (move, changed)
         checked += 1

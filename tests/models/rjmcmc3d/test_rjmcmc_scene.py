@@ -45,8 +45,9 @@ def test_fast_projector_equals_part_boxes(scene) -> None:
         x, y = rng.uniform(-1, 21), rng.uniform(-1, 9)
         h, a = rng.uniform(1.4, 2.0), rng.uniform(-np.pi, np.pi)
         boxes, bbox, depth = proj.one(x, y, h, a)
-        ref = part_boxes(scene.P, np.array([[x, y]]), np.array([h]), np.array([a]),
-                         scene.width, scene.height)[:, 0]
+        ref = part_boxes(
+            scene.P, np.array([[x, y]]), np.array([h]), np.array([a]), scene.width, scene.height
+        )[:, 0]
         assert np.array_equal(np.array(boxes), ref)
         for v in range(3):
             ne = [b for b in ref[v] if b[2] > b[0] and b[3] > b[1]]
@@ -91,8 +92,16 @@ def test_render_and_detector(scene) -> None:
 def test_metrics_through_motmetrics() -> None:
     sc = default_scene(0, width=192, height=144)
     truth = simulate_walkers(2, sc, 20, 3)
-    perfect = [FrameResult(f.ids + 100, np.c_[f.u, np.zeros((len(f.ids), 4))], np.ones(len(f.ids)),
-                           np.zeros(6), 0.0) for f in truth.frames]
+    perfect = [
+        FrameResult(
+            f.ids + 100,
+            np.c_[f.u, np.zeros((len(f.ids), 4))],
+            np.ones(len(f.ids)),
+            np.zeros(6),
+            0.0,
+        )
+        for f in truth.frames
+    ]
     m = evaluate(truth.frames, perfect)
     assert m["mota"] == pytest.approx(1.0) and m["idf1"] == pytest.approx(1.0)
     assert m["id_switches"] == 0

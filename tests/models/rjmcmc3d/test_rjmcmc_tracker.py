@@ -39,12 +39,22 @@ def _walker_truth(scene, start, velocity, num_frames: int) -> Truth:
     u = np.array(start, dtype=float)
     for _ in range(num_frames):
         u = u + 0.2 * np.asarray(velocity)
-        inside = scene.floor[0] <= u[0] <= scene.floor[1] and scene.floor[2] <= u[1] <= scene.floor[3]
+        inside = (
+            scene.floor[0] <= u[0] <= scene.floor[1] and scene.floor[2] <= u[1] <= scene.floor[3]
+        )
         if inside:
-            frames.append(FrameTruth(np.array([0]), u[None].copy(), np.array([1.75]),
-                                     np.array([math.atan2(velocity[1], velocity[0])])))
+            frames.append(
+                FrameTruth(
+                    np.array([0]),
+                    u[None].copy(),
+                    np.array([1.75]),
+                    np.array([math.atan2(velocity[1], velocity[0])]),
+                )
+            )
         else:
-            frames.append(FrameTruth(np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros(0)))
+            frames.append(
+                FrameTruth(np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros(0))
+            )
     colours = np.array([[[0.1, 0.1, 0.3], [0.85, 0.15, 0.15], [0.55, 0.4, 0.3]]])
     return Truth(frames, colours, 0.2)
 
@@ -73,7 +83,9 @@ def test_track_predicted_outside_is_dropped(scene, tracker) -> None:
     mean[0] = (19.9, 4.0, 1.5, 0.0)  # predicted at x = 20.2 > 20
     cov = state.cov.copy()
     cov[0] = np.diag([0.01, 0.01, 0.01, 0.01])
-    state = state._replace(alive=alive, mean=mean, cov=cov, label=np.where(alive, 0, -1), next_label=1)
+    state = state._replace(
+        alive=alive, mean=mean, cov=cov, label=np.where(alive, 0, -1), next_label=1
+    )
     empty = Frame(
         np.zeros((3, scene.height, scene.width), np.float32),
         scene.background.copy(),
@@ -175,7 +187,9 @@ def test_ground_noise_map_matches_linearisation(scene) -> None:
     i_near, j_near = noise.index(np.array([4.5, 1.5]))
     i_far, j_far = noise.index(np.array([4.5, 7.0]))
     assert noise.view_seen[0, i_near, j_near] and noise.view_seen[0, i_far, j_far]
-    assert np.trace(noise.view_cov[0, i_far, j_far]) > 2 * np.trace(noise.view_cov[0, i_near, j_near])
+    assert np.trace(noise.view_cov[0, i_far, j_far]) > 2 * np.trace(
+        noise.view_cov[0, i_near, j_near]
+    )
 
 
 def test_prediction_with_and_without_ground_noise(scene) -> None:
@@ -203,6 +217,13 @@ def test_scalar_interaction_matches_vectorised(scene, tracker) -> None:
         si = [*rng.uniform(0, 3, 2), 1.7, rng.uniform(-3, 3)]
         sj = [*rng.uniform(0, 3, 2), 1.7, rng.uniform(-3, 3)]
         ui, uj = tuple(rng.uniform(0, 3, 2)), tuple(rng.uniform(0, 3, 2))
-        ref = interaction_penalty(chain.p, np.array(si[:2]), np.array(si[3]), np.array(ui),
-                                  np.array(sj[:2]), np.array(sj[3]), np.array(uj))
+        ref = interaction_penalty(
+            chain.p,
+            np.array(si[:2]),
+            np.array(si[3]),
+            np.array(ui),
+            np.array(sj[:2]),
+            np.array(sj[3]),
+            np.array(uj),
+        )
         assert chain._pair(si, ui, sj, uj) == pytest.approx(float(ref), abs=1e-15)
