@@ -65,9 +65,13 @@ __all__ = [
     "DEFAULT_OLD_UPDATE",
 ]
 
-#: Old-slice update kept by default: see the module docstring and the benchmark's
-#: ``oracle_posterior_gap`` / ``oracle_posterior_gap_keep`` figures.
-DEFAULT_OLD_UPDATE = "seed"
+#: Old-slice update kept by default. Measured against the exact filtering oracle on the
+#: first 8 observations of 80 default office scenarios (640 observations): "keep" agreed
+#: with the exact MAP link on 96.3 % of observations, mean |ADF - exact| link posterior
+#: 0.0126; the seed's projection 95.9 %, 0.0137 - not told apart within noise, and
+#: "keep" costs no extra projections, so it is the default. The benchmark reports both
+#: (``oracle_posterior_gap`` and ``oracle_posterior_gap_seed_update``).
+DEFAULT_OLD_UPDATE = "keep"
 _LOGPI = float(np.log(np.pi))
 _FORMAT = "zajdel-adf-state-v1"
 
@@ -459,18 +463,33 @@ class RunResult(NamedTuple):
         _, first, inv = np.unique(best, return_index=True, return_inverse=True)
         return np.argsort(np.argsort(first))[inv]
 
-    def labels_chain(self) -> np.ndarray:
-        """Chain decoding (spec "Decoding a partition", (b)): canonical labels (K,)."""
-        return chain_decode(self.link_obs - self.first_index, self.link_prob, self.new_prob)
+    def labels_chain(self, use_counter: bool = True, method: str = "matching") -> np.ndarray:
+        """Chain decoding (spec "Decoding a partition", (b)): canonical labels (K,).
+
+        With ``use_counter`` the number of tracks is the filter's final estimate of the
+        number of people (the rounded counter mean), see :func:`chain_decode`."""
+        n = int(round(float(self.counter_mean[-1]))) if (use_counter and self.num_obs) else None
+        if n is not None and self.first_index > 0:
+            n = None  # a continued run: the counter also counts earlier people
+        return chain_decode(
+            self.link_obs - self.first_index, self.link_prob, self.new_prob, n, method
+        )
 
 
-def chain_decode(link_obs: np.ndarray, link_prob: np.ndarray, new_prob: np.ndarray) -> np.ndarray:
-    """Each observation takes its most probable link, an earlier observation being
-    continued at most once (a track is a chain). Candidates are taken in decreasing
-    probability over all observations (new is always available).
+def _links_to_canonical(link: np.ndarray) -> np.ndarray:
+    K = link.shape[0]
+    labels = np.empty(K, np.int64)
+    nxt = 0
+    for k in range(K):  # one pass in time order (decoding, not the filter)
+        if link[k] == k:
+            labels[k] = nxt
+            nxt += 1
+        else:
+            labels[k] = labels[link[k]]
+    return labels
 
-    link_obs (K, L) int (indices into this batch, < 0 = none), link_prob (K, L),
-    new_prob (K,) -> canonical labels (K,)."""
+
+def _candidates(link_obs, link_prob, new_prob):
     K, L = link_obs.shape
     kk = np.repeat(np.arange(K), L)
     jj = link_obs.reshape(-1)
@@ -478,28 +497,88 @@ def chain_decode(link_obs: np.ndarray, link_prob: np.ndarray, new_prob: np.ndarr
     ok = (jj >= 0) & (jj < kk) & (pp > 0)
     kk = np.concatenate([kk[ok], np.arange(K)])
     jj = np.concatenate([jj[ok], np.arange(K)])
-    pp = np.concatenate([pp[ok], new_prob])
-    order = np.lexsort((kk, -pp))
-    link = np.full(K, -1)
-    used = np.zeros(K, bool)
-    for t in order:  # decoding pass over sorted candidates (not part of the filter)
-        k, j = kk[t], jj[t]
-        if link[k] >= 0:
-            continue
-        if j == k:
-            link[k] = k
-        elif not used[j]:
-            link[k] = j
-            used[j] = True
-    labels = np.empty(K, np.int64)
-    nxt = 0
-    for k in range(K):
-        if link[k] == k:
-            labels[k] = nxt
-            nxt += 1
-        else:
-            labels[k] = labels[link[k]]
-    return labels
+    pp = np.concatenate([pp[ok], np.maximum(new_prob, 1e-300)])
+    return kk, jj, pp
+
+
+def _match(kk, jj, cost, K):
+    """Min-cost assignment of every observation to one candidate: column j < K is
+    "continue observation j" (used at most once), column K + k is "k is new"."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import min_weight_full_bipartite_matching
+
+    cols = np.where(jj == kk, K + kk, jj)
+    g = csr_matrix((cost + 1.0, (kk, cols)), shape=(K, 2 * K))  # +1: keep zero costs explicit
+    _, col = min_weight_full_bipartite_matching(g)
+    return np.where(col >= K, np.arange(K), col)
+
+
+def chain_decode(
+    link_obs: np.ndarray,
+    link_prob: np.ndarray,
+    new_prob: np.ndarray,
+    num_tracks: int | None = None,
+    method: str = "matching",
+) -> np.ndarray:
+    r"""Chain decoding of link posteriors (spec "Decoding a partition", (b)): each
+    observation continues one earlier observation or starts a track, and an earlier
+    observation is continued at most once (a track is a chain).
+
+    ``method="matching"`` (default) maximises :math:`\sum_k \log P(	ext{link}_k)` over all
+    such assignments (a sparse min-cost bipartite matching); with ``num_tracks`` the
+    number of new tracks is fixed to that value by a Lagrange penalty on "new" found by
+    bisection (the tracker passes the counter's estimate). ``method="greedy"`` takes the
+    candidates in decreasing probability instead.
+
+    Parameters
+    ----------
+    link_obs : (K, L) int, candidate earlier observations (indices into this batch, < 0 none)
+    link_prob : (K, L), their probabilities; new_prob : (K,) P(new)
+    num_tracks : wanted number of tracks (None: free)
+
+    Returns
+    -------
+    canonical labels (K,)
+    """
+    K = link_obs.shape[0]
+    if K == 0:
+        return np.zeros(0, np.int64)
+    kk, jj, pp = _candidates(link_obs, link_prob, new_prob)
+    if method == "greedy":
+        order = np.lexsort((kk, -pp))
+        link = np.full(K, -1)
+        used = np.zeros(K, bool)
+        for t in order:  # decoding pass over sorted candidates (not part of the filter)
+            k, j = kk[t], jj[t]
+            if link[k] >= 0:
+                continue
+            if j == k:
+                link[k] = k
+            elif not used[j]:
+                link[k] = j
+                used[j] = True
+        return _links_to_canonical(link)
+    if method != "matching":
+        raise InputError(f"method = {method!r}: must be 'matching' or 'greedy'")
+    cost = -np.log(pp)
+    is_new = jj == kk
+    link = _match(kk, jj, cost, K)
+    if num_tracks is None:
+        return _links_to_canonical(link)
+    target = int(np.clip(num_tracks, 1, K))
+    if int((link == np.arange(K)).sum()) != target:
+        lo, hi = -60.0, 60.0
+        for _ in range(40):  # bisection on the penalty of a new track
+            lam = 0.5 * (lo + hi)
+            link = _match(kk, jj, cost + np.where(is_new, lam, 0.0) + 60.0, K)
+            n_new = int((link == np.arange(K)).sum())
+            if n_new == target:
+                break
+            if n_new > target:
+                lo = lam
+            else:
+                hi = lam
+    return _links_to_canonical(link)
 
 
 # ------------------------------------------------------------------------ tracker
