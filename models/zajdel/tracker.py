@@ -599,7 +599,8 @@ class ZajdelADF:
     """
 
     def __init__(self, params, config: ADFConfig | None = None):
-        if hasattr(params, "to_params"):
+        if hasattr(params, "to_params"):  # a models.zajdel.model.ZajdelModel declaration
+            params.check_structure()
             params = params.to_params()
         check_params(params)
         self.params: ZajdelParams = params
