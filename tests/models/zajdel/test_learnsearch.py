@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.special import logsumexp
 from scipy.stats import multivariate_normal
 
@@ -92,6 +94,25 @@ def test_exhaustive_search_finds_exact_map(p_new):
     np.testing.assert_array_equal(res.labels, parts[np.argmax(ls)])
     np.testing.assert_allclose(res.log_scores, partition_log_scores(res.hypotheses, obs, p), atol=1e-8)
     np.testing.assert_allclose(np.sort(res.log_scores), np.sort(ls), atol=1e-8)
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 10_000), K=st.integers(1, 6), T=st.integers(1, 12),
+       p_new=st.sampled_from([None, 0.1, 0.5]))
+def test_kept_partitions_are_the_best_children_property(seed, K, T, p_new):
+    """For random small models: the kept scores equal the from-scratch scores, and after
+    the last observation they are the T best scores among the children of the
+    partitions kept one step earlier (checked by enumerating those children)."""
+    obs, p = small_problem(seed, K=K, p_new=p_new)
+    cfg = LearnSearchConfig(num_hypotheses=T, n0=1, learn=False)
+    res = learn_search(obs, p, cfg)
+    np.testing.assert_allclose(res.log_scores, partition_log_scores(res.hypotheses, obs, p), atol=1e-8)
+    if K >= 2:
+        prev = learn_search(take(obs, slice(0, K - 1)), p, cfg).hypotheses
+        kids = np.concatenate([np.concatenate([np.repeat(h[None], h.max() + 2, 0),
+                                               np.arange(h.max() + 2)[:, None]], 1) for h in prev])
+        best = np.sort(partition_log_scores(kids, obs, p))[::-1][:T]
+        np.testing.assert_allclose(res.log_scores, best, atol=1e-8)
 
 
 def test_beam_scores_are_incremental_and_exact_on_simulated_data():
