@@ -23,6 +23,7 @@ from models.pathrecovery.filter import (
     StepInfo,
     init,
     make_model,
+    observation_support,
     run_filter,
     step,
 )
@@ -57,6 +58,7 @@ __all__ = [
     "legal_transitions",
     "make_model",
     "manhattan_grid",
+    "observation_support",
     "path_score",
     "propagate",
     "recover_path",

@@ -76,6 +76,7 @@ __all__ = [
     "PathFilterModel",
     "init",
     "make_model",
+    "observation_support",
     "run_filter",
     "step",
 ]
@@ -331,6 +332,33 @@ def _multinomial(rng: np.random.Generator, w: np.ndarray, n: int) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------------ the step
+def observation_support(
+    model: PathFilterModel, u_x: np.ndarray, u_z: np.ndarray, w_p: np.ndarray
+) -> np.ndarray:
+    """Support of an observation for a particle in its camera (seed 001, eqs. 5-6).
+
+    ``P(x = z | f_0) = beta (alpha W^p + (1 - alpha) P_s(f_x, f_z)) + (1 - beta) P_s(f_0, f_z)``
+    with ``P_s = exp(-d_M^2 / 2)`` (eqs. 2-3).
+
+    Parameters
+    ----------
+    model : PathFilterModel (``alpha``, ``beta``, whitened ``f_0``).
+    u_x : (n, feature_dim) whitened particle features ``L^{-1} f_x``.
+    u_z : (n, feature_dim) whitened observation features ``L^{-1} f_z``.
+    w_p : (n,) ``W^p(C_{x_{t-1}}, C_{x_t})``.
+
+    Returns
+    -------
+    (n,) float64 in [0, 1].
+    """
+    cfg = model.config
+    dx = u_x - u_z
+    d0 = model.u0 - u_z
+    ps_x = np.exp(-0.5 * np.einsum("ij,ij->i", dx, dx))
+    ps_0 = np.exp(-0.5 * np.einsum("ij,ij->i", d0, d0))
+    return cfg.beta * (cfg.alpha * w_p + (1 - cfg.alpha) * ps_x) + (1 - cfg.beta) * ps_0
+
+
 def step(
     rng: np.random.Generator,
     model: PathFilterModel,
@@ -394,12 +422,8 @@ def step(
     if p_idx.size:
         owner, item, starts = _segments(lo[has], (hi - lo)[has])
         uz = _whiten(model, obs_feat[item])
-        dx = feat[p_idx][owner] - uz
-        d0 = model.u0 - uz
-        ps_x = np.exp(-0.5 * np.einsum("ij,ij->i", dx, dx))  # eq. 3
-        ps_0 = np.exp(-0.5 * np.einsum("ij,ij->i", d0, d0))
         wp = net.transition_prob(src[p_idx], cam[p_idx])[owner]
-        support = cfg.beta * (cfg.alpha * wp + (1 - cfg.alpha) * ps_x) + (1 - cfg.beta) * ps_0  # eqs. 5-6
+        support = observation_support(model, feat[p_idx][owner], uz, wp)  # eqs. 5-6
         seg_max, best = _segment_argmax(support, owner, starts)  # eq. 7
         w[p_idx] = seg_max
         assoc[p_idx] = item[best]

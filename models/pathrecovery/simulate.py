@@ -364,7 +364,11 @@ def _calibrate_spread(
             lo = mid
         else:
             hi = mid
-    s = float(np.exp(0.5 * (lo + hi)))
+    # CM(s) is piecewise continuous with jumps where an observation crosses the threshold
+    # a of eq. 8; the bisection ends at such a jump, so step 1e-6 (relative) off it to the
+    # side closer to the request, where rounding cannot flip an observation
+    candidates = [float(np.exp(lo)) * (1 - 1e-6), float(np.exp(hi)) * (1 + 1e-6)]
+    s = min(candidates, key=lambda v: abs(cm_of(v) - cm_target))
     return s, cm_of(s)
 
 
@@ -450,6 +454,8 @@ def simulate_scene(
         achieved = confusion_measure(np.exp(-0.5 * np.einsum("ij,ij->i", w, w)), is_target)
     means = spread * z @ chol.T
     feat = means[o_obj] + o_e
+    # report the CM of the features exactly as stored
+    achieved = confusion_measure(similarity(feat, means[target], chol), is_target)
     odb = ObservationDB(time_ptr, o_cam, feat, o_obj)
     true_cam = obj_cam[target].copy()
     true_ta = obj_ta[target].copy()
