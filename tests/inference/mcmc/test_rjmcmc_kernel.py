@@ -173,3 +173,23 @@ def test_same_seed_same_chain_and_bad_input() -> None:
     with pytest.raises(InputError, match="reverse"):
         rj_step(np.random.default_rng(0), state, bad, log_target, MOVE_PROBS)
     assert state == (0.5,)
+
+
+def test_incremental_target_delta_gives_the_same_chain() -> None:
+    """A proposal that reports log pi(x') - log pi(x) itself drives the identical chain."""
+
+    def with_delta(move):
+        def propose(rng: np.random.Generator, x: tuple[float, ...]) -> Proposal | None:
+            prop = move(rng, x)
+            if prop is None:
+                return None
+            return prop._replace(log_target_delta=log_target(prop.state) - log_target(x))
+
+        return propose
+
+    moves_inc = [Move(m.name, with_delta(m.propose), m.reverse) for m in MOVES]
+    a, ia = run_chain(np.random.default_rng(9), (), 2000, MOVES, log_target, MOVE_PROBS)
+    b, ib = run_chain(np.random.default_rng(9), (), 2000, moves_inc, log_target, MOVE_PROBS)
+    assert a == b
+    assert [i.accepted for i in ia] == [i.accepted for i in ib]
+    assert ib[-1].log_target == pytest.approx(log_target(b[-1]))
