@@ -53,6 +53,14 @@ Two weightings (``FilterConfig.faithful``)
     ``q = 0.3``: 0.80; the faithful reading: 0.58). ``benchmarks/pathrecovery.py``
     reports the faithful and the default side by side.
 
+Readings common to both: sec. 2 says the resampling "distinguishes between two sets of
+particles and resamples from one of them" while sec. 4.1.6 describes plain factored
+sampling by the weights; we resample all particles together by their normalised weights
+(hidden ones are duplicated in proportion to their weight). Diffusion moves visible
+particles one step on ``G_mcd`` whatever the edge (as written, also across a gap edge);
+hidden particles are neither diffused nor switched. A visible particle outside the
+``N_fc`` evaluated cameras, or in a camera without observations, weighs 0.
+
 ``FilterConfig.gaps=False`` disables gap modelling: every edge takes one step and no
 particle is ever hidden (the "without gap modelling" runs of sec. 7.2.1).
 """
