@@ -120,7 +120,8 @@ class LearnSearchConfig(NamedTuple):
         iterations or when no parameter moves by more than em_tol (relative)
     shrinkage : pseudo-count of the regularised appearance M step: S(l) is shrunk
         toward the pooled noise covariance (itself toward the starting S), b(l) toward 0,
-        R toward the starting R (0 = plain maximum likelihood, Appendix A)
+        R toward the starting R (0 = plain maximum likelihood, Appendix A; on the
+        default simulated office it overfits and ends with one track per observation)
     travel_shrinkage : pseudo-count pulling each camera pair's travel-time mean and
         variance toward the starting values (0 = maximum likelihood)
     """
@@ -476,6 +477,10 @@ def em_step(obs: Observations, labels: np.ndarray, log_weights: np.ndarray, para
                      np.asarray(params.noise_cov))
     S = 0.5 * (S + np.swapaxes(S, -1, -2))
     R = 0.5 * (R + R.T)
+    # floor (1e-9 of the anchor's scale) so that a degenerate fit stays positive definite
+    eye = np.eye(r)
+    S = S + 1e-9 * float(np.trace(np.asarray(anchor.noise_cov).mean(0))) / r * eye
+    R = R + 1e-9 * float(np.trace(np.asarray(anchor.prior_cov))) / r * eye
     if not config.learn_appearance:
         mu, R, bias, S = params.mean, params.prior_cov, params.bias, params.noise_cov
     path = params.path
