@@ -143,6 +143,16 @@ def _init(key: Array, model: StateSpaceModel, num_particles: int, dtype: Any) ->
     return ParticleState(x, lw)
 
 
+def _resample_predicate(cur_ess: Array, ess_threshold: float, n: int) -> Array:
+    """Whether to resample. For ``ess_threshold >= 1`` the predicate is ``ess >= 0``, always
+    true at run time but not a compile-time constant: the resampling branch of ``lax.cond``
+    then stays a separate computation. That matters for speed on CPU: XLA de-vectorises a
+    fusion that mixes the ancestor gather with the transition sampler (4x slower)."""
+    if ess_threshold >= 1.0:
+        return cur_ess >= 0.0
+    return cur_ess < ess_threshold * n
+
+
 def _check_threshold(ess_threshold: float) -> None:
     if not (ess_threshold >= 0.0):
         raise ValueError(f"ess_threshold must be >= 0, got {ess_threshold!r}")
@@ -201,12 +211,8 @@ def bootstrap_filter(
         def keep(_):
             return jnp.arange(n, dtype=jnp.int32), state.particles, lw
 
-        if ess_threshold >= 1.0:
-            do = jnp.asarray(True)
-            anc, x, base = resample(None)
-        else:
-            do = cur_ess < ess_threshold * n
-            anc, x, base = jax.lax.cond(do, resample, keep, None)
+        do = _resample_predicate(cur_ess, ess_threshold, n)
+        anc, x, base = jax.lax.cond(do, resample, keep, None)
         x_new = model.sample_transition(k_move, x, action).astype(dtype)
         log_w = _clean(base + model.log_likelihood(x_new, observation).astype(dtype))
         new_lw, total = _normalise(log_w)
@@ -267,12 +273,8 @@ def auxiliary_filter(
         def keep(_):
             return jnp.arange(n, dtype=jnp.int32), state.particles, lw
 
-        if ess_threshold >= 1.0:
-            do = jnp.asarray(True)
-            anc, x, base = resample(None)
-        else:
-            do = cur_ess < ess_threshold * n
-            anc, x, base = jax.lax.cond(do, resample, keep, None)
+        do = _resample_predicate(cur_ess, ess_threshold, n)
+        anc, x, base = jax.lax.cond(do, resample, keep, None)
         x_new = model.sample_transition(k_move, x, action).astype(dtype)
         log_w = _clean(base + model.log_likelihood(x_new, observation).astype(dtype))
         new_lw, total = _normalise(log_w)
@@ -293,16 +295,23 @@ def _run(
 ):
     num_steps = jax.tree_util.tree_leaves(observations)[0].shape[0]
     keys = jax.random.split(key, num_steps)
+    # Prefetch: the loop carries step k's inputs and slices step k+1's. Consumers then read
+    # a loop-carried buffer instead of a dynamic slice, which XLA on CPU would otherwise fuse
+    # into every per-particle loop (measured 1.8x slower).
+    inputs = (observations, actions)
+    first = jax.tree_util.tree_map(lambda a: a[0], inputs)
+    shifted = jax.tree_util.tree_map(lambda a: jnp.concatenate([a[1:], a[:1]]), inputs)
 
     def body(carry, inp):
-        k, obs, act = inp
-        new, info = pf.step(k, carry, obs, act)
+        state, (obs, act) = carry
+        k, nxt = inp
+        new, info = pf.step(k, state, obs, act)
         if not keep_ancestors:
             info = info._replace(ancestors=None)
         out = summary(new) if summary is not None else None
-        return new, (info, out)
+        return (new, nxt), (info, out)
 
-    final, (infos, outs) = jax.lax.scan(body, state, (keys, observations, actions))
+    (final, _), (infos, outs) = jax.lax.scan(body, (state, first), (keys, shifted))
     return final, infos, outs
 
 

@@ -96,8 +96,15 @@ def systematic(key: Array, log_weights: Array, n: int) -> Array:
     return as :func:`multinomial` (ancestors sorted).
     """
     w = normalized_weights(log_weights)
-    u = (jnp.arange(n, dtype=w.dtype) + _uniform(key, (), w.dtype)) / n
-    return _inverse_cdf(w, u)
+    cdf = jnp.cumsum(w)
+    cdf = cdf / cdf[-1]
+    # point k = (k + U) / n lies below cdf_i  <=>  k < n cdf_i - U: count_i = ceil(n cdf_i - U);
+    # the ancestor of point k is the number of particles whose count is <= k (O(n), no search)
+    counts = jnp.clip(jnp.ceil(n * cdf - _uniform(key, (), w.dtype)), 0, n).astype(jnp.int32)
+    marks = jnp.zeros(n + 1, jnp.int32).at[counts].add(1)
+    anc = jnp.cumsum(marks[:n])
+    last = w.shape[0] - 1 - jnp.argmax(w[::-1] > 0)
+    return jnp.minimum(anc, last).astype(jnp.int32)
 
 
 def stratified(key: Array, log_weights: Array, n: int) -> Array:
