@@ -44,6 +44,7 @@ Data in this library's tests, benchmark and tutorial are SIMULATED.
 
 from __future__ import annotations
 
+import time
 from typing import NamedTuple
 
 import numpy as np
@@ -122,8 +123,9 @@ class MCMCResult(NamedTuple):
     accept_rate : (4,) acceptance rate of each move type (nan if never tried)
     final : ChainState after the last step
     score_trace : (num_samples, num_chains) log score after each step
-    best_at : dict n -> (canonical labels (num_obs,), score) of the best sample among
-        the first n steps, for each requested checkpoint n (a run of n samples)
+    best_at : dict n -> (canonical labels (num_obs,), score, seconds) of the best sample
+        among the first n steps and the wall time since the call started, for each
+        requested checkpoint n (what a run of n samples with the same seed returns)
     """
 
     best_labels: np.ndarray
@@ -379,6 +381,7 @@ def partition_mcmc(seed, obs: Observations, params: LSParams, num_samples: int,
     K = obs.num_obs
     if K < 1:
         raise InputError("num_obs = 0: nothing to sample")
+    start = time.perf_counter()
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     if init_labels is not None:
         lab0 = np.broadcast_to(np.asarray(init_labels, np.int64), (num_chains, K))
@@ -415,7 +418,8 @@ def partition_mcmc(seed, obs: Observations, params: LSParams, num_samples: int,
             best[better] = state.labels[better]
         if s + 1 in marks:
             c = int(np.argmax(best_score))
-            best_at[s + 1] = (_canonical(best[c][None])[0], float(best_score[c]))
+            best_at[s + 1] = (_canonical(best[c][None])[0], float(best_score[c]),
+                              time.perf_counter() - start)
         if accepted.any():
             co_now = (state.labels[:, :, None] == state.labels[:, None, :]).sum(0)
         if s >= cfg.burn_in:
