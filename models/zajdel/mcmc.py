@@ -35,9 +35,13 @@ tens of thousands of chains, hence its own implementation).
 
 Initialisation: ``"random"`` (each observation gets a uniformly random slot; seed 000's
 "purely random" start) or ``"greedy"`` (the single-hypothesis search, T = 1, under the
-same parameters: seed 000's "MHT with only one hypothesis"). The result holds the
-sample of highest score (seed 000 takes the sample maximising the data likelihood) and
-the co-assignment frequencies of every pair of observations.
+same parameters: seed 000's "MHT with only one hypothesis"). Impossible path factors
+(zero transition or entry probability) count
+:data:`models.zajdel.learnsearch.IMPOSSIBLE_LOG_PROB` each, so a chain can start in an
+impossible partition and climb out of it. The result holds the sample of highest score
+(likelihood times partition prior: seed 000's criterion, the data likelihood, under its
+uniform prior ``p_new = None``) and the co-assignment frequencies of every pair of
+observations.
 
 Data in this library's tests, benchmark and tutorial are SIMULATED.
 """
