@@ -142,13 +142,16 @@ class NumpyLoopADF:
                     qlab[self.person[j, i]] += self.pprob[j, i] * (w[j] / open_[j])
         qlab += w0 * self.counter[:N]
         self.counter = (1.0 - w0) * self.counter + w0 * np.concatenate([[0.0], self.counter[:-1]])
+        self.counter = np.where(self.counter >= 1e-15, self.counter, 0.0)
+        self.counter = self.counter / self.counter.sum()
         pprob = self.pprob * (1.0 - qlab[self.person])
         self.never = self.never * (1.0 - qlab)
-        order = np.argsort(-qlab, kind="stable")[: cfg.persons_per_slot]
+        order = np.argsort(-qlab.astype(np.float32), kind="stable")[: cfg.persons_per_slot]
         new_n, new_p = order, qlab[order]
         # new slice: projection of the mixture over links (loop over components)
         comps, weights, upd = [], [], {}
-        for j in range(S):
+        mix = np.argsort(-w.astype(np.float32), kind="stable")[: min(cfg.mix_top, S)]
+        for j in mix:  # loop over the mixture components (the mix_top best links)
             a, kappa, eta, C = self.niw[j]
             d = o - a
             upd[j] = (a + d / (kappa + 1), kappa + 1, eta + 1, C + kappa / (kappa + 1) * np.outer(d, d))
@@ -161,7 +164,7 @@ class NumpyLoopADF:
         new_niw = _project(weights, comps, r)
         niw = list(self.niw)
         if cfg.old_update == "seed":
-            top = np.argsort(-w, kind="stable")[: min(cfg.old_update_top, S)]
+            top = np.argsort(-w.astype(np.float32), kind="stable")[: min(cfg.old_update_top, S)]
             for j in top:
                 if w[j] > 0:
                     niw[j] = _project([w[j], 1.0 - w[j]], [upd[j], self.niw[j]], r)

@@ -74,6 +74,7 @@ __all__ = [
 DEFAULT_OLD_UPDATE = "keep"
 _LOGPI = float(np.log(np.pi))
 _FORMAT = "zajdel-adf-state-v1"
+_COUNTER_EPS = 1e-15  # counter tails below this are dropped (keeps its support bounded)
 
 
 class ADFConfig(NamedTuple):
@@ -86,6 +87,9 @@ class ADFConfig(NamedTuple):
     prune_eps : pointer entries below this are dropped
     old_update : "seed" or "keep" (see module docstring)
     old_update_top : number of most probable links whose slices get the seed update
+    mix_top : links (most probable first) whose components enter the new slice's NIW
+        mixture (the others' weights are negligible and dropped; exact when
+        ``max_open <= mix_top``)
     link_out, label_out : how many top links / labels are recorded per observation
     chunk : observations per compiled scan chunk in :meth:`ZajdelADF.run`
     init_persons : initial person capacity (grows by doubling, each growth recompiles)
@@ -98,6 +102,7 @@ class ADFConfig(NamedTuple):
     prune_eps: float = 1e-10
     old_update: str = DEFAULT_OLD_UPDATE
     old_update_top: int = 8
+    mix_top: int = 32
     link_out: int = 16
     label_out: int = 16
     chunk: int = 128
@@ -221,6 +226,14 @@ def _link_logweights(m: _Model, uniform: bool, st: ADFState, x):
     return logw, logw0
 
 
+def _top(x, k):
+    """Indices and values of the k largest entries of a float64 vector. The ranking is
+    done in float32 (XLA's CPU top-k is several times faster there; entries equal to
+    float32 precision may swap places), the values returned are the float64 ones."""
+    _, i = jax.lax.top_k(x.astype(jnp.float32), k)
+    return x[i], i
+
+
 def _normalise(logw, logw0):
     allw = jnp.concatenate([logw, logw0[None]])
     lz = logsumexp(allw)
@@ -258,12 +271,21 @@ def _update(m: _Model, cfg: ADFConfig, st: ADFState, x, w, w0, lz, impossible):
     qlab = qlab + w0 * st.counter[:N]
     # 4. counter
     counter = (1.0 - w0) * st.counter + w0 * jnp.concatenate([jnp.zeros(1), st.counter[:-1]])
+    counter = jnp.where(counter >= _COUNTER_EPS, counter, 0.0)  # bounded support
+    counter = counter / jnp.sum(counter)
     # 5. pointers
     pprob = st.slot_pprob * (1.0 - qlab[st.slot_person])
     never = st.never * (1.0 - qlab)
-    new_p, new_n = jax.lax.top_k(qlab, W)
-    # 6. states: the new slice
-    ca, ck, ce, cC, cCinv, cld = _conj(st, o)
+    new_p, new_n = _top(qlab, W)
+    # 6. states: the new slice, projected from the mixture over its mix_top most
+    #    probable links and "new" (the other links' weights are dropped: negligible)
+    Mx = min(cfg.mix_top, S)
+    _, itop = _top(w, Mx)
+    sub = ADFState(*st)._replace(
+        slot_a=st.slot_a[itop], slot_kappa=st.slot_kappa[itop], slot_eta=st.slot_eta[itop],
+        slot_C=st.slot_C[itop], slot_Cinv=st.slot_Cinv[itop], slot_logdetC=st.slot_logdetC[itop],
+    )
+    ca, ck, ce, cC, cCinv, cld = _conj(sub, o)
     u0 = o - m.a0
     b0 = m.k0 / (m.k0 + 1.0)
     Cu0 = m.Cinv0 @ u0
@@ -273,26 +295,28 @@ def _update(m: _Model, cfg: ADFConfig, st: ADFState, x, w, w0, lz, impossible):
     comp_e = jnp.concatenate([ce, (m.e0 + 1.0)[None]])
     comp_Cinv = jnp.concatenate([cCinv, (m.Cinv0 - (b0 / den0) * jnp.outer(Cu0, Cu0))[None]])
     comp_ld = jnp.concatenate([cld, (m.logdet0 + jnp.log(den0))[None]])
-    weights = jnp.concatenate([w, w0[None]])
+    weights = jnp.concatenate([w[itop], w0[None]])
     na, nk, ne, nC, nCinv, nld = niw_project_cached(weights, comp_a, comp_k, comp_e, comp_Cinv, comp_ld)
-    # 6'. old slices
+    # 6'. old slices (the seed's marginal, for the old_update_top most probable links;
+    #     they are the first entries of the mix_top list)
     sa, sk, se, sC, sCinv, sld = st.slot_a, st.slot_kappa, st.slot_eta, st.slot_C, st.slot_Cinv, st.slot_logdetC
     if cfg.old_update == "seed":
-        M = min(cfg.old_update_top, S)
-        wt, it = jax.lax.top_k(w, M)
+        M = min(cfg.old_update_top, Mx)
+        it = itop[:M]
+        wt = w[it]
 
-        def proj2(wj, j):
+        def proj2(wj, q, j):
             ww = jnp.stack([wj, 1.0 - wj])
             return niw_project_cached(
                 ww,
-                jnp.stack([ca[j], sa[j]]),
-                jnp.stack([ck[j], sk[j]]),
-                jnp.stack([ce[j], se[j]]),
-                jnp.stack([cCinv[j], sCinv[j]]),
-                jnp.stack([cld[j], sld[j]]),
+                jnp.stack([ca[q], sa[j]]),
+                jnp.stack([ck[q], sk[j]]),
+                jnp.stack([ce[q], se[j]]),
+                jnp.stack([cCinv[q], sCinv[j]]),
+                jnp.stack([cld[q], sld[j]]),
             )
 
-        pa, pk, pe, pC, pCinv, pld = jax.vmap(proj2)(wt, it)
+        pa, pk, pe, pC, pCinv, pld = jax.vmap(proj2)(wt, jnp.arange(M), it)
         use = wt > 0
         sel = lambda new, old: jnp.where(use.reshape((-1,) + (1,) * (new.ndim - 1)), new, old)  # noqa: E731
         sa = sa.at[it].set(sel(pa, sa[it]))
@@ -338,13 +362,13 @@ def _update(m: _Model, cfg: ADFConfig, st: ADFState, x, w, w0, lz, impossible):
         slot_pprob=pprob,
     )
     L = min(cfg.link_out, S)
-    lp, li = jax.lax.top_k(w, L)
+    lp, li = _top(w, L)
     link_obs = jnp.where(lp > 0, st.slot_obs[li], -1)
     if L < cfg.link_out:
         link_obs = jnp.concatenate([link_obs, -jnp.ones(cfg.link_out - L, link_obs.dtype)])
         lp = jnp.concatenate([lp, jnp.zeros(cfg.link_out - L)])
     Lb = min(cfg.label_out, N)
-    bp, bn = jax.lax.top_k(qlab, Lb)
+    bp, bn = _top(qlab, Lb)
     cc = jnp.arange(counter.shape[0], dtype=counter.dtype)
     cm = jnp.sum(counter * cc)
     cs = jnp.sqrt(jnp.maximum(jnp.sum(counter * cc * cc) - cm * cm, 0.0))
@@ -734,7 +758,7 @@ class ZajdelADF:
         cfg = self.config
         CH = cfg.chunk
         K = o.num_obs
-        xs_all = self._xs(o)
+        xs_all = (o.appearance, o.camera, o.border_enter, o.border_quit, o.t_enter, o.t_quit)
         infos = []
         counters = []
         rng = range(0, K, CH)
@@ -745,17 +769,21 @@ class ZajdelADF:
         for s in rng:
             n = min(CH, K - s)
             state = self._grow(state, CH)
-            xs = tuple(jnp.concatenate([v[s : s + n], jnp.repeat(v[-1:], CH - n, axis=0)]) for v in xs_all)
-            state, (info, cnt) = _run_chunk(self._model, cfg, self._uniform, state, xs, n)
-            infos.append(jax.tree_util.tree_map(lambda a, n=n: a[:n], info))
+            pad = np.minimum(np.arange(s, s + CH), K - 1)  # fixed chunk shape (host side)
+            xs = tuple(v[pad] for v in xs_all)
+            state, (info, cnt) = _run_chunk(self._model, cfg, self._uniform, state, xs, np.int64(n))
+            infos.append((info, n))
             if cfg.record_counter:
-                counters.append(cnt[:n])
+                counters.append((cnt, n))
         return state, self._result(infos, counters, first)
 
     def _result(self, infos, counters, first) -> RunResult:
-        infos = jax.device_get(infos)
+        infos = [(jax.device_get(i), n) for i, n in infos]
+        counters = [np.asarray(c)[:n] for c, n in counters]
         if infos:
-            cat = ADFInfo(*(np.concatenate([np.asarray(getattr(i, f)) for i in infos]) for f in ADFInfo._fields))
+            cat = ADFInfo(
+                *(np.concatenate([np.asarray(getattr(i, f))[:n] for i, n in infos]) for f in ADFInfo._fields)
+            )
         else:
             cfg = self.config
             cat = ADFInfo(
@@ -797,9 +825,9 @@ class ZajdelADF:
                 self._model, cfg, state, x, jnp.asarray(w), jnp.asarray(w0, jnp.float64),
                 jnp.asarray(lz, jnp.float64), jnp.asarray(imp),
             )
-            infos.append(jax.tree_util.tree_map(lambda a: np.asarray(a)[None], info))
+            infos.append((jax.tree_util.tree_map(lambda a: np.asarray(a)[None], info), 1))
             if cfg.record_counter:
-                counters.append(np.asarray(state.counter)[None])
+                counters.append((np.asarray(state.counter)[None], 1))
         return state, self._result(infos, counters, first)
 
     def _lag_revision(self, st: ADFState, o: Observations, idx, logw, logw0, lp_win):

@@ -1,0 +1,173 @@
+"""Benchmark ``zajdel_adf`` (issue 3): the Zajdel ADF tracker (seed 002, section 1.4) on
+SIMULATED office-building data (``models.zajdel.simulate``).
+
+Keys
+----
+q_adf, f1_adf, objects_abs_err : mean partition accuracy (seed 000, eqs. 7-8), pairwise
+    F1 and |objects found - true objects| over 10 default office scenarios, chain
+    decoding (matching, number of tracks from the counter)
+f1_adf_online_map : the on-line MAP labels (seed 002's answer)
+f1_adf_lag3 : fixed-lag revision, L = 3, chain decoding
+q_greedy, f1_greedy : single-hypothesis greedy baseline on the same data
+oracle_link_agreement, oracle_posterior_gap : on the first K = 8 observations of 20
+    scenarios, fraction of observations whose ADF MAP link equals the exact filtering
+    posterior's, and mean total-variation distance between the ADF and exact link
+    posteriors (1/2 sum_j |p_adf - p_exact| per observation)
+obs_per_s, compile_s, peak_open_tracks : streaming the large setting (20 cameras,
+    about 200 people at once; 10,000 observations, --quick the first 2,000) after
+    warm-up; compile time of the first chunk; most open track ends at once
+speedup_vs_numpy_loop : time of the same ADF written as a plain numpy loop over
+    candidate links and mixture components (``models.zajdel.reference``) / ours, on the
+    first 1,000 observations of the large setting (--quick: 150); "ok" requires both to
+    give the same link posteriors (1e-8)
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+
+from benchmarks._common import log
+
+NAME = "zajdel_adf"
+
+
+def _mean(x):
+    return float(np.mean(x)) if len(x) else float("nan")
+
+
+def run(quick: bool, seed: int) -> dict:
+    import inference  # noqa: F401  (jax 64-bit)
+    from models.zajdel.data import take
+    from models.zajdel.greedy import greedy_labels
+    from models.zajdel.metrics import num_objects, pairwise_prf, partition_accuracy
+    from models.zajdel.oracle import exact_filtering
+    from models.zajdel.reference import NumpyLoopADF
+    from models.zajdel.simulate import large_config, simulate_office
+    from models.zajdel.tracker import ADFConfig, ZajdelADF
+
+    checks: dict[str, bool] = {}
+
+    def check(name: str, cond) -> None:
+        checks[name] = checks.get(name, True) and bool(cond)
+
+    out: dict = {"name": NAME, "quick": quick, "seed": seed}
+    out["cpu_count"] = os.cpu_count()
+    try:
+        out["load_average_1min"] = float(os.getloadavg()[0])
+    except OSError:  # pragma: no cover
+        out["load_average_1min"] = None
+
+    # -- 1. accuracy on the default office scenario (10 seeds) -----------------------
+    cfg = ADFConfig(max_open=64, init_persons=128, chunk=64)
+    acc: dict[str, list] = {}
+    t0 = time.perf_counter()
+    for s in range(10):
+        sc = simulate_office(seed + s)
+        truth = sc.labels
+        n_true = num_objects(truth)
+        tr = ZajdelADF(sc.params, cfg)
+        _, res = tr.run(sc.obs)
+        _, res3 = tr.run(sc.obs, lag=3)
+        # the top link_out links + new hold all but a negligible part of the mass
+        check("office_link_rows_sum_to_one", np.allclose(res.link_matrix().sum(1), 1.0, atol=1e-6))
+        check("office_loglik_finite", np.all(np.isfinite(res.loglik)))
+        decodings = {
+            "adf": res.labels_chain(),
+            "adf_chain_unconstrained": res.labels_chain(use_counter=False),
+            "adf_chain_greedy_order": res.labels_chain(use_counter=False, method="greedy"),
+            "adf_online_map": res.labels_online(),
+            "adf_lag3": res3.labels_chain(),
+            "greedy": greedy_labels(sc.obs, sc.params),
+        }
+        for name, lab in decodings.items():
+            acc.setdefault("q_" + name, []).append(partition_accuracy(lab, truth))
+            acc.setdefault("f1_" + name, []).append(pairwise_prf(lab, truth)[2])
+            acc.setdefault("objects_" + name, []).append(abs(num_objects(lab) - n_true))
+    log(f"office accuracy: {time.perf_counter() - t0:.1f} s")
+    for key in ("q_adf", "f1_adf", "f1_adf_online_map", "f1_adf_lag3", "q_greedy", "f1_greedy",
+                "q_adf_lag3", "f1_adf_chain_unconstrained", "f1_adf_chain_greedy_order"):
+        out[key] = _mean(acc[key])
+    out["objects_abs_err"] = _mean(acc["objects_adf"])
+    out["objects_abs_err_lag3"] = _mean(acc["objects_adf_lag3"])
+    out["objects_abs_err_greedy"] = _mean(acc["objects_greedy"])
+    out["office_num_seeds"] = 10
+
+    # -- 2. against the exact oracle (K = 8, 20 seeds) -------------------------------
+    t0 = time.perf_counter()
+    variants = {"": cfg} if quick else {"": cfg, "_seed_update": cfg._replace(old_update="seed")}
+    exact = []
+    for s in range(20):
+        sc = simulate_office(seed + 1000 + s)
+        obs = take(sc.obs, slice(0, 8))
+        ora = exact_filtering(obs, sc.params)
+        check("oracle_rows_sum_to_one", np.allclose(ora.link_post.sum(1), 1.0, atol=1e-12))
+        exact.append((sc.params, obs, ora.link_post))
+    for suffix, c in variants.items():
+        agree, gap = [], []
+        for params, obs, O in exact:
+            _, res = ZajdelADF(params, c).run(obs)
+            A = res.link_matrix()
+            agree.extend(A.argmax(1) == O.argmax(1))
+            gap.extend(0.5 * np.abs(A - O).sum(1))
+        out["oracle_link_agreement" + suffix] = _mean(agree)
+        out["oracle_posterior_gap" + suffix] = _mean(gap)
+    out["old_update"] = cfg.old_update
+    log(f"oracle comparison: {time.perf_counter() - t0:.1f} s")
+
+    # -- 3. streaming the large setting --------------------------------------------
+    n_large = 2000 if quick else 10_000
+    big = simulate_office(seed, large_config(10_000))
+    stream = take(big.obs, slice(0, n_large))
+    lcfg = ADFConfig(max_open=256, init_persons=1024 if quick else 4096, chunk=128)
+    tr = ZajdelADF(big.params, lcfg)
+    t0 = time.perf_counter()
+    tr.run(take(stream, slice(0, lcfg.chunk)))  # warm-up: compiles the chunk
+    out["compile_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    _, res = tr.run(stream, progress=not quick)
+    dt = time.perf_counter() - t0
+    out["obs_per_s"] = n_large / dt
+    out["large_num_obs"] = n_large
+    out["large_peak_people_in_building"] = int(big.peak_concurrent)
+    out["peak_open_tracks"] = int(res.num_open.max())
+    out["large_counter_mean_final"] = float(res.counter_mean[-1])
+    out["large_impossible_obs"] = int(res.impossible.sum())
+    check("large_finite", np.all(np.isfinite(res.loglik[~res.impossible])))
+    check("large_link_mass_at_most_one", np.all(res.link_prob.sum(1) + res.new_prob <= 1 + 1e-9))
+    log(f"large setting: {n_large} obs in {dt:.1f} s ({out['obs_per_s']:.0f} obs/s)")
+
+    # -- 4. against the plain numpy loop (same ADF) ----------------------------------
+    n_ref = 150 if quick else 1000
+    sub = take(big.obs, slice(0, n_ref))
+    rcfg = lcfg._replace(link_out=lcfg.max_open, init_persons=1024 if quick else 4096)
+    tr = ZajdelADF(big.params, rcfg)
+    tr.run(take(sub, slice(0, rcfg.chunk)))  # warm-up (this config compiles once)
+    t0 = time.perf_counter()
+    _, mine = tr.run(sub)
+    t_jax = time.perf_counter() - t0
+    ref = NumpyLoopADF(big.params, rcfg, rcfg.init_persons)
+    t0 = time.perf_counter()
+    lo, lp, npr = ref.run(sub)
+    t_np = time.perf_counter() - t0
+    out["speedup_vs_numpy_loop"] = t_np / t_jax
+    out["numpy_loop_obs"] = n_ref
+    A = mine.link_matrix()
+    B = np.zeros_like(A)
+    kk = np.repeat(np.arange(n_ref), lo.shape[1])
+    m = lo.reshape(-1) >= 0
+    np.add.at(B, (kk[m], lo.reshape(-1)[m]), lp.reshape(-1)[m])
+    B[np.arange(n_ref), np.arange(n_ref)] += npr
+    out["numpy_loop_max_abs_diff"] = float(np.abs(A - B).max())
+    check("numpy_loop_equals_jax", out["numpy_loop_max_abs_diff"] < 1e-8)
+    log(f"numpy loop: {t_np:.1f} s vs {t_jax:.2f} s")
+
+    out["failed_checks"] = [k for k, v in checks.items() if not v]
+    out["ok"] = all(checks.values())
+    out["note"] = (
+        "simulated data (models.zajdel.simulate); timings on a shared machine, see "
+        "load_average_1min"
+    )
+    return out
