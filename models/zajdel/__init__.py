@@ -4,5 +4,7 @@ non-overlapping cameras with an unknown number of people.
 Modules: ``data`` (observations), ``path`` (path model), ``params``, ``scores``
 (closed-form track and partition scores), ``metrics`` (partition accuracy q, objects,
 pairwise F1), ``oracle`` (exact enumeration), ``greedy`` (single-hypothesis baseline),
-``simulate`` (office-building generator, SIMULATED data), ``tracker`` (the ADF).
+``simulate`` (office-building generator, SIMULATED data), ``model`` (the slice model
+declared with ``dbn``), ``tracker`` (the ADF, seed 002), ``reference`` (the same ADF as
+a plain numpy loop, a benchmark baseline), ``demo``.
 """
