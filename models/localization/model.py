@@ -491,6 +491,7 @@ class RangeBearingLocalizationModel(RobotModel):
     sigma_range, sigma_bearing : float
     outlier_prob : float, :math:`\epsilon`
     max_range : float, :math:`r_{\max}`
+    range_bias : float, added to the predicted range (sensor calibration)
     initial_pose, initial_std, noise : as :class:`RobotModel`
     """
 
@@ -505,6 +506,7 @@ class RangeBearingLocalizationModel(RobotModel):
         sigma_bearing: float = 0.05,
         outlier_prob: float = 0.05,
         max_range: float = 10.0,
+        range_bias: float = 0.0,
     ) -> None:
         super().__init__(initial_pose, initial_std, noise)
         self.landmarks = np.asarray(landmarks, dtype=np.float64)
@@ -514,6 +516,7 @@ class RangeBearingLocalizationModel(RobotModel):
         self.sigma_bearing = float(sigma_bearing)
         self.outlier_prob = float(outlier_prob)
         self.max_range = float(max_range)
+        self.range_bias = float(range_bias)
 
     def log_likelihood(self, particles: Array, observation: RangeBearingObservation) -> Array:
         """Sum over the step's measurements; shape (num_particles,)."""
@@ -521,7 +524,7 @@ class RangeBearingLocalizationModel(RobotModel):
         lm = jnp.asarray(self.landmarks, dt)[observation.landmark]  # (M, 2)
         dx = lm[None, :, 0] - particles[:, None, 0]
         dy = lm[None, :, 1] - particles[:, None, 1]
-        r_hat = jnp.sqrt(dx * dx + dy * dy)
+        r_hat = jnp.sqrt(dx * dx + dy * dy) + self.range_bias
         b_hat = jnp.arctan2(dy, dx) - particles[:, None, 2]
         er = (observation.range.astype(dt)[None] - r_hat) / self.sigma_range
         eb = wrap_angle(observation.bearing.astype(dt)[None] - b_hat) / self.sigma_bearing
