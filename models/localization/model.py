@@ -179,10 +179,10 @@ class RobotModel(StateSpaceModel):
             )
         if not np.all(np.isfinite(u)):
             bad = tuple(np.argwhere(~np.isfinite(u))[0])
-            raise NonFiniteError(f"odometry{list(bad)} = {u[bad]} is not finite")
+            raise NonFiniteError(f"odometry{[int(i) for i in bad]} = {u[bad]} is not finite")
         if np.any(u[..., 3] < 0):
             bad = tuple(np.argwhere(u[..., 3] < 0)[0])
-            raise InputError(f"odometry dt{list(bad)} = {u[..., 3][bad]} is negative")
+            raise InputError(f"odometry dt{[int(i) for i in bad]} = {u[..., 3][bad]} is negative")
         n = self.noise
         dx, dy, dth, dt = (u[..., i] for i in range(4))
         zero = np.zeros_like(dx)
@@ -334,7 +334,7 @@ class KNNSensor:
             raise ShapeError(f"{name} has shape {y.shape}, expected (..., {self.obs_dim})")
         if not np.all(np.isfinite(y)):
             bad = tuple(np.argwhere(~np.isfinite(y))[0])
-            raise NonFiniteError(f"{name}{list(bad)} = {y[bad]} is not finite")
+            raise NonFiniteError(f"{name}{[int(i) for i in bad]} = {y[bad]} is not finite")
         return y
 
     def nearest_distance(self, observations: np.ndarray) -> np.ndarray:
