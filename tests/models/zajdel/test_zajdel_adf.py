@@ -166,3 +166,38 @@ def test_chain_decoding_continues_each_observation_at_most_once():
     # 1 takes 0 (0.9); 2 cannot take 0 any more -> 1 (0.1 ties new 0.1) ; 3 -> 2 (0.2)
     assert lab[1] == lab[0]
     assert lab[3] == lab[2]
+
+
+def test_step_eager_equals_jitted():
+    import jax
+
+    from models.zajdel.tracker import _step, _step_jit
+
+    obs, params = scenario(7, 6)
+    tr = ZajdelADF(params, CFG)
+    state, _ = tr.run(take(obs, slice(0, 5)))
+    x = tuple(np.asarray(v)[5] for v in (obs.appearance, obs.camera, obs.border_enter,
+                                         obs.border_quit, obs.t_enter, obs.t_quit))
+    s1, i1 = _step_jit(tr._model, CFG, tr._uniform, state, x)
+    with jax.disable_jit():
+        s2, i2 = _step(tr._model, CFG, tr._uniform, state, x)
+    for f in ADFState._fields:
+        np.testing.assert_allclose(np.asarray(getattr(s1, f)), np.asarray(getattr(s2, f)),
+                                   rtol=1e-9, atol=1e-12, err_msg=f)
+    np.testing.assert_allclose(np.asarray(i1.link_prob), np.asarray(i2.link_prob), atol=1e-12)
+
+
+@pytest.mark.parametrize("old_update", ["keep", "seed"])
+def test_numpy_loop_twin_equals_jax_tracker(old_update):
+    from models.zajdel.reference import NumpyLoopADF
+
+    obs, params = scenario(8, 25)  # 25 observations > 12 slots: eviction and pruning run
+    cfg = CFG._replace(old_update=old_update, prune_eps=1e-6, mix_top=6)
+    _, res = ZajdelADF(params, cfg).run(obs)
+    lo, lp, npr = NumpyLoopADF(params, cfg, cfg.init_persons).run(obs)
+    B = np.zeros((25, 25))
+    kk = np.repeat(np.arange(25), lo.shape[1])
+    m = lo.reshape(-1) >= 0
+    np.add.at(B, (kk[m], lo.reshape(-1)[m]), lp.reshape(-1)[m])
+    B[np.arange(25), np.arange(25)] += npr
+    np.testing.assert_allclose(res.link_matrix(), B, atol=1e-10)
