@@ -391,6 +391,19 @@ def _log_binom(n: np.ndarray, total: int, p: np.ndarray) -> np.ndarray:
     )
 
 
+def _log_comb(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    with np.errstate(invalid="ignore"):
+        out = gammaln(a + 1) - gammaln(b + 1) - gammaln(a - b + 1)
+    return np.where((b < 0) | (b > a), -np.inf, out)
+
+
+def _log_hypergeom(n: np.ndarray, total: int, size: np.ndarray, pool_size: int) -> np.ndarray:
+    """log P(n of ``total`` distinct colours drawn at random from the pool fall in a
+    palette of ``size`` colours) (hypergeometric)."""
+    return (_log_comb(size, n) + _log_comb(pool_size - size, total - n)
+            - _log_comb(np.float64(pool_size), np.float64(total)))
+
+
 def colour_log_likelihood(
     colours: np.ndarray,
     palettes: np.ndarray,
@@ -406,10 +419,15 @@ def colour_log_likelihood(
     object was born), :math:`P` the match probability and :math:`q = m / \text{pool}` the
     chance that a colour falls in a palette of :math:`m` colours:
 
-    * ``mode="ratio"`` (default): the proper likelihood ratio of the colours under the
-      label against chance matches,
-      :math:`\log \mathrm{Bin}(n; N, P) - \log \mathrm{Bin}(n; N, q)`; a new label
+    * ``mode="hyper"`` (the network's default): the likelihood ratio of the colours under
+      the label against chance matches of :math:`N` *distinct* colours drawn from the
+      pool, :math:`\log \mathrm{Bin}(n; N, P) - \log \mathrm{Hyp}(n; \text{pool}, m, N)`,
+      :math:`\mathrm{Hyp}(n; K, m, N) = \binom{m}{n}\binom{K-m}{N-n} / \binom{K}{N}`
+      (exact for distinct dominant colours; the binomial below treats them as drawn
+      with replacement and overstates chance matches of small palettes); a new label
       carries no colour information (ratio 1, log 0).
+    * ``mode="ratio"``: the same with the binomial of chance matches,
+      :math:`\log \mathrm{Bin}(n; N, P) - \log \mathrm{Bin}(n; N, q)`.
     * ``mode="eq6"``: seed 004 eq. 6 as written,
       :math:`\log \binom{N}{n} P^n (1-P)^{N-n}`, for every label, the new one included
       (its palette is the one it gets from this very stroke). For :math:`P = 0.8` this peaks
@@ -426,7 +444,7 @@ def colour_log_likelihood(
     match_prob : float
         :math:`P`.
     pool_size : int
-    mode : {"ratio", "eq6"}
+    mode : {"ratio", "hyper", "eq6"}
 
     Returns
     -------
@@ -441,10 +459,14 @@ def colour_log_likelihood(
     n = palettes[:, colours].sum(axis=1).astype(np.float64)
     if mode == "eq6":
         return _log_binom(n, total, np.full_like(n, match_prob))
-    if mode != "ratio":
-        raise ModelError(f"colour model mode must be 'ratio' or 'eq6', got {mode!r}")
-    q = palettes.sum(axis=1) / pool_size
-    out = _log_binom(n, total, np.full_like(n, match_prob)) - _log_binom(n, total, q)
+    if mode not in ("ratio", "hyper"):
+        raise ModelError(f"colour model mode must be 'ratio', 'hyper' or 'eq6', got {mode!r}")
+    size = palettes.sum(axis=1).astype(np.float64)
+    if mode == "hyper":
+        chance = _log_hypergeom(n, total, size, pool_size)
+    else:
+        chance = _log_binom(n, total, size / pool_size)
+    out = _log_binom(n, total, np.full_like(n, match_prob)) - chance
     return np.where(is_new, 0.0, out)
 
 

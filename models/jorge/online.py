@@ -17,6 +17,19 @@ Instant labelling between inferences (eq. 12)
     It takes :math:`\arg\max_{x} p(y | x)\, p(x | x_{pa}) \prod_s p(r_{s} = 1 | x, x_s)`.
     Nodes that took part in the last inference keep their MAP label until the next one.
 
+Object re-identification (final off-line pass; our addition)
+    In the seed's net a label only travels along links, so once a person's stroke takes a
+    new label (a missed link, or a wrong MAP at a split) every later stroke of that person
+    inherits the new object and the identity stays broken for the rest of the sequence.
+    After the last inference, :func:`reidentify` asks of each object ``b`` born as a new
+    label whether it is an earlier object ``a`` seen again: ``a`` must be finished before
+    ``b`` appears (every stroke labelled with ``a`` ends before the first stroke labelled
+    with ``b`` starts, so the two never coexist), and the colours of ``b``'s one-object
+    strokes (eq. 6, the configured colour model) must favour ``a``'s palette over ``b``'s
+    own, with prior probability ``reid_prior`` that a new-looking object is a lost one
+    (shared equally among the candidates). Objects are renamed in birth order; the network
+    itself (domains, frozen labels) is not changed. ``reid_prior = 0`` turns it off.
+
 Scoring
     An object id ``o`` is the object first seen in stroke ``o``. Objects are matched one to
     one with people, by default with the matching that maximises co-occurrences (as IDF1
@@ -53,6 +66,7 @@ __all__ = [
     "label_online",
     "score",
     "colour_only_labels",
+    "reidentify",
     "object_people",
     "optimal_people",
 ]
@@ -76,6 +90,10 @@ class OnlineConfig:
         Compute every active node's marginal at each inference (junction tree); needed
         for pruning by posterior. Without it, domains are pruned to ``max_labels`` by
         nothing but the MAP (not recommended).
+    reid_prior : float
+        Prior probability that an object born as a new label is an earlier, finished
+        object seen again (final re-identification pass, :func:`reidentify`); 0 turns
+        the pass off.
     network : NetworkConfig
     """
 
@@ -84,6 +102,7 @@ class OnlineConfig:
     prune_threshold: float = 1e-3
     max_labels: int = 12
     marginals: bool = True
+    reid_prior: float = 0.9
     network: NetworkConfig = field(default_factory=NetworkConfig)
 
     def __post_init__(self) -> None:
@@ -93,6 +112,8 @@ class OnlineConfig:
             raise ModelError(f"OnlineConfig.max_active must be >= 1, got {self.max_active}")
         if not 0.0 <= self.prune_threshold < 1.0:
             raise ModelError(f"OnlineConfig.prune_threshold must be in [0, 1), got {self.prune_threshold}")
+        if not 0.0 <= self.reid_prior < 1.0:
+            raise ModelError(f"OnlineConfig.reid_prior must be in [0, 1), got {self.reid_prior}")
         if self.max_labels < 2:
             raise ModelError(f"OnlineConfig.max_labels must be >= 2, got {self.max_labels}")
 
@@ -287,10 +308,16 @@ class OnlineLabeller:
         return rec
 
     def finish(self, frame: int | None = None) -> dict[int, Label]:
-        """Final inference at the end of the sequence; returns every node's label."""
+        """Final inference at the end of the sequence, then the re-identification pass
+        (:func:`reidentify`, when ``reid_prior > 0``); returns every node's label.
+
+        ``self.labels`` keeps the network's own labels (before re-identification)."""
         last = frame if frame is not None else max((nd.stroke.end for nd in self.graph.nodes), default=0)
         self.infer(int(last))
-        return dict(self.labels)
+        labels = [self.labels[k] for k in range(len(self.graph))]
+        if self.config.reid_prior > 0:
+            labels = reidentify(self.graph, labels, self.config.reid_prior)
+        return dict(enumerate(labels))
 
 
 @dataclass(frozen=True)
@@ -300,7 +327,10 @@ class OnlineResult:
     Attributes
     ----------
     labels : list of Label
-        Final label per stroke.
+        Final label per stroke (after the re-identification pass).
+    network_labels : list of Label
+        The network's own final labels (MAP at the last inference each node took part
+        in), before re-identification.
     instant : list of Label
         Eq. 12 label given when each stroke started.
     records : list of InferenceRecord
@@ -310,6 +340,7 @@ class OnlineResult:
     """
 
     labels: list
+    network_labels: list
     instant: list
     records: list
     seconds: float
@@ -339,7 +370,84 @@ def label_online(strokes: StrokeSet | Sequence[Stroke], config: OnlineConfig | N
     instant = [lab.add_stroke(s) for s in strokes]
     final = lab.finish()
     seconds = time.perf_counter() - t0
-    return OnlineResult([final[k] for k in range(len(final))], instant, lab.records, seconds, lab)
+    return OnlineResult([final[k] for k in range(len(final))], [lab.labels[k] for k in range(len(final))],
+                        instant, lab.records, seconds, lab)
+
+
+def reidentify(graph: LabelGraph, labels: Sequence[Label], prior: float) -> list[Label]:
+    r"""Final off-line pass: rename objects born as new labels that are earlier objects
+    seen again (module docstring; our addition to seed 004).
+
+    For each object :math:`b` in birth order whose birth stroke is labelled
+    :math:`\{b\}`, the candidates :math:`a` are the earlier objects (after renaming)
+    whose every stroke ends before the first stroke of :math:`b` starts. With
+    :math:`S_b` the strokes labelled exactly :math:`\{b\}` and :math:`\ell(s \mid x)`
+    the colour log-likelihood of eq. 6 (the network's colour model; :math:`\ell = 0` for
+    the birth stroke under its own new label),
+
+    .. math::
+        \Lambda_a = \log\frac{\rho / |A|}{1 - \rho}
+          + \sum_{s \in S_b} \ell(s \mid \text{palette}_a) - \ell(s \mid \text{palette}_b)
+
+    and :math:`b` is renamed to the best :math:`a` when :math:`\Lambda_a > 0`.
+
+    Parameters
+    ----------
+    graph : LabelGraph
+        The labelled graph (strokes and the palettes objects got at birth).
+    labels : sequence of Label, length num_strokes
+    prior : float
+        :math:`\rho` in (0, 1).
+
+    Returns
+    -------
+    list of Label
+        The labels with renamed objects (a renamed object takes the id of the object it
+        continues).
+    """
+    labels = list(labels)
+    if len(labels) != len(graph):
+        raise InputError(f"reidentify: {len(labels)} labels for {len(graph)} nodes")
+    if not 0.0 < prior < 1.0:
+        raise InputError(f"reidentify: prior must be in (0, 1), got {prior}")
+    if not labels:
+        return []
+    cfg = graph.config
+    starts = np.array([nd.stroke.start for nd in graph.nodes])
+    ends = np.array([nd.stroke.end for nd in graph.nodes])
+    objects = sorted(set().union(*labels))
+    member = np.array([[o in lab for lab in labels] for o in objects])  # (num_objects, num_strokes)
+    first = {o: int(starts[member[i]].min()) for i, o in enumerate(objects)}
+    last = {o: int(ends[member[i]].max()) for i, o in enumerate(objects)}
+    alias: dict[int, int] = {}
+    roots: list[int] = []
+    pal = graph.palettes([frozenset({o}) for o in objects])
+    row = {o: i for i, o in enumerate(objects)}
+    for i, b in enumerate(objects):
+        if labels[b] != frozenset({b}):
+            roots.append(b)
+            continue
+        cands = [a for a in roots if last[a] < first[b]]
+        if not cands:
+            roots.append(b)
+            continue
+        singles = [k for k in np.flatnonzero(member[i]) if labels[k] == frozenset({b})]
+        palettes = pal[[row[a] for a in cands] + [i]]
+        score = np.full(len(cands), np.log(prior / len(cands)) - np.log1p(-prior))
+        for k in singles:
+            is_new = np.zeros(len(cands) + 1, dtype=bool)
+            is_new[-1] = k == b
+            ll = colour_log_likelihood(graph.nodes[k].stroke.colours, palettes, is_new, cfg.match_prob,
+                                       cfg.pool_size, cfg.colour_mode)
+            score += ll[:-1] - ll[-1]
+        best = int(np.argmax(score))
+        if score[best] > 0:
+            a = cands[best]
+            alias[b] = a
+            last[a] = max(last[a], last[b])
+        else:
+            roots.append(b)
+    return [frozenset(alias.get(o, o) for o in lab) for lab in labels]
 
 
 # --------------------------------------------------------------------------------------------

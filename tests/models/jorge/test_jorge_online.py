@@ -13,6 +13,7 @@ from models.jorge.online import (
     label_online,
     object_people,
     optimal_people,
+    reidentify,
     score,
 )
 from models.jorge.simulate import simulate_ground_truth
@@ -74,7 +75,7 @@ def test_bounded_memory_on_a_long_simulated_sequence():
     frozen = [k for k, n in enumerate(g.nodes) if n.frozen is not None]
     assert len(frozen) >= len(strokes) - 8
     for k, n in enumerate(g.nodes):
-        assert res.labels[k] in g.current_domain(k) or res.labels[k] == n.frozen
+        assert res.network_labels[k] in g.current_domain(k) or res.network_labels[k] == n.frozen
     # same input, same result
     again = label_online(strokes, cfg)
     assert again.labels == res.labels
@@ -102,3 +103,31 @@ def test_real_sequence_runs_on_line(shared_data):
     assert sc.num_strokes == len(st) and 0 <= sc.label_errors <= len(st)
     assert res.seconds < truth.duration_s
     assert np.isfinite([r.log_prob for r in res.records]).all()
+
+
+def test_reidentification_pass():
+    """An object lost to a missed link is found again by its colours; a look-alike that
+    coexists with it, or one with other colours, is not."""
+    far = [
+        make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2, 3, 4], {0}),
+        make_stroke(1, 200, 210, (300, 200), (310, 200), [0, 1, 2, 3, 4], {0}),
+        make_stroke(2, 205, 215, (100, 250), (110, 250), [5, 6, 7, 8, 9], {1}),
+    ]
+    off = label_online(far, OnlineConfig(reid_prior=0.0))
+    assert off.labels == off.network_labels == [F({0}), F({1}), F({2})]
+    on = label_online(far, OnlineConfig(reid_prior=0.5))
+    assert on.network_labels == off.network_labels
+    # stroke 1 is object 0 again; stroke 2 (other colours, and coexisting with 1) is not
+    assert on.labels == [F({0}), F({0}), F({2})]
+    assert score(far, on.labels).label_errors == 0
+    assert score(far, off.labels).label_errors == 1
+    # two look-alikes at the same time are never merged
+    both = [
+        make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2, 3, 4], {0}),
+        make_stroke(1, 5, 15, (300, 200), (310, 200), [0, 1, 2, 3, 4], {1}),
+    ]
+    assert label_online(both, OnlineConfig(reid_prior=0.5)).labels == [F({0}), F({1})]
+    with pytest.raises(InputError):
+        reidentify(on.labeller.graph, on.network_labels[:2], 0.5)
+    with pytest.raises(InputError):
+        reidentify(on.labeller.graph, on.network_labels, 1.0)
