@@ -171,7 +171,7 @@ def run(quick: bool, seed: int) -> dict:
     )
 
     # 1. accuracy on the SIMULATED world ----------------------------------------------------------
-    num_t = 60 if quick else 120
+    num_t = 120  # the same runs in --quick: cheap, and the SIR/APF gap needs the whole loop
     syn = synthetic_trials(seed, trained, num_runs=10, num_timesteps=num_t, num_particles=1000)
     for name in ("sir", "apf"):
         out[f"rmse_{name}"] = float(syn[name]["rmse"].mean())
@@ -214,7 +214,7 @@ def run(quick: bool, seed: int) -> dict:
     final, infos, _ = go()
     out["compile_s"] = time.perf_counter() - t0  # first call: trace + compile (+ one run)
     best_wall = best_cpu = math.inf
-    for _ in range(3 if quick else 7):
+    for _ in range(5 if quick else 10):
         t0, c0 = time.perf_counter(), time.process_time()
         go()
         best_wall = min(best_wall, time.perf_counter() - t0)

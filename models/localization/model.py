@@ -371,14 +371,20 @@ class KNNSensor:
 
 
 def _knn_quadratic(xt: Array, observation: KNNObservation, inv_bandwidth: Array) -> Array:
-    """Log kernel terms ``(J, num_particles)``: log lambda_j - |(s - s_j^*) / h|^2 / 2 (angle wrapped)."""
+    """Log kernel terms ``(J, num_particles)``: log lambda_j - |(s - s_j^*) / h|^2 / 2 (angle wrapped).
+
+    Coordinates are scaled by the inverse bandwidths first (per particle and per centre),
+    so the ``J x num_particles`` loop only subtracts, wraps and squares.
+    """
     dt = xt.dtype
-    c = observation.centres.astype(dt)
     ib = inv_bandwidth.astype(dt)
-    dx = (xt[0][None, :] - c[:, 0:1]) * ib[0]
-    dy = (xt[1][None, :] - c[:, 1:2]) * ib[1]
-    dth = xt[2][None, :] - c[:, 2:3]
-    dth = (dth - TWO_PI * jnp.round(dth * (1.0 / TWO_PI))) * ib[2]
+    xs = xt * ib[:, None]  # (3, num_particles), scaled
+    cs = observation.centres.astype(dt) * ib[None, :]  # (J, 3), scaled
+    period = TWO_PI * ib[2]
+    dx = xs[0][None, :] - cs[:, 0:1]
+    dy = xs[1][None, :] - cs[:, 1:2]
+    dth = xs[2][None, :] - cs[:, 2:3]
+    dth = dth - period * jnp.round(dth * (1.0 / period))
     return observation.log_lambda.astype(dt)[:, None] - 0.5 * (dx * dx + dy * dy + dth * dth)
 
 

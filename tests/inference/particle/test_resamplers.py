@@ -63,16 +63,20 @@ def test_counts_are_unbiased(name: str) -> None:
         assert np.all(counts <= np.ceil(n * w + 1e-9))
 
 
+_JITTED = {name: jax.jit(fn, static_argnums=2) for name, fn in RESAMPLERS.items()}
+
+
 @settings(max_examples=40, deadline=None)
 @given(
-    st.lists(st.one_of(st.floats(-800.0, 50.0), st.just(-np.inf)), min_size=1, max_size=30),
-    st.integers(1, 40),
+    st.lists(st.one_of(st.floats(-800.0, 50.0), st.just(-np.inf)), min_size=16, max_size=16),
+    st.sampled_from([1, 16, 33]),
     st.sampled_from(NAMES),
     st.integers(0, 2**31 - 1),
 )
 def test_property_valid_ancestors(raw: list[float], n: int, name: str, seed: int) -> None:
+    # fixed sizes keep the number of compilations small; the values are what varies
     lw = jnp.asarray(raw, dtype=jnp.float64)
-    anc = np.asarray(RESAMPLERS[name](jax.random.key(seed), lw, n))
+    anc = np.asarray(_JITTED[name](jax.random.key(seed), lw, n))
     assert anc.shape == (n,)
     assert anc.min() >= 0 and anc.max() < len(raw)
     w = np.asarray(normalized_weights(lw))
