@@ -144,7 +144,9 @@ def test_bad_input_raises_and_state_is_unchanged() -> None:
         flt.step(state, None, {"y": np.ones(3)})
     assert state.t == snapshot[0] and state.log_likelihood == snapshot[2]
     np.testing.assert_array_equal(state.belief, snapshot[1])
-    np.testing.assert_array_equal(flt.step(state, {"y": 2}).belief, flt.step(state, {"y": 2}).belief)
+    np.testing.assert_array_equal(
+        flt.step(state, {"y": 2}).belief, flt.step(state, {"y": 2}).belief
+    )
     with pytest.raises(ShapeError, match="length"):
         flt.filter({"y": np.zeros(3, int), "x": np.zeros(4, int)})
     with pytest.raises(EvidenceError, match="integer"):

@@ -49,7 +49,9 @@ def test_engines_equal_enumeration(factories, seed: int, ev_seed: int) -> None:
     if len(hidden) >= 2:  # a joint query equals the enumerated joint
         q = hidden[:2]
         joint = joint_factor(bn, hard, soft).keep(q).probabilities(q)
-        np.testing.assert_allclose(variable_elimination(bn, q, hard, soft).probabilities(q), joint, atol=TOL)
+        np.testing.assert_allclose(
+            variable_elimination(bn, q, hard, soft).probabilities(q), joint, atol=TOL
+        )
     config, lp = map_assignment(bn, hard, soft)
     _, best = brute_force_map(bn, hard, soft)
     assert abs(lp - best) < TOL
@@ -97,7 +99,10 @@ def test_example_networks_equal_pgmpy(name: str) -> None:
     cases = [{}]
     for _ in range(20):  # a random evidence set of positive probability
         nodes = rng.choice(bn.nodes, size=min(3, len(bn) - 1), replace=False)
-        ev = {str(n): bn.variable(str(n)).state_names[rng.integers(bn.cardinality(str(n)))] for n in nodes}
+        ev = {
+            str(n): bn.variable(str(n)).state_names[rng.integers(bn.cardinality(str(n)))]
+            for n in nodes
+        }
         if np.isfinite(log_evidence(bn, ev)):
             cases.append(ev)
             break

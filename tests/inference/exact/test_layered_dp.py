@@ -23,12 +23,16 @@ def brute_force(node_costs, edge_costs):
     if not nonempty:
         return np.inf, None
     # prefixes: dict node -> list of (cost, path) ; enumerate all of them explicitly
-    prefixes = [(float(node_costs[nonempty[0]][j]), (j,)) for j in range(len(node_costs[nonempty[0]]))]
+    prefixes = [
+        (float(node_costs[nonempty[0]][j]), (j,)) for j in range(len(node_costs[nonempty[0]]))
+    ]
     prev = nonempty[0]
     for t in nonempty[1:]:
         adjacent = t == prev + 1
         connected = adjacent and any(
-            np.isfinite(edge_costs[prev][p[-1], j]) for _, p in prefixes for j in range(len(node_costs[t]))
+            np.isfinite(edge_costs[prev][p[-1], j])
+            for _, p in prefixes
+            for j in range(len(node_costs[t]))
         )
         new = []
         for cost, p in prefixes:
