@@ -108,6 +108,18 @@ def ess(log_weights: Array) -> Array:
     return jnp.where(jnp.isfinite(value), value, jnp.zeros_like(value))
 
 
+def _lse_and_ess(log_weights: Array) -> tuple[Array, Array]:
+    """``(logsumexp(log_weights), ess(log_weights))`` in one max pass and one exp pass."""
+    m = jnp.max(log_weights)
+    safe = jnp.where(jnp.isfinite(m), m, jnp.zeros_like(m))
+    w = jnp.exp(log_weights - safe)
+    s1 = jnp.sum(w)
+    s2 = jnp.sum(w * w)
+    lse = jnp.where(s1 > 0, safe + jnp.log(s1), -jnp.inf)
+    value = s1 * s1 / s2
+    return lse, jnp.where(jnp.isfinite(value), value, jnp.zeros_like(value))
+
+
 def weighted_mean(state: ParticleState) -> Array:
     r"""Filtered mean :math:`\sum_i W_i s^i`; shape ``(state_dim,)``."""
     w = jnp.exp(state.log_weights)
@@ -202,7 +214,7 @@ def bootstrap_filter(
     ) -> tuple[ParticleState, ParticleInfo]:
         k_res, k_move = jax.random.split(key)
         lw = state.log_weights
-        cur_ess = ess(lw)
+        _, cur_ess = _lse_and_ess(lw)
 
         def resample(_):
             anc = resampler(k_res, lw, n)
@@ -258,13 +270,13 @@ def auxiliary_filter(
         lw = state.log_weights
         log_eta = _clean(model.log_eta(state.particles, observation, action).astype(dtype))
         lw1 = lw + log_eta
-        lse1 = logsumexp(lw1)
+        lse1, cur_ess = _lse_and_ess(lw1)
         # a look-ahead that gives every particle weight zero carries no information: ignore it
         eta_ok = jnp.isfinite(lse1)
         log_eta = jnp.where(eta_ok, log_eta, jnp.zeros_like(log_eta))
         lw1 = jnp.where(eta_ok, lw1, lw)
         lse1 = jnp.where(eta_ok, lse1, jnp.zeros_like(lse1))
-        cur_ess = ess(lw1)
+        cur_ess = jnp.where(eta_ok, cur_ess, _lse_and_ess(lw)[1])
 
         def resample(_):
             anc = resampler(k_res, lw1, n)
