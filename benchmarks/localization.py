@@ -214,7 +214,7 @@ def run(quick: bool, seed: int) -> dict:
     final, infos, _ = go()
     out["compile_s"] = time.perf_counter() - t0  # first call: trace + compile (+ one run)
     best_wall = best_cpu = math.inf
-    for _ in range(5 if quick else 10):
+    for _ in range(10 if quick else 20):
         t0, c0 = time.perf_counter(), time.process_time()
         go()
         best_wall = min(best_wall, time.perf_counter() - t0)
