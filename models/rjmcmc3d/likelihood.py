@@ -302,6 +302,18 @@ class IncrementalLikelihood:
         self.total = float(self.fg.sum() + sum(map(sum, self.cc)))
         nb = data.num_bins
         self._dump = 3 * 2 * nb
+        self._stride = W + 1
+        self.alive = [j for j in range(M) if self.present_l[j]]
+        # non-empty part boxes of each present person per view
+        self.nz_l = [
+            [
+                [b for b in self.boxes_l[v][j] if b[2] > b[0] and b[3] > b[1]]
+                if self.present_l[j]
+                else []
+                for j in range(M)
+            ]
+            for v in range(V)
+        ]
         # per view and person: sum of c1 (D - c2) over the union of its boxes
         st = W + 1
         self.usum = [
@@ -348,50 +360,35 @@ class IncrementalLikelihood:
             total -= p.lambda_im * nR * ((1.0 - lf) * d2H + lf * d2h - p.d_min)
         return total
 
-    def _slot_cost(self, v: int, j: int, ov: dict) -> float:
-        """Colour term of person ``j`` in view ``v`` (with ``ov`` overriding changed people)."""
-        present, boxes, bbox, depth = self._get(v, ov)
-        x0, y0, x1, y1 = bbox[j]
+    def _slot_cost(self, v: int, j: int, boxes: list, bbox: list, dj: float, occ: list) -> float:
+        """Colour term of person ``j`` in view ``v`` with part boxes ``boxes``.
+
+        ``occ`` lists the other present people of the configuration as
+        ``(k, boxes_k, bbox_k, depth_k)``; the nearer ones hide their pixels.
+        """
+        x0, y0, x1, y1 = bbox
         if x1 <= x0 or y1 <= y0:
             return 0.0
-        nb = self.data.num_bins
+        nb2 = 2 * self.data.num_bins
         reg = np.full((y1 - y0, x1 - x0), self._dump, dtype=np.int64)
-        for b, (bx0, by0, bx1, by1) in enumerate(boxes[j]):
+        for b, (bx0, by0, bx1, by1) in enumerate(boxes):
             if bx1 > bx0 and by1 > by0:
-                reg[by0 - y0 : by1 - y0, bx0 - x0 : bx1 - x0] = b * 2 * nb
-        dj = depth[j]
-        for k in range(self.M):
-            if k == j or not present[k]:
+                reg[by0 - y0 : by1 - y0, bx0 - x0 : bx1 - x0] = b * nb2
+        for k, bk, bbk, dk in occ:
+            if dk > dj or (dk == dj and k > j) or k == j:
                 continue
-            dk = depth[k]
-            if dk > dj or (dk == dj and k > j):
+            if bbk[0] >= x1 or bbk[2] <= x0 or bbk[1] >= y1 or bbk[3] <= y0:
                 continue
-            kx0, ky0, kx1, ky1 = bbox[k]
-            if kx0 >= x1 or kx1 <= x0 or ky0 >= y1 or ky1 <= y0:
-                continue
-            for bx0, by0, bx1, by1 in boxes[k]:
-                cx0, cy0 = max(bx0, x0), max(by0, y0)
-                cx1, cy1 = min(bx1, x1), min(by1, y1)
+            for bx0, by0, bx1, by1 in bk:
+                cx0 = bx0 if bx0 > x0 else x0
+                cy0 = by0 if by0 > y0 else y0
+                cx1 = bx1 if bx1 < x1 else x1
+                cy1 = by1 if by1 < y1 else y1
                 if cx1 > cx0 and cy1 > cy0:
                     reg[cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0] = self._dump
-        lab = reg + self.data.code[v, y0:y1, x0:x1]
-        counts = np.bincount(lab.ravel(), minlength=4 * 2 * nb)[: 3 * 2 * nb].reshape(3, 2, nb)
-        return self._colour_one(counts, j)
-
-    def _get(self, v: int, ov: dict):
-        """Per-view lists (present, boxes, bbox, depth) with the overrides applied."""
-        if not ov:
-            return self.present_l, self.boxes_l[v], self.bbox_l[v], self.depth_l[v]
-        present = list(self.present_l)
-        boxes = list(self.boxes_l[v])
-        bbox = list(self.bbox_l[v])
-        depth = list(self.depth_l[v])
-        for j, (pr, bx, bb, dp) in ov.items():
-            present[j] = pr
-            boxes[j] = bx[v]
-            bbox[j] = bb[v]
-            depth[j] = dp[v]
-        return present, boxes, bbox, depth
+        reg += self.data.code[v, y0:y1, x0:x1]
+        counts = np.bincount(reg.ravel(), minlength=2 * self._dump)[: self._dump]
+        return self._colour_one(counts.reshape(3, 2, -1), j)
 
     def propose(self, ov: dict) -> tuple[float, _Pending]:
         """Log-likelihood change when the people in ``ov`` change (the others stay).
@@ -410,20 +407,25 @@ class IncrementalLikelihood:
         pending : object
             Pass to :meth:`commit` if the move is accepted.
         """
-        changed = list(ov)
+        items = list(ov.items())
         delta = 0.0
         patches = []
         colour = []
         active = self.active_l
+        present_l = self.present_l
+        stay = [k for k in self.alive if k not in ov]  # present, unchanged
+        ii = self.data.ii
+        st = self._stride
         for v in range(self.num_views):
+            nz_v = self.nz_l[v]
             signed = []
-            for j in changed:
-                if self.present_l[j]:
-                    signed += [
-                        (bx, -1) for bx in self.boxes_l[v][j] if bx[2] > bx[0] and bx[3] > bx[1]
-                    ]
-                if ov[j][0]:
-                    signed += [(bx, 1) for bx in ov[j][1][v] if bx[2] > bx[0] and bx[3] > bx[1]]
+            new_nz = []
+            for j, (pr, bx, _, _) in items:
+                if present_l[j]:
+                    signed += [(bx_, -1) for bx_ in nz_v[j]]
+                nz = [b for b in bx[v] if b[2] > b[0] and b[3] > b[1]] if pr else []
+                new_nz.append(nz)
+                signed += [(bx_, 1) for bx_ in nz]
             if not signed:
                 continue
             X0 = Y0 = 1 << 40
@@ -433,40 +435,48 @@ class IncrementalLikelihood:
                 Y0 = b1 if b1 < Y0 else Y0
                 X1 = b2 if b2 > X1 else X1
                 Y1 = b3 if b3 > Y1 else Y1
-            present, _, bbox, _ = self._get(v, ov)
+            bbox_v = self.bbox_l[v]
             others = []  # unchanged people whose boxes meet the changed area
-            for j in range(self.M):
-                if j in ov or not present[j]:
-                    continue
-                kx0, ky0, kx1, ky1 = bbox[j]
+            for k in stay:
+                kx0, ky0, kx1, ky1 = bbox_v[k]
                 if kx0 >= X1 or kx1 <= X0 or ky0 >= Y1 or ky1 <= Y0:
                     continue
-                others.append(j)
-            get = self.data.ii[v].item
-            st = self.data.fgw.shape[2] + 1
+                others.append(k)
+            get = ii[v].item
             new_usum = {}
-            for j in changed:
-                nbx = [b for b in ov[j][1][v] if b[2] > b[0] and b[3] > b[1]] if ov[j][0] else []
-                new_usum[j] = _union_sum(get, st, nbx) if nbx else 0.0
-            if not others and len(changed) == 1:
+            for (j, _), nz in zip(items, new_nz):
+                new_usum[j] = _union_sum(get, st, nz) if nz else 0.0
+            if not others and len(items) == 1:
                 # nobody else covers these pixels: eq. 9 change from the integral image
-                j = changed[0]
-                d_fg = new_usum[j] - (self.usum[v][j] if self.present_l[j] else 0.0)
+                j = items[0][0]
+                d_fg = new_usum[j] - (self.usum[v][j] if present_l[j] else 0.0)
             else:
                 cold = self.count[v, Y0:Y1, X0:X1]
                 cnew = cold.copy()
                 for (bx0, by0, bx1, by1), sign in signed:
                     cnew[by0 - Y0 : by1 - Y0, bx0 - X0 : bx1 - X0] += sign
-                gain = (cnew > 0).view(np.int8) - (cold > 0).view(np.int8)
-                d_fg = float(np.vdot(gain, self.data.fgw[v, Y0:Y1, X0:X1]))
+                f = self.data.fgw[v, Y0:Y1, X0:X1]
+                d_fg = float(
+                    np.add.reduce(f, axis=None, where=cnew > 0)
+                    - np.add.reduce(f, axis=None, where=cold > 0)
+                )
             delta += d_fg
             patches.append((v, signed, d_fg, new_usum))
-            for j in list(changed) + others:
-                if not active[j]:
-                    continue
-                c_new = self._slot_cost(v, j, ov) if present[j] else 0.0
-                delta += c_new - self.cc[v][j]
-                colour.append((v, j, c_new))
+            # the configuration after the move, as seen from view v
+            boxes_v, depth_v = self.boxes_l[v], self.depth_l[v]
+            occ = [(k, boxes_v[k], bbox_v[k], depth_v[k]) for k in stay]
+            occ += [(j, bx[v], bb[v], dp[v]) for j, (pr, bx, bb, dp) in items if pr]
+            cc_v = self.cc[v]
+            for j, (pr, bx, bb, dp) in items:
+                if active[j]:
+                    c_new = self._slot_cost(v, j, bx[v], bb[v], dp[v], occ) if pr else 0.0
+                    delta += c_new - cc_v[j]
+                    colour.append((v, j, c_new))
+            for k in others:
+                if active[k]:
+                    c_new = self._slot_cost(v, k, boxes_v[k], bbox_v[k], depth_v[k], occ)
+                    delta += c_new - cc_v[k]
+                    colour.append((v, k, c_new))
         return delta, _Pending(delta, patches, colour, ov)
 
     def commit(self, pending: _Pending) -> None:
@@ -487,4 +497,6 @@ class IncrementalLikelihood:
                 self.boxes_l[v][j] = bx[v]
                 self.bbox_l[v][j] = bb[v]
                 self.depth_l[v][j] = dp[v]
+                self.nz_l[v][j] = [b for b in bx[v] if b[2] > b[0] and b[3] > b[1]] if pr else []
+        self.alive = [j for j in range(self.M) if self.present_l[j]]
         self.total += pending.delta

@@ -284,6 +284,76 @@ def default_scene(seed: int = 0, width: int = 384, height: int = 288) -> Scene:
 # ---------------------------------------------------------------------------------------
 # Projection of the body model
 # ---------------------------------------------------------------------------------------
+def _projection_coefficients(P: np.ndarray) -> np.ndarray:
+    """Linear map from ``(x, y, 1, cos a, sin a, h)`` to the projected body points.
+
+    Returns
+    -------
+    ndarray, shape (6, 3 * V * 3 * 2 * A)
+        Row ``r`` multiplies the ``r``-th feature; the columns are the homogeneous image
+        coordinates of the sampled points, ordered (coordinate, view, part, z level,
+        angle).
+    """
+    V = P.shape[0]
+    Pk = [np.moveaxis(P[:, :, k], 1, 0)[:, :, None, None, None] for k in range(4)]  # (3, V,1,1,1)
+    ct = _CT[None, None, :, None, :]  # (1, 1, 3, 1, A)
+    cw = _CW[None, None, :, None, :]
+    z = BODY_Z[None, None, :, :, None]  # (1, 1, 3, 2, 1)
+    shape = (3, V, 3, 2, _NUM_ANGLES)
+    rows = [
+        Pk[0],  # x
+        Pk[1],  # y
+        Pk[3],  # 1
+        ct * Pk[0] + cw * Pk[1],  # cos a
+        ct * Pk[1] - cw * Pk[0],  # sin a
+        z * Pk[2],  # h
+    ]
+    return np.stack([np.broadcast_to(r, shape).reshape(-1) for r in rows])
+
+
+def _box_limits(width: int, height: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Clip limits and signs of the ``(x0, y0, -x1, -y1)`` rows used by :func:`_boxes_from_points`."""
+    lo = np.array([[0.0], [0.0], [-width], [-height]])
+    hi = np.array([[width], [height], [0.0], [0.0]], dtype=float)
+    sign = np.array([[1.0], [1.0], [-1.0], [-1.0]])
+    return lo, hi, sign
+
+
+def _boxes_from_points(proj: np.ndarray, limits: tuple) -> np.ndarray:
+    """Part boxes from projected points.
+
+    Parameters
+    ----------
+    proj : ndarray, shape (3, V * 3, 2 A)
+        Homogeneous image coordinates of each (view, part)'s sampled points.
+    limits : tuple
+        From :func:`_box_limits`.
+
+    Returns
+    -------
+    ndarray, shape (V * 3, 4), int64
+        ``(floor(min x), floor(min y), ceil(max x), ceil(max y))`` clipped to the image
+        (clipping to integer limits commutes with floor and ceil); all zero for a part
+        with a sampled point behind (or on) a camera plane.
+    """
+    lo, hi, sign = limits
+    w = proj[2]
+    front = None
+    if not w.min() > 1e-6:
+        ok = w > 1e-6
+        front = ok.all(axis=1)
+        w = np.where(ok, w, 1.0)
+    xy = proj[:2] / w
+    ext = np.concatenate((xy.min(-1), -xy.max(-1)))  # (x0, y0, -x1, -y1)
+    np.maximum(ext, lo, out=ext)
+    np.minimum(ext, hi, out=ext)
+    np.floor(ext, out=ext)  # ceil(x1) = -floor(-x1)
+    ext *= sign
+    if front is not None:
+        ext[:, ~front] = 0.0
+    return ext.T.astype(np.int64)
+
+
 def part_boxes(
     P: np.ndarray, u: np.ndarray, h: np.ndarray, alpha: np.ndarray, width: int, height: int
 ) -> np.ndarray:
@@ -292,6 +362,11 @@ def part_boxes(
     Each elliptic cylinder's top and bottom ellipses are sampled at 8 angles and
     projected; in a rectified view (seed 003, sec. 2) the silhouette of an upright
     cylinder is bounded by the axis-aligned box of these points (seed 003, fig. 3).
+    A part with a sampled point behind a camera is not seen in that view (empty box).
+
+    The points of each person are projected by the same one-person product as
+    :meth:`BoxProjector.one` (the tracker's per-move path), so both give bit-identical
+    boxes; the loop runs over the people of one frame (a few dozen at most).
 
     Parameters
     ----------
@@ -309,70 +384,40 @@ def part_boxes(
         ``(x0, y0, x1, y1)`` half-open pixel boxes; empty (``x1 <= x0``) when not seen.
     """
     V = P.shape[0]
-    ca, sa = np.cos(alpha)[:, None, None], np.sin(alpha)[:, None, None]
-    gx = u[:, 0, None, None] + (_CT * ca - _CW * sa)  # (n, 3, A)
-    gy = u[:, 1, None, None] + (_CT * sa + _CW * ca)
-    Pt = np.moveaxis(P, 2, 0).reshape(4, 3 * V)  # column k of every view's P
-    base = gx[..., None] * Pt[0] + gy[..., None] * Pt[1] + Pt[3]  # (n, 3, A, 3V)
-    z = BODY_Z[None] * h[:, None, None]  # (n, 3, 2)
-    proj = base[:, :, None] + z[:, :, :, None, None] * Pt[2]  # (n, 3, 2, A, 3V)
-    proj = proj.reshape(u.shape[0], 3, 2 * _NUM_ANGLES, V, 3)
-    w = proj[..., 2]
-    front = (w > 1e-6).all(axis=2)  # (n, 3, V)
-    safe_w = np.where(w > 1e-6, w, 1.0)
-    px = proj[..., 0] / safe_w
-    py = proj[..., 1] / safe_w
-    lo_x = np.minimum(np.maximum(np.floor(px.min(2)), 0), width)
-    hi_x = np.minimum(np.maximum(np.ceil(px.max(2)), 0), width)
-    lo_y = np.minimum(np.maximum(np.floor(py.min(2)), 0), height)
-    hi_y = np.minimum(np.maximum(np.ceil(py.max(2)), 0), height)
-    boxes = np.stack([lo_x, lo_y, hi_x, hi_y], axis=-1)  # (n, 3, V, 4)
-    boxes = np.where(front[..., None], boxes, 0.0).astype(np.int64)
-    return np.ascontiguousarray(np.moveaxis(boxes, 2, 0).swapaxes(1, 2).swapaxes(1, 2))
+    C = _projection_coefficients(P)
+    limits = _box_limits(width, height)
+    out = np.zeros((V, u.shape[0], 3, 4), dtype=np.int64)
+    for i, (x, y, hh, a) in enumerate(zip(u[:, 0], u[:, 1], h, alpha)):
+        feat = [float(x), float(y), 1.0, math.cos(a), math.sin(a), float(hh)]
+        proj = np.dot(feat, C).reshape(3, V * 3, 2 * _NUM_ANGLES)
+        out[:, i] = _boxes_from_points(proj, limits).reshape(V, 3, 4)
+    return out
 
 
 class BoxProjector:
     """Fast :func:`part_boxes` for one person (the per-move hot path of the tracker).
 
-    Gives exactly the boxes of :func:`part_boxes` (same points, same rounding) as
+    Gives exactly the boxes of :func:`part_boxes` (same product, same rounding) as
     nested lists ``boxes[v][part] = [x0, y0, x1, y1]``, with the union box per view
-    and the distance to each camera.
+    and the distance to each camera. The projection of the 3 x 16 sampled body points
+    into every view is one ``(6,) @ (6, V * 144)`` product.
     """
 
     def __init__(self, scene: Scene) -> None:
         V = scene.num_views
         self.V = V
         self.P = scene.P
-        Pt = np.moveaxis(scene.P, 2, 0).reshape(4, 3 * V)
-        self.P013 = Pt[[0, 1, 3]].copy()
-        self.P2 = Pt[2].copy()
-        self.offsets = np.stack([_CT.ravel(), _CW.ravel()], axis=1)  # (3 A, 2)
-        self.zf = BODY_Z.reshape(3, 2, 1, 1)
-        self.hi = np.array([scene.width, scene.height, scene.width, scene.height], dtype=float)
+        self.C = _projection_coefficients(scene.P)
+        self.shape = (3, V * 3, 2 * _NUM_ANGLES)
+        self.limits = _box_limits(scene.width, scene.height)
         self.width, self.height = scene.width, scene.height
         self.centers = scene.centers[:, :2].tolist()
-        self.g = np.empty((3 * _NUM_ANGLES, 3))
 
     def one(self, x: float, y: float, h: float, a: float) -> tuple[list, list, list]:
         """Boxes (V, 3, 4), union boxes (V, 4) and camera distances (V,) as lists."""
-        ca, sa = math.cos(a), math.sin(a)
-        g = self.g
-        g[:, :2] = self.offsets @ np.array([[ca, sa], [-sa, ca]])
-        g[:, 0] += x
-        g[:, 1] += y
-        g[:, 2] = 1.0
-        proj = (g @ self.P013).reshape(3, 1, _NUM_ANGLES, 3 * self.V) + (self.zf * h) * self.P2
-        proj = proj.reshape(3, 2 * _NUM_ANGLES, self.V, 3)
-        w = proj[..., 2:3]
-        if not w.min() > 1e-6:
-            b = part_boxes(
-                self.P, np.array([[x, y]]), np.array([h]), np.array([a]), self.width, self.height
-            )[:, 0]
-        else:
-            pxy = proj[..., :2] / w  # (3, 2A, V, 2)
-            ext = np.concatenate([np.floor(pxy.min(1)), np.ceil(pxy.max(1))], axis=-1)  # (3, V, 4)
-            b = np.minimum(np.maximum(ext, 0.0), self.hi).astype(np.int64).swapaxes(0, 1)
-        boxes = b.tolist()
+        feat = [x, y, 1.0, math.cos(a), math.sin(a), h]
+        b = _boxes_from_points(np.dot(feat, self.C).reshape(self.shape), self.limits)
+        boxes = b.reshape(self.V, 3, 4).tolist()
         bbox = []
         for parts in boxes:
             x0 = y0 = 1 << 40
