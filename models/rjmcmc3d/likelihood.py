@@ -397,8 +397,9 @@ class IncrementalLikelihood:
         ``j``'s new existence flag and image geometry.
 
         Only the pixels inside the union box of the changed people's old and new boxes
-        are read for eq. 9, and only the colour terms of people whose boxes meet that
-        union box are recomputed for eq. 10.
+        are read for eq. 9, and only the colour terms of the changed people and of the
+        people whose boxes meet that union box and who are (or were) behind a changed
+        person are recomputed for eq. 10 (the visible pixels of the others stay).
 
         Returns
         -------
@@ -473,10 +474,22 @@ class IncrementalLikelihood:
                     delta += c_new - cc_v[j]
                     colour.append((v, j, c_new))
             for k in others:
-                if active[k]:
-                    c_new = self._slot_cost(v, k, boxes_v[k], bbox_v[k], depth_v[k], occ)
-                    delta += c_new - cc_v[k]
-                    colour.append((v, k, c_new))
+                if not active[k]:
+                    continue
+                # k's visible pixels change only if a changed person is (or was) nearer
+                dk = depth_v[k]
+                for j, (pr, _, _, dp) in items:
+                    dj = depth_v[j]
+                    if present_l[j] and (dj < dk or (dj == dk and j < k)):
+                        break
+                    dj = dp[v]
+                    if pr and (dj < dk or (dj == dk and j < k)):
+                        break
+                else:
+                    continue
+                c_new = self._slot_cost(v, k, boxes_v[k], bbox_v[k], dk, occ)
+                delta += c_new - cc_v[k]
+                colour.append((v, k, c_new))
         return delta, _Pending(delta, patches, colour, ov)
 
     def commit(self, pending: _Pending) -> None:

@@ -187,6 +187,9 @@ class _Chain:
         self.lp = [self._slot_prior(i, self.S[i].tolist(), bool(self.present[i])) for i in range(M)]
         self.upr = [self._upr(i, self.S[i, 0], self.S[i, 1]) for i in range(M)]
         self.boxdata = [self.proj.one(*self.S[i].tolist()) for i in range(M)]
+        self.S_l = self.S.tolist()  # list mirrors of S and present (the per-move code)
+        self.present_l = self.present.tolist()
+        self.alive = [j for j in range(M) if self.present_l[j]]
         cfg = self._config_from_boxdata(self.boxdata, self.present)
         self.G = self._interaction_matrix()
         if likelihood == "incremental":
@@ -290,10 +293,12 @@ class _Chain:
             return -math.inf, None
         upr_new = {i: self._upr(i, rows_s[i][0], rows_s[i][1]) for i in changed}
         # interaction energy change: rows of the changed slots (pairs counted once)
-        S_l = self.S.tolist()
+        S_l = self.S_l
         rows = {}
         d_e = 0.0
-        live = [j for j in range(self.M) if pr_new[j]]
+        live = [j for j in self.alive if pr_new[j]] + [
+            c for c in changed if pr_new[c] and not self.present_l[c]
+        ]
         for c in changed:
             row = [0.0] * self.M
             if pr_new[c]:
@@ -313,7 +318,17 @@ class _Chain:
             d_e += rows[a][b] - self.G[a][b]
         d_int = -2.0 * self.p.lambda_g * d_e
         t0 = time.perf_counter()
-        boxdata = {i: self.proj.one(*rows_s[i]) for i in changed}
+        # image geometry of the changed slots; a row that is some changed slot's current
+        # row (delete, leave: the same; switch: the other's) reuses its projection
+        boxdata = {}
+        for i in changed:
+            row = rows_s[i]
+            for j in changed:
+                if S_l[j] == row:
+                    boxdata[i] = self.boxdata[j]
+                    break
+            else:
+                boxdata[i] = self.proj.one(*row)
         if self.lik is not None:
             ov = {i: (pr_new[i], *boxdata[i]) for i in changed}
             d_lik, pending = self.lik.propose(ov)
@@ -331,6 +346,8 @@ class _Chain:
         self.S = S_new
         self.present = present_new
         for i in changed:
+            self.S_l[i] = S_new[i].tolist()
+            self.present_l[i] = bool(present_new[i])
             self.lp[i] = lp_new[i]
             self.upr[i] = upr_new[i]
             self.boxdata[i] = boxdata[i]
@@ -338,6 +355,7 @@ class _Chain:
             self.G[i] = row
             for j in range(self.M):
                 self.G[j][i] = row[j]
+        self.alive = [j for j in range(self.M) if self.present_l[j]]
         if self.lik is not None:
             self.lik.commit(pending)
         self.loglik += d_lik
