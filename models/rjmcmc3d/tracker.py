@@ -23,6 +23,7 @@ never mutates the state it is given.
 
 from __future__ import annotations
 
+import bisect
 import math
 import time
 from collections.abc import Iterable
@@ -200,7 +201,7 @@ class _Chain:
             self.loglik = full_loglik(p, self.data, cfg, self.sref, self.nref)
         self.log_probs = np.log(np.asarray(p.move_probs)).tolist()
         self.probs = np.asarray(p.move_probs)
-        self._near_cache = (math.nan, math.nan, [])
+        self._kernel_memo = {}
         self.lik_time = 0.0  # seconds spent projecting boxes and evaluating the likelihood
 
     # ---- geometry helpers --------------------------------------------------------------
@@ -406,6 +407,15 @@ class _Chain:
                 out.append((dx, dy))
         return out
 
+    def _kernel_at(self, x: float, y: float) -> tuple[tuple, list]:
+        """Update kernel factor and gated detections at ``(x, y)`` (memoised per frame)."""
+        key = (x, y)
+        got = self._kernel_memo.get(key)
+        if got is None:
+            L = self.t.update_chol(x, y)
+            got = self._kernel_memo[key] = (L, self._near(x, y, L))
+        return got
+
     @staticmethod
     def _lg(x: float, y: float, mx: float, my: float, L: tuple) -> float:
         l00, l10, l11 = L
@@ -415,9 +425,7 @@ class _Chain:
 
     def _log_q_update(self, x1: float, y1: float, x0: float, y0: float) -> float:
         """``log q(u1 | u0)`` of the update mixture (random walk + detection-driven)."""
-        L = self.t.update_chol(x0, y0)
-        cache = self._near_cache
-        near = cache[2] if cache[0] == x0 and cache[1] == y0 else self._near(x0, y0, L)
+        L, near = self._kernel_at(x0, y0)
         l_rw = self._lg(x1, y1, x0, y0, L)
         if not near:
             return l_rw
@@ -498,14 +506,12 @@ class _Chain:
             S[[a, b]] = S[[b, a]]
             return S, present.copy(), [a, b], 0.0, 0.0
         # UPDATE
-        idx = np.flatnonzero(present)
-        if idx.size == 0:
+        alive = self.alive
+        if not alive:
             return None
-        i = int(idx[int(rng.random() * idx.size)])
-        x0, y0, h0, a0 = self.S[i].tolist()
-        L = self.t.update_chol(x0, y0)
-        near = self._near(x0, y0, L)
-        self._near_cache = (x0, y0, near)
+        i = alive[int(rng.random() * len(alive))]
+        x0, y0, h0, a0 = self.S_l[i]
+        L, near = self._kernel_at(x0, y0)
         if near and rng.random() < p.p_det_update:
             cx, cy = near[int(rng.random() * len(near))]
         else:
@@ -548,12 +554,12 @@ class _Chain:
             sc[:, 1] += pm * np.sin(self.S[:, 3])
             last = upto
 
-        cum = np.cumsum(self.probs)
+        cum = np.cumsum(self.probs).tolist()
         for it in range(p.num_moves):
             m = (
                 select_move(rng, self.probs)
                 if it == 0
-                else min(int(np.searchsorted(cum, rng.random(), side="right")), 5)
+                else min(bisect.bisect_right(cum, rng.random()), 5)
             )
             tried[m] += 1
             prop = self.propose(rng, m)
