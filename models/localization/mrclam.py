@@ -128,8 +128,10 @@ class MRCLAMSequence(NamedTuple):
     times : (num_timesteps + 1,) grid times [s]
     odometry : (num_timesteps, 4) ``(dx, dy, dtheta, dt)`` per step, robot frame
     observations : RangeBearingObservation, leaves (num_timesteps, max_meas)
-    truth : (num_timesteps + 1, 3) motion-capture poses at the grid times
+    truth : (num_timesteps + 1, 3) motion-capture poses at the step times
     landmarks : (15, 2)
+    on_grid : (num_timesteps,) bool, which steps end on the regular ``dt`` grid (errors are
+        averaged over these, so that extra measurement-time steps do not weigh in)
     """
 
     times: np.ndarray
@@ -137,12 +139,18 @@ class MRCLAMSequence(NamedTuple):
     observations: RangeBearingObservation
     truth: np.ndarray
     landmarks: np.ndarray
+    on_grid: np.ndarray
 
 
 def build_sequence(
-    data: MRCLAMRobot, *, duration: float = 300.0, dt: float = 0.1, start: float | None = None
+    data: MRCLAMRobot,
+    *,
+    duration: float = 300.0,
+    dt: float = 0.1,
+    start: float | None = None,
+    align: str = "grid",
 ) -> MRCLAMSequence:
-    """Cut the first ``duration`` seconds (from the first odometry sample) onto a ``dt`` grid.
+    """Cut the first ``duration`` seconds (from the first odometry sample) into filter steps.
 
     Parameters
     ----------
@@ -150,15 +158,36 @@ def build_sequence(
     duration, dt : float, seconds
     start : float, optional
         Start time; default the later of the first odometry and ground-truth samples.
+    align : 'grid' or 'events'
+        'grid' (default): a plain ``dt`` grid, each measurement attached to the nearest grid
+        time; 'events': the step ends are the grid plus every landmark-measurement time, so
+        each measurement is applied at its own time (steps of variable length). On robot 2
+        (held out) both gave the same accuracy (0.275 vs 0.273 m), so the simpler grid is
+        the default.
     """
     if not (dt > 0 and duration > dt):
         raise InputError(f"need 0 < dt < duration, got dt={dt!r}, duration={duration!r}")
+    if align not in ("events", "grid"):
+        raise InputError(f"align = {align!r}, expected 'events' or 'grid'")
     t0 = max(data.odometry[0, 0], data.groundtruth[0, 0]) if start is None else float(start)
-    n = int(math.floor(duration / dt))
-    times = t0 + dt * np.arange(n + 1)
+    grid = t0 + dt * np.arange(int(math.floor(duration / dt)) + 1)
+    # landmark measurements (robots and unknown barcodes dropped)
+    meas = data.measurements
+    index = {int(s): i for i, s in enumerate(data.landmark_subjects)}
+    subj = np.array([data.barcode_to_subject.get(int(b), -1) for b in meas[:, 1]], dtype=int)
+    keep = np.isin(subj, list(index)) & (meas[:, 0] > grid[0]) & (meas[:, 0] <= grid[-1])
+    meas, subj = meas[keep], subj[keep]
+    if align == "events":
+        times = np.union1d(grid, meas[:, 0])
+        step = np.searchsorted(times, meas[:, 0]) - 1  # the step ending at the measurement
+    else:
+        times = grid
+        step = np.rint((meas[:, 0] - times[0]) / dt).astype(int) - 1  # nearest grid time
+    n = len(times) - 1
+    step = np.clip(step, 0, n - 1)
     dead = integrate_odometry(data.odometry, times)
     rel = relative_pose(dead[:-1], dead[1:])
-    odo = np.column_stack([rel, np.full(n, dt)])
+    odo = np.column_stack([rel, np.diff(times)])
     gt = data.groundtruth
     th = np.unwrap(gt[:, 3])
     truth = np.column_stack(
@@ -168,19 +197,6 @@ def build_sequence(
             wrap_angle(np.interp(times, gt[:, 0], th)),
         ]
     )
-    # landmark measurements (robots and unknown barcodes dropped)
-    subj_of = np.vectorize(lambda b: data.barcode_to_subject.get(int(b), -1))
-    meas = data.measurements
-    subj = subj_of(meas[:, 1]) if len(meas) else np.zeros(0, int)
-    index = {int(s): i for i, s in enumerate(data.landmark_subjects)}
-    keep = (
-        np.array([s in index for s in subj], dtype=bool)
-        & (meas[:, 0] > times[0])
-        & (meas[:, 0] <= times[-1])
-    )
-    meas, subj = meas[keep], subj[keep]
-    # step k ends at grid time times[k + 1]: attach a measurement to the nearest grid time
-    step = np.clip(np.rint((meas[:, 0] - times[0]) / dt).astype(int) - 1, 0, n - 1)
     counts = np.bincount(step, minlength=n)
     width = max(1, int(counts.max()) if counts.size else 1)
     order = np.argsort(step, kind="stable")
@@ -194,9 +210,9 @@ def build_sequence(
     rng[step, slot] = meas[:, 2]
     brg[step, slot] = meas[:, 3]
     mask[step, slot] = True
-    return MRCLAMSequence(
-        times, odo, RangeBearingObservation(lm, rng, brg, mask), truth, data.landmarks
-    )
+    on_grid = np.isin(times[1:], grid)
+    obs = RangeBearingObservation(lm, rng, brg, mask)
+    return MRCLAMSequence(times, odo, obs, truth, data.landmarks, on_grid)
 
 
 def estimate_noise(data: MRCLAMRobot, *, duration: float = 600.0, dt: float = 0.1) -> dict:

@@ -165,3 +165,20 @@ def test_time_order_is_checked() -> None:
     _check_time(np.array([0.0, 1.0, 1.0, 2.0]), "ok")
     with pytest.raises(TimeOrderError, match=r"timestamp\[2\] = 0.5"):
         _check_time(np.array([0.0, 1.0, 0.5]), "Robot1 odometry")
+
+
+def test_mrclam_event_alignment(shared_data) -> None:
+    from models.localization.mrclam import build_sequence, load_robot
+
+    data = load_robot(1)
+    grid = build_sequence(data, duration=30.0, dt=0.1)
+    events = build_sequence(data, duration=30.0, dt=0.1, align="events")
+    assert grid.on_grid.all() and events.on_grid.sum() == len(grid.odometry)
+    assert events.observations.mask.sum() == grid.observations.mask.sum()
+    # every measurement sits at the end of its own step, at its own time
+    k, _ = np.nonzero(events.observations.mask)
+    t_meas = np.sort(data.measurements[:, 0])
+    assert np.all(np.isin(events.times[k + 1], t_meas))
+    np.testing.assert_allclose(events.odometry[:, 3].sum(), 30.0, atol=1e-9)
+    with pytest.raises(InputError, match="align"):
+        build_sequence(data, align="nope")
