@@ -118,3 +118,50 @@ def test_full_and_incremental_chains_coincide(chain_setup) -> None:
     assert np.allclose(a.S, b.S)
     assert np.allclose(ra["presence"], rb["presence"])
     assert a.loglik == pytest.approx(b.loglik, abs=1e-6)
+
+
+def _two_people(dx_back: int, dx_front: int) -> Config:
+    """One view, person 0 in front (depth 1) of person 1 (depth 2), boxes shifted by dx."""
+    boxes = np.zeros((1, 2, 3, 4), dtype=np.int64)
+    for j, dx in ((0, dx_front), (1, dx_back)):
+        boxes[0, j] = [
+            (8 + dx, 30, 16 + dx, 40),
+            (6 + dx, 14, 18 + dx, 31),
+            (9 + dx, 8, 15 + dx, 15),
+        ]
+    bbox = np.concatenate([boxes[0, :, :, :2].min(1), boxes[0, :, :, 2:].max(1)], axis=-1)[None]
+    return Config(boxes, bbox, np.array([[1.0, 2.0]]), np.array([True, True]))
+
+
+@pytest.mark.parametrize("who", [0, 1])
+def test_incremental_occlusion_front_and_back(who: int) -> None:
+    """Moving the person behind leaves the front one's colour term; moving the front one
+    changes the hidden pixels of the one behind; both deltas equal the full recompute."""
+    p = TrackerParams()
+    rng = np.random.default_rng(3)
+    D = rng.random((1, 48, 40)).astype(np.float32)
+    img = rng.random((1, 48, 40, 3)).astype(np.float32)
+    data = prepare_frame(p, _frame(D, img))
+    refs = rng.random((2, 3, 1, data.num_bins))
+    sref = np.sqrt(refs / refs.sum(-1, keepdims=True))
+    nref = np.ones((2, 3), dtype=np.int64)
+    before = _two_people(dx_back=4, dx_front=0)
+    inc = IncrementalLikelihood(p, data, before, sref, nref)
+    assert inc.total == pytest.approx(full_loglik(p, data, before, sref, nref), abs=1e-9)
+    after = _two_people(dx_back=4 + 3 * (who == 1), dx_front=3 * (who == 0))
+    ov = {
+        who: (
+            True,
+            after.boxes[:, who].tolist(),
+            after.bbox[:, who].tolist(),
+            [after.depth[0, who]],
+        )
+    }
+    delta, pending = inc.propose(ov)
+    want = full_loglik(p, data, after, sref, nref) - full_loglik(p, data, before, sref, nref)
+    assert delta == pytest.approx(want, abs=1e-9)
+    recoloured = sorted(j for _, j, _ in pending.colour)
+    # the person in front (0) keeps its visible pixels when the one behind (1) moves
+    assert recoloured == ([0, 1] if who == 0 else [1])
+    inc.commit(pending)
+    assert inc.total == pytest.approx(full_loglik(p, data, after, sref, nref), abs=1e-9)
