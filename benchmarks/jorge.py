@@ -8,7 +8,9 @@ Keys: ``strokes`` (NT, mean per run), ``groups``, ``label_errors`` (mean LE per 
 ``error_rate`` (LE / NT, the network, default colour model, then the final
 re-identification pass of :func:`models.jorge.online.reidentify`; object ids matched to
 people one to one as IDF1 does), ``error_rate_network_only`` (the same network labels
-before the re-identification pass), ``error_rate_first_seen_mapping`` (the same labels, each object
+before the re-identification pass), ``first_mistake_rate`` (and ``_network_only``: the
+errors none of whose true predecessor strokes is in error, per stroke; the rest of the
+errors are carried along the links), ``error_rate_first_seen_mapping`` (the same labels, each object
 standing for the person of the stroke where it was first seen: one early mistake makes
 every later stroke of that person an error), ``error_rate_colour_only`` (the baseline
 without the network: best colour match among all labels up to the network's maximum
@@ -35,7 +37,7 @@ from dbn import pgmpy_adapter
 from inference.exact import JunctionTree, map_assignment
 from models import datasets
 from models.jorge.network import NetworkConfig, node_name
-from models.jorge.online import OnlineConfig, colour_only_labels, label_online, score
+from models.jorge.online import OnlineConfig, colour_only_labels, first_errors, label_online, score
 from models.jorge.strokes import build_strokes, load_caviar, load_pets2009
 
 SEQUENCES = ("ms3ggt.xml.gz", "mws1gt.xml.gz")
@@ -123,6 +125,8 @@ def run(quick: bool, seed: int) -> dict:
                 "seq": name, "seed": s, "strokes": len(strokes), "groups": strokes.num_groups,
                 "le": sc.label_errors, "rate": sc.error_rate, "rate_colour": col.error_rate,
                 "rate_net": net_only.error_rate,
+                "rate_first": len(first_errors(strokes, sc.errors)) / len(strokes),
+                "rate_first_net": len(first_errors(strokes, net_only.errors)) / len(strokes),
                 "rate_eq6": eq6.error_rate, "rate_colour1": col1.error_rate,
                 "rate_strict": strict.error_rate, "idsw": sc.id_switches, "duration": strokes.duration_s,
                 "seconds": res.seconds, "max_inf": max(r.seconds for r in res.records),
@@ -164,6 +168,8 @@ def run(quick: bool, seed: int) -> dict:
         "label_errors": mean("le"),
         "error_rate": mean("rate"),
         "error_rate_network_only": mean("rate_net"),
+        "first_mistake_rate": mean("rate_first"),
+        "first_mistake_rate_network_only": mean("rate_first_net"),
         "error_rate_colour_only": mean("rate_colour"),
         "error_rate_eq6_as_written": mean("rate_eq6"),
         "error_rate_colour_only_singles": mean("rate_colour1"),

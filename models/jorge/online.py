@@ -67,6 +67,7 @@ __all__ = [
     "score",
     "colour_only_labels",
     "reidentify",
+    "first_errors",
     "object_people",
     "optimal_people",
 ]
@@ -389,7 +390,8 @@ def reidentify(graph: LabelGraph, labels: Sequence[Label], prior: float) -> list
         \Lambda_a = \log\frac{\rho / |A|}{1 - \rho}
           + \sum_{s \in S_b} \ell(s \mid \text{palette}_a) - \ell(s \mid \text{palette}_b)
 
-    and :math:`b` is renamed to the best :math:`a` when :math:`\Lambda_a > 0`.
+    and :math:`b` is renamed to the best :math:`a` when :math:`\Lambda_a > 0`. Passes
+    over all objects are repeated until no object is renamed.
 
     Parameters
     ----------
@@ -412,6 +414,17 @@ def reidentify(graph: LabelGraph, labels: Sequence[Label], prior: float) -> list
         raise InputError(f"reidentify: prior must be in (0, 1), got {prior}")
     if not labels:
         return []
+    # one pass can miss a renaming because a candidate set was larger when the object was
+    # examined than after later renamings; repeat until nothing changes (each pass only
+    # merges objects, so at most num_objects passes)
+    while True:
+        renamed = _reidentify_pass(graph, labels, prior)
+        if renamed == labels:
+            return renamed
+        labels = renamed
+
+
+def _reidentify_pass(graph: LabelGraph, labels: list, prior: float) -> list:
     cfg = graph.config
     starts = np.array([nd.stroke.start for nd in graph.nodes])
     ends = np.array([nd.stroke.end for nd in graph.nodes])
@@ -565,6 +578,45 @@ def score(strokes: Sequence[Stroke], labels: Sequence[Label], mapping: str = "op
             last[p] = lab
     n = len(strokes)
     return Score(len(errors), n, len(errors) / n if n else 0.0, switches, tuple(errors))
+
+
+def first_errors(strokes: Sequence[Stroke], errors: Iterable[int]) -> tuple:
+    """The labelling errors that are first mistakes: strokes in error none of whose true
+    predecessors (for each of its people, the latest earlier stroke holding that person,
+    ended before it starts) is in error. The other errors are carried: a wrong label
+    inherited along the links.
+
+    Parameters
+    ----------
+    strokes : sequence of Stroke, length num_strokes
+        In start order, with their true sets.
+    errors : iterable of int
+        Indices of the mislabelled strokes (:attr:`Score.errors`).
+
+    Returns
+    -------
+    tuple of int
+        The first mistakes, in index order.
+    """
+    strokes = list(strokes)
+    bad = set(int(e) for e in errors)
+    unknown = sorted(e for e in bad if not 0 <= e < len(strokes))
+    if unknown:
+        raise InputError(f"first_errors: error indices {unknown} outside 0..{len(strokes) - 1}")
+    latest: dict[int, list[int]] = {}  # person -> indices of their strokes, in start order
+    out = []
+    for k, s in enumerate(strokes):
+        if k in bad:
+            preds = set()
+            for p in s.truth:
+                earlier = [i for i in latest.get(p, []) if strokes[i].end < s.start]
+                if earlier:
+                    preds.add(max(earlier, key=lambda i: strokes[i].end))
+            if not preds & bad:
+                out.append(k)
+        for p in s.truth:
+            latest.setdefault(p, []).append(k)
+    return tuple(out)
 
 
 def colour_only_labels(strokes: Iterable[Stroke], max_group_size: int = 3, match_prob: float = 0.8,

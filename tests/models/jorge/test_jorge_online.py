@@ -10,6 +10,7 @@ from models.jorge.online import (
     OnlineConfig,
     OnlineLabeller,
     colour_only_labels,
+    first_errors,
     label_online,
     object_people,
     optimal_people,
@@ -131,3 +132,14 @@ def test_reidentification_pass():
         reidentify(on.labeller.graph, on.network_labels[:2], 0.5)
     with pytest.raises(InputError):
         reidentify(on.labeller.graph, on.network_labels, 1.0)
+
+
+def test_first_errors_by_hand():
+    s = _strokes() + [make_stroke(4, 30, 40, (20, 0), (30, 0), [0, 1], {0}),
+                      make_stroke(5, 30, 40, (120, 0), (130, 0), [5, 6], {1})]
+    # person 0: strokes 0, 2, 4; person 1: strokes 1, 3, 5
+    assert first_errors(s, [2, 4, 5]) == (2, 5)  # 4 inherits from 2; 5's predecessor 3 is right
+    assert first_errors(s, [4]) == (4,)
+    assert first_errors(s, []) == ()
+    with pytest.raises(InputError):
+        first_errors(s, [6])
