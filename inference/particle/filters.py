@@ -29,6 +29,7 @@ import jax.numpy as jnp
 from jax import Array
 from jax.scipy.special import logsumexp
 
+from dbn.errors import InputError, ModelError
 from inference.particle.model import StateSpaceModel
 from inference.particle.resampling import Resampler, systematic
 
@@ -148,7 +149,7 @@ def _normalise(log_w: Array) -> tuple[Array, Array]:
 def _init(key: Array, model: StateSpaceModel, num_particles: int, dtype: Any) -> ParticleState:
     x = jnp.asarray(model.sample_initial(key, num_particles, dtype), dtype=dtype)
     if x.ndim != 2 or x.shape[0] != num_particles:
-        raise ValueError(
+        raise ModelError(
             f"model.sample_initial returned shape {x.shape}; expected ({num_particles}, state_dim)"
         )
     lw = jnp.full((num_particles,), -math.log(num_particles), dtype=dtype)
@@ -167,7 +168,7 @@ def _resample_predicate(cur_ess: Array, ess_threshold: float, n: int) -> Array:
 
 def _check_threshold(ess_threshold: float) -> None:
     if not (ess_threshold >= 0.0):
-        raise ValueError(f"ess_threshold must be >= 0, got {ess_threshold!r}")
+        raise InputError(f"ess_threshold must be >= 0, got {ess_threshold!r}")
 
 
 def bootstrap_filter(

@@ -22,6 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dbn.errors import InputError
 from models.localization.model import (
     KNNLocalizationModel,
     KNNSensor,
@@ -232,7 +233,7 @@ def training_grid(
     of ``num_orientations``).
     """
     if num_rays % num_orientations:
-        raise ValueError(
+        raise InputError(
             f"num_rays {num_rays} must be a multiple of num_orientations {num_orientations}"
         )
     xs = np.arange(cell_xy / 2, world.width, cell_xy)
