@@ -179,7 +179,7 @@ def lgssm_joint_log_likelihood(params: LinearGaussianParams, observations: np.nd
     """
     y = _check(params, observations)
     F, Q, H, R = (np.asarray(a, dtype=np.float64) for a in params[:4])
-    T, m, d = y.shape[0], H.shape[0], F.shape[0]
+    T, m = y.shape[0], H.shape[0]
     # s_k = F^k s_0 + sum_{j<=k} F^{k-j} q_j
     Fp = [np.linalg.matrix_power(F, k) for k in range(T + 1)]
     mean = np.concatenate([H @ Fp[k + 1] @ params.m0 for k in range(T)])
@@ -194,5 +194,4 @@ def lgssm_joint_log_likelihood(params: LinearGaussianParams, observations: np.nd
     c = cho_factor(cov, lower=True)
     r = y.reshape(-1) - mean
     logdet = 2.0 * np.sum(np.log(np.diag(c[0])))
-    _ = d
     return float(-0.5 * (r @ cho_solve(c, r) + logdet + T * m * math.log(2 * math.pi)))
