@@ -89,8 +89,8 @@ plt.show()
 # label (a missed link, a wrong MAP at a split), every later stroke of that person
 # inherits the new object. A final off-line pass (our addition, `reid_prior`) renames an
 # object born as a new label to an earlier object that had finished before it appeared,
-# when the colours of its one-person strokes favour that object's palette. Both figures
-# are printed.
+# when its palette and the colours of its later one-person strokes favour that object
+# (even prior odds). Both figures are printed.
 
 # %%
 result = label_online(strokes, OnlineConfig())
