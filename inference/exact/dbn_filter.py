@@ -179,7 +179,6 @@ class DBNFilter:
                 trans = trans.product(Factor((p,), np.zeros(self.cards[n])))
         trans = trans.transpose((*prev_iface, *order))
         self._L = np.exp(trans.log_values).reshape(self.num_states, self.num_states, *other_cards)
-        self._other_axis = {n: 2 + k for k, n in enumerate(self.others)}
         self._cache: dict[tuple[bool, tuple[tuple[str, int], ...]], np.ndarray] = {}
 
     def __repr__(self) -> str:
@@ -297,9 +296,11 @@ class DBNFilter:
         hard, soft = self._check(evidence, soft_evidence)
         A = self._L0[0] if state is None else np.tensordot(state.belief, self._L, axes=(0, 0))
         row = np.ones(self.num_states)
-        for name, vec in {**{n: np.eye(self.cards[n])[s] for n, s in hard.items()}, **soft}.items():
-            if name in self._iface_state:
-                row = row * vec[self._iface_state[name]]
+        for name, states in self._iface_state.items():
+            if name in hard:
+                row = row * (states == hard[name])
+            if name in soft:
+                row = row * soft[name][states]
         A = A * row.reshape(-1, *([1] * len(self.others)))
         for n in self.others:
             vec = np.ones(self.cards[n])

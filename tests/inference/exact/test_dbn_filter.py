@@ -153,3 +153,16 @@ def test_bad_input_raises_and_state_is_unchanged() -> None:
         flt.filter({"y": np.zeros(3)})
     with pytest.raises(EvidenceError, match="slice 2"):
         flt.filter({"y": np.array([0, 1, 9])})
+
+
+def test_hard_and_soft_evidence_on_one_variable_match_the_unrolled_net() -> None:
+    dbn = _hmm(3, 5)
+    flt = DBNFilter(dbn)
+    soft = {"x": np.array([0.2, 1.0, 0.5])}
+    state = flt.init({"y": 1})
+    marg = flt.slice_marginals(state, {"x": 2, "y": 4}, soft)
+    assert marg["x"].tolist() == [0.0, 0.0, 1.0]
+    stepped = flt.step(state, {"y": 4}, soft)
+    cal = JunctionTree(dbn.unroll(2)).calibrate({"y_0": 1, "y_1": 4}, {"x_1": soft["x"]})
+    np.testing.assert_allclose(flt.marginal(stepped, "x"), cal.marginals["x_1"], atol=TOL)
+    assert abs(stepped.log_likelihood - cal.log_evidence) < TOL
