@@ -226,7 +226,11 @@ class JunctionTree:
         for name, lik in soft.items():
             top = float(lik.max())
             log_scale += np.log(top)
-            if name in hard:
+            if name in hard:  # a constant factor lambda(observed state)
+                if lik[hard[name]] <= 0.0:
+                    raise EvidenceError(
+                        f"soft evidence on {name!r} gives its observed state likelihood zero"
+                    )
                 log_scale += float(np.log(lik[hard[name]] / top))
                 continue
             i = st.home[name]

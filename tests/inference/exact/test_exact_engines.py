@@ -85,6 +85,11 @@ def test_bad_evidence_leaves_tree_usable_and_unchanged() -> None:
         jt.calibrate({"asia": "maybe"})
     with pytest.raises(EvidenceError, match="shape"):
         jt.calibrate(soft_evidence={"asia": [1.0, 2.0, 3.0]})
+    state = bn.variable("asia").index("yes")
+    zero = np.ones(2)
+    zero[state] = 0.0
+    with pytest.raises(EvidenceError, match="likelihood zero"):
+        jt.calibrate({"asia": "yes"}, {"asia": zero})
     after = jt.calibrate({"asia": "yes"})
     for n in bn.nodes:
         np.testing.assert_array_equal(before.marginals[n], after.marginals[n])
