@@ -5,7 +5,8 @@ Ground truth: CAVIAR ``ms3ggt`` (Meet_Split_3rdGuy, the sequence of seed 004) an
 the ground truth has neither. Rates are means over both sequences and the seeds.
 
 Keys: ``strokes`` (NT, mean per run), ``groups``, ``label_errors`` (mean LE per run),
-``error_rate`` (LE / NT, the network, default colour model, then the final
+``error_rate`` (LE / NT, the network, default colour model and the region-size evidence
+on the number of people, our addition (``NetworkConfig.size_evidence``), then the final
 re-identification pass of :func:`models.jorge.online.reidentify`; object ids matched to
 people one to one as IDF1 does), ``error_rate_network_only`` (the same network labels
 before the re-identification pass), ``first_mistake_rate`` (and ``_network_only``: the

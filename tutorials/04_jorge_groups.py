@@ -5,6 +5,8 @@
 #     text_representation:
 #       extension: .py
 #       format_name: percent
+#       format_version: '1.3'
+#       jupytext_version: 1.19.6
 #   kernelspec:
 #     display_name: Python 3
 #     language: python
@@ -18,7 +20,11 @@
 # trajectory broken by occlusions, merges and splits) with a Bayes net built on the fly:
 # one label node per stroke, whose states are sets of object ids (a group is a set),
 # restriction nodes that forbid two children of one stroke to share an object, and the
-# stroke's dominant colours as soft evidence. This notebook runs it on the CAVIAR
+# stroke's dominant colours as soft evidence. We add one piece of evidence the paper does
+# not use: the stroke's region size (its box area against the median of the earlier
+# strokes) as evidence on how many people its label holds, so that a one-person stroke
+# leaving a group whose other member is hidden is not given the whole group's label
+# (`NetworkConfig.size_evidence`, on by default). This notebook runs it on the CAVIAR
 # **Meet_Split_3rdGuy** ground truth, the sequence of the paper.
 #
 # What is real and what is simulated: the boxes are the real CAVIAR ground truth; the
@@ -174,7 +180,7 @@ plt.show()
 # pgmpy 1.1.2's `map_query` builds the joint table of all the queried variables, so it
 # can only check windows with a small joint: we take the windows of a run with at most 6
 # active nodes and compare the last one whose joint has at most 10^5 configurations. The
-# colour soft evidence becomes explicit binary children for pgmpy (virtual evidence as a
+# soft evidence (colours and size) becomes explicit binary children for pgmpy (virtual evidence as a
 # node); our MAP log probability must equal the log probability of pgmpy's MAP.
 
 # %%

@@ -5,7 +5,9 @@ Nodes: a hidden label node ``x{k}`` per stroke ``k`` (its states are the admissi
 :math:`L_k`, :mod:`models.jorge.labels`), a binary restriction node ``r{i}_{j}`` for every
 pair of children sharing a parent (observed :math:`r = 1`, eq. 5, hard evidence), and the
 stroke's dominant colours as soft (virtual) evidence on ``x{k}`` (eq. 6; proper likelihood
-ratio by default, the equation as written as an option).
+ratio by default, the equation as written as an option), times, where the stroke has a
+recorded region size, the size evidence on the number of people of the label
+(:func:`models.jorge.labels.size_log_likelihood`; our addition, ``size_evidence``).
 
 Links (seed 004, sec. 4): ``i -> j`` when stroke ``j`` starts after ``i`` ends and the gap
 is physically possible. A region's centre jumps when regions merge or split, so we admit
@@ -24,7 +26,7 @@ import numpy as np
 
 from dbn.bayesnet import BayesNet
 from dbn.cpds import TabularCPD
-from dbn.errors import InputError, ModelError, TimeOrderError, UnknownVariableError
+from dbn.errors import InputError, ModelError, ShapeError, TimeOrderError, UnknownVariableError
 from dbn.variables import DiscreteVariable
 from inference.exact import JunctionTree, map_assignment
 from models.jorge.labels import (
@@ -36,6 +38,7 @@ from models.jorge.labels import (
     format_label,
     restriction_table,
     root_table,
+    size_log_likelihood,
     structure_of,
 )
 from models.jorge.strokes import Stroke, _check_colours
@@ -99,6 +102,14 @@ class NetworkConfig:
         :math:`P` of eq. 6.
     pool_size : int
         Number of colours in the pool.
+    size_evidence : bool
+        Also use the stroke's region size as soft evidence on the number of people of
+        its label (:func:`models.jorge.labels.size_log_likelihood`; our addition, not in
+        seed 004). Needs ``Stroke.extent`` (recorded by
+        :func:`models.jorge.strokes.build_strokes`); strokes without it get none.
+    size_mu_single, size_slope, size_sigma : float
+        mu_1, beta and sigma of the size likelihood, estimated on
+        CAVIAR with the held-out simulation seeds 20-39 (never the benchmark's 0-4).
     """
 
     v_max: float = 1.0
@@ -111,6 +122,10 @@ class NetworkConfig:
     colour_mode: str = "hyper"
     match_prob: float = 0.8
     pool_size: int = 12
+    size_evidence: bool = True
+    size_mu_single: float = -0.14
+    size_slope: float = 1.1 / float(np.log(2.0))
+    size_sigma: float = 0.68
 
     def __post_init__(self) -> None:
         if self.v_max <= 0 or not np.isfinite(self.v_max):
@@ -130,6 +145,13 @@ class NetworkConfig:
             )
         if not 0.0 < self.match_prob < 1.0:
             raise ModelError(f"NetworkConfig.match_prob must be in (0, 1), got {self.match_prob}")
+        if not self.size_sigma > 0 or not np.isfinite(self.size_sigma):
+            raise ModelError(f"NetworkConfig.size_sigma must be > 0, got {self.size_sigma}")
+        if not np.isfinite(self.size_mu_single) or not np.isfinite(self.size_slope):
+            raise ModelError(
+                f"NetworkConfig.size_mu_single / size_slope must be finite, got "
+                f"{self.size_mu_single} / {self.size_slope}"
+            )
 
 
 @dataclass
@@ -139,6 +161,7 @@ class _Node:
     children: list[int]
     domain: tuple[Label, ...]
     frozen: Label | None = None
+    rel_log_area: float = float("nan")
 
 
 class LabelGraph:
@@ -163,6 +186,7 @@ class LabelGraph:
         self._end_pos = np.zeros((n0, 2))
         self._nchild = np.zeros(n0, dtype=np.int64)
         self._palettes = np.zeros((n0, self.config.pool_size), dtype=bool)
+        self._log_area = np.full(n0, np.nan)
 
     # --- growth --------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -170,9 +194,10 @@ class LabelGraph:
 
     def _grow(self) -> None:
         n = self._end.shape[0] * 2
-        for name in ("_end", "_end_pos", "_nchild", "_palettes"):
+        for name in ("_end", "_end_pos", "_nchild", "_palettes", "_log_area"):
             old = getattr(self, name)
-            new = np.zeros((n, *old.shape[1:]), dtype=old.dtype)
+            new = np.full((n, *old.shape[1:]), np.nan) if name == "_log_area" else \
+                np.zeros((n, *old.shape[1:]), dtype=old.dtype)
             new[: old.shape[0]] = old
             setattr(self, name, new)
 
@@ -202,6 +227,13 @@ class LabelGraph:
             raise InputError(f"stroke {k}: positions must have shape (num_points, 2), got {pos.shape}")
         if not np.all(np.isfinite(pos)):
             raise InputError(f"stroke {k}: non-finite position")
+        ext = getattr(stroke, "extent", None)
+        if ext is not None:
+            ext = np.asarray(ext, dtype=np.float64)
+            if ext.shape != pos.shape:
+                raise ShapeError(f"stroke {k}: extent must have shape {pos.shape}, got {ext.shape}")
+            if not np.all(np.isfinite(ext)) or np.any(ext <= 0):
+                raise InputError(f"stroke {k}: region extent (width, height) must be finite and > 0")
 
     def candidate_parents(self, stroke: Stroke) -> np.ndarray:
         r"""Parents of a new stroke: ended before it starts, reachable, with a free child
@@ -263,10 +295,17 @@ class LabelGraph:
         self._end[k] = stroke.end
         self._end_pos[k] = stroke.positions[-1]
         self._palettes[k, stroke.palette] = True
+        rel = float("nan")
+        ext = getattr(stroke, "extent", None)
+        if ext is not None:
+            self._log_area[k] = float(np.median(np.log(ext[:, 0] * ext[:, 1])))
+            seen = self._log_area[:k][np.isfinite(self._log_area[:k])]
+            if seen.size:
+                rel = float(self._log_area[k] - np.median(seen))
         for p in parents:
             self._nchild[p] += 1
             self.nodes[p].children.append(k)
-        node = _Node(stroke, parents, [], ())
+        node = _Node(stroke, parents, [], (), rel_log_area=rel)
         self.nodes.append(node)
         node.domain = self._admissible(k)
         # a parent that now splits changes its other child's structure: widen that domain
@@ -341,6 +380,31 @@ class LabelGraph:
             self.nodes[k].stroke.colours, self.palettes(domain), is_new, self.config.match_prob,
             self.config.pool_size, self.config.colour_mode if mode is None else mode,
         )
+
+    def size_loglik(self, k: int, domain: Sequence[Label] | None = None) -> np.ndarray:
+        """Region-size log-likelihood of stroke ``k`` for each label of ``domain``
+        (:func:`models.jorge.labels.size_log_likelihood`; zeros when ``size_evidence`` is
+        off or the stroke has no recorded extent).
+
+        Returns
+        -------
+        ndarray, shape (num_labels,)
+        """
+        domain = self.nodes[k].domain if domain is None else domain
+        cfg = self.config
+        rel = self.nodes[k].rel_log_area if cfg.size_evidence else float("nan")
+        sizes = np.array([len(lab) for lab in domain], dtype=np.int64)
+        return size_log_likelihood(rel, sizes, cfg.size_mu_single, cfg.size_slope, cfg.size_sigma)
+
+    def evidence_loglik(self, k: int, domain: Sequence[Label] | None = None) -> np.ndarray:
+        """All soft evidence of stroke ``k`` per label: colours (eq. 6, default mode) plus
+        region size (:meth:`size_loglik`).
+
+        Returns
+        -------
+        ndarray, shape (num_labels,)
+        """
+        return self.colour_loglik(k, domain) + self.size_loglik(k, domain)
 
     def cpd_table(self, k: int) -> np.ndarray:
         """CPD table of (non-frozen) node ``k`` over its parents' current domains.
@@ -435,7 +499,7 @@ class LabelGraph:
             variables.append(DiscreteVariable(name, len(dom), tuple(format_label(x) for x in dom)))
             parents = [node_name(p) for p in self.nodes[a].parents]
             cpds.append(TabularCPD(name, parents, self.cpd_table(a)))
-            ll = self.colour_loglik(a)
+            ll = self.evidence_loglik(a)
             soft[name] = np.exp(ll - ll.max())
         evidence: dict[str, int] = {}
         for i, j in sorted(pairs):
@@ -493,7 +557,8 @@ class WindowNet:
     boundary: tuple
 
     def with_colour_nodes(self) -> tuple[BayesNet, dict]:
-        """The same model with the colour evidence as explicit binary children ``y{k}``
+        """The same model with the soft evidence (colours, and size where recorded) as
+        explicit binary children ``y{k}``
         observed 1, ``p(y = 1 | x) = lambda(x)`` (virtual evidence as a node), for engines
         without soft evidence (pgmpy). Its joint with the evidence equals ours exactly.
 

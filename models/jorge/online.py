@@ -194,12 +194,13 @@ class OnlineLabeller:
         r"""Eq. 12 posterior of node ``k`` over its domain.
 
         .. math::
-            P(x_k \mid \cdot) \propto p(y_k \mid x_k)
+            P(x_k \mid \cdot) \propto p(y_k \mid x_k)\,p(a_k \mid |x_k|)
               \sum_{x_{pa}} p(x_k \mid x_{pa}) \prod_p b_p(x_p)
               \prod_{s} [x_k \cap \ell_s = \emptyset]
 
         with :math:`b_p` the parents' beliefs at the last inference (or their own eq. 12
-        posteriors) and :math:`\ell_s` the current labels of its labelled siblings.
+        posteriors), :math:`\ell_s` the current labels of its labelled siblings and
+        :math:`p(a_k \mid |x_k|)` the region-size evidence (1 when not recorded or off).
 
         Returns
         -------
@@ -208,7 +209,7 @@ class OnlineLabeller:
         g = self.graph
         node = g.nodes[k]
         domain = node.domain
-        score = g.colour_loglik(k)
+        score = g.evidence_loglik(k)
         if node.parents:
             table = g.cpd_table(k)
             beliefs = [self.belief_of(p) for p in node.parents]

@@ -9,7 +9,9 @@ the strokes.
 
 What is real and what is simulated
 ----------------------------------
-* Real: the boxes (CAVIAR / PETS2009 ground truth; see ``../shared/data/README.md``).
+* Real: the boxes (CAVIAR / PETS2009 ground truth; see ``../shared/data/README.md``),
+  hence each stroke's region centre and region size (``Stroke.extent``, the bounding box
+  of its people's boxes per frame).
 * Simulated (seeded): the occlusions by the background (boxes dropped for gaps of a few
   frames) and the colours. The ground truth has no appearance, so each person gets a
   palette of ``num_colours`` distinct colours drawn from a shared pool of ``pool_size``
@@ -313,6 +315,11 @@ class Stroke:
         dominant colors is assigned to the label"). Simulated as the palette of the
         people in the region, as if extracted cleanly over the whole segment; defaults to
         ``colours``.
+    extent : ndarray, shape (num_points, 2), optional
+        Width and height in pixels of the region's box per frame (the bounding box of its
+        people's boxes), recorded by :func:`build_strokes`; the label network uses it as
+        evidence on the number of people (:func:`models.jorge.labels.size_log_likelihood`).
+        ``None``: unknown (no size evidence).
     """
 
     index: int
@@ -323,6 +330,7 @@ class Stroke:
     colours: np.ndarray
     truth: frozenset = field(default_factory=frozenset)
     palette: np.ndarray | None = None
+    extent: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.palette is None:
@@ -346,6 +354,7 @@ def make_stroke(
     colours,
     truth=frozenset(),
     pool_size: int = 12,
+    size=None,
 ) -> Stroke:
     """Build a validated stroke from its end points (for synthetic tests and users).
 
@@ -363,15 +372,18 @@ def make_stroke(
         The people in the stroke (scoring only).
     pool_size : int
         Number of colours in the pool.
+    size : array_like, shape (2,), optional
+        Width and height of the region's box, the same at every point (``Stroke.extent``);
+        ``None`` for no size.
 
     Raises
     ------
     TimeOrderError
         ``end < start``.
     InputError
-        Empty, repeated or out-of-range colours.
+        Empty, repeated or out-of-range colours; a size that is not positive.
     NonFiniteError
-        A non-finite position.
+        A non-finite position or size.
     """
     start, end = int(start), int(end)
     if end < start:
@@ -384,7 +396,18 @@ def make_stroke(
     col = _check_colours(index, colours, pool_size)
     frames = np.array([start, end]) if end > start else np.array([start])
     positions = pos if end > start else pos[:1]
-    return Stroke(index, start, end, frames, positions, col, frozenset(int(t) for t in truth))
+    extent = None
+    if size is not None:
+        wh = np.asarray(size, dtype=np.float64)
+        if wh.shape != (2,):
+            raise ShapeError(f"stroke {index}: size must have shape (2,), got {wh.shape}")
+        if not np.all(np.isfinite(wh)):
+            raise NonFiniteError(f"stroke {index}: non-finite size {wh.tolist()}")
+        if np.any(wh <= 0):
+            raise InputError(f"stroke {index}: size (width, height) must be > 0, got {wh.tolist()}")
+        extent = np.tile(wh, (positions.shape[0], 1))
+    return Stroke(index, start, end, frames, positions, col, frozenset(int(t) for t in truth),
+                  extent=extent)
 
 
 def _check_colours(index: int, colours, pool_size: int) -> np.ndarray:
@@ -616,17 +639,19 @@ def build_strokes(seed, truth: GroundTruth, config: StrokeConfig | None = None) 
         for h in np.flatnonzero(shown_head[f]):
             cols = np.flatnonzero(same[f, h])
             key = frozenset(int(ids[c]) for c in cols)
-            centre = 0.5 * (lo[f, cols].min(0) + hi[f, cols].max(0))
-            here[key] = centre
+            rlo, rhi = lo[f, cols].min(0), hi[f, cols].max(0)
+            here[key] = (0.5 * (rlo + rhi), rhi - rlo)
         for key in list(open_):
             if key not in here:
                 done.append(open_.pop(key))
-        for key, centre in here.items():
+        for key, (centre, extent) in here.items():
             if key in open_:
                 open_[key]["frames"].append(int(truth.frames[f]))
                 open_[key]["pos"].append(centre)
+                open_[key]["ext"].append(extent)
             else:
-                open_[key] = {"truth": key, "frames": [int(truth.frames[f])], "pos": [centre]}
+                open_[key] = {"truth": key, "frames": [int(truth.frames[f])], "pos": [centre],
+                              "ext": [extent]}
     done.extend(open_.values())
     done.sort(key=lambda d: (d["frames"][0], d["frames"][-1], sorted(d["truth"])))
 
@@ -640,7 +665,8 @@ def build_strokes(seed, truth: GroundTruth, config: StrokeConfig | None = None) 
     strokes = tuple(
         Stroke(k, d["frames"][0], d["frames"][-1], np.array(d["frames"], dtype=np.int64),
                np.array(d["pos"], dtype=np.float64), colours[k], d["truth"],
-               np.unique(palettes[[id_col[i] for i in d["truth"]]]))
+               np.unique(palettes[[id_col[i] for i in d["truth"]]]),
+               np.array(d["ext"], dtype=np.float64))
         for k, d in enumerate(done)
     )
     return StrokeSet(strokes, palettes.astype(np.int64), ids.copy(), config, truth.fps,
