@@ -9,9 +9,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from dbn import pgmpy_adapter
 from dbn.errors import InputError, TimeOrderError, UnknownVariableError
-from inference.exact import map_assignment
 from models.jorge.labels import LabelParams, format_label
 from models.jorge.network import LabelGraph, NetworkConfig, node_name, solve
 from models.jorge.strokes import make_stroke
@@ -94,21 +92,10 @@ def test_frozen_boundary_window_against_brute_force():
     assert res.labels[3] == frozenset({0}) and res.labels[4] == frozenset({1})
 
 
-def test_same_as_pgmpy():
+def test_same_as_pgmpy(assert_window_matches_pgmpy):
     g = _graph()
     win = g.window(range(6))
-    bn, ev = win.with_colour_nodes()
-    ours, lp = map_assignment(bn, ev)
-    assert lp == pytest.approx(solve(win).log_prob, abs=1e-9)
-    model = pgmpy_adapter.to_pgmpy(bn)
-    names_ev = {n: bn.variable(n).state_names[s] for n, s in ev.items()}
-    theirs = pgmpy_adapter.pgmpy_map(model, names_ev)
-    theirs_idx = {n: bn.variable(n).index(s) for n, s in theirs.items()}
-    assert bn.log_joint({**theirs_idx, **ev}) == pytest.approx(lp, abs=1e-9)
-    marg = pgmpy_adapter.pgmpy_marginals(model, [node_name(k) for k in range(6)], names_ev)
-    res = solve(win)
-    for k in range(6):
-        np.testing.assert_allclose(res.marginals[k], marg[node_name(k)], atol=1e-9)
+    assert_window_matches_pgmpy(win, 6)
 
 
 def test_bad_strokes_leave_the_graph_unchanged():
