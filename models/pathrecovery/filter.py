@@ -316,6 +316,20 @@ def _segments(lo: np.ndarray, cnt: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
     return owner, item, starts
 
 
+def _observations_at(
+    obs_cam: np.ndarray, cams: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The observations seen at each of ``cams`` (``obs_cam`` sorted by camera).
+
+    Returns ``(has, owner, item, starts)``: ``has`` marks the cameras with at least one
+    observation; the rest is :func:`_segments` over those cameras' observation ranges.
+    """
+    lo = np.searchsorted(obs_cam, cams, side="left")
+    hi = np.searchsorted(obs_cam, cams, side="right")
+    has = hi > lo
+    return (has, *_segments(lo[has], (hi - lo)[has]))
+
+
 def _segment_argmax(values: np.ndarray, owner: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Max and first argmax (flat index) of ``values`` over each contiguous run."""
     seg_max = np.maximum.reduceat(values, starts)
@@ -423,12 +437,9 @@ def step(
         considered = vis_idx
     w = np.zeros(n)
     assoc = np.full(n, -1, dtype=np.int64)
-    lo = np.searchsorted(obs_cam, cam[considered], side="left")
-    hi = np.searchsorted(obs_cam, cam[considered], side="right")
-    has = hi > lo
+    has, owner, item, starts = _observations_at(obs_cam, cam[considered])
     p_idx = considered[has]
     if p_idx.size:
-        owner, item, starts = _segments(lo[has], (hi - lo)[has])
         uz = _whiten(model, obs_feat[item])
         wp = net.transition_prob(src[p_idx], cam[p_idx])[owner]
         support = observation_support(model, feat[p_idx][owner], uz, wp)  # eqs. 5-6
@@ -462,12 +473,9 @@ def step(
         edges = net.sample_edges(rng, cam[vis_idx], diffusion=True)
         cam[vis_idx] = net.indices[edges]
         sw = vis_idx[rng.random(vis_idx.size) < cfg.p_switch]
-        lo = np.searchsorted(obs_cam, cam[sw], side="left")
-        hi = np.searchsorted(obs_cam, cam[sw], side="right")
-        has = hi > lo
+        has, owner, item, starts = _observations_at(obs_cam, cam[sw])
         sw = sw[has]
         if sw.size:
-            owner, item, starts = _segments(lo[has], (hi - lo)[has])
             uz = _whiten(model, obs_feat[item])
             d0 = model.u0 - uz
             # draw z with probability proportional to P_s(f0, f_z): Gumbel-max per particle
