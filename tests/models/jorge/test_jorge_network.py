@@ -6,11 +6,11 @@ import itertools
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dbn.errors import InputError, TimeOrderError, UnknownVariableError
-from models.jorge.labels import LabelParams, format_label
+from models.jorge.labels import format_label
 from models.jorge.network import LabelGraph, NetworkConfig, node_name, solve
 from models.jorge.strokes import make_stroke
 
@@ -128,20 +128,9 @@ def test_state_names_are_labels():
 
 @settings(max_examples=25, deadline=None)
 @given(data=st.data())
-def test_random_small_networks_against_brute_force(data):
+def test_random_small_networks_against_brute_force(random_window, data):
     """Random stroke layouts: MAP log probability, MAP and marginals equal enumeration."""
-    n = data.draw(st.integers(3, 6))
-    g = LabelGraph(NetworkConfig(labels=LabelParams(max_group_size=2)))
-    start = 0
-    for k in range(n):
-        start += data.draw(st.integers(0, 4))
-        length = data.draw(st.integers(0, 3))
-        x0 = data.draw(st.floats(0, 30))
-        colours = data.draw(st.lists(st.integers(0, 11), min_size=2, max_size=5, unique=True))
-        g.add_stroke(make_stroke(k, start, start + length, (x0, 0.0), (x0 + 1, 0.0), colours))
-    win = g.window(range(n))
-    size = np.prod([win.bn.cardinality(node_name(k)) for k in range(n)])
-    assume(size <= 20000)
+    win = random_window(data)
     res = solve(win)
     names, joint, best, best_lp = _brute_force(win)
     assert res.log_prob == pytest.approx(best_lp, abs=1e-9)

@@ -14,7 +14,7 @@ from scipy.integrate import quad
 from scipy.stats import norm
 
 from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
-from models.jorge.labels import LabelParams, size_log_likelihood
+from models.jorge.labels import size_log_likelihood
 from models.jorge.network import LabelGraph, NetworkConfig, node_name, solve
 from models.jorge.strokes import GroundTruth, StrokeConfig, build_strokes, make_stroke
 
@@ -231,18 +231,7 @@ def test_bad_extent_leaves_the_graph_unchanged():
 
 @settings(max_examples=25, deadline=None)
 @given(data=st.data())
-def test_random_small_networks_with_sizes_against_brute_force(data):
+def test_random_small_networks_with_sizes_against_brute_force(random_window, data):
     """Random stroke layouts and region sizes: MAP and marginals equal enumeration."""
-    n = data.draw(st.integers(3, 6))
-    g = LabelGraph(NetworkConfig(labels=LabelParams(max_group_size=2)))
-    start = 0
-    for k in range(n):
-        start += data.draw(st.integers(0, 4))
-        length = data.draw(st.integers(0, 3))
-        x0 = data.draw(st.floats(0, 30))
-        colours = data.draw(st.lists(st.integers(0, 11), min_size=2, max_size=5, unique=True))
-        size = (data.draw(st.floats(10, 120)), data.draw(st.floats(20, 120)))
-        g.add_stroke(make_stroke(k, start, start + length, (x0, 0.0), (x0 + 1, 0.0), colours, size=size))
-    win = g.window(range(n))
-    assume(np.prod([win.bn.cardinality(node_name(k)) for k in range(n)]) <= 20000)
+    win = random_window(data, with_sizes=True)
     _check_against_brute_force(win, atol=1e-10)
