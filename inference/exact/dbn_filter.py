@@ -398,6 +398,12 @@ class DBNFilter:
         """
         T, cols = self._columns(evidence, num_timesteps)
         first, rest, idx, _ = self._matrices(T, cols)
+        return self._forward(T, first, rest, idx)
+
+    def _forward(
+        self, T: int, first: np.ndarray, rest: list[np.ndarray], idx: np.ndarray
+    ) -> FilterResult:
+        """The normalised forward pass over prepared per-slice matrices."""
         # pad the slice count and the matrix stack to powers of two (identity matrices),
         # so that sequences of different lengths share a handful of compiled scans
         num = 1 << max(0, (T - 1)).bit_length()
@@ -424,8 +430,8 @@ class DBNFilter:
     ) -> SmootherResult:
         """Forward-backward: ``P(interface_t | e_{0:T-1})`` for every slice, shape (T, S)."""
         T, cols = self._columns(evidence, num_timesteps)
-        fwd = self.filter(cols, T)
-        _, rest, idx, _ = self._matrices(T, cols)
+        first, rest, idx, _ = self._matrices(T, cols)
+        fwd = self._forward(T, first, rest, idx)
         post = np.empty_like(fwd.beliefs)
         beta = np.ones(self.num_states)
         post[T - 1] = fwd.beliefs[T - 1]
