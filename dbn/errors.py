@@ -18,6 +18,7 @@ __all__ = [
     "CPDShapeError",
     "NotNormalizedError",
     "NegativeProbabilityError",
+    "FrontierTooLargeError",
     "EvidenceError",
     "InputError",
     "ShapeError",
@@ -57,6 +58,11 @@ class NotNormalizedError(ModelError):
 
 class NegativeProbabilityError(ModelError):
     """A probability table holds a negative (or NaN) entry."""
+
+
+class FrontierTooLargeError(ModelError):
+    """Exact inference would build a table larger than its memory limit; the message
+    quotes the size and names the approximate methods (Boyen-Koller, particle, RBPF)."""
 
 
 # --- evidence and data -----------------------------------------------------------------

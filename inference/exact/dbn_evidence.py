@@ -1,0 +1,149 @@
+"""Evidence of discrete DBNs turned into per-slice likelihood vectors, checked first.
+
+Every form of evidence on a discrete variable ``v`` at slice ``t`` becomes one likelihood
+vector :math:`\\lambda_{v,t}(x)` of length ``cardinality(v)``: ones where unobserved, a
+one-hot row for hard evidence, the given vector for soft (virtual) evidence, their
+product when both are given. The structured filter multiplies it into ``v``'s CPD.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from dbn.bayesnet import check_likelihood
+from dbn.errors import EvidenceError, ShapeError
+from dbn.variables import DiscreteVariable
+
+__all__ = ["sequence_likelihoods", "slice_likelihoods", "distinct_rows"]
+
+
+def _variable(variables: Mapping[str, DiscreteVariable], name: str, what: str):
+    if name not in variables:
+        raise EvidenceError(f"{what} on unknown variable {name!r} (known: {sorted(variables)})")
+    return variables[name]
+
+
+def _length(name: str, n: int, T: int | None) -> int:
+    if T is not None and n != T:
+        raise ShapeError(f"evidence column {name!r} has length {n}, expected {T}")
+    return n
+
+
+def sequence_likelihoods(
+    variables: Mapping[str, DiscreteVariable],
+    evidence: Mapping[str, ArrayLike] | None,
+    soft_evidence: Mapping[str, ArrayLike] | None = None,
+    num_timesteps: int | None = None,
+) -> tuple[int, dict[str, np.ndarray]]:
+    """Check columnar evidence and turn it into likelihoods.
+
+    Parameters
+    ----------
+    variables : mapping name -> DiscreteVariable
+    evidence : mapping name -> int array, shape (T,)
+        Observed state per slice, ``-1`` where unobserved.
+    soft_evidence : mapping name -> float array, shape (T, cardinality), optional
+        A likelihood row per slice (nonnegative, finite, not all zero); a row of NaN means
+        no soft evidence on that slice.
+    num_timesteps : int, optional
+        ``T``; needed only without any column.
+
+    Returns
+    -------
+    T : int
+    lam : dict name -> float array, shape (T, cardinality)
+
+    Raises
+    ------
+    EvidenceError, ShapeError
+        Unknown variable, non-integer states, a state out of range, lengths that differ,
+        a soft row of the wrong shape or not a likelihood.
+    """
+    T = num_timesteps
+    lam: dict[str, np.ndarray] = {}
+    for name, col in (evidence or {}).items():
+        k = _variable(variables, name, "evidence").cardinality
+        arr = np.asarray(col)
+        if arr.ndim != 1:
+            raise ShapeError(f"evidence column {name!r} must be 1-D (T,), got shape {arr.shape}")
+        if not np.issubdtype(arr.dtype, np.integer):
+            raise EvidenceError(
+                f"evidence column {name!r} must hold integer states (-1 = unobserved), "
+                f"got dtype {arr.dtype}"
+            )
+        T = _length(name, arr.shape[0], T)
+        bad = (arr < -1) | (arr >= k)
+        if bad.any():
+            t = int(np.argmax(bad))
+            raise EvidenceError(
+                f"evidence column {name!r}: state {int(arr[t])} at slice {t} out of range -1..{k - 1}"
+            )
+        rows = np.ones((arr.shape[0], k))
+        seen = arr >= 0
+        rows[seen] = np.eye(k)[arr[seen]]
+        lam[name] = rows
+    for name, col in (soft_evidence or {}).items():
+        k = _variable(variables, name, "soft evidence").cardinality
+        arr = np.asarray(col, dtype=np.float64)
+        if arr.ndim != 2 or arr.shape[1] != k:
+            raise ShapeError(
+                f"soft evidence {name!r} must have shape (T, {k}), got shape {arr.shape}"
+            )
+        T = _length(name, arr.shape[0], T)
+        none = np.all(np.isnan(arr), axis=1)
+        rows = np.where(none[:, None], 1.0, arr)
+        ok = np.all(np.isfinite(rows) & (rows >= 0), axis=1) & np.any(rows > 0, axis=1)
+        if not ok.all():
+            t = int(np.argmin(ok))
+            raise EvidenceError(
+                f"soft evidence {name!r} at slice {t}: {arr[t]} is not a likelihood "
+                "(finite, nonnegative, not all zero; all-NaN = none)"
+            )
+        lam[name] = lam[name] * rows if name in lam else rows
+    if T is None or T < 1:
+        raise ShapeError("filtering needs num_timesteps >= 1 (give it or an evidence column)")
+    return int(T), lam
+
+
+def slice_likelihoods(
+    variables: Mapping[str, DiscreteVariable],
+    evidence: Mapping[str, int | str] | None,
+    soft_evidence: Mapping[str, ArrayLike] | None = None,
+) -> dict[str, np.ndarray]:
+    """One slice's evidence (name -> state, name -> likelihood vector) as likelihoods,
+    each of shape (1, cardinality)."""
+    lam: dict[str, np.ndarray] = {}
+    for name, state in (evidence or {}).items():
+        v = _variable(variables, name, "evidence")
+        lam[name] = np.eye(v.cardinality)[v.index(state)][None]
+    for name, vec in (soft_evidence or {}).items():
+        v = _variable(variables, name, "soft evidence")
+        row = check_likelihood(name, v.cardinality, vec)[None]
+        lam[name] = lam[name] * row if name in lam else row
+    return lam
+
+
+def distinct_rows(lam: Mapping[str, np.ndarray], names: tuple[str, ...], start: int, stop: int):
+    """The distinct evidence rows of slices ``start..stop-1``.
+
+    Returns
+    -------
+    rows : dict name -> (R, cardinality)
+        One likelihood per distinct row.
+    inverse : int array, shape (stop - start,)
+        The distinct row of every slice.
+    """
+    n = stop - start
+    if not names:
+        return {}, np.zeros(n, np.int64)
+    mat = np.concatenate([lam[v][start:stop] for v in names], axis=1)
+    uniq, inverse = np.unique(mat, axis=0, return_inverse=True)
+    rows, col = {}, 0
+    for v in names:
+        k = lam[v].shape[1]
+        rows[v] = uniq[:, col : col + k]
+        col += k
+    return rows, np.asarray(inverse).reshape(-1)
