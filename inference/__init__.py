@@ -10,3 +10,12 @@ for explicitly by dtype.
 import jax
 
 jax.config.update("jax_enable_x64", True)
+
+
+# --- lazy entry points (issue 11): ``inference.filter`` without importing every engine ---
+def __getattr__(name: str):
+    if name in ("filter", "online_filter"):
+        from inference import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'inference' has no attribute {name!r}")

@@ -1,0 +1,245 @@
+"""One entry point for filtering any declared DBN: :func:`filter` (exact, Boyen-Koller,
+particle, Rao-Blackwellised particle), and :func:`online_filter` for step-by-step use.
+
+::
+
+    res = inference.filter(dbn, {"y0": ys[:, 0], "y1": ys[:, 1]})   # method="auto"
+    res.marginals["x0"]          # (T, 2) filtered marginals
+    res.method, res.info["auto"] # which engine ran, and why
+
+``auto`` runs exact structured filtering when its predicted largest table (the frontier)
+fits under ``max_size``, else Boyen-Koller; for DBNs with continuous variables it runs the
+bootstrap particle filter (which needs ``key``). The approximate engines live in
+:mod:`inference.adf.boyen_koller`, :mod:`inference.particle.dbn_adapter` and
+:mod:`inference.particle.rbpf` and are imported only when asked for.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from dbn.dbn import TwoSliceDBN
+from dbn.errors import (
+    EvidenceError,
+    InputError,
+    ModelError,
+    NonFiniteError,
+    ShapeError,
+)
+from dbn.variables import DiscreteVariable
+from inference.exact.frontier import MAX_FRONTIER_SIZE
+from inference.results import DBNFilterResult
+
+__all__ = ["filter", "online_filter", "as_two_slice_dbn", "METHODS"]
+
+METHODS = ("auto", "exact", "bk", "particle", "rbpf")
+_OPTIONS = {
+    "exact": {"max_size"},
+    "bk": {"clusters", "max_size"},
+    "particle": {"num_particles", "particle_method", "max_size"},
+    "rbpf": {"num_particles", "max_size"},
+}
+_UNBOUNDED = 2**62
+
+
+def as_two_slice_dbn(model: Any) -> TwoSliceDBN:
+    """A :class:`TwoSliceDBN` as is, or a pgmpy ``DynamicBayesianNetwork`` converted by
+    :func:`dbn.pgmpy_adapter.dbn_from_pgmpy` (node names become ``str``)."""
+    if isinstance(model, TwoSliceDBN):
+        return model
+    if (
+        type(model).__module__.startswith("pgmpy")
+        and type(model).__name__ == "DynamicBayesianNetwork"
+    ):
+        from dbn.pgmpy_adapter import dbn_from_pgmpy
+
+        return dbn_from_pgmpy(model)
+    raise ModelError(
+        f"model must be a TwoSliceDBN or a pgmpy DynamicBayesianNetwork, got {type(model).__name__}"
+    )
+
+
+def _check_evidence(
+    dbn: TwoSliceDBN, evidence: Mapping[str, ArrayLike] | None, soft: Mapping[str, ArrayLike] | None
+) -> None:
+    """Names, shapes and lengths of every column (discrete ones are checked in full by the
+    exact engine's :func:`~inference.exact.dbn_evidence.sequence_likelihoods`)."""
+    variables = {v.name: v for v in dbn.variables}
+    if evidence is not None and not isinstance(evidence, Mapping):
+        raise EvidenceError(
+            f"evidence must be a mapping name -> column, got {type(evidence).__name__}"
+        )
+    lengths: dict[str, int] = {}
+    for name, col in {**(evidence or {}), **(soft or {})}.items():
+        if name not in variables:
+            raise EvidenceError(
+                f"evidence on unknown variable {name!r} (known: {sorted(variables)})"
+            )
+        v = variables[name]
+        arr = np.asarray(col)
+        if isinstance(v, DiscreteVariable):
+            lengths[name] = arr.shape[0] if arr.ndim else -1
+            continue
+        if name in (soft or {}):
+            raise EvidenceError(f"soft evidence on continuous variable {name!r} is not supported")
+        if arr.ndim != 2 or arr.shape[1] != v.dim:
+            raise ShapeError(f"evidence {name!r} must have shape (T, {v.dim}), got {arr.shape}")
+        arr = arr.astype(np.float64)
+        nan = np.isnan(arr)
+        partial = nan.any(axis=1) & ~nan.all(axis=1)
+        if partial.any() or np.isinf(arr).any():
+            t = int(np.argmax(partial | np.isinf(arr).any(axis=1)))
+            raise NonFiniteError(
+                f"evidence {name!r} at slice {t}: {arr[t]} (a missing row must be all NaN)"
+            )
+        lengths[name] = arr.shape[0]
+    if len(set(lengths.values())) > 1:
+        raise ShapeError(f"evidence columns have different lengths: {lengths}")
+
+
+def _choose(dbn: TwoSliceDBN, evars: Sequence[str], query, max_size: int) -> tuple[str, dict]:
+    """(method, info) for ``auto``."""
+    if not all(isinstance(v, DiscreteVariable) for v in dbn.variables):
+        cont = [v.name for v in dbn.variables if not isinstance(v, DiscreteVariable)]
+        return "particle", {
+            "auto": f"continuous variables {cont}: exact and Boyen-Koller need discrete DBNs; "
+            "ran the bootstrap particle filter (ask for method='rbpf' on conditionally "
+            "linear-Gaussian models)"
+        }
+    from inference.exact.structured_filter import StructuredFilter
+
+    size = StructuredFilter(dbn, query, max_size=_UNBOUNDED).predicted_size(evars)
+    info = {"predicted_size": size, "max_size": max_size}
+    if size <= max_size:
+        info["auto"] = f"exact: the largest table per slice has {size:,} entries <= {max_size:,}"
+        return "exact", info
+    info["auto"] = (
+        f"bk: exact filtering would need a table of {size:,} entries > max_size {max_size:,}"
+    )
+    return "bk", info
+
+
+def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this module only)
+    model: Any,
+    evidence: Mapping[str, ArrayLike] | None,
+    method: str = "auto",
+    query: Sequence[str] | None = None,
+    *,
+    key: Any = None,
+    soft_evidence: Mapping[str, ArrayLike] | None = None,
+    num_timesteps: int | None = None,
+    **options: Any,
+) -> DBNFilterResult:
+    """Filter a DBN over a whole evidence sequence with one of the generic engines.
+
+    Parameters
+    ----------
+    model : TwoSliceDBN or pgmpy DynamicBayesianNetwork
+    evidence : mapping name -> array
+        Columnar evidence: discrete ``name -> (T,) int`` (``-1`` = unobserved), continuous
+        ``name -> (T, dim) float`` (a row of NaN = unobserved).
+    method : {"auto", "exact", "bk", "particle", "rbpf"}
+    query : sequence of str, optional
+        Variables whose marginals are returned (default: the engine's default, the
+        interface for exact filtering).
+    key : jax PRNG key
+        Required by ``particle`` and ``rbpf`` (and ``auto`` on continuous models).
+    soft_evidence : mapping name -> (T, cardinality) float, optional
+        Likelihood rows on discrete variables (all-NaN row = none): exact and bk only.
+    num_timesteps : int, optional
+        ``T`` when no evidence column gives it (exact only).
+    **options
+        ``max_size`` (largest exact table, entries; default
+        :data:`~inference.exact.frontier.MAX_FRONTIER_SIZE`), ``clusters`` (bk),
+        ``num_particles`` (particle, rbpf), ``particle_method`` (particle: passed as the
+        adapter's ``method``, e.g. ``"bootstrap"``).
+
+    Returns
+    -------
+    DBNFilterResult
+        ``method`` says which engine ran; ``info["auto"]`` why ``auto`` chose it.
+
+    Raises
+    ------
+    ModelError, EvidenceError, ShapeError, InputError
+        Bad model, evidence, method or option, before any engine runs;
+        :class:`~dbn.errors.FrontierTooLargeError` for ``exact`` above ``max_size``.
+    """
+    dbn = as_two_slice_dbn(model)
+    if method not in METHODS:
+        raise InputError(f"method must be one of {METHODS}, got {method!r}")
+    _check_evidence(dbn, evidence, soft_evidence)
+    max_size = int(options.get("max_size", MAX_FRONTIER_SIZE))
+    info: dict[str, Any] = {}
+    if method == "auto":
+        evars = [*(evidence or {}), *(soft_evidence or {})]
+        method, info = _choose(dbn, evars, query, max_size)
+    unknown = set(options) - _OPTIONS[method]
+    if unknown:
+        raise InputError(f"options {sorted(unknown)} do not apply to method {method!r}")
+    if method in ("particle", "rbpf"):
+        if key is None:
+            raise InputError(
+                f"method {method!r} needs a PRNG key: filter(..., key=jax.random.key(0))"
+            )
+        if soft_evidence:
+            raise InputError(f"method {method!r} takes no soft evidence")
+    res = _dispatch(
+        method, dbn, evidence, query, key, soft_evidence, num_timesteps, options, max_size
+    )
+    return dataclasses.replace(res, info={**res.info, **info})
+
+
+def _dispatch(method, dbn, evidence, query, key, soft, num_timesteps, options, max_size):
+    if method == "exact":
+        from inference.exact.structured_filter import StructuredFilter
+
+        flt = StructuredFilter(dbn, query, max_size=max_size)
+        res = flt.filter(evidence, soft, num_timesteps)
+        evars = [*(evidence or {}), *(soft or {})]
+        plan = flt._plan("next", frozenset(evars))
+        return DBNFilterResult(
+            marginals=res.marginals,
+            log_likelihoods=res.log_normalizers,
+            method="exact",
+            info={
+                "predicted_size": flt.predicted_size(evars),
+                "interface": flt.interface,
+                "elimination_order": plan.order,
+            },
+        )
+    if method == "bk":
+        from inference.adf.boyen_koller import bk_filter
+
+        return bk_filter(dbn, evidence, query, clusters=options.get("clusters"), soft_evidence=soft)
+    if method == "particle":
+        from inference.particle.dbn_adapter import particle_filter_dbn
+
+        kw = {"num_particles": int(options.get("num_particles", 1000))}
+        if "particle_method" in options:
+            kw["method"] = options["particle_method"]
+        return particle_filter_dbn(key, dbn, evidence, query, **kw)
+    from inference.particle.rbpf import rbpf_filter_dbn
+
+    return rbpf_filter_dbn(
+        key, dbn, evidence, query, num_particles=int(options.get("num_particles", 1000))
+    )
+
+
+def online_filter(
+    model: Any, query: Sequence[str] | None = None, *, max_size: int = MAX_FRONTIER_SIZE
+):
+    """The exact structured filter of a model for on-line use (``init`` / ``step`` /
+    ``marginals``); see :class:`~inference.exact.structured_filter.StructuredFilter`.
+
+    Raises :class:`~dbn.errors.FrontierTooLargeError` when exact filtering does not fit
+    (then use Boyen-Koller's or the particle filters' own on-line objects).
+    """
+    from inference.exact.structured_filter import StructuredFilter
+
+    return StructuredFilter(as_two_slice_dbn(model), query, max_size=max_size)

@@ -1,0 +1,167 @@
+"""``inference.filter``: one entry point, dispatch, ``auto``'s choice, pgmpy models in,
+bad input out. The approximate engines are stubbed here (they have their own tests)."""
+
+from __future__ import annotations
+
+import sys
+import types
+
+import numpy as np
+import pytest
+
+import inference
+from dbn import pgmpy_adapter as pa
+from dbn.cpds import LinearGaussianCPD
+from dbn.dbn import TwoSliceDBN, prev
+from dbn.errors import (
+    EvidenceError,
+    FrontierTooLargeError,
+    InputError,
+    ModelError,
+    NonFiniteError,
+    ShapeError,
+)
+from dbn.examples import coupled_chains, sample_coupled_chains
+from dbn.variables import ContinuousVariable
+from inference import api
+from inference.exact.dbn_filter import DBNFilter
+from inference.results import DBNFilterResult
+
+
+def _chains(n: int, T: int, seed: int = 0):
+    _, ys = sample_coupled_chains(np.random.default_rng(seed), n, T)
+    return coupled_chains(n), {f"y{i}": ys[:, i] for i in range(n)}
+
+
+def _stub(monkeypatch, module: str, fn: str, calls: list) -> None:
+    def engine(*args, **kwargs):
+        calls.append((args, kwargs))
+        T = len(next(iter(args[-2 if fn == "bk_filter" else -2].values())))
+        return DBNFilterResult({}, np.zeros(T), fn, info={"stub": True})
+
+    mod = types.ModuleType(module)
+    setattr(mod, fn, engine)
+    monkeypatch.setitem(sys.modules, module, mod)
+
+
+def test_exact_is_lazily_exported_and_equals_the_dense_engine() -> None:
+    assert inference.filter is api.filter
+    dbn, ev = _chains(4, 30)
+    res = inference.filter(dbn, ev, method="exact")
+    dense = DBNFilter(dbn)
+    ref = dense.filter(ev)
+    assert res.method == "exact" and res.num_timesteps == 30
+    assert abs(res.log_likelihood - ref.log_likelihood) < 1e-9
+    for i in range(4):
+        np.testing.assert_allclose(
+            res.marginals[f"x{i}"], dense.marginals_of(ref.beliefs, f"x{i}"), atol=1e-9
+        )
+    auto = inference.filter(dbn, ev)
+    assert (
+        auto.method == "exact"
+        and "exact" in auto.info["auto"]
+        and auto.info["predicted_size"] == 16
+    )
+    np.testing.assert_allclose(auto.marginals["x3"], res.marginals["x3"], atol=0)
+
+
+def test_pgmpy_dbn_in_gives_the_same_result() -> None:
+    dbn, ev = _chains(2, 12)
+    ours = inference.filter(dbn, ev, query=["x1", "y0"])
+    theirs = inference.filter(pa.dbn_to_pgmpy(dbn), ev, query=["x1", "y0"])
+    for name in ("x1", "y0"):
+        np.testing.assert_allclose(theirs.marginals[name], ours.marginals[name], atol=1e-12)
+    assert abs(theirs.log_likelihood - ours.log_likelihood) < 1e-12
+
+
+def test_auto_falls_back_to_boyen_koller_and_says_why(monkeypatch) -> None:
+    calls: list = []
+    _stub(monkeypatch, "inference.adf.boyen_koller", "bk_filter", calls)
+    dbn, ev = _chains(26, 5)
+    with pytest.raises(FrontierTooLargeError, match="bk"):
+        inference.filter(dbn, ev, method="exact")
+    res = inference.filter(dbn, ev, clusters=[["x0"]])
+    assert res.method == "bk_filter" and res.info["stub"]
+    assert res.info["auto"].startswith("bk") and "67,108,864" in res.info["auto"]
+    ((args, kwargs),) = calls
+    assert args[0] is dbn and args[1] is ev and kwargs["clusters"] == [["x0"]]
+    small = inference.filter(*_chains(3, 5), max_size=4)  # the limit decides
+    assert small.method == "bk_filter" and small.info["predicted_size"] == 8
+
+
+def test_particle_and_rbpf_dispatch_with_the_key_first(monkeypatch) -> None:
+    calls: list = []
+    _stub(monkeypatch, "inference.particle.dbn_adapter", "particle_filter_dbn", calls)
+    _stub(monkeypatch, "inference.particle.rbpf", "rbpf_filter_dbn", calls)
+    dbn, ev = _chains(2, 4)
+    with pytest.raises(InputError, match="key"):
+        inference.filter(dbn, ev, method="particle")
+    inference.filter(
+        dbn, ev, method="particle", key="K", num_particles=50, particle_method="auxiliary"
+    )
+    inference.filter(dbn, ev, method="rbpf", key="K", query=["x0"], num_particles=7)
+    (a1, k1), (a2, k2) = calls
+    assert a1[:3] == ("K", dbn, ev) and k1 == {"num_particles": 50, "method": "auxiliary"}
+    assert a2 == ("K", dbn, ev, ["x0"]) and k2 == {"num_particles": 7}
+
+
+def _switching_lg() -> TwoSliceDBN:
+    x, y = ContinuousVariable("x", 1), ContinuousVariable("y", 1)
+    return TwoSliceDBN(
+        [x, y],
+        [
+            LinearGaussianCPD("x", [], [], [0.0], [[1.0]]),
+            LinearGaussianCPD("y", ["x"], [[[1.0]]], [0.0], [[0.5]]),
+        ],
+        [
+            LinearGaussianCPD("x", [prev("x")], [[[0.9]]], [0.0], [[0.1]]),
+            LinearGaussianCPD("y", ["x"], [[[1.0]]], [0.0], [[0.5]]),
+        ],
+    )
+
+
+def test_continuous_models_go_to_the_particle_filter_and_evidence_is_checked(monkeypatch) -> None:
+    calls: list = []
+    _stub(monkeypatch, "inference.particle.dbn_adapter", "particle_filter_dbn", calls)
+    dbn = _switching_lg()
+    ys = np.array([[0.1], [np.nan], [0.3]])
+    res = inference.filter(dbn, {"y": ys}, key="K")
+    assert res.method == "particle_filter_dbn" and "continuous" in res.info["auto"]
+    with pytest.raises(NonFiniteError, match="slice 1"):
+        inference.filter(dbn, {"y": np.array([[0.1], [np.inf], [0.2]])}, key="K")
+    with pytest.raises(ShapeError, match=r"\(T, 1\)"):
+        inference.filter(dbn, {"y": np.zeros(3)}, key="K")
+    with pytest.raises(ModelError, match="continuous"):
+        inference.filter(dbn, {"y": ys}, method="exact")
+    assert len(calls) == 1
+
+
+def test_bad_input_raises_before_any_engine_runs(monkeypatch) -> None:
+    calls: list = []
+    _stub(monkeypatch, "inference.adf.boyen_koller", "bk_filter", calls)
+    dbn, ev = _chains(2, 5)
+    with pytest.raises(InputError, match="method"):
+        inference.filter(dbn, ev, method="magic")
+    with pytest.raises(EvidenceError, match="unknown variable 'z'"):
+        inference.filter(dbn, {"z": np.zeros(5, int)}, method="bk")
+    with pytest.raises(ShapeError, match="lengths"):
+        inference.filter(dbn, {"y0": np.zeros(5, int), "y1": np.zeros(4, int)}, method="bk")
+    with pytest.raises(InputError, match="num_particles"):
+        inference.filter(dbn, ev, method="bk", num_particles=3)
+    with pytest.raises(ModelError, match="TwoSliceDBN"):
+        inference.filter(dbn.unroll(2), ev)
+    with pytest.raises(InputError, match="soft"):
+        inference.filter(dbn, ev, method="particle", key="K", soft_evidence={"y0": np.ones((5, 2))})
+    assert calls == []
+
+
+def test_online_filter_steps_equal_the_batch_run() -> None:
+    dbn, ev = _chains(3, 6)
+    res = inference.filter(dbn, ev, method="exact")
+    flt = inference.online_filter(dbn)
+    state = None
+    for t in range(6):
+        row = {n: int(c[t]) for n, c in ev.items()}
+        state = flt.init(row) if state is None else flt.step(state, row)
+    assert abs(state.log_likelihood - res.log_likelihood) < 1e-12
+    np.testing.assert_allclose(flt.marginals(state)["x2"], res.marginals["x2"][-1], atol=1e-12)
