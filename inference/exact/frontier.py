@@ -237,6 +237,7 @@ def compile_slice_plan(
     keep: tuple[str, ...],
     *,
     limit: int = MAX_FRONTIER_SIZE,
+    input_static: bool = False,
 ) -> SlicePlan:
     """Compile the elimination plan of one slice.
 
@@ -252,6 +253,9 @@ def compile_slice_plan(
         Variables left in the result, in this axis order.
     limit : int
         Largest table (entries) allowed.
+    input_static : bool
+        The message is a constant (e.g. an identity that turns the plan into the dense
+        per-slice matrix), so every op is static.
 
     Raises
     ------
@@ -268,7 +272,7 @@ def compile_slice_plan(
         factors[s] = b.scopes[s]
     input_slot = None
     if input_scope is not None:
-        input_slot = b.slot(tuple(input_scope), False)
+        input_slot = b.slot(tuple(input_scope), input_static)
         factors[input_slot] = tuple(input_scope)
     todo = {v for sc in factors.values() for v in sc} - set(keep)
     order: list[str] = []

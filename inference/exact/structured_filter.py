@@ -40,6 +40,10 @@ from inference.exact.frontier import MAX_FRONTIER_SIZE, SlicePlan, barren, compi
 __all__ = ["StructuredFilter", "FrontierState", "StructuredResult", "SmoothedResult"]
 
 _BLOCK_ENTRIES = 2**22  # entries of per-block buffers (32 MiB)
+_SOURCE = prev("[source]")  # the extra axis of the dense plan (no variable can be named so)
+DENSE_LIMIT = 2**12
+"""Interfaces with ``S * S <= DENSE_LIMIT`` joint states run each slice as one ``S x S``
+matrix-vector product, the matrix built by the same plan once per distinct evidence row."""
 
 
 class FrontierState(NamedTuple):
@@ -105,6 +109,9 @@ class StructuredFilter:
         non-interface variable adds its axis to the slice's output table.
     max_size : int
         Largest table (entries) a slice may allocate.
+    dense_limit : int
+        Small interfaces (``S * S <= dense_limit``, no extra query variable) run the
+        forward pass as per-row ``S x S`` matrices built by the plan; 0 turns it off.
 
     Raises
     ------
@@ -121,6 +128,7 @@ class StructuredFilter:
         query: Sequence[str] | None = None,
         *,
         max_size: int = MAX_FRONTIER_SIZE,
+        dense_limit: int = DENSE_LIMIT,
     ) -> None:
         if not isinstance(dbn, TwoSliceDBN):
             raise ModelError(f"expected a TwoSliceDBN, got {type(dbn).__name__}")
@@ -144,6 +152,9 @@ class StructuredFilter:
         self.cards = {n: v.cardinality for n, v in self.variables.items()}
         self.cards.update({prev(n): self.cards[n] for n in self.interface})
         self.iface_shape = tuple(self.cards[n] for n in self.interface)
+        self.num_states = int(np.prod(self.iface_shape, dtype=np.int64))
+        self.cards[_SOURCE] = self.num_states
+        self._dense = not self.extras and self.num_states**2 <= dense_limit
         self._tables = [
             {n: dbn.initial_net.table(n) for n in dbn.names},
             {n: dbn.transition_net.table(n) for n in dbn.names},
@@ -160,7 +171,8 @@ class StructuredFilter:
 
     # --- plans --------------------------------------------------------------------------
     def _plan(self, kind: str, evars: frozenset[str]) -> SlicePlan:
-        """kind: "first" / "next" (forward), "back" (backward message), "max0" / "max"."""
+        """kind: "first" / "next" / "dense" (forward), "back" (backward message),
+        "max0" / "max" (Viterbi)."""
         key = (kind, evars)
         if key in self._plans:
             return self._plans[key]
@@ -177,6 +189,15 @@ class StructuredFilter:
         if kind == "back":
             plan = compile_slice_plan(
                 cpds, self.cards, self.interface, prev_scope, limit=self.max_size
+            )
+        elif kind == "dense":
+            plan = compile_slice_plan(
+                cpds,
+                self.cards,
+                (_SOURCE, *prev_scope),
+                (_SOURCE, *self.interface),
+                limit=self.max_size,
+                input_static=True,
             )
         else:
             plan = compile_slice_plan(
@@ -196,6 +217,9 @@ class StructuredFilter:
     def _static(self, plan: SlicePlan, first: bool, rows: Mapping[str, np.ndarray], R: int):
         """Slot values of the static part for ``R`` distinct evidence rows (leading axis)."""
         vals: list = [None] * len(plan.scopes)
+        if plan.input_slot is not None and plan.static[plan.input_slot]:  # the dense plan
+            eye = np.eye(self.num_states).reshape(1, self.num_states, *self.iface_shape)
+            vals[plan.input_slot] = eye
         tables = self._tables[0 if first else 1]
         for v, s in plan.base:
             t = tables[v]
@@ -229,7 +253,11 @@ class StructuredFilter:
         normalisers into ``norms``; returns the last belief."""
         names = tuple(sorted(evars))
         rows, inverse = distinct_rows(lam, names, start, stop)
-        vals = self._static(plan, first, rows, int(inverse.max()) + 1 if len(inverse) else 1)
+        R = int(inverse.max()) + 1 if len(inverse) else 1
+        if self._dense and not first:
+            plan = self._plan("dense", evars)
+            return self._run_dense(plan, rows, inverse, R, msg, buf, norms, start)
+        vals = self._static(plan, first, rows, R)
         ops, static_out = self._dynamic(plan)
         inp, out = plan.input_slot, plan.output_slot
         split = int(np.prod(self.iface_shape, dtype=np.int64))
@@ -254,6 +282,23 @@ class StructuredFilter:
             )
         return msg
 
+    def _run_dense(self, plan, rows, inverse, R, msg, buf, norms, start):
+        """The forward pass as ``a_t = a_{t-1} M_r / z_t`` with one matrix per row."""
+        S = self.num_states
+        mats = self._static(plan, False, rows, R)[plan.output_slot].reshape(R, S, S)
+        a = msg.reshape(S)
+        flat = buf.reshape(buf.shape[0], S)
+        for k in range(buf.shape[0]):
+            b = a @ mats[inverse[k]]
+            z = b.sum()
+            if not z > 0.0:
+                raise EvidenceError(
+                    f"the evidence of slice {start + k} has probability zero given the past"
+                )
+            norms[k] = z
+            a = np.multiply(b, 1.0 / z, out=flat[k])
+        return a.reshape(self.iface_shape)
+
     def _forward(self, T: int, lam: dict[str, np.ndarray], store: np.ndarray | None = None):
         """Whole-sequence forward pass in blocks; marginals, normalisers, last state."""
         evars = frozenset(lam)
@@ -261,6 +306,8 @@ class StructuredFilter:
         out_shape = tuple(self.cards[n] for n in plans[1].output_scope)
         size = max(1, int(np.prod(out_shape, dtype=np.int64)))
         block = max(1, min(T, _BLOCK_ENTRIES // size, 4096))
+        if self._dense:
+            block = max(1, min(block, _BLOCK_ENTRIES // max(1, self.num_states**2)))
         marg = {q: np.empty((T, self.cards[q])) for q in self.query}
         norms = np.empty(T)
         msg = None

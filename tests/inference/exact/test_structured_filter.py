@@ -98,6 +98,10 @@ def test_filter_smoother_viterbi_equal_brute_force_on_the_unrolled_net(seed: int
         return
     res = flt.filter(hard, soft, T)
     assert abs(res.log_likelihood - logz) < TOL
+    small = StructuredFilter(dbn).filter(hard, soft, T)  # interface only: the dense path
+    np.testing.assert_allclose(small.log_normalizers, res.log_normalizers, atol=TOL, rtol=0)
+    for n in dbn.interface:
+        np.testing.assert_allclose(small.marginals[n], res.marginals[n], atol=TOL, rtol=0)
     sm = flt.smooth(hard, soft, T)
     assert abs(sm.log_likelihood - logz) < TOL
     for t in range(T):
@@ -125,7 +129,8 @@ def test_equals_dbn_filter_and_online_steps_equal_batch(seed: int, T: int) -> No
     dbn = random_dbn(seed)
     hard, _ = random_evidence(seed + 2, dbn, T)
     dense = DBNFilter(dbn)
-    flt = StructuredFilter(dbn)
+    flt = StructuredFilter(dbn, dense_limit=0)  # the einsum plan at every slice
+    small = StructuredFilter(dbn)  # small interfaces: one matrix per distinct row
     try:
         ref = dense.filter(hard, num_timesteps=T)
     except EvidenceError:
@@ -134,6 +139,10 @@ def test_equals_dbn_filter_and_online_steps_equal_batch(seed: int, T: int) -> No
         return
     res = flt.filter(hard, num_timesteps=T)
     assert abs(res.log_likelihood - ref.log_likelihood) < TOL
+    res_small = small.filter(hard, num_timesteps=T)
+    np.testing.assert_allclose(res_small.log_normalizers, ref.log_normalizers, atol=TOL, rtol=0)
+    for n in flt.interface:
+        np.testing.assert_allclose(res_small.marginals[n], res.marginals[n], atol=TOL, rtol=0)
     np.testing.assert_allclose(res.log_normalizers, ref.log_normalizers, atol=TOL, rtol=0)
     for n in flt.interface:
         np.testing.assert_allclose(res.marginals[n], dense.marginals_of(ref.beliefs, n), atol=TOL)
