@@ -152,7 +152,9 @@ class DBNFilter:
         if size > MAX_LOCAL_SIZE:
             raise ModelError(
                 f"the local table of one slice would have {size} entries (> {MAX_LOCAL_SIZE}): "
-                "the interface or the slice is too large for exact filtering"
+                "the interface or the slice is too large for this dense engine; the "
+                "structured one (inference.exact.structured_filter.StructuredFilter, or "
+                "inference.filter(model, evidence, method='exact')) never builds it"
             )
         # the state of each interface variable in every joint interface state
         grids = (
