@@ -87,7 +87,8 @@ class SlicePlan:
         Whether each slot depends on the evidence only.
     base : tuple of (str, int)
         ``(variable, slot)``: the slot holding ``P(v | pa(v)) lambda_v`` (axes: the CPD's
-        parents, then ``v``).
+        parents, then ``v``). A static slot that is neither a base factor nor an op's
+        output (nor a static input) is the constant 1 over its scope.
     input_slot : int or None
         Slot of the incoming message (None: none, the first slice).
     ops : tuple of Op
@@ -290,8 +291,9 @@ def compile_slice_plan(
         order.append(v)
         _absorb(factors, b)
     rest = list(factors)
-    if not rest:
-        rest = [b.slot((), True)]  # the constant 1 (nothing left to multiply)
+    loose = tuple(v for v in keep if not any(v in sc for sc in factors.values()))
+    if loose or not rest:  # kept variables no factor mentions: a constant 1 over them
+        rest.append(b.slot(loose, True))
     if len(rest) == 1 and b.scopes[rest[0]] == tuple(keep):
         output = rest[0]
     else:

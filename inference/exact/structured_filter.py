@@ -234,7 +234,7 @@ class StructuredFilter:
         for s, st in enumerate(plan.static):
             if st:
                 if vals[s] is None:  # the constant 1
-                    vals[s] = np.ones((1,))
+                    vals[s] = np.ones((1, *(self.cards[v] for v in plan.scopes[s])))
                 if vals[s].shape[0] != R:
                     vals[s] = np.broadcast_to(vals[s], (R, *vals[s].shape[1:]))
         return vals

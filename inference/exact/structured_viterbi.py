@@ -32,7 +32,7 @@ def _max_slice(flt, plan, first: bool, lam_t: dict[str, np.ndarray], delta):
         vals[plan.input_slot] = delta
     for s, st in enumerate(plan.static):
         if st and vals[s] is None and not any(op.output == s for op in plan.ops):
-            vals[s] = np.ones(())
+            vals[s] = np.ones([flt.cards[v] for v in plan.scopes[s]])
     args: dict[int, np.ndarray] = {}
     for k, op in enumerate(plan.ops):
         operands = [vals[i] for i in op.inputs]

@@ -238,3 +238,26 @@ def test_bad_input_raises_before_any_state_changes() -> None:
         TwoSliceDBN(
             [x], [TabularCPD("x", [], [0.5, 0.5])], [TabularCPD("x", [prev("w")], np.eye(2))]
         )
+
+
+def test_interface_variable_whose_only_child_is_barren_smooths_like_brute_force() -> None:
+    # c is in the interface only through b (never observed, not in the interface), so the
+    # backward plan drops b and keeps prev(c) through a constant factor
+    a, c = DiscreteVariable("a", 2), DiscreteVariable("c", 2)
+    b, y = DiscreteVariable("b", 3), DiscreteVariable("y", 2)
+    rng = np.random.default_rng(0)
+    pb = rng.dirichlet(np.ones(3), 2)
+    py = rng.dirichlet(np.ones(2), (2, 2))
+    init = [TabularCPD("a", [], [0.3, 0.7]), TabularCPD("c", [], [0.6, 0.4])]
+    init += [TabularCPD("b", ["c"], pb), TabularCPD("y", ["a", "c"], py)]
+    trans = [TabularCPD("a", [prev("a")], [[0.8, 0.2], [0.1, 0.9]]), init[1]]
+    trans += [TabularCPD("b", [prev("c")], pb), init[3]]
+    dbn = TwoSliceDBN([a, c, b, y], init, trans)
+    assert dbn.interface == ("a", "c")
+    ys = np.array([0, 1, 1, 0])
+    sm = StructuredFilter(dbn).smooth({"y": ys})
+    full, logz = brute_force_marginals(dbn.unroll(4), {f"y_{t}": int(ys[t]) for t in range(4)})
+    assert abs(sm.log_likelihood - logz) < TOL
+    for t in range(4):
+        for n in ("a", "c"):
+            np.testing.assert_allclose(sm.marginals[n][t], full[f"{n}_{t}"], atol=TOL, rtol=0)
