@@ -282,6 +282,14 @@ class StructuredFilter:
             )
         return msg
 
+    def _static_entries(self, plan: SlicePlan) -> int:
+        """Entries of the static tables of one evidence row."""
+        return sum(
+            int(np.prod([self.cards[v] for v in sc], dtype=np.int64))
+            for sc, st in zip(plan.scopes, plan.static)
+            if st
+        )
+
     def _run_dense(self, plan, rows, inverse, R, msg, buf, norms, start):
         """The forward pass as ``a_t = a_{t-1} M_r / z_t`` with one matrix per row."""
         S = self.num_states
@@ -305,9 +313,9 @@ class StructuredFilter:
         plans = (self._plan("first", evars), self._plan("next", evars))
         out_shape = tuple(self.cards[n] for n in plans[1].output_scope)
         size = max(1, int(np.prod(out_shape, dtype=np.int64)))
-        block = max(1, min(T, _BLOCK_ENTRIES // size, 4096))
-        if self._dense:
-            block = max(1, min(block, _BLOCK_ENTRIES // max(1, self.num_states**2)))
+        # a block of slices holds its outputs and its rows' static tables
+        per_row = self._static_entries(self._plan("dense" if self._dense else "next", evars))
+        block = max(1, min(T, _BLOCK_ENTRIES // (size + per_row), 4096))
         marg = {q: np.empty((T, self.cards[q])) for q in self.query}
         norms = np.empty(T)
         msg = None
