@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike
 from dbn.dbn import TwoSliceDBN
 from dbn.errors import (
     EvidenceError,
+    FrontierTooLargeError,
     InputError,
     ModelError,
     NonFiniteError,
@@ -113,7 +114,10 @@ def _choose(dbn: TwoSliceDBN, evars: Sequence[str], query, max_size: int) -> tup
         }
     from inference.exact.structured_filter import StructuredFilter
 
-    size = StructuredFilter(dbn, query, max_size=_UNBOUNDED).predicted_size(evars)
+    try:
+        size = StructuredFilter(dbn, query, max_size=_UNBOUNDED).predicted_size(evars)
+    except FrontierTooLargeError as exc:  # too many variables in one step to even count
+        return "bk", {"predicted_size": None, "max_size": max_size, "auto": f"bk: {exc}"}
     info = {"predicted_size": size, "max_size": max_size}
     if size <= max_size:
         info["auto"] = f"exact: the largest table per slice has {size:,} entries <= {max_size:,}"

@@ -37,6 +37,10 @@ __all__ = ["MAX_FRONTIER_SIZE", "Op", "SlicePlan", "compile_slice_plan", "barren
 MAX_FRONTIER_SIZE = 2**25
 """Default limit (entries, float64) of the largest table one slice may allocate (256 MiB)."""
 
+_APPROX = (
+    "use an approximate method: inference.filter(model, evidence, method='bk' "
+    "(Boyen-Koller), 'particle' or 'rbpf')"
+)
 _LETTERS = string.ascii_letters[:-1]  # 51 labels per einsum; "Z" is the batch label
 _BATCH = "Z"
 
@@ -140,7 +144,8 @@ def _einsum(in_scopes: Sequence[tuple[str, ...]], out: Sequence[str]) -> tuple[s
             if v not in labels:
                 if len(labels) == len(_LETTERS):
                     raise FrontierTooLargeError(
-                        f"one einsum would involve more than {len(_LETTERS)} variables"
+                        f"exact filtering would need one step over more than {len(_LETTERS)} "
+                        f"variables {sorted(labels)[:8]} ...; {_APPROX}"
                     )
                 labels[v] = _LETTERS[len(labels)]
     ins = ["".join(labels[v] for v in s) for s in in_scopes]
@@ -317,7 +322,6 @@ def _guard(size: int, limit: int, scope: set[str]) -> None:
         raise FrontierTooLargeError(
             f"exact filtering needs a table of {size:,} entries ({size * 8 / 2**20:,.0f} MiB "
             f"of float64) over {len(scope)} variables {sorted(scope)[:8]}"
-            f"{' ...' if len(scope) > 8 else ''}, above the limit of {limit:,} entries; use an "
-            "approximate method: inference.filter(model, evidence, method='bk' (Boyen-Koller), "
-            "'particle' or 'rbpf'), or raise max_size if the memory is there"
+            f"{' ...' if len(scope) > 8 else ''}, above the limit of {limit:,} entries; {_APPROX}"
+            ", or raise max_size if the memory is there"
         )

@@ -85,6 +85,8 @@ def test_auto_falls_back_to_boyen_koller_and_says_why(monkeypatch) -> None:
     assert res.info["auto"].startswith("bk") and "67,108,864" in res.info["auto"]
     ((args, kwargs),) = calls
     assert args[0] is dbn and args[1] is ev and kwargs["clusters"] == [["x0"]]
+    wide = inference.filter(*_chains(64, 3))  # too wide to even plan exactly
+    assert wide.method == "bk_filter" and "approximate" in wide.info["auto"]
     small = inference.filter(*_chains(3, 5), max_size=4)  # the limit decides
     assert small.method == "bk_filter" and small.info["predicted_size"] == 8
 
