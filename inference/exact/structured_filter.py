@@ -41,6 +41,7 @@ __all__ = ["StructuredFilter", "FrontierState", "StructuredResult", "SmoothedRes
 
 _BLOCK_ENTRIES = 2**22  # entries of per-block buffers (32 MiB)
 _SOURCE = prev("[source]")  # the extra axis of the dense plan (no variable can be named so)
+_ROW_CACHE = 4096  # on-line evidence rows whose static tables are kept
 DENSE_LIMIT = 2**12
 """Interfaces with ``S * S <= DENSE_LIMIT`` joint states run each slice as one ``S x S``
 matrix-vector product, the matrix built by the same plan once per distinct evidence row."""
@@ -164,6 +165,7 @@ class StructuredFilter:
             {n: dbn.transition_net.parents(n) for n in dbn.names},
         ]
         self._plans: dict[tuple, SlicePlan] = {}
+        self._rows: dict[tuple, object] = {}  # on-line: static tables per evidence row
         self.predicted_size(())  # raises now if even the evidence-free plan is too large
 
     def __repr__(self) -> str:
@@ -400,22 +402,44 @@ class StructuredFilter:
         return self._absorb(state, lam)
 
     def _absorb(self, state: FrontierState | None, lam: dict[str, np.ndarray]) -> FrontierState:
+        """One on-line slice; the evidence-only tables are cached per distinct row."""
         first = state is None
-        evars = frozenset(lam)
-        plan = self._plan("first" if first else "next", evars)
-        out_shape = tuple(self.cards[n] for n in plan.output_scope)
-        buf, norms = np.empty((1, *out_shape)), np.empty(1)
         t = 0 if first else state.t + 1
-        try:
-            msg = self._run_block(
-                plan, first, lam, evars, 0, 1, None if first else state.belief, buf, norms
-            )
-        except EvidenceError:
-            raise EvidenceError(
-                f"the evidence of slice {t} has probability zero given the past"
-            ) from None
-        ll = (0.0 if first else state.log_likelihood) + float(np.log(norms[0]))
-        return FrontierState(t, np.array(msg, copy=True), ll, buf[0])
+        names = tuple(sorted(lam))
+        dense = self._dense and not first
+        kind = "dense" if dense else ("first" if first else "next")
+        plan = self._plan(kind, frozenset(names))
+        key = (kind, names, b"".join(lam[v].tobytes() for v in names))
+        vals = self._rows.get(key)
+        if vals is None:
+            vals = self._static(plan, first, lam, 1)
+            if dense:
+                S = self.num_states
+                vals = vals[plan.output_slot].reshape(S, S)
+            if len(self._rows) >= _ROW_CACHE:
+                self._rows.clear()
+            self._rows[key] = vals
+        if dense:
+            out = state.belief.reshape(-1) @ vals
+        else:
+            vals = list(vals)
+            if plan.input_slot is not None:
+                vals[plan.input_slot] = state.belief
+            ops, static_out = self._dynamic(plan)
+            for subs, ins, o in ops:
+                vals[o] = np.einsum(subs, *[vals[i][0] if st else vals[i] for i, st in ins])
+            out = vals[plan.output_slot][0] if static_out else vals[plan.output_slot]
+        z = out.sum()
+        if not z > 0.0:
+            raise EvidenceError(f"the evidence of slice {t} has probability zero given the past")
+        joint = (out / z).reshape(
+            tuple(self.cards[n] for n in plan.output_scope[1 if dense else 0 :])
+        )
+        belief = joint
+        if self.extras:
+            belief = joint.reshape(self.num_states, -1).sum(axis=1).reshape(self.iface_shape)
+        ll = (0.0 if first else state.log_likelihood) + float(np.log(z))
+        return FrontierState(t, belief, ll, joint)
 
     def marginals(self, state: FrontierState) -> dict[str, np.ndarray]:
         """Filtered marginal of every query variable from a state."""
