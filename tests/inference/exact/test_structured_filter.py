@@ -28,12 +28,13 @@ from inference.exact.structured_filter import StructuredFilter
 TOL = 1e-9
 
 
-def random_dbn(seed: int) -> TwoSliceDBN:
-    """2-4 variables per slice, cardinalities 1-3, random intra- and inter-slice edges
-    (v0 always persists), tables with some exact zeros."""
+def random_dbn(seed: int, max_vars: int = 4, max_card: int = 3) -> TwoSliceDBN:
+    """2..max_vars variables per slice, cardinalities 1..max_card, random intra- and
+    inter-slice edges (v0 always persists), tables with some exact zeros."""
     rng = np.random.default_rng(seed)
-    n = int(rng.integers(2, 5))
-    cards = [max(2, int(rng.integers(1, 4)))] + [int(k) for k in rng.integers(1, 4, size=n - 1)]
+    n = int(rng.integers(2, max_vars + 1))
+    k = max_card + 1
+    cards = [max(2, int(rng.integers(1, k)))] + [int(c) for c in rng.integers(1, k, size=n - 1)]
     names = [f"v{i}" for i in range(n)]
     card = dict(zip(names, cards))
     card.update({prev(v): k for v, k in card.items()})
@@ -126,7 +127,7 @@ def test_filter_smoother_viterbi_equal_brute_force_on_the_unrolled_net(seed: int
 @settings(max_examples=15, deadline=None)
 @given(seed=st.integers(0, 2**31 - 1), T=st.integers(1, 6))
 def test_equals_dbn_filter_and_online_steps_equal_batch(seed: int, T: int) -> None:
-    dbn = random_dbn(seed)
+    dbn = random_dbn(seed, max_vars=7, max_card=2)  # wider: interfaces up to 2**7
     hard, _ = random_evidence(seed + 2, dbn, T)
     dense = DBNFilter(dbn)
     flt = StructuredFilter(dbn, dense_limit=0)  # the einsum plan at every slice
