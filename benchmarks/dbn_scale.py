@@ -26,7 +26,6 @@ import time
 
 import numpy as np
 
-import inference  # noqa: F401  (jax float64 while that module sets it)
 from benchmarks._chains_numpy import numpy_factored_filter
 from benchmarks._common import best_time, log
 from dbn import pgmpy_adapter as pa
