@@ -42,6 +42,7 @@ __all__ = ["StructuredFilter", "FrontierState", "StructuredResult", "SmoothedRes
 _BLOCK_ENTRIES = 2**22  # entries of per-block buffers (32 MiB)
 _SOURCE = prev("[source]")  # the extra axis of the dense plan (no variable can be named so)
 _ROW_CACHE = 4096  # on-line evidence rows whose static tables are kept
+_ONLINE_DENSE = 16  # on-line steps use the dense matrix (cached per row) up to this S
 DENSE_LIMIT = 2**12
 """Interfaces with ``S * S <= DENSE_LIMIT`` joint states run each slice as one ``S x S``
 matrix-vector product, the matrix built by the same plan once per distinct evidence row."""
@@ -112,7 +113,9 @@ class StructuredFilter:
         Largest table (entries) a slice may allocate.
     dense_limit : int
         Small interfaces (``S * S <= dense_limit``, no extra query variable) run the
-        forward pass as per-row ``S x S`` matrices built by the plan; 0 turns it off.
+        forward pass as per-row ``S x S`` matrices built by the plan, in blocks of slices
+        where the ``R`` distinct evidence rows satisfy ``R * S <=`` the block length (the
+        matrices then cost less than the slices they serve); 0 turns it off.
 
     Raises
     ------
@@ -256,7 +259,9 @@ class StructuredFilter:
         names = tuple(sorted(evars))
         rows, inverse = distinct_rows(lam, names, start, stop)
         R = int(inverse.max()) + 1 if len(inverse) else 1
-        if self._dense and not first:
+        if self._dense and not first and R * self.num_states <= stop - start:
+            # building R matrices costs about R * S structured slices: worth it only when
+            # the block has at least that many slices
             plan = self._plan("dense", evars)
             return self._run_dense(plan, rows, inverse, R, msg, buf, norms, start)
         vals = self._static(plan, first, rows, R)
@@ -316,7 +321,9 @@ class StructuredFilter:
         out_shape = tuple(self.cards[n] for n in plans[1].output_scope)
         size = max(1, int(np.prod(out_shape, dtype=np.int64)))
         # a block of slices holds its outputs and its rows' static tables
-        per_row = self._static_entries(self._plan("dense" if self._dense else "next", evars))
+        per_row = self._static_entries(self._plan("next", evars))
+        if self._dense:
+            per_row = max(per_row, self._static_entries(self._plan("dense", evars)))
         block = max(1, min(T, _BLOCK_ENTRIES // (size + per_row), 4096))
         marg = {q: np.empty((T, self.cards[q])) for q in self.query}
         norms = np.empty(T)
@@ -406,7 +413,7 @@ class StructuredFilter:
         first = state is None
         t = 0 if first else state.t + 1
         names = tuple(sorted(lam))
-        dense = self._dense and not first
+        dense = self._dense and not first and self.num_states <= _ONLINE_DENSE
         kind = "dense" if dense else ("first" if first else "next")
         plan = self._plan(kind, frozenset(names))
         key = (kind, names, b"".join(lam[v].tobytes() for v in names))

@@ -178,6 +178,15 @@ def test_coupled_chains_equal_the_numpy_pass_and_finite_over_long_runs() -> None
     np.testing.assert_allclose(long.marginals["x1"].sum(axis=1), 1.0, atol=1e-12)
     head = flt.filter({"y0": ys[:500, 0], "y1": ys[:500, 1]})
     np.testing.assert_allclose(head.marginals["x0"], long.marginals["x0"][:500], atol=1e-12)
+    # few distinct evidence rows: the dense path (one matrix per row) equals the plan's
+    soft = np.array([[0.3, 1.0], [1.0, 0.5]])[ys[:500, 1]]
+    soft[::7] = np.nan
+    ev = {"y0": np.where(np.arange(500) % 5 == 0, -1, ys[:500, 0])}
+    dense = flt.filter(ev, {"x1": soft})
+    plain = StructuredFilter(coupled_chains(2), dense_limit=0).filter(ev, {"x1": soft})
+    np.testing.assert_allclose(dense.log_normalizers, plain.log_normalizers, atol=1e-12)
+    for n in ("x0", "x1"):
+        np.testing.assert_allclose(dense.marginals[n], plain.marginals[n], atol=1e-12)
 
 
 def test_equals_pgmpy_forward_inference() -> None:
