@@ -168,8 +168,34 @@ class StructuredFilter:
             {n: dbn.transition_net.parents(n) for n in dbn.names},
         ]
         self._plans: dict[tuple, SlicePlan] = {}
-        self._rows: dict[tuple, object] = {}  # on-line: static tables per evidence row
+        self._down = self._downstream()
+        self._rows: dict = {}  # static tables per on-line evidence row; "trans": M
         self.predicted_size(())  # raises now if even the evidence-free plan is too large
+
+    def _downstream(self) -> frozenset[str]:
+        """Non-interface, non-query variables of the transition slice whose parents are
+        this slice's interface or each other and whose children are each other: with
+        evidence on these only, the dense slice matrix factors as ``M diag(L_r)`` (one
+        transition matrix, one likelihood over the interface per evidence row)."""
+        parents = self._parents[1]
+        down = {
+            n
+            for n in self.dbn.names
+            if n not in self.interface
+            and n not in self.query
+            and not any(p not in parents for p in parents[n])  # no previous-slice parent
+        }
+        changed = True
+        while changed:
+            changed = False
+            for n in sorted(down):
+                kids = [c for c in self.dbn.names if n in parents[c]]
+                if any(p not in down and p not in self.interface for p in parents[n]) or any(
+                    c not in down for c in kids
+                ):
+                    down.discard(n)
+                    changed = True
+        return frozenset(down)
 
     def __repr__(self) -> str:
         return f"StructuredFilter(interface={list(self.interface)}, query={list(self.query)})"
@@ -191,11 +217,15 @@ class StructuredFilter:
         drop = barren(parents, needed)
         cpds = {n: parents[n] for n in self.dbn.names if n not in drop}
         prev_scope = tuple(prev(n) for n in self.interface)
-        if kind == "back":
+        if kind in ("trans", "lik"):  # the two halves of a separable dense slice
+            cpds = {n: p for n, p in cpds.items() if (n in self._down) == (kind == "lik")}
+        if kind == "lik":
+            plan = compile_slice_plan(cpds, self.cards, None, self.interface, limit=self.max_size)
+        elif kind == "back":
             plan = compile_slice_plan(
                 cpds, self.cards, self.interface, prev_scope, limit=self.max_size
             )
-        elif kind == "dense":
+        elif kind in ("dense", "trans"):
             plan = compile_slice_plan(
                 cpds,
                 self.cards,
@@ -233,13 +263,15 @@ class StructuredFilter:
                 if v in rows
                 else t[None]
             )
+        made = {op.output for op in plan.ops}
+        for s, st in enumerate(plan.static):
+            if st and vals[s] is None and s not in made:  # the constant 1
+                vals[s] = np.ones((1, *(self.cards[v] for v in plan.scopes[s])))
         for op in plan.ops:
             if op.static:
                 vals[op.output] = np.einsum(op.batched, *[vals[i] for i in op.inputs])
         for s, st in enumerate(plan.static):
             if st:
-                if vals[s] is None:  # the constant 1
-                    vals[s] = np.ones((1, *(self.cards[v] for v in plan.scopes[s])))
                 if vals[s].shape[0] != R:
                     vals[s] = np.broadcast_to(vals[s], (R, *vals[s].shape[1:]))
         return vals
@@ -259,6 +291,8 @@ class StructuredFilter:
         names = tuple(sorted(evars))
         rows, inverse = distinct_rows(lam, names, start, stop)
         R = int(inverse.max()) + 1 if len(inverse) else 1
+        if self._dense and not first and evars <= self._down:
+            return self._run_separable(evars, rows, inverse, R, msg, buf, norms, start)
         if self._dense and not first and R * self.num_states <= stop - start:
             # building R matrices costs about R * S structured slices: worth it only when
             # the block has at least that many slices
@@ -296,6 +330,30 @@ class StructuredFilter:
             for sc, st in zip(plan.scopes, plan.static)
             if st
         )
+
+    def _run_separable(self, evars, rows, inverse, R, msg, buf, norms, start):
+        """``a_t = (a_{t-1} M) * L_r / z_t``: one transition matrix for the sequence, one
+        likelihood over the interface per distinct evidence row."""
+        S = self.num_states
+        mat = self._rows.get("trans")
+        if mat is None:  # evidence-free: built once per filter
+            trans = self._plan("trans", frozenset())
+            mat = self._static(trans, False, {}, 1)[trans.output_slot].reshape(S, S)
+            self._rows["trans"] = mat
+        lik = self._plan("lik", evars)
+        L = self._static(lik, False, rows, R)[lik.output_slot].reshape(R, S)
+        a = msg.reshape(S)
+        flat = buf.reshape(buf.shape[0], S)
+        for k in range(buf.shape[0]):
+            b = (a @ mat) * L[inverse[k]]
+            z = b.sum()
+            if not z > 0.0:
+                raise EvidenceError(
+                    f"the evidence of slice {start + k} has probability zero given the past"
+                )
+            norms[k] = z
+            a = np.multiply(b, 1.0 / z, out=flat[k])
+        return a.reshape(self.iface_shape)
 
     def _run_dense(self, plan, rows, inverse, R, msg, buf, norms, start):
         """The forward pass as ``a_t = a_{t-1} M_r / z_t`` with one matrix per row."""
@@ -424,7 +482,7 @@ class StructuredFilter:
                 S = self.num_states
                 vals = vals[plan.output_slot].reshape(S, S)
             if len(self._rows) >= _ROW_CACHE:
-                self._rows.clear()
+                self._rows = {k: v for k, v in self._rows.items() if k == "trans"}
             self._rows[key] = vals
         if dense:
             out = state.belief.reshape(-1) @ vals
