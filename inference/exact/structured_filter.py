@@ -15,6 +15,12 @@ every slice and ``log z_t = log p(e_t | e_{0:t-1})`` accumulated, so the log-lik
 stays finite over any number of slices. The per-slice factors that depend on evidence
 only are computed once per distinct evidence row, batched over rows.
 
+Small interfaces (``S * S <= DENSE_LIMIT = 4096`` joint-state pairs, so at most 32 KiB)
+may instead run each slice as one ``S x S`` matrix-vector product, the matrix built by the
+same plan from an identity message: one transition matrix times a likelihood over the
+interface when the evidence sits on downstream leaves only, else one matrix per distinct
+evidence row where that is cheaper than the plan. Larger interfaces never build it.
+
 API
 ---
 :class:`StructuredFilter` (compile once): ``init`` / ``step`` (on-line, pure: they return
