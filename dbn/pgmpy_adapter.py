@@ -202,7 +202,21 @@ def dbn_to_pgmpy(dbn: TwoSliceDBN):
 
 
 def dbn_from_pgmpy(model) -> TwoSliceDBN:
-    """A :class:`TwoSliceDBN` from a pgmpy ``DynamicBayesianNetwork``."""
+    """A :class:`TwoSliceDBN` from a pgmpy ``DynamicBayesianNetwork``.
+
+    Raises
+    ------
+    ModelError
+        A node of either slice has no CPD (the message lists them), or the CPDs do not
+        make a valid two-slice template (as :class:`TwoSliceDBN`).
+    """
+    have = {(str(c.variable[0]), int(c.variable[1])) for c in model.get_cpds()}
+    nodes = sorted({str(n[0]) for n in model.nodes()})
+    missing = [(n, t) for n in nodes for t in (0, 1) if (n, t) not in have]
+    if missing or not nodes:
+        raise ModelError(
+            f"pgmpy DBN: no CPD for node(s) {missing or 'any'}; add them (model.add_cpds) first"
+        )
     variables: dict[str, DiscreteVariable] = {}
     initial, transition = [], []
     for cpd in model.get_cpds():

@@ -74,6 +74,13 @@ def test_pgmpy_dbn_in_gives_the_same_result() -> None:
     assert abs(theirs.log_likelihood - ours.log_likelihood) < 1e-12
 
 
+def test_pgmpy_dbn_without_all_cpds_is_refused() -> None:
+    model = pa.dbn_to_pgmpy(coupled_chains(2))
+    model.remove_cpds(model.get_cpds(("x1", 1)))
+    with pytest.raises(ModelError, match=r"no CPD for node\(s\) \[\('x1', 1\)\]"):
+        inference.filter(model, {"y0": np.zeros(3, int)})
+
+
 def test_auto_falls_back_to_boyen_koller_and_says_why(monkeypatch) -> None:
     calls: list = []
     _stub(monkeypatch, "inference.adf.boyen_koller", "bk_filter", calls)
