@@ -67,6 +67,12 @@ class Op:
         The product with ``eliminated`` kept as the last output axis (max-product).
     static : bool
         True when every input is derived from CPD factors only.
+    matmul : tuple or None
+        For a dynamic op of one message-like table ``B`` and one static factor ``f``:
+        ``(position of B in inputs, axes of f summed first, B's axis permutation, its 3-D
+        shape (batch, free, contracted), f's permutation, its 3-D shape (batch,
+        contracted, new), the result's shape)``; the op is then one batched ``matmul``
+        and its output axes are (batch, free, new). None: run ``subscripts``.
     """
 
     inputs: tuple[int, ...]
@@ -77,6 +83,7 @@ class Op:
     batched: str
     keep_subscripts: str
     static: bool
+    matmul: tuple | None = None
 
 
 @dataclass(frozen=True)
@@ -183,14 +190,49 @@ class _Builder:
 
     def op(self, inputs: Sequence[int], drop: str | None, out: tuple[str, ...] | None = None):
         scopes = [self.scopes[i] for i in inputs]
-        if out is None:
-            out = _out_scope(scopes, [_size(s, self.cards) for s in scopes], drop)
         static = all(self.static[i] for i in inputs)
+        mm = None
+        if out is None and len(inputs) == 2 and not static and any(self.static[i] for i in inputs):
+            mm, out = self._matmul(inputs, drop)
+        elif out is None:
+            out = _out_scope(scopes, [_size(s, self.cards) for s in scopes], drop)
         slot = self.slot(tuple(out), static)
         plain, batched = _einsum(scopes, out)
         keep, _ = _einsum(scopes, (*out, drop) if drop is not None else out)
-        self.ops.append(Op(tuple(inputs), slot, tuple(out), drop, plain, batched, keep, static))
+        op = Op(tuple(inputs), slot, tuple(out), drop, plain, batched, keep, static, mm)
+        self.ops.append(op)
         return slot
+
+    def _matmul(self, inputs: Sequence[int], drop: str | None):
+        """The batched-matmul form of (dynamic table B) x (static factor f), summing
+        ``drop``: ``out[b, F, N] = sum_C B[b, F, C] f[b, C, N]``."""
+        pos = 0 if not self.static[inputs[0]] else 1
+        sb, sf = self.scopes[inputs[pos]], self.scopes[inputs[1 - pos]]
+        summed = tuple(k for k, u in enumerate(sf) if u == drop and u not in sb)
+        sf = tuple(u for u in sf if not (u == drop and u not in sb))
+        batch = [u for u in sb if u in sf and u != drop]
+        contracted = [u for u in sb if u == drop and u in sf]
+        free = [u for u in sb if u not in sf]
+        new = [u for u in sf if u not in sb]
+        card = self.cards
+
+        def n(vs):
+            return _size(tuple(vs), card)
+
+        perm_b = tuple(sb.index(u) for u in (*batch, *free, *contracted))
+        perm_f = tuple(sf.index(u) for u in (*batch, *contracted, *new))
+        out = (*batch, *free, *new)
+        shape = tuple(card[u] for u in out)
+        spec = (
+            pos,
+            summed,
+            perm_b,
+            (n(batch), n(free), n(contracted)),
+            perm_f,
+            (n(batch), n(contracted), n(new)),
+            shape,
+        )
+        return spec, out
 
     def product(self, slots: list[int], drop: str | None, out: tuple[str, ...] | None = None):
         """Multiply ``slots`` pairwise (static and small ones first), then drop ``drop``."""

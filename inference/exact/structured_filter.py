@@ -285,7 +285,7 @@ class StructuredFilter:
     @staticmethod
     def _dynamic(plan: SlicePlan):
         ops = [
-            (op.subscripts, tuple((i, plan.static[i]) for i in op.inputs), op.output)
+            (op.matmul or op.subscripts, tuple((i, plan.static[i]) for i in op.inputs), op.output)
             for op in plan.ops
             if not op.static
         ]
@@ -313,7 +313,7 @@ class StructuredFilter:
             if inp is not None:
                 vals[inp] = msg
             for subs, ins, o in ops:
-                vals[o] = np.einsum(subs, *[vals[i][r] if st else vals[i] for i, st in ins])
+                vals[o] = _apply(subs, [vals[i][r] if st else vals[i] for i, st in ins])
             res = vals[out][r] if static_out else vals[out]
             z = res.sum()
             if not z > 0.0:
@@ -498,7 +498,7 @@ class StructuredFilter:
                 vals[plan.input_slot] = state.belief
             ops, static_out = self._dynamic(plan)
             for subs, ins, o in ops:
-                vals[o] = np.einsum(subs, *[vals[i][0] if st else vals[i] for i, st in ins])
+                vals[o] = _apply(subs, [vals[i][0] if st else vals[i] for i, st in ins])
             out = vals[plan.output_slot][0] if static_out else vals[plan.output_slot]
         z = out.sum()
         if not z > 0.0:
@@ -551,7 +551,7 @@ class StructuredFilter:
             vals[plan.input_slot] = beta
             ops, static_out = self._dynamic(plan)
             for subs, ins, o in ops:
-                vals[o] = np.einsum(subs, *[vals[i][0] if st else vals[i] for i, st in ins])
+                vals[o] = _apply(subs, [vals[i][0] if st else vals[i] for i, st in ins])
             beta = vals[plan.output_slot][0] if static_out else vals[plan.output_slot]
             beta = beta / beta.sum()
         post = store[0] * beta[ext]
@@ -578,6 +578,18 @@ class StructuredFilter:
 
         T, lam = sequence_likelihoods(self.variables, evidence, soft_evidence, num_timesteps)
         return viterbi(self, T, lam)
+
+
+def _apply(op, operands: list[np.ndarray]) -> np.ndarray:
+    """Run one dynamic op: an einsum string, or a matmul spec (see ``frontier.Op``)."""
+    if isinstance(op, str):
+        return np.einsum(op, *operands)
+    pos, summed, perm_b, shape_b, perm_f, shape_f, shape = op
+    b, f = operands[pos], operands[1 - pos]
+    if summed:
+        f = f.sum(axis=summed)
+    r = np.matmul(b.transpose(perm_b).reshape(shape_b), f.transpose(perm_f).reshape(shape_f))
+    return r.reshape(shape)
 
 
 def _axis_marginals(
