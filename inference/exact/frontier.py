@@ -11,7 +11,9 @@ unobserved, one-hot for hard evidence, any nonnegative vector for soft evidence)
 A :class:`SlicePlan` sums (or maximises) every variable that is not *kept* out of that
 product, one variable at a time, in an order chosen greedily over the template (smallest
 resulting table first), each step one ``numpy.einsum`` over the factors that hold the
-variable. Observed leaves are thereby reduced to likelihood vectors over their parents
+variable, or, for a step that multiplies the message by one static factor, one batched
+``numpy.matmul`` (message axes permuted to (batch, free, contracted)) whose output axes
+are (batch, free, new). Observed leaves are thereby reduced to likelihood vectors over their parents
 before anything meets the message, no table over (interface, next interface,
 observations) is ever built, and the largest table a slice allocates is known before any
 allocation (:attr:`SlicePlan.max_size`); a plan above the limit raises
