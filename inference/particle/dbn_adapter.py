@@ -35,6 +35,7 @@ dim)``); the filter then runs step by step without ``jit`` so numpy-based CPDs w
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -367,6 +368,25 @@ class DBNStateSpaceModel(StateSpaceModel):
         return summarise
 
 
+_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _filters(dbn, model, num_particles: int, method: str, query: tuple[str, ...]):
+    """(slice-0 filter, later-slice filter, summary), cached per DBN so that ``run``'s
+    compiled code is reused by later calls with the same sizes."""
+    per = _CACHE.setdefault(dbn, {})
+    per["model"] = model
+    key = (num_particles, method, query)
+    if key not in per:
+        make = bootstrap_filter if method == "bootstrap" else auxiliary_filter
+        per[key] = (
+            make(model.at_slice(True), num_particles, dtype=jnp.float64),
+            make(model.at_slice(False), num_particles, dtype=jnp.float64),
+            model.summary(query),
+        )
+    return per[key]
+
+
 def particle_filter_dbn(
     key: Array,
     dbn: TwoSliceDBN,
@@ -404,16 +424,13 @@ def particle_filter_dbn(
         raise InputError(f"method must be 'bootstrap' or 'auxiliary', got {method!r}")
     if isinstance(num_particles, bool) or not isinstance(num_particles, int) or num_particles < 1:
         raise InputError(f"num_particles must be an integer >= 1, got {num_particles!r}")
-    model = DBNStateSpaceModel(dbn)
+    model = _CACHE.setdefault(dbn, {}).get("model") or DBNStateSpaceModel(dbn)
     inp = model.inputs(evidence, soft_evidence)
     hidden = tuple(n for n in dbn.names if n not in inp["discrete"] and n not in inp["continuous"])
     query = check_query(dbn, query, hidden)
-    make = bootstrap_filter if method == "bootstrap" else auxiliary_filter
-    summary = model.summary(query)
+    pf0, pf1, summary = _filters(dbn, model, num_particles, method, query)
     T = int(inp["first"].shape[0])
     k0, k_first, k_rest = jax.random.split(key, 3)
-    pf0 = make(model.at_slice(True), num_particles, dtype=jnp.float64)
-    pf1 = make(model.at_slice(False), num_particles, dtype=jnp.float64)
     at = [
         jax.tree_util.tree_map(lambda a, t=t: a[t], inp) for t in range(1 if model.jittable else T)
     ]
