@@ -265,9 +265,12 @@ def _step(model: _Model, first: bool, n: int, key: Array, state: RBPFState, inp:
     log_w = base + ll + llc
     log_w = jnp.where(jnp.isnan(log_w), -jnp.inf, log_w)
     total = logsumexp(log_w)
-    new = RBPFState(
-        jnp.stack([disc[nm] for nm in model.discrete_names], axis=1), m, P, log_w - total
+    d_new = (
+        jnp.stack([disc[nm] for nm in model.discrete_names], axis=1)
+        if model.discrete_names
+        else jnp.zeros((n, 0), jnp.int32)
     )
+    new = RBPFState(d_new, m, P, log_w - total)
     return new, (total, jnp.exp(-logsumexp(2 * new.log_weights)))
 
 
