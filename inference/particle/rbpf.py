@@ -254,7 +254,7 @@ def _step(model: _Model, first: bool, n: int, key: Array, state: RBPFState, inp:
             ll = ll + jnp.where(obs >= 0, node.log_prob(val, values, n), 0.0)
             draw = jnp.where(obs >= 0, val, draw)
         values[node.name] = draw
-    disc = {nm: values[nm] for nm in model.discrete_names}
+    disc = dict(values)  # current and previous slice: CLG parents may be either
     obs = inp["continuous"]
 
     def gauss(d, m, P):

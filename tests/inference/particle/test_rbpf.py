@@ -37,15 +37,26 @@ def test_rbpf_means_match_switch_path_enumeration() -> None:
     assert se.max() > 0  # the runs differ: z is not a division by a floor
 
 
-def test_rbpf_without_switches_is_the_kalman_filter() -> None:
+@pytest.mark.parametrize("switch", [False, True], ids=["no_switch", "inert_prev_switch"])
+def test_rbpf_without_effective_switches_is_the_kalman_filter(switch: bool) -> None:
+    """No discrete variable, or a switch of the previous slice whose states select equal
+    parameters: either way the RBPF is the Kalman filter, whatever the particles."""
     a, q, r = 0.9, 0.5, 0.8
     x, y = ContinuousVariable("x"), ContinuousVariable("y")
     obs = LinearGaussianCPD("y", ["x"], [[[1.0]]], [0.0], [[r]])
-    dbn = TwoSliceDBN(
-        [x, y],
-        [LinearGaussianCPD("x", [], [], [0.0], [[a * a + q]]), obs],
-        [LinearGaussianCPD("x", [prev("x")], [[[a]]], [0.0], [[q]]), obs],
-    )
+    x0 = LinearGaussianCPD("x", [], [], [0.0], [[a * a + q]])
+    if switch:
+        sw = switching_lds()
+        xt = ConditionalLinearGaussianCPD(
+            "x", [prev("s")], [prev("x")], [[[[a]], [[a]]]], [[0.0], [0.0]], [[[q]], [[q]]]
+        )
+        variables = [DiscreteVariable("s", 2), x, y]
+        dbn = TwoSliceDBN(
+            variables, [sw.initial_cpds[0], x0, obs], [sw.transition_cpds[0], xt, obs]
+        )
+    else:
+        xt = LinearGaussianCPD("x", [prev("x")], [[[a]]], [0.0], [[q]])
+        dbn = TwoSliceDBN([x, y], [x0, obs], [xt, obs])
     params = LinearGaussianParams(
         np.array([[a]]), np.array([[q]]), np.eye(1), np.array([[r]]), np.zeros(1), np.eye(1)
     )
