@@ -170,6 +170,20 @@ class SlicePlan:
                 need.add(k)
                 k = self.parent[k]
         self._need_down = sorted((k for k in need if self.parent[k] >= 0), reverse=True)
+        self._ones = []
+        for c in self.cliques:
+            ones = np.ones(tuple(self.cards[u] for u in c))
+            ones.setflags(write=False)
+            self._ones.append(ones)
+        # operands of each message, as clique indices (precomputed: a step is a tight loop)
+        self._down_ops = {
+            k: (
+                self.parent[k],
+                self.parent[self.parent[k]] >= 0,
+                [j for j in self.children[self.parent[k]] if j != k],
+            )
+            for k in self._need_down
+        }
         self._empty_factors = [i for i, h in enumerate(self.factor_home) if h < 0]
 
     def run(self, factors: Sequence[np.ndarray]) -> tuple[list[np.ndarray], float]:
@@ -191,37 +205,34 @@ class SlicePlan:
         psi = []
         for k in range(n):
             facs, sub = self._psi_sub[k]
-            shape = tuple(self.cards[u] for u in self.cliques[k])
-            psi.append(np.einsum(sub, *[factors[i] for i in facs], np.ones(shape)))
+            if facs:
+                psi.append(np.einsum(sub, *[factors[i] for i in facs], self._ones[k]))
+            else:
+                psi.append(self._ones[k])
         log_z = 0.0
         for i in self._empty_factors:
             log_z += float(np.log(factors[i]))
-        up: list[np.ndarray | None] = [None] * n
+        up: list = [None] * n
+        children = self.children
         for k in range(n):
-            m = np.einsum(self._up_sub[k], psi[k], *[up[j] for j in self.children[k]])
-            s = float(m.sum())
+            m = np.einsum(self._up_sub[k], psi[k], *[up[j] for j in children[k]])
+            s = m.sum()
             if not s > 0.0:
                 return [np.full(t.shape, np.nan) for t in self._target_shapes()], -np.inf
-            log_z += float(np.log(s))
+            log_z += np.log(s)
             up[k] = m / s
-        down: list[np.ndarray | None] = [None] * n
+        down: list = [None] * n
         for k in self._need_down:
-            p = self.parent[k]
-            ops = [psi[p]]
-            if self.parent[p] >= 0:
-                ops.append(down[p])
-            ops += [up[j] for j in self.children[p] if j != k]
-            m = np.einsum(self._down_sub[k], *ops)
+            p, has_down, sibs = self._down_ops[k]
+            ops = [psi[p], down[p]] if has_down else [psi[p]]
+            m = np.einsum(self._down_sub[k], *ops, *[up[j] for j in sibs])
             down[k] = m / m.sum()
         out = []
         for i, k in enumerate(self.target_home):
-            ops = [psi[k]]
-            if self.parent[k] >= 0:
-                ops.append(down[k])
-            ops += [up[j] for j in self.children[k]]
-            m = np.einsum(self._marg_sub[i], *ops)
+            ops = [psi[k], down[k]] if self.parent[k] >= 0 else [psi[k]]
+            m = np.einsum(self._marg_sub[i], *ops, *[up[j] for j in children[k]])
             out.append(m / m.sum())
-        return out, log_z
+        return out, float(log_z)
 
     def _target_shapes(self) -> list[np.ndarray]:
         return [np.empty(tuple(self.cards[u] for u in s)) for s in self.target_scopes]
