@@ -379,8 +379,10 @@ def _filters(dbn, model, num_particles: int, method: str, query: tuple[str, ...]
     key = (num_particles, method, query)
     if key not in per:
         make = bootstrap_filter if method == "bootstrap" else auxiliary_filter
+        pf0 = make(model.at_slice(True), num_particles, dtype=jnp.float64)
+        step0 = jax.jit(pf0.step) if model.jittable else pf0.step
         per[key] = (
-            make(model.at_slice(True), num_particles, dtype=jnp.float64),
+            pf0._replace(step=step0),
             make(model.at_slice(False), num_particles, dtype=jnp.float64),
             model.summary(query),
         )
