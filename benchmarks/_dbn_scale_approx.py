@@ -169,8 +169,8 @@ def approx_keys(quick: bool, seed: int) -> dict:
     out["bk_mean_kl_n12"], out["bk_kl_late_over_early"] = mean_kl, ratio
     log(f"bk accuracy n=12: {time.perf_counter() - t0:.1f}s")
     T_time = 40 if quick else 200
-    us16 = _bk_us_per_slice(rng, 16, T_time, repeat=3)
-    us64 = _bk_us_per_slice(rng, 64, T_time, repeat=3)
+    us16 = _bk_us_per_slice(rng, 16, T_time, repeat=5)
+    us64 = _bk_us_per_slice(rng, 64, T_time, repeat=5)
     out["bk_us_per_slice_n16"], out["bk_us_per_slice_n64"] = us16, us64
     out["bk_time_ratio_n64_vs_n16"] = us64 / us16
     log(f"bk timing: {time.perf_counter() - t0:.1f}s")
@@ -185,7 +185,8 @@ def approx_keys(quick: bool, seed: int) -> dict:
     return out
 
 
-if __name__ == "__main__":  # for a quick look: python -m benchmarks._dbn_scale_approx
+if __name__ == "__main__":  # a look: python -m benchmarks._dbn_scale_approx [--full]
     import json
+    import sys
 
-    print(json.dumps(approx_keys(True, 0)))
+    print(json.dumps(approx_keys("--full" not in sys.argv, 0)))
