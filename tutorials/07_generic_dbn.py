@@ -89,7 +89,8 @@ plt.show()
 
 # %% [markdown]
 # ## 2. Fifty chains: Boyen-Koller
-# The exact belief couples every chain (2^n states): `DBNFilter` stops at 8 chains.
+# The exact belief couples every chain: 2^n joint states, 2^50 at 50 chains, beyond any
+# exact filter (`DBNFilter`, which builds interface x interface tables, stops at 8).
 # Boyen-Koller keeps one marginal per chain (the automatic clusters: chains share no edge
 # inside a slice), propagates the product exactly through the template and projects back
 # onto the clusters. First its error where exact filtering is still possible (8 chains):
