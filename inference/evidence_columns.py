@@ -6,7 +6,8 @@ Columnar evidence maps a variable name to one array over the slices:
 - a continuous variable of dimension ``d``: floats, shape ``(num_timesteps, d)`` (a 1-D
   column is read as ``d = 1``), a row of NaN = unobserved;
 - soft evidence on a discrete variable: nonnegative likelihoods, shape
-  ``(num_timesteps, cardinality)``, each row finite and not all zero.
+  ``(num_timesteps, cardinality)``, each row finite and not all zero, or all NaN for no
+  soft evidence at that slice.
 
 Every check runs before any filtering, and each error names the column and the value.
 """
@@ -121,9 +122,12 @@ def check_columns(
                 f"got {arr.shape}"
             )
         T = _length(name, arr.shape[0], T)
+        none = np.isnan(arr).all(axis=1)  # an all-NaN row: no soft evidence at that slice
+        arr = np.where(none[:, None], 1.0, arr)
         if not np.all(np.isfinite(arr)) or np.any(arr < 0) or not np.all(arr.max(axis=1) > 0):
             raise EvidenceError(
-                f"soft evidence {name!r}: every row must be finite, nonnegative, not all zero"
+                f"soft evidence {name!r}: every row must be finite, nonnegative and not all "
+                "zero (or all NaN for none)"
             )
         soft[name] = arr
     if T is None or T < 1:

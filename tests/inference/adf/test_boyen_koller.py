@@ -188,3 +188,23 @@ def test_bad_clusters_and_inputs_raise_clear_errors() -> None:
     lg2 = LinearGaussianCPD("x", [prev("x")], [[[1.0]]], [0.0], [[1.0]])
     with pytest.raises(ModelError, match="continuous"):
         BoyenKoller(TwoSliceDBN([x], [lg], [lg2]))
+
+
+def test_soft_evidence_one_cluster_equals_exact() -> None:
+    dbn, ev = _chains(3, 8, seed=2)
+    rng = np.random.default_rng(0)
+    soft = rng.random((8, 2)) + 0.1
+    soft[3] = np.nan  # no soft evidence at slice 3
+    names = ["x0", "x1", "x2"]
+    out = bk_filter(dbn, ev, clusters=[names], soft_evidence={"x1": soft})
+    flt = DBNFilter(dbn)
+    state = None
+    for t in range(8):
+        hard = {n: int(c[t]) for n, c in ev.items()}
+        sv = {} if t == 3 else {"x1": soft[t]}
+        state = flt.init(hard, sv) if t == 0 else flt.step(state, hard, sv)
+        assert abs(out.log_likelihoods[: t + 1].sum() - state.log_likelihood) < TOL
+        for n in names:
+            np.testing.assert_allclose(out.marginals[n][t], flt.marginal(state, n), atol=TOL)
+    with pytest.raises(EvidenceError, match="x1"):
+        bk_filter(dbn, ev, soft_evidence={"x1": -soft})
