@@ -7,6 +7,10 @@ Kinds
 - :class:`DeterministicCPD`: a discrete child that is a function of its discrete parents
   (e.g. a counter ``c_k = c_{k-1} + [l_k = new]``); exact inference sees a 0/1 table.
 - :class:`LinearGaussianCPD`: a continuous child ``x ~ N(b + sum_p W_p u_p, S)``.
+- :class:`ConditionalLinearGaussianCPD`: a continuous child whose linear-Gaussian
+  parameters are selected by discrete parents,
+  ``x ~ N(b[k] + sum_p W_p[k] u_p, S[k])`` with ``k`` the discrete parents' states
+  (the switching linear dynamical system's CPD).
 - :class:`ContinuousCPD`: the protocol any continuous CPD implements
   (``sample(key, parent_values)``, ``log_prob(value, parent_values)``).
 
@@ -35,6 +39,7 @@ __all__ = [
     "DeterministicCPD",
     "LinearGaussianCPD",
     "ContinuousCPD",
+    "ConditionalLinearGaussianCPD",
     "DiscreteCPD",
 ]
 
@@ -332,6 +337,159 @@ class LinearGaussianCPD:
         maha = np.sum(z**2, axis=0).reshape(np.shape(r)[:-1])
         logdet = 2.0 * np.sum(np.log(np.diag(self.chol)))
         return -0.5 * (maha + logdet + self.dim * np.log(2.0 * np.pi))
+
+
+@dataclass(frozen=True, eq=False)
+class ConditionalLinearGaussianCPD:
+    """``x ~ N(bias[k] + sum_p W_p[k] u_p, cov[k])``: linear-Gaussian given discrete parents.
+
+    ``k = (k_1, ..., k_m)`` are the states of the discrete parents; ``u_p`` the values of
+    the continuous parents. With no discrete parent it is a :class:`LinearGaussianCPD`.
+
+    Parameters
+    ----------
+    variable : str
+    discrete_parents : sequence of str
+        Discrete parents, in the order of the leading axes of ``bias``, ``cov`` and each
+        weight array.
+    continuous_parents : sequence of str
+        Continuous parents ``u_p``.
+    weights : sequence of arrays, shapes ``(K_1, ..., K_m, d, dim(u_p))``
+        One per continuous parent.
+    bias : array_like, shape ``(K_1, ..., K_m, d)``
+    cov : array_like, shape ``(K_1, ..., K_m, d, d)``
+        Each ``cov[k]`` symmetric positive definite (checked by Cholesky).
+
+    Attributes
+    ----------
+    parents : tuple of str
+        ``(*discrete_parents, *continuous_parents)``.
+    chol : ndarray, shape ``(K_1, ..., K_m, d, d)``
+        Lower Cholesky factors of ``cov``.
+    """
+
+    variable: str
+    discrete_parents: tuple[str, ...]
+    continuous_parents: tuple[str, ...]
+    weights: tuple[np.ndarray, ...] = field(repr=False)
+    bias: np.ndarray = field(repr=False)
+    cov: np.ndarray = field(repr=False)
+    chol: np.ndarray = field(repr=False)
+
+    def __init__(
+        self,
+        variable: str,
+        discrete_parents: Sequence[str],
+        continuous_parents: Sequence[str],
+        weights: Sequence[ArrayLike],
+        bias: ArrayLike,
+        cov: ArrayLike,
+    ) -> None:
+        dpa = _parents_tuple(variable, discrete_parents)
+        cpa = _parents_tuple(variable, continuous_parents)
+        if set(dpa) & set(cpa):
+            raise ModelError(f"CPD of {variable!r}: {set(dpa) & set(cpa)} listed twice")
+        m = len(dpa)
+        b = np.asarray(bias, dtype=np.float64)
+        if b.ndim != m + 1:
+            raise CPDShapeError(
+                f"CPD of {variable!r}: bias has shape {b.shape}, expected one axis per discrete "
+                f"parent {dpa} and one of size d"
+            )
+        kshape, d = b.shape[:-1], b.shape[-1]
+        S = np.asarray(cov, dtype=np.float64)
+        if S.shape != (*kshape, d, d):
+            raise CPDShapeError(
+                f"CPD of {variable!r}: cov shape {S.shape}, expected {(*kshape, d, d)}"
+            )
+        if not np.all(np.isfinite(S)) or not np.allclose(S, np.swapaxes(S, -1, -2), atol=1e-12):
+            raise ModelError(f"CPD of {variable!r}: cov must be finite and symmetric")
+        try:
+            L = np.linalg.cholesky(S)
+        except np.linalg.LinAlgError:
+            raise ModelError(f"CPD of {variable!r}: a cov[k] is not positive definite") from None
+        if not np.all(np.isfinite(b)):
+            raise ModelError(f"CPD of {variable!r}: bias must be finite")
+        if len(weights) != len(cpa):
+            raise CPDShapeError(
+                f"CPD of {variable!r}: {len(weights)} weight arrays for {len(cpa)} "
+                "continuous parents"
+            )
+        W = []
+        for p, w in zip(cpa, weights):
+            w = np.asarray(w, dtype=np.float64)
+            if w.ndim != m + 2 or w.shape[: m + 1] != (*kshape, d) or not np.all(np.isfinite(w)):
+                raise CPDShapeError(
+                    f"CPD of {variable!r}: weight of parent {p!r} has shape {w.shape}, "
+                    f"expected {(*kshape, d)} + (dim of {p!r},), finite"
+                )
+            w.setflags(write=False)
+            W.append(w)
+        for a in (b, S, L):
+            a.setflags(write=False)
+        object.__setattr__(self, "variable", variable)
+        object.__setattr__(self, "discrete_parents", dpa)
+        object.__setattr__(self, "continuous_parents", cpa)
+        object.__setattr__(self, "weights", tuple(W))
+        object.__setattr__(self, "bias", b)
+        object.__setattr__(self, "cov", S)
+        object.__setattr__(self, "chol", L)
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (*self.discrete_parents, *self.continuous_parents)
+
+    @property
+    def dim(self) -> int:
+        return int(self.bias.shape[-1])
+
+    @property
+    def discrete_cardinalities(self) -> tuple[int, ...]:
+        return tuple(int(k) for k in self.bias.shape[:-1])
+
+    def renamed(self, variable: str, parents: Sequence[str]) -> ConditionalLinearGaussianCPD:
+        """The same CPD with the child and parents renamed (for unrolling)."""
+        m = len(self.discrete_parents)
+        return ConditionalLinearGaussianCPD(
+            variable, parents[:m], parents[m:], self.weights, self.bias, self.cov
+        )
+
+    def _index(self, parent_values: dict[str, Any]) -> tuple[np.ndarray, ...]:
+        out = []
+        for p, k in zip(self.discrete_parents, self.discrete_cardinalities):
+            s = np.asarray(parent_values[p])
+            if not np.issubdtype(s.dtype, np.integer) or np.any((s < 0) | (s >= k)):
+                raise ModelError(
+                    f"CPD of {self.variable!r}: discrete parent {p!r} needs integer states "
+                    f"0..{k - 1}"
+                )
+            out.append(s)
+        return tuple(out)
+
+    def mean(self, parent_values: dict[str, Any]) -> np.ndarray:
+        """``bias[k] + sum_p W_p[k] u_p``; shape ``(..., d)`` (parents may carry batch axes)."""
+        k = self._index(parent_values)
+        m = self.bias[k]
+        for p, w in zip(self.continuous_parents, self.weights):
+            m = m + np.einsum("...ij,...j->...i", w[k], np.asarray(parent_values[p]))
+        return m
+
+    def sample(self, key: Any, parent_values: dict[str, Any]) -> np.ndarray:
+        """One draw, ``mean + L[k] eps`` with ``eps ~ N(0, I)`` from the jax key ``key``."""
+        import jax
+
+        m = self.mean(parent_values)
+        L = self.chol[self._index(parent_values)]
+        eps = np.asarray(jax.random.normal(key, np.shape(m), dtype=np.float64))
+        return m + np.einsum("...ij,...j->...i", L, eps)
+
+    def log_prob(self, value: ArrayLike, parent_values: dict[str, Any]) -> np.ndarray:
+        """Gaussian log density by a Cholesky solve; shape ``value.shape[:-1]``."""
+        r = np.asarray(value, dtype=np.float64) - self.mean(parent_values)
+        L = np.broadcast_to(self.chol[self._index(parent_values)], (*r.shape, r.shape[-1]))
+        z = np.linalg.solve(L, r[..., None])[..., 0]  # triangular L: exact solve
+        logdet = 2.0 * np.sum(np.log(np.diagonal(L, axis1=-2, axis2=-1)), axis=-1)
+        return -0.5 * (np.sum(z**2, axis=-1) + logdet + self.dim * np.log(2.0 * np.pi))
 
 
 DiscreteCPD = TabularCPD | DeterministicCPD

@@ -15,7 +15,7 @@ from dbn.dbn import TwoSliceDBN, prev
 from dbn.errors import ModelError
 from dbn.variables import DiscreteVariable
 
-__all__ = ["coupled_chains", "sample_coupled_chains"]
+__all__ = ["coupled_chains", "sample_coupled_chains", "switching_lds", "sample_switching_lds"]
 
 
 def _check_prob(name: str, value: float) -> float:
@@ -85,3 +85,62 @@ def sample_coupled_chains(
         xs[t] = x
     ys = np.where(rng.random((num_timesteps, n)) < noise, 1 - xs, xs)
     return xs, ys
+
+
+def switching_lds(
+    stay: float = 0.95, q_quiet: float = 0.01, q_manoeuvre: float = 1.0, r: float = 0.5
+) -> TwoSliceDBN:
+    """A switching linear dynamical system: switch ``s``, state ``x`` (position, velocity),
+    observed position ``y``.
+
+    ``s_t`` keeps its value with probability ``stay``; ``x_t = A x_{t-1} + N(0, Q[s_t])``
+    with ``A = [[1, 1], [0, 0.9]]`` and ``Q[s] = diag(0.01, q_s)`` (``s = 0`` quiet,
+    ``s = 1`` manoeuvring); ``y_t = x_t[0] + N(0, r)``. Slice 0: ``s_0`` uniform,
+    ``x_0 ~ N(0, I)``. The CPD of ``x`` is a
+    :class:`~dbn.cpds.ConditionalLinearGaussianCPD` with discrete parent ``s``.
+    """
+    from dbn.cpds import ConditionalLinearGaussianCPD, LinearGaussianCPD
+    from dbn.variables import ContinuousVariable
+
+    stay = _check_prob("stay", stay)
+    A = np.array([[1.0, 1.0], [0.0, 0.9]])
+    Q = np.array([np.diag([0.01, q_quiet]), np.diag([0.01, q_manoeuvre])])
+    trans_s = np.array([[stay, 1 - stay], [1 - stay, stay]])
+    s, x, y = DiscreteVariable("s", 2), ContinuousVariable("x", 2), ContinuousVariable("y", 1)
+    obs = LinearGaussianCPD("y", ["x"], [[[1.0, 0.0]]], [0.0], [[r]])
+    init = [
+        TabularCPD("s", [], [0.5, 0.5]),
+        LinearGaussianCPD("x", [], [], np.zeros(2), np.eye(2)),
+        obs,
+    ]
+    trans = [
+        TabularCPD("s", [prev("s")], trans_s),
+        ConditionalLinearGaussianCPD(
+            "x", ["s"], [prev("x")], [np.stack([A, A])], np.zeros((2, 2)), Q
+        ),
+        obs,
+    ]
+    return TwoSliceDBN([s, x, y], init, trans)
+
+
+def sample_switching_lds(
+    rng: np.random.Generator,
+    num_timesteps: int,
+    stay: float = 0.95,
+    q_quiet: float = 0.01,
+    q_manoeuvre: float = 1.0,
+    r: float = 0.5,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Simulate :func:`switching_lds`: switches (T,) int, states (T, 2), observations (T, 1)."""
+    switching_lds(stay, q_quiet, q_manoeuvre, r)  # validates the arguments
+    A = np.array([[1.0, 1.0], [0.0, 0.9]])
+    q = [q_quiet, q_manoeuvre]
+    s = np.empty(num_timesteps, np.int64)
+    xs = np.empty((num_timesteps, 2))
+    s[0] = int(rng.random() < 0.5)
+    xs[0] = rng.normal(size=2)
+    for t in range(1, num_timesteps):
+        s[t] = s[t - 1] if rng.random() < stay else 1 - s[t - 1]
+        xs[t] = A @ xs[t - 1] + rng.normal(size=2) * np.sqrt([0.01, q[s[t]]])
+    ys = xs[:, :1] + rng.normal(size=(num_timesteps, 1)) * np.sqrt(r)
+    return s, xs, ys

@@ -1,0 +1,149 @@
+"""Validation of columnar DBN evidence, shared by the approximate DBN filters.
+
+Columnar evidence maps a variable name to one array over the slices:
+
+- a discrete variable: integer states, shape ``(num_timesteps,)``, ``-1`` = unobserved;
+- a continuous variable of dimension ``d``: floats, shape ``(num_timesteps, d)`` (a 1-D
+  column is read as ``d = 1``), a row of NaN = unobserved;
+- soft evidence on a discrete variable: nonnegative likelihoods, shape
+  ``(num_timesteps, cardinality)``, each row finite and not all zero, or all NaN for no
+  soft evidence at that slice.
+
+Every check runs before any filtering, and each error names the column and the value.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from dbn.dbn import TwoSliceDBN
+from dbn.errors import EvidenceError, NonFiniteError, ShapeError, UnknownVariableError
+from dbn.variables import DiscreteVariable
+
+__all__ = ["Columns", "check_columns", "check_query"]
+
+
+class Columns(NamedTuple):
+    """Validated evidence.
+
+    Attributes
+    ----------
+    num_timesteps : int
+    discrete : dict name -> int64 array (num_timesteps,), -1 = unobserved
+    continuous : dict name -> float64 array (num_timesteps, dim), NaN rows = unobserved
+    soft : dict name -> float64 array (num_timesteps, cardinality)
+    """
+
+    num_timesteps: int
+    discrete: dict[str, np.ndarray]
+    continuous: dict[str, np.ndarray]
+    soft: dict[str, np.ndarray]
+
+
+def _length(name: str, n: int, T: int | None) -> int:
+    if T is not None and n != T:
+        raise ShapeError(f"evidence column {name!r} has length {n}, expected {T}")
+    return n
+
+
+def check_columns(
+    dbn: TwoSliceDBN,
+    evidence: Mapping[str, ArrayLike] | None,
+    soft_evidence: Mapping[str, ArrayLike] | None = None,
+    num_timesteps: int | None = None,
+) -> Columns:
+    """Validate columnar evidence against ``dbn``; see the module docstring.
+
+    Raises
+    ------
+    UnknownVariableError, EvidenceError, ShapeError, NonFiniteError
+    """
+    if evidence is not None and not isinstance(evidence, Mapping):
+        raise EvidenceError(f"evidence must be a mapping name -> column, got {type(evidence)}")
+    variables = {v.name: v for v in dbn.variables}
+    T = num_timesteps
+    disc: dict[str, np.ndarray] = {}
+    cont: dict[str, np.ndarray] = {}
+    for name, col in (evidence or {}).items():
+        if name not in variables:
+            raise UnknownVariableError(f"evidence on unknown variable {name!r}")
+        v = variables[name]
+        arr = np.asarray(col)
+        if isinstance(v, DiscreteVariable):
+            if arr.ndim != 1:
+                raise ShapeError(f"evidence column {name!r} must be 1-D, got shape {arr.shape}")
+            if not np.issubdtype(arr.dtype, np.integer):
+                raise EvidenceError(
+                    f"evidence column {name!r} must hold integer states (-1 = unobserved)"
+                )
+            T = _length(name, arr.shape[0], T)
+            bad = (arr < -1) | (arr >= v.cardinality)
+            if bad.any():
+                t = int(np.argmax(bad))
+                raise EvidenceError(
+                    f"evidence column {name!r}: state {int(arr[t])} at slice {t} out of range "
+                    f"-1..{v.cardinality - 1}"
+                )
+            disc[name] = arr.astype(np.int64)
+        else:
+            arr = np.asarray(col, dtype=np.float64)
+            if arr.ndim == 1 and v.dim == 1:
+                arr = arr[:, None]
+            if arr.ndim != 2 or arr.shape[1] != v.dim:
+                raise ShapeError(
+                    f"evidence column {name!r} must have shape (num_timesteps, {v.dim}), "
+                    f"got {arr.shape}"
+                )
+            T = _length(name, arr.shape[0], T)
+            nan = np.isnan(arr)
+            partial = nan.any(axis=1) & ~nan.all(axis=1)
+            if partial.any() or np.isinf(arr).any():
+                t = int(np.argmax(partial | np.isinf(arr).any(axis=1)))
+                raise NonFiniteError(
+                    f"evidence column {name!r}: row {t} is {arr[t]} (a row is all finite, "
+                    "or all NaN for unobserved)"
+                )
+            cont[name] = arr
+    soft: dict[str, np.ndarray] = {}
+    for name, col in (soft_evidence or {}).items():
+        v = variables.get(name)
+        if v is None:
+            raise UnknownVariableError(f"soft evidence on unknown variable {name!r}")
+        if not isinstance(v, DiscreteVariable):
+            raise EvidenceError(f"soft evidence on continuous variable {name!r}")
+        arr = np.asarray(col, dtype=np.float64)
+        if arr.ndim != 2 or arr.shape[1] != v.cardinality:
+            raise ShapeError(
+                f"soft evidence {name!r} must have shape (num_timesteps, {v.cardinality}), "
+                f"got {arr.shape}"
+            )
+        T = _length(name, arr.shape[0], T)
+        none = np.isnan(arr).all(axis=1)  # an all-NaN row: no soft evidence at that slice
+        arr = np.where(none[:, None], 1.0, arr)
+        if not np.all(np.isfinite(arr)) or np.any(arr < 0) or not np.all(arr.max(axis=1) > 0):
+            raise EvidenceError(
+                f"soft evidence {name!r}: every row must be finite, nonnegative and not all "
+                "zero (or all NaN for none)"
+            )
+        soft[name] = arr
+    if T is None or T < 1:
+        raise ShapeError("filtering needs num_timesteps >= 1 (give an evidence column)")
+    return Columns(int(T), disc, cont, soft)
+
+
+def check_query(dbn: TwoSliceDBN, query, default: tuple[str, ...]) -> tuple[str, ...]:
+    """The query as a tuple of known variable names (``None`` gives ``default``)."""
+    if query is None:
+        return tuple(default)
+    if isinstance(query, str):
+        query = (query,)
+    names = set(dbn.names)
+    out = tuple(query)
+    for q in out:
+        if q not in names:
+            raise UnknownVariableError(f"query names unknown variable {q!r}")
+    return out
