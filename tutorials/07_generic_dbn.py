@@ -5,6 +5,8 @@
 #     text_representation:
 #       extension: .py
 #       format_name: percent
+#       format_version: '1.3'
+#       jupytext_version: 1.19.6
 #   kernelspec:
 #     display_name: Python 3
 #     language: python
@@ -34,13 +36,9 @@ import jax
 import matplotlib.pyplot as plt
 import numpy as np
 
-import inference  # noqa: F401  (float64 for the filters)
+import inference
 from dbn import pgmpy_adapter as pa
 from dbn.examples import coupled_chains, sample_coupled_chains, sample_switching_lds, switching_lds
-from inference.adf.boyen_koller import bk_filter
-from inference.exact.dbn_filter import DBNFilter
-from inference.particle.dbn_adapter import particle_filter_dbn
-from inference.particle.rbpf import rbpf_filter_dbn
 
 QUICK = os.environ.get("DBNTRACK_QUICK") == "1"
 rng = np.random.default_rng(0)
@@ -50,20 +48,20 @@ rng = np.random.default_rng(0)
 # The model: `n` binary chains in a line; chain `i` keeps its state with probability 0.9
 # while its left neighbour is off and flips with probability 0.3 while it is on; each
 # chain has one noisy binary sensor (wrong with probability 0.2). Suppose a pgmpy user has
-# it as a `DynamicBayesianNetwork` (we build it here from our declaration, for brevity);
-# `dbn_from_pgmpy` turns it into a `TwoSliceDBN`, and the exact filter runs on that.
+# it as a `DynamicBayesianNetwork` (we build it here from our declaration, for brevity):
+# `inference.filter` takes it as it is (through the pgmpy adapter) and, with
+# `method="auto"`, runs the structured exact filter because its frontier is small.
 
 # %%
 n_small, T = 4, 40 if QUICK else 100
 pgmpy_model = pa.dbn_to_pgmpy(coupled_chains(n_small))
-dbn = pa.dbn_from_pgmpy(pgmpy_model)
-print(dbn)
+print(pa.dbn_from_pgmpy(pgmpy_model))
 
 states, ys = sample_coupled_chains(rng, n_small, T)
 evidence = {f"y{i}": ys[:, i] for i in range(n_small)}
-exact = DBNFilter(dbn)
-res = exact.filter(evidence)
-p_on = np.stack([exact.marginals_of(res.beliefs, f"x{i}")[:, 1] for i in range(n_small)], 1)
+res = inference.filter(pgmpy_model, evidence)  # method="auto"
+print("method:", res.method, "-", res.info["auto"])
+p_on = np.stack([res.marginals[f"x{i}"][:, 1] for i in range(n_small)], 1)
 print("log-likelihood of the sensor readings:", round(res.log_likelihood, 3))
 
 # pgmpy's forward inference at one slice, for comparison
@@ -90,7 +88,8 @@ plt.show()
 # %% [markdown]
 # ## 2. Fifty chains: Boyen-Koller
 # The exact belief couples every chain: 2^n joint states, 2^50 at 50 chains, beyond any
-# exact filter (`DBNFilter`, which builds interface x interface tables, stops at 8).
+# exact filter (the structured exact filter's frontier tables grow like 2^n: asked for
+# 50 chains, it refuses before allocating and names the approximate methods).
 # Boyen-Koller keeps one marginal per chain (the automatic clusters: chains share no edge
 # inside a slice), propagates the product exactly through the template and projects back
 # onto the clusters. First its error where exact filtering is still possible (8 chains):
@@ -102,11 +101,10 @@ n8 = 8
 states8, ys8 = sample_coupled_chains(rng, n8, T)
 ev8 = {f"y{i}": ys8[:, i] for i in range(n8)}
 dbn8 = coupled_chains(n8)
-flt8 = DBNFilter(dbn8)
-exact8 = flt8.filter(ev8)
-bk8 = bk_filter(dbn8, ev8)
+exact8 = inference.filter(dbn8, ev8, method="exact")
+bk8 = inference.filter(dbn8, ev8, method="bk")
 print("clusters:", bk8.info["clusters"])
-p = np.stack([flt8.marginals_of(exact8.beliefs, f"x{i}") for i in range(n8)], 1)
+p = np.stack([exact8.marginals[f"x{i}"] for i in range(n8)], 1)
 q = np.stack([bk8.marginals[f"x{i}"] for i in range(n8)], 1)
 kl = (p * np.log(p / q)).sum(-1)  # (T, chains)
 print(f"mean KL {kl.mean():.2e}, last 20 slices {kl[-20:].mean():.2e}")
@@ -123,7 +121,8 @@ plt.show()
 # %%
 n50 = 50
 states50, ys50 = sample_coupled_chains(rng, n50, T)
-bk50 = bk_filter(coupled_chains(n50), {f"y{i}": ys50[:, i] for i in range(n50)})
+bk50 = inference.filter(coupled_chains(n50), {f"y{i}": ys50[:, i] for i in range(n50)})
+print("method:", bk50.method, "-", bk50.info["auto"])
 p50 = np.stack([bk50.marginals[f"x{i}"][:, 1] for i in range(n50)], 1)
 print("largest clique of a step:", bk50.info["max_clique_size"], "entries")
 print("fraction of chain states recovered (MAP of marginal):", ((p50 > 0.5) == states50).mean())
@@ -151,8 +150,8 @@ plt.show()
 T_s, N = (40, 100) if QUICK else (150, 100)
 slds = switching_lds()
 s_true, x_true, y_obs = sample_switching_lds(rng, T_s)
-rb = rbpf_filter_dbn(jax.random.key(1), slds, {"y": y_obs}, num_particles=N)
-pf = particle_filter_dbn(jax.random.key(1), slds, {"y": y_obs}, num_particles=N)
+rb = inference.filter(slds, {"y": y_obs}, "rbpf", key=jax.random.key(1), num_particles=N)
+pf = inference.filter(slds, {"y": y_obs}, "particle", key=jax.random.key(1), num_particles=N)
 for name, out in (("RBPF", rb), ("bootstrap PF", pf)):
     rmse = np.sqrt(np.mean((out.means["x"] - x_true) ** 2))
     print(f"{name:>13}: RMSE of the filtered state {rmse:.3f}")
