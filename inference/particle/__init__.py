@@ -7,7 +7,6 @@ Usage::
     log_evidence = infos.log_likelihood.sum()
 """
 
-import inference  # noqa: F401  (64-bit mode)
 from inference.particle.filters import (
     ParticleFilter,
     ParticleInfo,

@@ -24,6 +24,7 @@ from inference.particle import (
     run,
     systematic,
 )
+from inference.precision import honours_dtype, precision_scope
 from models.localization.model import (
     KNNLocalizationModel,
     RangeBearingLocalizationModel,
@@ -66,6 +67,7 @@ class LocalizationResult(NamedTuple):
     final_state: ParticleState
 
 
+@honours_dtype
 def localize(
     key: jax.Array,
     model: RobotModel,
@@ -124,6 +126,7 @@ class Localizer:
     state: a rejected input leaves the localiser exactly as it was.
     """
 
+    @honours_dtype
     def __init__(
         self,
         key: jax.Array,
@@ -214,11 +217,12 @@ class Localizer:
                 raise NonFiniteError(f"timestamp = {timestamp!r} is not finite")
             if self.timestamp is not None and ts <= self.timestamp:
                 raise TimeOrderError(f"timestamp = {ts} does not come after {self.timestamp}")
-        step = jnp.asarray(self.model.prepare_actions(odometry), self.dtype)
-        if step.shape != (4, 3):
-            raise ShapeError(f"odometry has shape {np.shape(odometry)}, expected (4,)")
-        obs = self._check_observation(observation)
-        new_state, info = self._step(key, self.state, obs, step)
+        with precision_scope(self.dtype):  # float64 by default, whatever jax's global mode
+            step = jnp.asarray(self.model.prepare_actions(odometry), self.dtype)
+            if step.shape != (4, 3):
+                raise ShapeError(f"odometry has shape {np.shape(odometry)}, expected (4,)")
+            obs = self._check_observation(observation)
+            new_state, info = self._step(key, self.state, obs, step)
         self.state, self.last_info = new_state, info
         if timestamp is not None:
             self.timestamp = float(timestamp)
@@ -226,4 +230,5 @@ class Localizer:
 
     def mean(self) -> np.ndarray:
         """Filtered mean pose ``(3,)`` (circular mean for the heading)."""
-        return np.asarray(circular_mean(self.state.particles, self.state.log_weights))
+        with precision_scope(self.dtype):
+            return np.asarray(circular_mean(self.state.particles, self.state.log_weights))
