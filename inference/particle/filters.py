@@ -33,8 +33,8 @@ from jax.scipy.special import logsumexp
 
 from dbn.errors import InputError, ModelError
 from inference.particle.model import StateSpaceModel
-from inference.precision import precision_scope, scoped
 from inference.particle.resampling import Resampler, systematic
+from inference.precision import precision_scope, scoped
 
 __all__ = [
     "ParticleState",
