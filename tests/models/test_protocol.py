@@ -123,8 +123,9 @@ def test_rejected_observation_leaves_the_state_unchanged(name: str) -> None:
     with pytest.raises(DBNError):
         tr.step(jax.random.key(3), state, ex.bad_observation)
     _assert_same(tr.fingerprint(state), snapshot)
-    # and the state still steps as if nothing had happened
+    # and the state still steps as if nothing had happened; a good step does not mutate it
     a = tr.step(jax.random.key(4), state, ex.observations[1])
+    _assert_same(tr.fingerprint(state), snapshot)
     fresh, _ = tr.step(jax.random.key(2), tr.init(jax.random.key(1)), ex.observations[0])
     b = tr.step(jax.random.key(4), fresh, ex.observations[1])
     _assert_same(tr.fingerprint(a[0]), tr.fingerprint(b[0]))
