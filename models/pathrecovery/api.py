@@ -3,13 +3,15 @@
 ``step(key, state, obs)`` is :func:`models.pathrecovery.filter.step` with a numpy
 ``Generator`` seeded from the key (:func:`models.protocol.seed_from_key`); the state is
 the filter's own immutable :class:`inference.particle.ParticleState` plus the time step.
-The second phase (dynamic programming over the k-best lists, :func:`recover_path`) is
+``save`` / ``load`` write the state to ``.npz``. The second phase (dynamic programming
+over the k-best lists, :func:`recover_path`) is
 offline and stays outside the protocol. Info is :class:`StepInfo`; its ``log_score`` is
 the step's log mean unnormalised particle weight.
 """
 
 from __future__ import annotations
 
+import json
 from typing import NamedTuple
 
 import jax
@@ -20,12 +22,15 @@ from inference.particle import ParticleState
 from models.pathrecovery.filter import (
     FilterConfig,
     PathFilterModel,
+    PathParticles,
     StepInfo,
     init,
     make_model,
     step,
 )
 from models.protocol import Example, StepTracker, seed_from_key
+
+_FORMAT = "dbntrack-pathrecovery-state-1"
 
 __all__ = ["PathObservation", "PathState", "PathRecoveryTracker", "make", "example"]
 
@@ -50,7 +55,7 @@ class PathRecoveryTracker(StepTracker):
 
     name = "pathrecovery"
     score_field = "log_score"
-    can_save = False
+    can_save = True
 
     def __init__(self, model: PathFilterModel) -> None:
         self.model = model
@@ -67,6 +72,34 @@ class PathRecoveryTracker(StepTracker):
         rng = np.random.default_rng(seed_from_key(key))
         particles, info = step(rng, self.model, state.particles, obs.cam, obs.feat, int(obs.offset))
         return PathState(particles, state.t + 1), info
+
+    def save(self, state: PathState, path) -> None:
+        """Write ``state`` to an ``.npz`` file (arrays and a JSON header; no pickle)."""
+        header = json.dumps({"format": _FORMAT, "t": int(state.t)})
+        arrays = {
+            f: np.asarray(getattr(state.particles.particles, f)) for f in PathParticles._fields
+        }
+        np.savez(
+            path,
+            __header__=np.frombuffer(header.encode(), np.uint8),
+            log_weights=np.asarray(state.particles.log_weights),
+            **arrays,
+        )
+
+    def load(self, path) -> PathState:
+        """Read a state written by :meth:`save` (checked against this model's sizes)."""
+        with np.load(path, allow_pickle=False) as f:
+            header = json.loads(bytes(f["__header__"]).decode())
+            if header.get("format") != _FORMAT:
+                raise InputError(f"{path}: not a saved path-recovery state")
+            parts = PathParticles(*(np.array(f[name]) for name in PathParticles._fields))
+            lw = np.array(f["log_weights"])
+        n, d = self.model.config.num_particles, self.model.f0.size
+        if parts.cam.shape != (n,) or parts.feat.shape != (n, d) or lw.shape != (n,):
+            raise InputError(
+                f"{path}: saved for other sizes than num_particles={n}, feature_dim={d}"
+            )
+        return PathState(ParticleState(parts, lw), int(header["t"]))
 
 
 def make(model: PathFilterModel) -> PathRecoveryTracker:
