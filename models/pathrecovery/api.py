@@ -4,8 +4,7 @@
 ``Generator`` seeded from the key (:func:`models.protocol.seed_from_key`); the state is
 the filter's own immutable :class:`inference.particle.ParticleState` plus the time step.
 ``save`` / ``load`` write the state to ``.npz``. The second phase (dynamic programming
-over the k-best lists, :func:`recover_path`) is
-offline and stays outside the protocol. Info is :class:`StepInfo`; its ``log_score`` is
+over the k-best lists, :func:`recover_path`) is offline and stays outside the protocol. Info is :class:`StepInfo`; its ``log_score`` is
 the step's log mean unnormalised particle weight.
 """
 
