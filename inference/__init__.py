@@ -2,14 +2,13 @@
 
 Imports ``dbn`` only (never ``models``).
 
-Importing this package switches jax to 64-bit mode (``jax_enable_x64``): filters run in
-float64 unless a benchmark shows float32 keeps the accuracy, and float32 is then asked
-for explicitly by dtype.
+Importing this package (or any module of the library) leaves jax's global configuration
+alone: it does NOT switch on ``jax_enable_x64``. Each engine chooses its float dtype
+explicitly: filters run in float64 by default and enter jax's 64-bit mode themselves for
+the duration of a call (:mod:`inference.precision`); float32 is asked for by ``dtype``
+where a benchmark shows it keeps the accuracy.
 """
 
-import jax
-
-jax.config.update("jax_enable_x64", True)
 
 
 # --- lazy entry points (issue 11): ``inference.filter`` without importing every engine ---

@@ -417,7 +417,8 @@ class DBNFilter:
         z0 = a0.sum()
         if not z0 > 0.0:
             raise EvidenceError("the evidence of slice 0 has probability zero")
-        beliefs, norms = _forward_scan(a0 / z0, np.stack(stack), steps)
+        with jax.enable_x64(True):  # float64 scan without touching jax's global config
+            beliefs, norms = _forward_scan(a0 / z0, np.stack(stack), steps)
         beliefs = np.concatenate([(a0 / z0)[None], np.asarray(beliefs)[: T - 1]])
         norms = np.concatenate([[z0], np.asarray(norms)[: T - 1]])
         with np.errstate(divide="ignore", invalid="ignore"):

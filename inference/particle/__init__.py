@@ -5,9 +5,12 @@ Usage::
     pf = auxiliary_filter(model, num_particles=1000, dtype=jnp.float32)
     final, infos, means = run(jax.random.key(0), pf, observations, actions)
     log_evidence = infos.log_likelihood.sum()
+
+Models whose particles are ragged host data (numpy) use the same machinery from
+:mod:`inference.particle.numpy_path` (log normalisation, ESS, resamplers with a numpy
+``Generator``) and :func:`k_best_states` (the k distinct states of largest mass).
 """
 
-import inference  # noqa: F401  (64-bit mode)
 from inference.particle.filters import (
     ParticleFilter,
     ParticleInfo,
@@ -19,6 +22,7 @@ from inference.particle.filters import (
     weighted_cov,
     weighted_mean,
 )
+from inference.particle.kbest import k_best_states
 from inference.particle.linear_gaussian import LinearGaussianSSM
 from inference.particle.model import StateSpaceModel
 from inference.particle.resampling import (
@@ -41,6 +45,7 @@ __all__ = [
     "ess",
     "run",
     "weighted_cov",
+    "k_best_states",
     "weighted_mean",
     "RESAMPLERS",
     "multinomial",

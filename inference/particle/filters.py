@@ -14,7 +14,9 @@ weights, and each step's info carries the one-step log-likelihood estimate
 exponential is unbiased.
 
 Steps are pure and jit-able; :func:`run` scans a step over time with ``lax.scan``.
-The float dtype (float32 or float64) is chosen by ``dtype`` and kept throughout.
+The float dtype (float32 or float64) is chosen by ``dtype`` and kept throughout; with
+float64 (the default) ``init``, ``step`` and :func:`run` enter jax's 64-bit mode themselves
+(:func:`inference.precision.precision_scope`), whatever the global configuration.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from jax.scipy.special import logsumexp
 from dbn.errors import InputError, ModelError
 from inference.particle.model import StateSpaceModel
 from inference.particle.resampling import Resampler, systematic
+from inference.precision import precision_scope, scoped
 
 __all__ = [
     "ParticleState",
@@ -85,11 +88,14 @@ class ParticleFilter(NamedTuple):
     """An algorithm as a pair of pure functions (blackjax style).
 
     ``init(key) -> ParticleState``;
-    ``step(key, state, observation, action=None) -> (ParticleState, ParticleInfo)``.
+    ``step(key, state, observation, action=None) -> (ParticleState, ParticleInfo)``;
+    ``dtype`` is the float dtype they compute in (``None``: jax's current default). Both
+    functions enter 64-bit mode themselves when ``dtype`` is float64.
     """
 
     init: Callable[..., ParticleState]
     step: Callable[..., tuple[ParticleState, ParticleInfo]]
+    dtype: Any = None
 
 
 def ess(log_weights: Array) -> Array:
@@ -207,9 +213,11 @@ def bootstrap_filter(
     n = int(num_particles)
     log_n = math.log(n)
 
+    @scoped(dtype)
     def init(key: Array) -> ParticleState:
         return _init(key, model, n, dtype)
 
+    @scoped(dtype)
     def step(
         key: Array, state: ParticleState, observation: Any, action: Any = None
     ) -> tuple[ParticleState, ParticleInfo]:
@@ -231,7 +239,7 @@ def bootstrap_filter(
         new_lw, total = _normalise(log_w)
         return ParticleState(x_new, new_lw), ParticleInfo(total, cur_ess, anc, do)
 
-    return ParticleFilter(init, step)
+    return ParticleFilter(init, step, dtype)
 
 
 def auxiliary_filter(
@@ -261,9 +269,11 @@ def auxiliary_filter(
     n = int(num_particles)
     log_n = math.log(n)
 
+    @scoped(dtype)
     def init(key: Array) -> ParticleState:
         return _init(key, model, n, dtype)
 
+    @scoped(dtype)
     def step(
         key: Array, state: ParticleState, observation: Any, action: Any = None
     ) -> tuple[ParticleState, ParticleInfo]:
@@ -293,7 +303,7 @@ def auxiliary_filter(
         new_lw, total = _normalise(log_w)
         return ParticleState(x_new, new_lw), ParticleInfo(total, cur_ess, anc, do)
 
-    return ParticleFilter(init, step)
+    return ParticleFilter(init, step, dtype)
 
 
 @partial(jax.jit, static_argnames=("pf", "summary", "keep_ancestors"))
@@ -364,6 +374,7 @@ def run(
     summaries : pytree
         ``summary`` of each filtered state, stacked over time.
     """
-    k0, k_steps = jax.random.split(key)
-    state = pf.init(k0) if initial_state is None else initial_state
-    return _run(k_steps, state, observations, actions, pf, summary, keep_ancestors)
+    with precision_scope(pf.dtype):
+        k0, k_steps = jax.random.split(key)
+        state = pf.init(k0) if initial_state is None else initial_state
+        return _run(k_steps, state, observations, actions, pf, summary, keep_ancestors)

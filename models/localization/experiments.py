@@ -16,6 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from inference.particle import ParticleState, run
+from inference.precision import honours_dtype
 from models.localization.model import compose
 from models.localization.simulate import (
     TrainedWorld,
@@ -48,6 +49,7 @@ def _vmapped_run(pf, keys, init, obs, steps):
     return jax.vmap(one)(keys, init, obs, steps)
 
 
+@honours_dtype
 def synthetic_trials(
     seed: int,
     trained: TrainedWorld,
@@ -111,6 +113,7 @@ def dead_reckoning(start: np.ndarray, odometry: np.ndarray) -> np.ndarray:
     return out
 
 
+@honours_dtype
 def mrclam_trials(
     seed: int,
     *,

@@ -24,6 +24,7 @@ from inference.particle import (
     run,
     systematic,
 )
+from inference.precision import honours_dtype, precision_scope
 from models.localization.model import (
     KNNLocalizationModel,
     RangeBearingLocalizationModel,
@@ -32,7 +33,14 @@ from models.localization.model import (
     circular_mean,
 )
 
-__all__ = ["Localizer", "LocalizationResult", "localize", "make_filter", "position_errors"]
+__all__ = [
+    "Localizer",
+    "LocalizationResult",
+    "check_observation",
+    "localize",
+    "make_filter",
+    "position_errors",
+]
 
 ALGORITHMS = {"sir": bootstrap_filter, "apf": auxiliary_filter}
 
@@ -66,6 +74,7 @@ class LocalizationResult(NamedTuple):
     final_state: ParticleState
 
 
+@honours_dtype
 def localize(
     key: jax.Array,
     model: RobotModel,
@@ -107,6 +116,50 @@ def position_errors(means: np.ndarray, truth: np.ndarray) -> np.ndarray:
     return np.hypot(means[..., 0] - truth[..., 0], means[..., 1] - truth[..., 1])
 
 
+def check_observation(model: RobotModel, observation: Any, dtype: Any = jnp.float64):
+    """Validate and pre-process one step's observation for ``model`` (before any state change).
+
+    A raw scan ``(obs_dim,)`` for the k-NN model (projected, looked up, outlier-tested), or
+    a :class:`RangeBearingObservation` of ``(max_meas,)`` arrays; raises
+    :class:`ShapeError`, :class:`NonFiniteError` or :class:`InputError` naming the field.
+    """
+    m = model
+    if isinstance(m, KNNLocalizationModel):
+        return m.sensor.preprocess(m.sensor.check(observation, "observation"), dtype=dtype)
+    if isinstance(m, RangeBearingLocalizationModel):
+        if not isinstance(observation, RangeBearingObservation):
+            raise InputError(
+                f"observation must be a RangeBearingObservation, got {type(observation).__name__}"
+            )
+        lm = np.asarray(observation.landmark)
+        fields = {
+            "range": np.asarray(observation.range, dtype=np.float64),
+            "bearing": np.asarray(observation.bearing, dtype=np.float64),
+            "mask": np.asarray(observation.mask),
+        }
+        for name, arr in fields.items():
+            if arr.shape != lm.shape or lm.ndim != 1:
+                raise ShapeError(
+                    f"observation.{name} has shape {arr.shape}, landmark {lm.shape}"
+                )
+        for name in ("range", "bearing"):
+            arr = fields[name]
+            if not np.all(np.isfinite(arr)):
+                i = int(np.flatnonzero(~np.isfinite(arr))[0])
+                raise NonFiniteError(f"observation.{name}[{i}] = {arr[i]} is not finite")
+        if np.any((lm < 0) | (lm >= len(m.landmarks))):
+            raise InputError(
+                f"observation.landmark {lm.tolist()} out of [0, {len(m.landmarks)})"
+            )
+        return RangeBearingObservation(
+            jnp.asarray(lm, jnp.int32),
+            jnp.asarray(fields["range"], dtype),
+            jnp.asarray(fields["bearing"], dtype),
+            jnp.asarray(fields["mask"], bool),
+        )
+    return observation
+
+
 class Localizer:
     """A running localiser: one validated ``update`` per time step (seed 002, section 1.3).
 
@@ -124,6 +177,7 @@ class Localizer:
     state: a rejected input leaves the localiser exactly as it was.
     """
 
+    @honours_dtype
     def __init__(
         self,
         key: jax.Array,
@@ -145,41 +199,7 @@ class Localizer:
         self.last_info: ParticleInfo | None = None
 
     def _check_observation(self, observation: Any):
-        m = self.model
-        if isinstance(m, KNNLocalizationModel):
-            return m.sensor.preprocess(m.sensor.check(observation, "observation"), dtype=self.dtype)
-        if isinstance(m, RangeBearingLocalizationModel):
-            if not isinstance(observation, RangeBearingObservation):
-                raise InputError(
-                    f"observation must be a RangeBearingObservation, got {type(observation).__name__}"
-                )
-            lm = np.asarray(observation.landmark)
-            fields = {
-                "range": np.asarray(observation.range, dtype=np.float64),
-                "bearing": np.asarray(observation.bearing, dtype=np.float64),
-                "mask": np.asarray(observation.mask),
-            }
-            for name, arr in fields.items():
-                if arr.shape != lm.shape or lm.ndim != 1:
-                    raise ShapeError(
-                        f"observation.{name} has shape {arr.shape}, landmark {lm.shape}"
-                    )
-            for name in ("range", "bearing"):
-                arr = fields[name]
-                if not np.all(np.isfinite(arr)):
-                    i = int(np.flatnonzero(~np.isfinite(arr))[0])
-                    raise NonFiniteError(f"observation.{name}[{i}] = {arr[i]} is not finite")
-            if np.any((lm < 0) | (lm >= len(m.landmarks))):
-                raise InputError(
-                    f"observation.landmark {lm.tolist()} out of [0, {len(m.landmarks)})"
-                )
-            return RangeBearingObservation(
-                jnp.asarray(lm, jnp.int32),
-                jnp.asarray(fields["range"], self.dtype),
-                jnp.asarray(fields["bearing"], self.dtype),
-                jnp.asarray(fields["mask"], bool),
-            )
-        return observation
+        return check_observation(self.model, observation, self.dtype)
 
     def update(
         self,
@@ -214,11 +234,12 @@ class Localizer:
                 raise NonFiniteError(f"timestamp = {timestamp!r} is not finite")
             if self.timestamp is not None and ts <= self.timestamp:
                 raise TimeOrderError(f"timestamp = {ts} does not come after {self.timestamp}")
-        step = jnp.asarray(self.model.prepare_actions(odometry), self.dtype)
-        if step.shape != (4, 3):
-            raise ShapeError(f"odometry has shape {np.shape(odometry)}, expected (4,)")
-        obs = self._check_observation(observation)
-        new_state, info = self._step(key, self.state, obs, step)
+        with precision_scope(self.dtype):  # float64 by default, whatever jax's global mode
+            step = jnp.asarray(self.model.prepare_actions(odometry), self.dtype)
+            if step.shape != (4, 3):
+                raise ShapeError(f"odometry has shape {np.shape(odometry)}, expected (4,)")
+            obs = self._check_observation(observation)
+            new_state, info = self._step(key, self.state, obs, step)
         self.state, self.last_info = new_state, info
         if timestamp is not None:
             self.timestamp = float(timestamp)
@@ -226,4 +247,5 @@ class Localizer:
 
     def mean(self) -> np.ndarray:
         """Filtered mean pose ``(3,)`` (circular mean for the heading)."""
-        return np.asarray(circular_mean(self.state.particles, self.state.log_weights))
+        with precision_scope(self.dtype):
+            return np.asarray(circular_mean(self.state.particles, self.state.log_weights))

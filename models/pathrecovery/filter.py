@@ -63,6 +63,14 @@ hidden particles are neither diffused nor switched. A visible particle outside t
 
 ``FilterConfig.gaps=False`` disables gap modelling: every edge takes one step and no
 particle is ever hidden (the "without gap modelling" runs of sec. 7.2.1).
+
+The particle machinery is the library's (:mod:`inference.particle`, numpy path): the state
+is an :class:`inference.particle.ParticleState` whose ``particles`` are the
+:class:`PathParticles` arrays, weights are log weights normalised in log space
+(:func:`inference.particle.numpy_path.log_normalise`), resampling is
+:func:`inference.particle.numpy_path.systematic` / ``multinomial``, and the k best states
+are :func:`inference.particle.kbest.k_best_states`. This module holds only the model:
+prediction, the support of eqs. 5-7, diffusion and feature switching.
 """
 
 from __future__ import annotations
@@ -74,12 +82,17 @@ import numpy as np
 from scipy.linalg import cholesky
 
 from dbn.errors import InputError, NonFiniteError, ShapeError
+from inference.particle.filters import ParticleState
+from inference.particle.kbest import k_best_states
+from inference.particle.numpy_path import ess as ess_of
+from inference.particle.numpy_path import log_normalise, multinomial, systematic
 from models.pathrecovery.model import CameraNetwork, check_cameras, propagate, whiten
 
 __all__ = [
     "FilterConfig",
     "KBestLists",
     "ParticleState",
+    "PathParticles",
     "StepInfo",
     "PathFilterModel",
     "init",
@@ -163,8 +176,11 @@ class PathFilterModel(NamedTuple):
     config: FilterConfig
 
 
-class ParticleState(NamedTuple):
-    """The particle set (arrays of shape (num_particles, ...)); never mutated in place.
+class PathParticles(NamedTuple):
+    """The particles' values (arrays of shape (num_particles, ...)); never mutated in place.
+
+    The filter's state is ``inference.particle.ParticleState(particles=PathParticles,
+    log_weights)``: after every step's resampling the weights are uniform (``-log N``).
 
     Attributes
     ----------
@@ -175,7 +191,6 @@ class ParticleState(NamedTuple):
     feat : (N, feature_dim) whitened feature vectors ``L^{-1} f``.
     raw : (N,) float64 the particle's last eq. 7 weight (the stale weight the faithful
         reading gives a hidden particle).
-    t : int, the time step of this particle set.
     """
 
     cam: np.ndarray
@@ -183,7 +198,6 @@ class ParticleState(NamedTuple):
     src: np.ndarray
     feat: np.ndarray
     raw: np.ndarray
-    t: int
 
 
 class StepInfo(NamedTuple):
@@ -199,6 +213,11 @@ class StepInfo(NamedTuple):
     mass : (k,) float64 normalised weight of the state (0 for no state).
     num_tracked_cameras : cameras evaluated this step (at most ``N_fc``).
     ess : effective sample size of the normalised weights.
+    log_score : the step's log mean unnormalised weight
+        ``log sum_i exp(log_w_prev_i + log g_i)`` with ``g`` the weighting function of
+        the reading (eq. 7 support raised to ``kappa``, or the faithful raw weight):
+        the particle estimate of the step's (unnormalised) evidence; ``-inf`` when every
+        particle weighs zero.
     """
 
     kind: np.ndarray
@@ -208,6 +227,7 @@ class StepInfo(NamedTuple):
     mass: np.ndarray
     num_tracked_cameras: int
     ess: float
+    log_score: float = float("nan")
 
 
 class KBestLists(NamedTuple):
@@ -276,14 +296,14 @@ def make_model(
 def init(model: PathFilterModel) -> ParticleState:
     """All particles at ``C_0`` with ``f_0``, equally weighted (sec. 4.1), at ``t = 0``."""
     n = model.config.num_particles
-    return ParticleState(
+    particles = PathParticles(
         cam=np.full(n, model.c0, dtype=np.int64),
         ta=np.zeros(n, dtype=np.int64),
         src=np.full(n, model.c0, dtype=np.int64),
         feat=np.tile(model.u0, (n, 1)),
         raw=np.ones(n),
-        t=0,
     )
+    return ParticleState(particles, np.full(n, -np.log(n)))
 
 
 def _check_observations(model: PathFilterModel, obs_cam: np.ndarray, obs_feat: np.ndarray) -> None:
@@ -342,17 +362,6 @@ def _whiten(model: PathFilterModel, feats: np.ndarray) -> np.ndarray:
     return whiten(model.chol, feats)
 
 
-def _systematic(rng: np.random.Generator, w: np.ndarray, n: int) -> np.ndarray:
-    cum = np.cumsum(w)
-    u = (rng.random() + np.arange(n)) / n
-    return np.minimum(np.searchsorted(cum, u * cum[-1], side="right"), w.size - 1)
-
-
-def _multinomial(rng: np.random.Generator, w: np.ndarray, n: int) -> np.ndarray:
-    cum = np.cumsum(w)
-    return np.minimum(np.searchsorted(cum, rng.random(n) * cum[-1], side="right"), w.size - 1)
-
-
 # ------------------------------------------------------------------------------ the step
 def observation_support(
     model: PathFilterModel, u_x: np.ndarray, u_z: np.ndarray, w_p: np.ndarray
@@ -396,7 +405,7 @@ def step(
     ----------
     rng : numpy Generator (the step's randomness; same state, same result).
     model : PathFilterModel from :func:`make_model`.
-    state : ParticleState at ``t - 1``.
+    state : ParticleState (particles :class:`PathParticles`) at ``t - 1``.
     obs_cam : (num_obs,) int camera of every observation at ``t``, sorted ascending.
     obs_feat : (num_obs, feature_dim) their feature vectors.
     obs_offset : added to observation indices in the output (e.g. the ODB's
@@ -421,9 +430,10 @@ def step(
     n = cfg.num_particles
 
     # 1. prediction (sec. 4.1.1)
-    cam, ta, moved_from = propagate(rng, net, state.cam, state.ta, gaps=cfg.gaps)
-    src = np.where(moved_from >= 0, moved_from, state.src)
-    feat = state.feat.copy()
+    prev = state.particles
+    cam, ta, moved_from = propagate(rng, net, prev.cam, prev.ta, gaps=cfg.gaps)
+    src = np.where(moved_from >= 0, moved_from, prev.src)
+    feat = prev.feat.copy()
     vis = ta == 0
     vis_idx = np.flatnonzero(vis)
 
@@ -449,22 +459,24 @@ def step(
         upd = rng.random(p_idx.size) < cfg.p_update
         feat[p_idx[upd]] = uz[best[upd]]
 
-    # 3. normalisation over visible and hidden (sec. 4.1.4)
-    if cfg.faithful:
-        raw = np.where(vis, w, state.raw)  # hidden particles keep their stale weight
-        weight = raw
-    else:
-        raw = np.where(vis, w, state.raw)
-        weight = np.where(vis, w, cfg.hidden_likelihood) ** cfg.sharpness
-    total = weight.sum()
-    wn = weight / total if total > 0 else np.full(n, 1.0 / n)
-    ess = float(1.0 / np.sum(wn * wn))
+    # 3. normalisation over visible and hidden (sec. 4.1.4), in log space
+    raw = np.where(vis, w, prev.raw)  # a hidden particle keeps its stale weight in ``raw``
+    with np.errstate(divide="ignore"):
+        if cfg.faithful:
+            log_g = np.log(raw)
+        else:
+            log_g = cfg.sharpness * np.log(np.where(vis, w, cfg.hidden_likelihood))
+    log_w = state.log_weights + log_g
+    log_wn, log_score = log_normalise(log_w)
+    wn = np.exp(log_wn)
 
     # output: k best distinct states (sec. 4.1.5)
-    info = _kbest(model, cam, ta, assoc, wn, weight > 0, obs_offset, int(tracked_cams.size), ess)
+    info = _kbest(
+        model, cam, ta, assoc, wn, np.isfinite(log_w), obs_offset, int(tracked_cams.size), ess_of(log_wn)
+    )._replace(log_score=log_score)
 
     # 4. resampling (sec. 4.1.6)
-    anc = _multinomial(rng, wn, n) if cfg.faithful else _systematic(rng, wn, n)
+    anc = (multinomial if cfg.faithful else systematic)(rng, log_wn, n)
     cam, ta, src, feat, raw = cam[anc], ta[anc], src[anc], feat[anc], raw[anc]
 
     # diffusion of visible locations by G_mcd, then feature switching
@@ -482,7 +494,7 @@ def step(
             score = -0.5 * np.einsum("ij,ij->i", d0, d0) + rng.gumbel(size=item.size)
             _, best = _segment_argmax(score, owner, starts)
             feat[sw] = uz[best]
-    new_state = ParticleState(cam=cam, ta=ta, src=src, feat=feat, raw=raw, t=state.t + 1)
+    new_state = ParticleState(PathParticles(cam, ta, src, feat, raw), np.full(n, -np.log(n)))
     return new_state, info
 
 
@@ -508,27 +520,21 @@ def _kbest(
     else:
         hkey = -(1 + cam[idx] * width)
     key = np.where(hidden, hkey, assoc[idx])
-    order = np.argsort(-wn[idx], kind="stable")
-    uniq, first = np.unique(key[order], return_index=True)
-    rep = idx[order[first]]  # heaviest particle of every distinct state
-    if cfg.faithful:
-        mass = wn[rep]
-    else:
-        mass = np.bincount(np.searchsorted(uniq, key), weights=wn[idx], minlength=uniq.size)
-    top = np.argsort(-mass, kind="stable")[:k]
-    m = top.size
+    # a state's rank: its largest particle weight (faithful) or its total mass (default)
+    best, mass = k_best_states(key, wn[idx], k, combine="max" if cfg.faithful else "sum")
+    m = best.size
     out_kind = np.full(k, NONE, dtype=np.int8)
     out_cam = np.full(k, -1, dtype=np.int64)
     out_ta = np.zeros(k, dtype=np.int64)
     out_obs = np.full(k, -1, dtype=np.int64)
     out_mass = np.zeros(k)
-    r = rep[top]
+    r = idx[best]
     is_h = ta[r] > 0
     out_kind[:m] = np.where(is_h, HIDDEN, VISIBLE)
     out_cam[:m] = cam[r]
     out_ta[:m] = ta[r]
     out_obs[:m] = np.where(is_h, -1, assoc[r] + obs_offset)
-    out_mass[:m] = mass[top]
+    out_mass[:m] = mass
     return StepInfo(out_kind, out_cam, out_ta, out_obs, out_mass, num_tracked, ess)
 
 

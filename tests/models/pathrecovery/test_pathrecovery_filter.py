@@ -13,6 +13,7 @@ from models.pathrecovery import (
     FilterConfig,
     KBestLists,
     ParticleState,
+    PathParticles,
     correct_states,
     init,
     kbest_score,
@@ -81,14 +82,14 @@ def isolated_world(faithful):
     cfg = FilterConfig(num_particles=5, k=10, faithful=faithful)
     model = make_model(net, 0, f0, np.eye(2), cfg)
     fA = np.array([1.0, 0.5])
-    state = ParticleState(
+    particles = PathParticles(
         cam=np.array([0, 0, 1, 2, 2]),
         ta=np.array([0, 0, 0, 3, 0]),
         src=np.array([0, 0, 1, 2, 2]),
         feat=np.array([f0, fA, f0, f0, f0]),
         raw=np.array([0.9, 0.9, 0.9, 0.3, 0.9]),
-        t=0,
     )
+    state = ParticleState(particles, np.full(5, -np.log(5)))
     obs_cam = np.array([0, 0, 1])
     obs_feat = np.array([fA + 0.1, [0.1, 0.0], [2.0, 2.0]])
     return model, state, obs_cam, obs_feat
@@ -103,12 +104,12 @@ def test_step_weights_by_hand(faithful):
     w = np.zeros(5)
     assoc = np.full(5, -1)
     for i in (0, 1, 2):
-        cands = [j for j in range(3) if obs_cam[j] == state.cam[i]]
-        s = [support_by_hand(cfg.alpha, cfg.beta, 1.0, state.feat[i], obs_feat[j], model.f0) for j in cands]
+        cands = [j for j in range(3) if obs_cam[j] == state.particles.cam[i]]
+        s = [support_by_hand(cfg.alpha, cfg.beta, 1.0, state.particles.feat[i], obs_feat[j], model.f0) for j in cands]
         w[i], assoc[i] = max(s), cands[int(np.argmax(s))]
     if faithful:
         weight = w.copy()
-        weight[3] = state.raw[3]  # stale
+        weight[3] = state.particles.raw[3]  # stale
     else:
         weight = w.copy()
         weight[3] = cfg.hidden_likelihood
@@ -138,8 +139,10 @@ def test_initial_state():
     net = network_from_undirected(3, [(0, 1), (1, 2)])
     model = make_model(net, 1, np.array([1.0, 2.0]), np.eye(2), FilterConfig(num_particles=7))
     s = init(model)
-    assert np.all(s.cam == 1) and np.all(s.ta == 0) and s.feat.shape == (7, 2)
-    assert np.allclose(s.feat, [1.0, 2.0])
+    p = s.particles
+    assert np.all(p.cam == 1) and np.all(p.ta == 0) and p.feat.shape == (7, 2)
+    assert np.allclose(p.feat, [1.0, 2.0])
+    np.testing.assert_allclose(np.exp(s.log_weights), 1 / 7)
 
 
 # ----------------------------------------------------------------------------- one object
@@ -292,7 +295,8 @@ def test_scoring_rules():
 # ----------------------------------------------------------------------------- bad input
 def test_bad_observations_leave_the_state_untouched():
     model, state, obs_cam, obs_feat = isolated_world(False)
-    before = {name: np.copy(getattr(state, name)) for name in ("cam", "ta", "src", "feat", "raw")}
+    before = {name: np.copy(getattr(state.particles, name)) for name in ("cam", "ta", "src", "feat", "raw")}
+    before_lw = np.copy(state.log_weights)
     rng = np.random.default_rng(0)
     rng_state = rng.bit_generator.state
     bad = [
@@ -307,7 +311,8 @@ def test_bad_observations_leave_the_state_untouched():
         with pytest.raises(err):
             step(rng, model, state, cams, feats)
         for name, arr in before.items():
-            assert np.array_equal(getattr(state, name), arr)
+            assert np.array_equal(getattr(state.particles, name), arr)
+        assert np.array_equal(state.log_weights, before_lw)
         assert rng.bit_generator.state == rng_state
 
 

@@ -1,0 +1,127 @@
+"""The path-recovery filter (seed 001, first phase) under the tracker protocol.
+
+``step(key, state, obs)`` is :func:`models.pathrecovery.filter.step` with a numpy
+``Generator`` seeded from the key (:func:`models.protocol.seed_from_key`); the state is
+the filter's own immutable :class:`inference.particle.ParticleState` plus the time step.
+``save`` / ``load`` write the state to ``.npz``. The second phase (dynamic programming
+over the k-best lists, :func:`recover_path`) is offline and stays outside the protocol. Info is :class:`StepInfo`; its ``log_score`` is
+the step's log mean unnormalised particle weight.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+from dbn.errors import InputError
+from inference.particle import ParticleState
+from models.pathrecovery.filter import (
+    FilterConfig,
+    PathFilterModel,
+    PathParticles,
+    StepInfo,
+    init,
+    make_model,
+    step,
+)
+from models.protocol import Example, StepTracker, seed_from_key
+
+_FORMAT = "dbntrack-pathrecovery-state-1"
+
+__all__ = ["PathObservation", "PathState", "PathRecoveryTracker", "make", "example"]
+
+
+class PathObservation(NamedTuple):
+    """One time step's observations: ``cam`` (n,) sorted, ``feat`` (n, d), index offset."""
+
+    cam: np.ndarray
+    feat: np.ndarray
+    offset: int = 0
+
+
+class PathState(NamedTuple):
+    """The particle set after step ``t`` (``t = 0``: the initial state)."""
+
+    particles: ParticleState
+    t: int
+
+
+class PathRecoveryTracker(StepTracker):
+    """Protocol adapter of the first phase of seed 001 for one :class:`PathFilterModel`."""
+
+    name = "pathrecovery"
+    score_field = "log_score"
+    can_save = True
+
+    def __init__(self, model: PathFilterModel) -> None:
+        self.model = model
+
+    def init(self, key: jax.Array) -> PathState:
+        """All particles at ``C_0`` with ``f_0`` (deterministic: the key is not used)."""
+        return PathState(init(self.model), 0)
+
+    def step(self, key: jax.Array, state: PathState, obs) -> tuple[PathState, StepInfo]:
+        """One filter step on ``obs`` (a :class:`PathObservation` or ``(cam, feat)``)."""
+        if not isinstance(obs, tuple) or len(obs) not in (2, 3):
+            raise InputError(f"obs must be (cam, feat[, offset]), got {type(obs).__name__}")
+        obs = PathObservation(*obs)
+        rng = np.random.default_rng(seed_from_key(key))
+        particles, info = step(rng, self.model, state.particles, obs.cam, obs.feat, int(obs.offset))
+        return PathState(particles, state.t + 1), info
+
+    def save(self, state: PathState, path) -> None:
+        """Write ``state`` to an ``.npz`` file (arrays and a JSON header; no pickle)."""
+        header = json.dumps({"format": _FORMAT, "t": int(state.t)})
+        arrays = {
+            f: np.asarray(getattr(state.particles.particles, f)) for f in PathParticles._fields
+        }
+        np.savez(
+            path,
+            __header__=np.frombuffer(header.encode(), np.uint8),
+            log_weights=np.asarray(state.particles.log_weights),
+            **arrays,
+        )
+
+    def load(self, path) -> PathState:
+        """Read a state written by :meth:`save` (checked against this model's sizes)."""
+        with np.load(path, allow_pickle=False) as f:
+            header = json.loads(bytes(f["__header__"]).decode())
+            if header.get("format") != _FORMAT:
+                raise InputError(f"{path}: not a saved path-recovery state")
+            parts = PathParticles(*(np.array(f[name]) for name in PathParticles._fields))
+            lw = np.array(f["log_weights"])
+        n, d = self.model.config.num_particles, self.model.f0.size
+        if parts.cam.shape != (n,) or parts.feat.shape != (n, d) or lw.shape != (n,):
+            raise InputError(
+                f"{path}: saved for other sizes than num_particles={n}, feature_dim={d}"
+            )
+        return PathState(ParticleState(parts, lw), int(header["t"]))
+
+
+def make(model: PathFilterModel) -> PathRecoveryTracker:
+    """The tracker for a model from :func:`models.pathrecovery.make_model`."""
+    return PathRecoveryTracker(model)
+
+
+def example(key: jax.Array) -> Example:
+    """A 4 x 4 grid, 60 SIMULATED walkers, 8 steps, 60 particles; bad: cameras unsorted."""
+    from models.pathrecovery.simulate import manhattan_grid, simulate_scene
+
+    seed = seed_from_key(key)
+    net = manhattan_grid(seed, 4, 4)
+    sc = simulate_scene(seed + 1, net, num_objects=60, num_timesteps=9, cm=0.2)
+    model = make_model(net, sc.c0, sc.f0, sc.sigma, FilterConfig(num_particles=60, k=5))
+    ptr = np.asarray(sc.odb.time_ptr)
+    obs = [
+        PathObservation(
+            np.asarray(sc.odb.cam[ptr[t] : ptr[t + 1]]),
+            np.asarray(sc.odb.feat[ptr[t] : ptr[t + 1]]),
+            int(ptr[t]),
+        )
+        for t in range(1, ptr.size - 1)
+    ]
+    bad = obs[1]._replace(cam=obs[1].cam[::-1].copy())
+    return Example(PathRecoveryTracker(model), obs, bad)

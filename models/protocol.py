@@ -1,0 +1,149 @@
+"""One protocol for every tracker: ``init`` / ``step`` / ``run`` (optional ``save`` / ``load``).
+
+The house's shared verbs (blackjax's ``init``/``step``, dynamax's filter verbs; see
+``shared/spec/style.md``), made the same for every seed tracker so that a user, the CLI, a
+benchmark or a test can drive any of them without knowing which it is::
+
+    import jax, models
+    entry = models.get("pathrecovery")
+    tracker, observations = entry.example(jax.random.key(0))  # tiny SIMULATED inputs
+    state = tracker.init(jax.random.key(1))
+    state, info = tracker.step(jax.random.key(2), state, observations[0])
+    states, infos = tracker.run(jax.random.key(3), observations)
+
+Contract (checked for every registered tracker by ``tests/models/test_protocol.py``)
+
+* ``init(key) -> State`` and ``step(key, state, obs) -> (State, Info)`` are PURE: the
+  tracker object is never mutated, the state handed in is never mutated, and the same key
+  with the same state and observation gives the same result. Randomness comes only from
+  the key (a tracker that wants an int seed gets :func:`seed_from_key`; a deterministic
+  tracker ignores it).
+* A rejected observation raises a :mod:`dbn.errors` class (a ``ValueError``) naming the
+  field, before anything changes: the state handed in is left exactly as it was.
+* ``run(key, observations) -> (states, infos)``: ``init`` with the first half of the key,
+  then one ``step`` per observation with keys split from the rest; ``states[i]`` and
+  ``infos[i]`` follow observation ``i``. (Trackers keep their own faster batch entry
+  points, e.g. ``ZajdelADF.run``; ``run`` here is the reference semantics.)
+* ``Info`` carries the model's one-step score where it has one, under the attribute
+  named by :attr:`Tracker.score_field` (e.g. ``"loglik"``: the one-step log-likelihood
+  ``log p(y_k | y_1..y_{k-1})``), or ``None`` where the model has no such number.
+* ``save(state, path)`` / ``load(path) -> State`` where the tracker offers persistence
+  (:attr:`Tracker.can_save`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, NamedTuple, Protocol, runtime_checkable
+
+import jax
+import numpy as np
+
+__all__ = ["Example", "Tracker", "StepTracker", "seed_from_key", "split_run_keys"]
+
+
+class Example(NamedTuple):
+    """A registry entry's tiny SIMULATED example (``entry.example(key)``).
+
+    Attributes
+    ----------
+    tracker : the protocol adapter
+    observations : list of per-step observations (a few steps)
+    bad_observation : an observation ``step`` must reject with a :mod:`dbn.errors` class
+        (after ``observations[0]``)
+    """
+
+    tracker: Any
+    observations: list
+    bad_observation: Any
+
+
+@runtime_checkable
+class Tracker(Protocol):
+    """What every tracker adapter offers (see the module docstring for the contract)."""
+
+    name: str
+    score_field: str | None
+    can_save: bool
+
+    def init(self, key: jax.Array) -> Any: ...
+
+    def step(self, key: jax.Array, state: Any, obs: Any) -> tuple[Any, Any]: ...
+
+    def run(self, key: jax.Array, observations: Sequence[Any]) -> tuple[list, list]: ...
+
+
+def seed_from_key(key: jax.Array) -> int:
+    """A non-negative int seed (< 2**31) derived deterministically from a jax PRNG key.
+
+    For trackers whose randomness is a ``numpy.random.Generator`` or an int seed: the
+    same key always gives the same seed, distinct keys give (almost surely) distinct seeds
+    (the key's data words hashed by ``numpy.random.SeedSequence``).
+    """
+    words = np.asarray(jax.random.key_data(key), dtype=np.uint32).ravel().tolist()
+    # hash the key's words on the host (no jax computation: ~60 us, a third of a randint)
+    return int(np.random.SeedSequence(words).generate_state(1)[0] >> 1)
+
+
+def split_run_keys(key: jax.Array, num_steps: int) -> tuple[jax.Array, jax.Array]:
+    """``(init_key, step_keys)`` for a run of ``num_steps`` steps (the protocol's ``run``)."""
+    k_init, k_steps = jax.random.split(key)
+    return k_init, jax.random.split(k_steps, max(num_steps, 1))
+
+
+class StepTracker:
+    """Base class of the adapters: the protocol's ``run`` from ``init`` and ``step``.
+
+    Subclasses set :attr:`name`, :attr:`score_field`, :attr:`can_save` and implement
+    :meth:`init` and :meth:`step` (and :meth:`save` / :meth:`load` when ``can_save``).
+    """
+
+    name: str = ""
+    score_field: str | None = None
+    can_save: bool = False
+
+    def init(self, key: jax.Array) -> Any:
+        raise NotImplementedError
+
+    def step(self, key: jax.Array, state: Any, obs: Any) -> tuple[Any, Any]:
+        raise NotImplementedError
+
+    def run(self, key: jax.Array, observations: Sequence[Any]) -> tuple[list, list]:
+        """``init`` then one ``step`` per observation; returns the states and infos after each.
+
+        Parameters
+        ----------
+        key : PRNG key
+        observations : sequence of per-step observations (the format of :meth:`step`)
+
+        Returns
+        -------
+        (states, infos) : lists of length ``len(observations)``
+        """
+        observations = list(observations)
+        k_init, keys = split_run_keys(key, len(observations))
+        state = self.init(k_init)
+        states, infos = [], []
+        for k, obs in zip(list(keys), observations, strict=False):  # list(): one unstack
+            state, info = self.step(k, state, obs)
+            states.append(state)
+            infos.append(info)
+        return states, infos
+
+    def fingerprint(self, state: Any) -> Any:
+        """A pytree of arrays/scalars that determines ``state`` (for equality checks).
+
+        The default is the state itself; adapters whose state is an object (e.g. a copied
+        labeller) return its defining arrays, without wall-clock timings.
+        """
+        return state
+
+    def score(self, info: Any) -> float | None:
+        """The one-step score of an ``info`` (``None`` when the model has none)."""
+        return None if self.score_field is None else float(getattr(info, self.score_field))
+
+    def save(self, state: Any, path) -> None:
+        raise NotImplementedError(f"{self.name}: this tracker offers no save/load")
+
+    def load(self, path) -> Any:
+        raise NotImplementedError(f"{self.name}: this tracker offers no save/load")

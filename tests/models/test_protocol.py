@@ -1,0 +1,199 @@
+"""Conformance of every registered tracker to the protocol of :mod:`models.protocol`.
+
+Parametrised over ``models.available()``: each entry's tiny SIMULATED example is run
+through ``init`` / ``step`` / ``run``; same key, same result; a rejected observation
+raises a :mod:`dbn.errors` class and leaves the state exactly as before; save/load round
+trip where offered; Info carries the one-step score where the model has one.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import subprocess
+import sys
+
+import jax
+import numpy as np
+import pytest
+
+import models
+from dbn.errors import DBNError, InputError
+from models.protocol import StepTracker, Tracker, split_run_keys
+
+NAMES = models.available()
+
+
+def _leaves(x, depth: int = 0) -> list:
+    """Flatten a state/info (NamedTuples, containers, dataclasses, arrays) to numpy leaves."""
+    if depth > 12:
+        raise AssertionError("structure too deep to compare")
+    if isinstance(x, dict):
+        return [("k", repr(k)) for k in sorted(x, key=repr)] + [
+            leaf for k in sorted(x, key=repr) for leaf in _leaves(x[k], depth + 1)
+        ]
+    if isinstance(x, tuple | list):
+        return [("len", len(x))] + [leaf for v in x for leaf in _leaves(v, depth + 1)]
+    if isinstance(x, frozenset | set):
+        return [("set", tuple(sorted(map(repr, x))))]
+    if dataclasses.is_dataclass(x) and not isinstance(x, type):
+        return _leaves(dataclasses.astuple(x), depth + 1)
+    if x is None or isinstance(x, str | bool | int | float | np.generic):
+        return [np.asarray(x)]
+    if isinstance(x, np.ndarray | jax.Array):
+        if jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key):
+            x = jax.random.key_data(x)
+        return [np.asarray(x)]
+    raise AssertionError(f"cannot compare a {type(x).__name__}")
+
+
+def _assert_same(a, b) -> None:
+    la, lb = _leaves(a), _leaves(b)
+    assert len(la) == len(lb)
+    for u, v in zip(la, lb, strict=True):
+        if isinstance(u, tuple):
+            assert u == v
+            continue
+        assert u.shape == v.shape and u.dtype == v.dtype
+        assert np.array_equal(u, v, equal_nan=u.dtype.kind in "fc"), (u, v)
+
+
+_EXAMPLES: dict = {}
+
+
+def _example(name: str):
+    if name not in _EXAMPLES:
+        _EXAMPLES[name] = models.get(name).example(jax.random.key(0))
+    return _EXAMPLES[name]
+
+
+def test_registry_lists_the_six_trackers_with_their_metadata() -> None:
+    assert set(NAMES) == {
+        "zajdel_adf",
+        "zajdel_learnsearch",
+        "jorge",
+        "localization",
+        "pathrecovery",
+        "rjmcmc3d",
+    }
+    for name in NAMES:
+        e = models.get(name)
+        assert e.name == name and e.seed_paper and e.tracks and e.input_formats
+    with pytest.raises(InputError, match="available: zajdel_adf"):
+        models.get("kalman")
+
+
+def test_importing_models_imports_no_tracker() -> None:
+    code = "import sys, models; models.available(); print(sorted(m for m in sys.modules if m.startswith(('jax', 'models.'))))"
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    assert out.stdout.strip() == "['models.registry']", out.stdout
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_same_key_same_result_and_run_equals_steps(name: str) -> None:
+    ex = _example(name)
+    tr = ex.tracker
+    assert isinstance(tr, Tracker) and isinstance(tr, StepTracker) and tr.name == name
+    obs = ex.observations[:3]
+    before = copy.deepcopy(tr.fingerprint(tr.init(jax.random.key(5))))
+    states, infos = tr.run(jax.random.key(1), obs)
+    states2, infos2 = tr.run(jax.random.key(1), obs)
+    assert len(states) == len(infos) == len(obs)
+    _assert_same([tr.fingerprint(s) for s in states], [tr.fingerprint(s) for s in states2])
+    _assert_same(infos, infos2)
+    # run is init + one step per observation with the split keys
+    k_init, keys = split_run_keys(jax.random.key(1), len(obs))
+    state = tr.init(k_init)
+    for i, o in enumerate(obs):
+        state, info = tr.step(keys[i], state, o)
+        _assert_same(tr.fingerprint(state), tr.fingerprint(states[i]))
+        _assert_same(info, infos[i])
+    # running did not change the tracker: init gives what it gave before
+    _assert_same(tr.fingerprint(tr.init(jax.random.key(5))), before)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_rejected_observation_leaves_the_state_unchanged(name: str) -> None:
+    ex = _example(name)
+    tr = ex.tracker
+    state, _ = tr.step(jax.random.key(2), tr.init(jax.random.key(1)), ex.observations[0])
+    snapshot = copy.deepcopy(tr.fingerprint(state))
+    with pytest.raises(DBNError):
+        tr.step(jax.random.key(3), state, ex.bad_observation)
+    _assert_same(tr.fingerprint(state), snapshot)
+    # and the state still steps as if nothing had happened; a good step does not mutate it
+    a = tr.step(jax.random.key(4), state, ex.observations[1])
+    _assert_same(tr.fingerprint(state), snapshot)
+    fresh, _ = tr.step(jax.random.key(2), tr.init(jax.random.key(1)), ex.observations[0])
+    b = tr.step(jax.random.key(4), fresh, ex.observations[1])
+    _assert_same(tr.fingerprint(a[0]), tr.fingerprint(b[0]))
+    _assert_same(a[1], b[1])
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_info_carries_the_one_step_score(name: str) -> None:
+    ex = _example(name)
+    tr = ex.tracker
+    _, infos = tr.run(jax.random.key(7), ex.observations[:2])
+    if tr.score_field is None:
+        pytest.skip(f"{name} has no one-step score")
+    for info in infos:
+        s = tr.score(info)
+        assert isinstance(s, float) and not np.isnan(s) and s < np.inf
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_save_load_round_trip(name: str, tmp_path) -> None:
+    ex = _example(name)
+    tr = ex.tracker
+    if not tr.can_save:
+        pytest.skip(f"{name} offers no save/load")
+    state, _ = tr.step(jax.random.key(2), tr.init(jax.random.key(1)), ex.observations[0])
+    path = tmp_path / "state.npz"
+    tr.save(state, path)
+    loaded = tr.load(path)
+    _assert_same(tr.fingerprint(loaded), tr.fingerprint(state))
+    a = tr.step(jax.random.key(3), loaded, ex.observations[1])
+    b = tr.step(jax.random.key(3), state, ex.observations[1])
+    _assert_same(tr.fingerprint(a[0]), tr.fingerprint(b[0]))
+    _assert_same(a[1], b[1])
+
+
+@pytest.mark.slow  # compiles the scanned filter (~10-20 s)
+def test_localization_protocol_run_equals_the_batch_filter() -> None:
+    """The adapter's step-by-step run is the library's scanned filter (same keys)."""
+    from models.localization.tracker import localize
+
+    ex = _example("localization")
+    tr = ex.tracker
+    states, infos = tr.run(jax.random.key(3), ex.observations)
+    odo = np.stack([o.odometry for o in ex.observations])
+    obs = jax.tree_util.tree_map(lambda *a: np.stack(a), *[o.observation for o in ex.observations])
+    obs = obs._replace(landmark=obs.landmark.astype(np.int32))
+    res = localize(jax.random.key(3), tr.model, odo, obs, 200, "apf")
+    np.testing.assert_allclose(
+        [float(i.log_likelihood) for i in infos], np.asarray(res.infos.log_likelihood), rtol=1e-9
+    )
+    np.testing.assert_allclose(
+        np.asarray(states[-1].particles.particles), np.asarray(res.final_state.particles), atol=1e-9
+    )
+
+
+@pytest.mark.x32
+@pytest.mark.parametrize(
+    "name", [pytest.param("zajdel_adf", marks=pytest.mark.slow), "localization"]
+)  # zajdel_adf: a fresh compile of the ADF step in this mode (~15 s)
+def test_float64_trackers_need_no_global_x64(name: str) -> None:
+    """With jax in its default 32-bit mode the adapters still compute in float64."""
+    ex = _example(name)
+    tr = ex.tracker
+    state, info = tr.step(jax.random.key(2), tr.init(jax.random.key(1)), ex.observations[0])
+    floats = [
+        x
+        for x in jax.tree_util.tree_leaves((state, info))
+        if getattr(x, "dtype", np.dtype(int)).kind == "f"
+    ]
+    assert floats and all(x.dtype == np.float64 for x in floats)
+    assert not jax.config.jax_enable_x64
