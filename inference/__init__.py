@@ -10,7 +10,6 @@ where a benchmark shows it keeps the accuracy.
 """
 
 
-
 # --- lazy entry points (issue 11): ``inference.filter`` without importing every engine ---
 def __getattr__(name: str):
     if name in ("filter", "online_filter"):

@@ -58,6 +58,7 @@ from dbn.variables import DiscreteVariable
 from inference.evidence_columns import check_columns, check_query
 from inference.particle.filters import auxiliary_filter, bootstrap_filter, ess, run
 from inference.particle.model import StateSpaceModel
+from inference.precision import scoped
 from inference.results import DBNFilterResult
 
 __all__ = ["DBNStateSpaceModel", "particle_filter_dbn"]
@@ -389,6 +390,7 @@ def _filters(dbn, model, num_particles: int, method: str, query: tuple[str, ...]
     return per[key]
 
 
+@scoped(jnp.float64)
 def particle_filter_dbn(
     key: Array,
     dbn: TwoSliceDBN,

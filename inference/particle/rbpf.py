@@ -51,6 +51,7 @@ from dbn.variables import DiscreteVariable
 from inference.evidence_columns import check_columns, check_query
 from inference.particle.dbn_adapter import _Node
 from inference.particle.resampling import systematic
+from inference.precision import scoped
 from inference.results import DBNFilterResult
 
 __all__ = ["RBPFState", "rbpf_filter_dbn"]
@@ -317,6 +318,7 @@ def _run(model: _Model, query: tuple[str, ...], n: int, key: Array, inp: Mapping
     return jnp.concatenate([ll0[None], lls]), jnp.concatenate([ess0[None], esss]), cat
 
 
+@scoped(jnp.float64)
 def rbpf_filter_dbn(
     key: Array,
     dbn: TwoSliceDBN,
