@@ -7,7 +7,6 @@ and falls back to simulated data).
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import importlib.util
 import sys
@@ -33,7 +32,20 @@ def _module_exists(name: str) -> bool:
 
 
 def demo(parts: list[str] | None = None) -> None:
-    """Run the demo of every model present (or of those whose module name contains a part)."""
+    """Run the demo of every model present (or of those whose module name contains a part).
+
+    Raises
+    ------
+    InputError
+        A part that matches no demo (the message lists the valid names).
+    """
+    from dbn.errors import InputError
+
+    modules = [m for _, m in DEMO_PARTS]
+    for p in parts or ():
+        if not any(p in m for m in modules):
+            valid = sorted({m.split(".")[1] for m in modules})
+            raise InputError(f"--only {p!r} matches no demo; valid: {', '.join(valid)}")
     for title, module_name in DEMO_PARTS:
         if parts and not any(p in module_name for p in parts):
             continue
@@ -46,23 +58,13 @@ def demo(parts: list[str] | None = None) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="dbntrack",
-        description="Tracking with dynamic Bayesian networks: demos of the seed trackers.",
-    )
-    sub = parser.add_subparsers(dest="command", required=True)
-    p_demo = sub.add_parser("demo", help="run a short example of every model")
-    p_demo.add_argument(
-        "--only",
-        nargs="*",
-        metavar="PART",
-        help="run only the parts whose module contains PART (e.g. primer zajdel jorge)",
-    )
-    args = parser.parse_args(argv)
-    if args.command == "demo":
-        demo(args.only)
-    return 0
+    """Entry point of ``dbntrack``; returns the exit status (2 on bad input, with a
+    one-line message on stderr)."""
+    from models.commands import build_parser, dispatch
 
+    parser = build_parser(demo)
+    args = parser.parse_args(argv)
+    return dispatch(parser, args)
 
 if __name__ == "__main__":
     sys.exit(main())
