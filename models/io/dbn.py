@@ -46,6 +46,8 @@ def two_slice_from_bn(bn: BayesNet, source: str = "model") -> TwoSliceDBN:
     """The :class:`TwoSliceDBN` of a Bayes net over ``X_0`` / ``X_1`` variables."""
     variables: dict[str, DiscreteVariable] = {}
     initial, transition = [], []
+    if not bn.nodes:
+        raise InputError(f"{source}: no variable with a probability block (not a BIF network?)")
     for name in bn.nodes:
         parts = _split(name)
         if parts is None:

@@ -1,0 +1,109 @@
+"""End-to-end ``dbntrack`` tests on the shipped example files (tests/data): every runner
+``track`` then ``eval``, the outputs parse back, bad input exits 2 with one line."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from models.cli import main
+
+DATA = Path(__file__).resolve().parent.parent / "data"
+
+
+def _track(tmp_path: Path, name: str, inputs: list[Path], *extra: str) -> Path:
+    out = tmp_path / name
+    assert main(["track", name, *map(str, inputs), "-o", str(out), "--seed", "3", *extra]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["tracker"] == name and summary["seed"] == 3
+    assert summary["versions"]["numpy"] == np.__version__
+    assert list(out.glob("*.png")), "no figure written"
+    for f in summary["outputs"]:
+        assert (out / f).is_file()
+    return out
+
+
+def _bad(capsys, argv: list[str], *needles: str) -> None:
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    for n in needles:
+        assert n in err, err
+
+
+def test_list_names_every_runner(capsys):
+    assert main(["list", "--json"]) == 0
+    names = [json.loads(line)["name"] for line in capsys.readouterr().out.splitlines()]
+    assert {"dbn", "localization"} <= set(names)
+
+
+def test_unknown_tracker_and_demo_part_exit_2(capsys, tmp_path):
+    _bad(capsys, ["track", "nosuch", "x", "-o", str(tmp_path)], "nosuch", "localization")
+    _bad(capsys, ["demo", "--only", "nosuch"], "nosuch", "jorge")
+
+
+def test_dbn_track_eval_matches_forward_algorithm(tmp_path, capsys):
+    d = DATA / "dbn"
+    out = _track(tmp_path, "dbn", [d / "umbrella.bif", d / "evidence.csv"],
+                 "--truth", str(d / "truth.csv"))  # fmt: skip
+    from models.io.dbn import read_marginals
+
+    states, rain = read_marginals(out / "marginals.csv")["Rain"]
+    # oracle: the forward algorithm by hand on the umbrella HMM (slice 3 unobserved)
+    T, O = np.array([[0.7, 0.3], [0.3, 0.7]]), np.array([[0.9, 0.1], [0.2, 0.8]])
+    a, ref = np.array([0.5, 0.5]), []
+    for t, u in enumerate([0, 0, 1, None, 0]):
+        a = a if t == 0 else a @ T
+        a = a * (O[:, u] if u is not None else 1.0)
+        a = a / a.sum()
+        ref.append(a)
+    assert states == ["yes", "no"]
+    np.testing.assert_allclose(rain, np.array(ref), atol=1e-12)
+    summary = json.loads((out / "summary.json").read_text())
+    capsys.readouterr()
+    assert main(["eval", "dbn", str(out / "marginals.csv"), str(d / "truth.csv"), "--json"]) == 0
+    metrics = json.loads(capsys.readouterr().out)
+    assert metrics == summary["metrics"]
+    truth = np.array([0, 0, 1, 1, 0])
+    assert metrics["label_error_rate"] == pytest.approx(np.mean(np.argmax(ref, 1) != truth))
+
+
+def test_dbn_bad_evidence_names_file_and_line(tmp_path, capsys):
+    d = DATA / "dbn"
+    _bad(capsys, ["track", "dbn", str(d / "umbrella.bif"), str(d / "bad_evidence.csv"),
+                  "-o", str(tmp_path)], "bad_evidence.csv:3:", "maybe")  # fmt: skip
+    bif = tmp_path / "broken.bif"
+    bif.write_text("variable Rain_0 { type discrete [ 2 ] { yes, no }; }\n")
+    _bad(capsys, ["track", "dbn", str(bif), str(d / "evidence.csv"), "-o", str(tmp_path)],
+         "broken.bif")  # fmt: skip
+
+
+@pytest.mark.parametrize("layout", ["mrclam", "csv"])
+def test_localization_track_eval(tmp_path, capsys, layout):
+    d = DATA / "localization"
+    inputs = [d / "mrclam"] if layout == "mrclam" else [
+        d / f"{n}.csv" for n in ("odometry", "measurements", "landmarks", "groundtruth")]  # fmt: skip
+    cfg = tmp_path / "cfg.json"
+    cfg.write_text(json.dumps({"num_particles": 200, "duration": 3.0}))
+    out = _track(tmp_path, "localization", inputs, "--config", str(cfg),
+                 "--truth", str(d / "groundtruth.csv"))  # fmt: skip
+    from models.io.localization import read_poses
+
+    t, poses = read_poses(out / "poses.csv")
+    assert poses.shape == (30, 3) and np.all(np.diff(t) > 0)
+    capsys.readouterr()
+    assert main(["eval", "localization", str(out / "poses.csv"), str(d / "mrclam"), "--json"]) == 0
+    metrics = json.loads(capsys.readouterr().out)
+    summary = json.loads((out / "summary.json").read_text())
+    assert metrics["rmse_m"] == pytest.approx(summary["metrics"]["rmse_m"], abs=1e-3)
+    assert metrics["rmse_m"] < 0.2  # odometry noise alone drifts; landmarks every 0.2 s
+
+
+def test_localization_bad_file(tmp_path, capsys):
+    d = DATA / "localization"
+    argv = ["track", "localization", str(d / "bad_odometry.csv"), str(d / "measurements.csv"),
+            str(d / "landmarks.csv"), "-o", str(tmp_path)]  # fmt: skip
+    _bad(capsys, argv, "bad_odometry.csv:3:", "oops")
