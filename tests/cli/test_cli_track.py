@@ -107,3 +107,39 @@ def test_localization_bad_file(tmp_path, capsys):
     argv = ["track", "localization", str(d / "bad_odometry.csv"), str(d / "measurements.csv"),
             str(d / "landmarks.csv"), "-o", str(tmp_path)]  # fmt: skip
     _bad(capsys, argv, "bad_odometry.csv:3:", "oops")
+
+
+@pytest.mark.parametrize("name", ["zajdel_adf", "zajdel_learnsearch"])
+def test_zajdel_track_eval(tmp_path, capsys, name):
+    d = DATA / "zajdel"
+    out = _track(tmp_path, name, [d / "observations.csv"], "--truth", str(d / "observations.csv"))
+    from models.io.zajdel import read_labels, read_observations
+    from models.zajdel.metrics import pairwise_prf
+
+    labels = read_labels(out / "labels.csv")
+    table = read_observations(d / "observations.csv")
+    assert sorted(labels) == sorted(table.ids.tolist())
+    capsys.readouterr()
+    assert main(["eval", name, str(out / "labels.csv"), str(d / "observations.csv"), "--json"]) == 0
+    metrics = json.loads(capsys.readouterr().out)
+    assert metrics == json.loads((out / "summary.json").read_text())["metrics"]
+    pred = np.array([labels[i] for i in table.ids])
+    assert metrics["pairwise_f1"] == pytest.approx(pairwise_prf(pred, table.person)[2])
+    partition = (out / "partition.csv").read_text().splitlines()[1:]
+    assert sum(int(row.split(",")[1]) for row in partition) == len(labels)
+
+
+def test_zajdel_events_layout_equals_passes(tmp_path):
+    from models.io.zajdel import read_observations
+
+    a = read_observations(DATA / "zajdel" / "observations.csv")
+    b = read_observations(DATA / "zajdel" / "events.csv")
+    np.testing.assert_array_equal(a.ids, b.ids)
+    for x, y in zip(a.obs, b.obs):
+        np.testing.assert_allclose(x, y)
+
+
+def test_zajdel_bad_file(tmp_path, capsys):
+    argv = ["track", "zajdel_adf", str(DATA / "zajdel" / "bad_observations.csv"), "-o",
+            str(tmp_path)]  # fmt: skip
+    _bad(capsys, argv, "bad_observations.csv:2:", "t_quit")
