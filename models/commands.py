@@ -91,7 +91,7 @@ def track(args: argparse.Namespace) -> dict:
     """Run ``dbntrack track``; returns the summary written to ``OUTDIR/summary.json``."""
     from dbn.errors import InputError
     from models.track import runner
-    from models.track.context import RunContext, versions, write_summary
+    from models.track.context import RunContext, clean, versions, write_summary
 
     mod = runner(args.name)
     config: dict = {}
@@ -126,15 +126,16 @@ def track(args: argparse.Namespace) -> dict:
     write_summary(ctx.outdir / "summary.json", summary)
     print(f"{args.name}: wrote {', '.join(summary['outputs'])}, summary.json to {ctx.outdir}")
     if "metrics" in summary:
-        print(json.dumps(summary["metrics"]))
+        print(json.dumps(clean(summary["metrics"])))
     return summary
 
 
 def evaluate(args: argparse.Namespace) -> dict:
     """Run ``dbntrack eval``; prints the metrics."""
     from models.track import runner
+    from models.track.context import clean
 
-    metrics = runner(args.name).evaluate(args.result, args.truth)
+    metrics = clean(runner(args.name).evaluate(args.result, args.truth))
     if args.json:
         print(json.dumps(metrics))
     else:

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import math
 import platform
 import sys
 import time
@@ -14,7 +15,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-__all__ = ["RunContext", "versions", "write_summary"]
+__all__ = ["RunContext", "clean", "versions", "write_summary"]
 
 
 @dataclass
@@ -92,8 +93,19 @@ def versions() -> dict[str, str]:
     return out
 
 
+def clean(x: Any) -> Any:
+    """``x`` with NaN / inf floats replaced by ``None`` (strict JSON), recursively."""
+    if isinstance(x, dict):
+        return {k: clean(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [clean(v) for v in x]
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
+
+
 def write_summary(path: Path, summary: dict) -> Path:
-    """Write ``summary`` as indented JSON (numpy scalars as numbers)."""
+    """Write ``summary`` as indented JSON (numpy scalars as numbers, NaN as null)."""
 
     def default(x):
         try:
@@ -101,5 +113,5 @@ def write_summary(path: Path, summary: dict) -> Path:
         except AttributeError:
             return str(x)
 
-    path.write_text(json.dumps(summary, indent=2, default=default) + "\n", encoding="utf-8")
+    path.write_text(json.dumps(clean(summary), indent=2, default=default) + "\n", encoding="utf-8")
     return path

@@ -143,3 +143,27 @@ def test_zajdel_bad_file(tmp_path, capsys):
     argv = ["track", "zajdel_adf", str(DATA / "zajdel" / "bad_observations.csv"), "-o",
             str(tmp_path)]  # fmt: skip
     _bad(capsys, argv, "bad_observations.csv:2:", "t_quit")
+
+
+def test_pathrecovery_track_eval(tmp_path, capsys):
+    d = DATA / "pathrecovery"
+    out = _track(tmp_path, "pathrecovery", [d / "edges.csv", d / "observations.csv",
+                 d / "cameras.csv"], "--truth", str(d / "truth_path.csv"))  # fmt: skip
+    from models.io.pathrecovery import read_path
+
+    path, truth = read_path(out / "path.csv"), read_path(d / "truth_path.csv")
+    assert sorted(path) == sorted(t for t in truth if t >= 1)
+    capsys.readouterr()
+    argv = ["eval", "pathrecovery", str(out / "path.csv"), str(d / "truth_path.csv"), "--json"]
+    assert main(argv) == 0
+    metrics = json.loads(capsys.readouterr().out)
+    assert metrics == json.loads((out / "summary.json").read_text())["metrics"]
+    ok = [path[t][3] == truth[t][3] if truth[t][0] == 0 else path[t][0] == 1 for t in path]
+    assert metrics["path_score"] == pytest.approx(np.mean(ok))
+
+
+def test_pathrecovery_bad_network(tmp_path, capsys):
+    d = DATA / "pathrecovery"
+    argv = ["track", "pathrecovery", str(d / "bad_edges.csv"), str(d / "observations.csv"),
+            "-o", str(tmp_path)]  # fmt: skip
+    _bad(capsys, argv, "bad_edges.csv", "sum")
