@@ -84,6 +84,24 @@ def _step_time(seed: int, n_rows: int, n_cols: int, steps: int) -> float:
     return float(np.median(lists.step_seconds)), net.num_cameras
 
 
+def _protocol_smoke(seed: int, scene, num_steps: int = 10) -> bool:
+    """The same filter through the registry's protocol adapter (``models.get``; untimed):
+    its k-best masses are sorted and sum to at most one."""
+    import jax
+
+    import models
+
+    model = make_model(scene.network, scene.c0, scene.f0, scene.sigma, FilterConfig(num_particles=N_PARTICLES))
+    tracker = models.get("pathrecovery").make(model)
+    ptr = np.asarray(scene.odb.time_ptr)
+    obs = [
+        (scene.odb.cam[ptr[t] : ptr[t + 1]], scene.odb.feat[ptr[t] : ptr[t + 1]], int(ptr[t]))
+        for t in range(1, num_steps + 1)
+    ]
+    _, infos = tracker.run(jax.random.key(seed), obs)
+    return all(bool(np.all(np.diff(i.mass) <= 1e-12) and i.mass.sum() <= 1 + 1e-9) for i in infos)
+
+
 def run(quick: bool, seed: int) -> dict:
     steps = 100 if quick else 200
     n_scenes = 5
@@ -94,6 +112,8 @@ def run(quick: bool, seed: int) -> dict:
     ok = True
     for i in range(n_scenes):
         scene = simulate_scene(seed + i, grid, num_objects=2000, num_timesteps=steps, cm=0.17)
+        if i == 0:
+            first_scene = scene
         cms.append(scene.cm)
         hidden.append(scene.hidden_fraction)
         ok &= abs(scene.cm - 0.17) < 0.03
@@ -135,6 +155,9 @@ def run(quick: bool, seed: int) -> dict:
             street_rows[name].append(res["phase2"])
     log(f"street: default {np.mean(street_rows['default']):.2f} faithful {np.mean(street_rows['faithful']):.2f}")
 
+    protocol_ok = _protocol_smoke(seed, first_scene)
+    ok &= protocol_ok
+
     # step time, 490 vs 4,931 cameras, 4 objects per camera; interleaved, best of 2
     t_small, t_large = [], []
     for r in range(2):
@@ -175,5 +198,6 @@ def run(quick: bool, seed: int) -> dict:
         "ms_per_step_faithful": mean("faithful", "ms"),
         "step_time_ratio_5000_vs_500_cameras": ratio,
         "num_cameras_large": n_large,
+        "protocol_ok": bool(protocol_ok),
         "ok": bool(ok),
     }

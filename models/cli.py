@@ -2,7 +2,10 @@
 
 ``dbntrack demo`` runs a short example of every model, on bundled or simulated data
 (real data from ``../shared/data`` where it is there; when it is not, the demo says so
-and falls back to simulated data).
+and falls back to simulated data). ``dbntrack demo --only NAME ...`` runs the named parts
+(``primer`` or a tracker of the registry, ``models.available()``); ``dbntrack list``
+prints the registry; ``dbntrack track`` / ``eval`` run a tracker on files
+(:mod:`models.commands`).
 """
 
 from __future__ import annotations
@@ -12,15 +15,33 @@ import importlib.util
 import sys
 import time
 
+import models
+
+# Titles of the demo parts; the module of every tracker's demo comes from the registry.
+_TITLES = {
+    "primer": "DBN primer",
+    "zajdel_adf": "Zajdel ADF tracker (seed 002)",
+    "zajdel_learnsearch": "Zajdel learn-search tracker (seed 000)",
+    "jorge": "Jorge group labels (seed 004)",
+    "localization": "Robot localisation, auxiliary particle filter (seed 002)",
+    "pathrecovery": "Path recovery (seed 001)",
+    "rjmcmc3d": "Multi-camera RJ-MCMC 3-D tracker (seed 003)",
+}
+
+
+def demo_parts() -> tuple[tuple[str, str, str], ...]:
+    """``(name, title, module)`` of every demo part: the primer, then each registered tracker."""
+    parts = [("primer", _TITLES["primer"], "models.primer")]
+    for name in models.available():
+        entry = models.get(name)
+        if entry.demo_module is not None:
+            parts.append((name, _TITLES.get(name, name), entry.demo_module))
+    return tuple(parts)
+
+
 # Each part is a module exposing ``run_demo(quick: bool = True) -> None``.
-DEMO_PARTS: tuple[tuple[str, str], ...] = (
-    ("DBN primer", "models.primer"),
-    ("Zajdel ADF tracker (seed 002)", "models.zajdel.demo"),
-    ("Zajdel learn-search tracker (seed 000)", "models.zajdel.demo_learnsearch"),
-    ("Jorge group labels (seed 004)", "models.jorge.demo"),
-    ("Robot localisation, auxiliary particle filter (seed 002)", "models.localization.demo"),
-    ("Path recovery (seed 001)", "models.pathrecovery.demo"),
-    ("Multi-camera RJ-MCMC 3-D tracker (seed 003)", "models.rjmcmc3d.demo"),
+DEMO_PARTS: tuple[tuple[str, str], ...] = tuple(
+    (title, module) for _, title, module in demo_parts()
 )
 
 
@@ -32,22 +53,9 @@ def _module_exists(name: str) -> bool:
 
 
 def demo(parts: list[str] | None = None) -> None:
-    """Run the demo of every model present (or of those whose module name contains a part).
-
-    Raises
-    ------
-    InputError
-        A part that matches no demo (the message lists the valid names).
-    """
-    from dbn.errors import InputError
-
-    modules = [m for _, m in DEMO_PARTS]
-    for p in parts or ():
-        if not any(p in m for m in modules):
-            valid = sorted({m.split(".")[1] for m in modules})
-            raise InputError(f"--only {p!r} matches no demo; valid: {', '.join(valid)}")
-    for title, module_name in DEMO_PARTS:
-        if parts and not any(p in module_name for p in parts):
+    """Run the demo of every model present, or of the parts named in ``parts``."""
+    for name, title, module_name in demo_parts():
+        if parts and name not in parts:
             continue
         if not _module_exists(module_name):
             continue
@@ -58,13 +66,13 @@ def demo(parts: list[str] | None = None) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of ``dbntrack``; returns the exit status (2 on bad input, with a
-    one-line message on stderr)."""
+    """Entry point of ``dbntrack`` (sub-commands in :mod:`models.commands`); returns the
+    exit status: 2 on bad input, with a one-line message on stderr."""
     from models.commands import build_parser, dispatch
 
-    parser = build_parser(demo)
-    args = parser.parse_args(argv)
-    return dispatch(parser, args)
+    parser = build_parser(demo, [name for name, _, _ in demo_parts()])
+    return dispatch(parser, parser.parse_args(argv))
+
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -21,8 +21,9 @@ __all__ = ["build_parser", "dispatch", "list_trackers", "track", "evaluate"]
 _EPILOG = "Input formats: docs/formats.md. Example files: tests/data/."
 
 
-def build_parser(demo: Callable) -> argparse.ArgumentParser:
-    """The ``dbntrack`` argument parser (``demo`` is the demo runner of :mod:`models.cli`)."""
+def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentParser:
+    """The ``dbntrack`` argument parser (``demo`` runs the parts ``demo_names`` of
+    :mod:`models.cli`)."""
     parser = argparse.ArgumentParser(
         prog="dbntrack",
         description="Tracking with dynamic Bayesian networks: run the seed trackers on your "
@@ -59,32 +60,36 @@ def build_parser(demo: Callable) -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the metrics as one JSON line")
     p = sub.add_parser("demo", help="run a short example of every model",
                        description="Run a short example of every model (or of some).")  # fmt: skip
-    p.add_argument("--only", nargs="*", metavar="PART",
-                   help="run only these parts: primer zajdel jorge localization "
-                   "pathrecovery rjmcmc3d")  # fmt: skip
-    p.set_defaults(demo=demo)
+    p.add_argument("--only", nargs="*", metavar="NAME",
+                   help=f"run only the named parts: {', '.join(demo_names)}")  # fmt: skip
+    p.set_defaults(demo=demo, demo_names=demo_names, demo_parser=p)
     return parser
 
 
 def list_trackers(as_json: bool = False) -> None:
-    """Print the registry (and the generic ``dbn`` runner) with the inputs of ``track``."""
+    """Print the registry (and the generic ``dbn`` runner): what each tracks, the files
+    ``dbntrack track`` reads and what one protocol step takes."""
     import models
     from models.track import available, runner
 
-    for name in available():
-        mod = runner(name)
+    runners = set(available())
+    for name in ["dbn", *models.available()]:
         if name == "dbn":
             info = {"name": "dbn", "seed_paper": "-", "tracks": "per-slice marginals of any "
-                    "discrete two-slice DBN (generic engines)"}  # fmt: skip
+                    "discrete two-slice DBN (generic engines)", "step_input": []}  # fmt: skip
         else:
             e = models.get(name)
-            info = {"name": name, "seed_paper": e.seed_paper, "tracks": e.tracks}
-        info["inputs"] = list(mod.INPUTS)
+            info = {"name": name, "seed_paper": e.seed_paper, "tracks": e.tracks,
+                    "step_input": list(e.input_formats)}  # fmt: skip
+        info["track_inputs"] = list(runner(name).INPUTS) if name in runners else []
         if as_json:
             print(json.dumps(info))
             continue
-        print(f"{name}\n  seed:   {info['seed_paper']}\n  tracks: {info['tracks']}")
-        print("  track inputs: " + "\n                ".join(info["inputs"]))
+        print(f"{name}\n  seed paper: {info['seed_paper']}\n  tracks: {info['tracks']}")
+        files = info["track_inputs"] or ["(no file reader yet: use the Python API)"]
+        print("  dbntrack track inputs: " + "\n                         ".join(files))
+        for fmt in info["step_input"]:
+            print(f"  protocol step input: {fmt}")
 
 
 def track(args: argparse.Namespace) -> dict:
@@ -158,6 +163,11 @@ def dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
         elif args.command == "eval":
             evaluate(args)
         elif args.command == "demo":
+            unknown = [p for p in args.only or [] if p not in args.demo_names]
+            if unknown:  # argparse's error: usage, one line, exit status 2
+                args.demo_parser.error(
+                    f"unknown part(s) {', '.join(unknown)}; valid: {', '.join(args.demo_names)}"
+                )
             args.demo(args.only)
     except (DBNError, FileNotFoundError) as exc:
         msg = " ".join(str(exc).split())

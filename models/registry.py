@@ -42,9 +42,9 @@ class Entry:
     def _api(self):
         return importlib.import_module(self.module)
 
-    def make(self, **options: Any):
-        """The tracker (protocol adapter), built with ``options`` (see the module's ``make``)."""
-        return self._api().make(**options)
+    def make(self, *args: Any, **options: Any):
+        """The tracker (protocol adapter), built from the module's ``make(*args, **options)``."""
+        return self._api().make(*args, **options)
 
     def example(self, key):
         """:class:`models.protocol.Example`: a small tracker, a few SIMULATED steps, a bad one."""

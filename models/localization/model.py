@@ -36,6 +36,7 @@ from scipy.spatial import cKDTree
 
 from dbn.errors import InputError, NonFiniteError, ShapeError
 from inference.particle import StateSpaceModel
+from inference.precision import honours_dtype
 
 __all__ = [
     "MotionNoise",
@@ -342,13 +343,14 @@ class KNNSensor:
         d, _ = self.tree.query(self.pca.project(self.check(observations)), k=1)
         return np.atleast_1d(d)
 
+    @honours_dtype
     def preprocess(self, observations: np.ndarray, dtype: Any = np.float64) -> KNNObservation:
         """Project, query the k-d tree and apply the outlier rule, outside jit.
 
         Parameters
         ----------
         observations : array (num_timesteps, obs_dim) or (obs_dim,)
-        dtype : float dtype of the returned arrays
+        dtype : float dtype of the returned arrays (float64 is kept whatever jax's mode)
 
         Returns
         -------

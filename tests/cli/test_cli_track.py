@@ -42,7 +42,10 @@ def test_list_names_every_runner(capsys):
 
 def test_unknown_tracker_and_demo_part_exit_2(capsys, tmp_path):
     _bad(capsys, ["track", "nosuch", "x", "-o", str(tmp_path)], "nosuch", "localization")
-    _bad(capsys, ["demo", "--only", "nosuch"], "nosuch", "jorge")
+    with pytest.raises(SystemExit) as exc:
+        main(["demo", "--only", "nosuch"])
+    assert exc.value.code == 2
+    assert "nosuch" in capsys.readouterr().err
 
 
 def test_dbn_track_eval_matches_forward_algorithm(tmp_path, capsys):

@@ -41,3 +41,22 @@ def test_every_demo_part_names_a_run_demo() -> None:
     for _, module_name in cli.DEMO_PARTS:
         if cli._module_exists(module_name):
             assert callable(getattr(importlib.import_module(module_name), "run_demo", None)), module_name
+
+
+def test_demo_rejects_unknown_names_listing_valid_ones(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["demo", "--only", "primer", "kalman"])
+    assert exc.value.code != 0
+    err = capsys.readouterr().err
+    assert "kalman" in err and "valid: primer, zajdel_adf" in err and "rjmcmc3d" in err
+
+
+def test_demo_parts_follow_the_registry(capsys: pytest.CaptureFixture[str]) -> None:
+    import models
+
+    names = [name for name, _, _ in cli.demo_parts()]
+    assert names == ["primer", *models.available()]
+    assert cli.main(["list"]) == 0
+    out = capsys.readouterr().out
+    for name in models.available():
+        assert name in out

@@ -159,3 +159,18 @@ def test_save_load_round_trip(name: str, tmp_path) -> None:
     b = tr.step(jax.random.key(3), state, ex.observations[1])
     _assert_same(tr.fingerprint(a[0]), tr.fingerprint(b[0]))
     _assert_same(a[1], b[1])
+
+
+def test_localization_protocol_run_equals_the_batch_filter() -> None:
+    """The adapter's step-by-step run is the library's scanned filter (same keys)."""
+    from models.localization.tracker import localize
+
+    ex = _example("localization")
+    tr = ex.tracker
+    states, infos = tr.run(jax.random.key(3), ex.observations)
+    odo = np.stack([o.odometry for o in ex.observations])
+    obs = jax.tree_util.tree_map(lambda *a: np.stack(a), *[o.observation for o in ex.observations])
+    obs = obs._replace(landmark=obs.landmark.astype(np.int32))
+    res = localize(jax.random.key(3), tr.model, odo, obs, 200, "apf")
+    np.testing.assert_allclose([float(i.log_likelihood) for i in infos], np.asarray(res.infos.log_likelihood), rtol=1e-9)
+    np.testing.assert_allclose(np.asarray(states[-1].particles.particles), np.asarray(res.final_state.particles), atol=1e-9)

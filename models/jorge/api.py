@@ -1,0 +1,119 @@
+"""The on-line group labeller of seed 004 under the tracker protocol.
+
+:class:`~models.jorge.online.OnlineLabeller` mutates itself (its label graph, labels,
+beliefs and inference log grow with every stroke). For a pure ``step`` the adapter's
+:class:`JorgeState` holds a labeller and ``step`` works on a deep copy of it
+(copy-on-step): the state handed in is never touched, and a rejected stroke raises before
+the copy is changed. Cost: the copy is ``O(num_strokes)`` (graph, domains, beliefs), so a
+protocol run of ``K`` strokes costs ``O(K^2)`` in copying on top of the labelling itself
+-- small for the window sizes of the seed (a copy of a 100-stroke labeller takes
+milliseconds), but :func:`~models.jorge.online.label_online` stays the batch entry point.
+Deterministic (the key is not used). Info's ``log_prob`` is the log eq. 12 posterior
+probability of the label given to the new stroke.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+from models.jorge.online import OnlineConfig, OnlineLabeller
+from models.jorge.strokes import Stroke
+from models.protocol import Example, StepTracker, seed_from_key
+
+__all__ = ["JorgeState", "JorgeInfo", "JorgeTracker", "make", "example"]
+
+
+class JorgeState(NamedTuple):
+    """A labeller after some strokes (never mutated by the protocol)."""
+
+    labeller: OnlineLabeller
+
+
+class JorgeInfo(NamedTuple):
+    """The new stroke's eq. 12 label (sorted members), its log posterior probability, and
+    the periodic inferences this step ran (count, MAP log probability of the last)."""
+
+    label: tuple
+    log_prob: float
+    num_inferences: int
+    inference_log_prob: float
+
+
+def _label(lab) -> tuple:
+    return tuple(sorted(lab))
+
+
+class JorgeTracker(StepTracker):
+    """Protocol adapter over :class:`OnlineLabeller` (one stroke per step)."""
+
+    name = "jorge"
+    score_field = "log_prob"
+    can_save = False
+
+    def __init__(self, config: OnlineConfig | None = None, fps: float = 25.0) -> None:
+        self.config = OnlineConfig() if config is None else config
+        self.fps = float(fps)
+        OnlineLabeller(self.config, self.fps)  # checks the configuration now
+
+    def init(self, key: jax.Array) -> JorgeState:
+        """An empty labeller (deterministic: the key is not used)."""
+        return JorgeState(OnlineLabeller(self.config, self.fps))
+
+    def step(self, key: jax.Array, state: JorgeState, obs: Stroke) -> tuple[JorgeState, JorgeInfo]:
+        """Add one stroke (in start order) to a copy of the labeller."""
+        lab = state.labeller
+        lab.graph.check_stroke(obs)  # reject before copying
+        new = copy.deepcopy(lab)
+        before = len(new.records)
+        label = new.add_stroke(obs)
+        k = obs.index
+        post = new.beliefs[k]
+        lp = float(np.log(post[new.graph.nodes[k].domain.index(label)]))
+        ran = new.records[before:]
+        info = JorgeInfo(_label(label), lp, len(ran), ran[-1].log_prob if ran else float("nan"))
+        return JorgeState(new), info
+
+    def fingerprint(self, state: JorgeState):
+        """Labels, beliefs, domains and the inference log (without wall times)."""
+        lab = state.labeller
+        nodes = lab.graph.nodes
+        return (
+            {k: _label(v) for k, v in lab.labels.items()},
+            dict(lab.beliefs),
+            [tuple(_label(d) for d in nd.domain) for nd in nodes],
+            [
+                (
+                    r.frame,
+                    r.num_active,
+                    r.num_boundary,
+                    r.max_domain,
+                    r.max_clique_entries,
+                    r.log_prob,
+                )
+                for r in lab.records
+            ],
+            lab._next_inference,
+        )
+
+
+def make(config: OnlineConfig | None = None, fps: float = 25.0) -> JorgeTracker:
+    """The adapter for an :class:`OnlineConfig` and a frame rate."""
+    return JorgeTracker(config, fps)
+
+
+def example(key: jax.Array) -> Example:
+    """A SIMULATED sequence of 3 walkers over 150 frames, its first strokes; bad: a stroke
+    with the wrong index."""
+    from models.jorge.simulate import simulate_ground_truth
+    from models.jorge.strokes import build_strokes
+
+    seed = seed_from_key(key)
+    strokes = build_strokes(seed, simulate_ground_truth(seed, num_people=3, num_frames=150))
+    steps = list(strokes.strokes[:5])
+    bad = dataclasses.replace(steps[1], index=7)
+    return Example(make(fps=strokes.fps), steps, bad)

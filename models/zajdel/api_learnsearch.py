@@ -1,0 +1,92 @@
+"""The learn-search tracker of seed 000 under the tracker protocol.
+
+:func:`learn_search` is a batch algorithm: given all observations so far it returns the
+``T`` most probable partitions (with EM-learned parameters). Its on-line reading, the
+seed's: after each new observation, the answer for all observations so far. The adapter's
+immutable :class:`LearnSearchState` holds the observations seen and the current answer;
+``step`` appends one observation (validated with the rest, before anything changes) and
+re-runs :func:`learn_search` on the whole prefix. Cost: one full search per step, so
+``O(K)`` per step and ``O(K^2)`` over a run of ``K`` observations -- the protocol's
+reference semantics; call :func:`learn_search` once for a batch. Deterministic (the key is
+not used). Info's ``log_score`` is the unnormalised log posterior of the MAP partition.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+from models.protocol import Example, StepTracker, seed_from_key
+from models.zajdel.data import Observations, concat_observations, take
+from models.zajdel.learnsearch import LearnSearchConfig, LSParams, learn_search
+
+__all__ = ["LearnSearchState", "LearnSearchInfo", "LearnSearchTracker", "make", "example"]
+
+
+class LearnSearchState(NamedTuple):
+    """Observations so far (num_obs) and the search's answer for them.
+
+    labels (num_obs,) MAP partition; hypotheses (T', num_obs); log_scores (T',);
+    params: the learned (or given) :class:`LSParams`.
+    """
+
+    observations: Observations
+    labels: np.ndarray
+    hypotheses: np.ndarray
+    log_scores: np.ndarray
+    params: LSParams
+
+
+class LearnSearchInfo(NamedTuple):
+    """The MAP partition after the step and its unnormalised log posterior."""
+
+    labels: np.ndarray
+    log_score: float
+
+
+class LearnSearchTracker(StepTracker):
+    """Protocol adapter over :func:`learn_search` (``params`` are EM's starting point)."""
+
+    name = "zajdel_learnsearch"
+    score_field = "log_score"
+    can_save = False
+
+    def __init__(self, params: LSParams, config: LearnSearchConfig | None = None) -> None:
+        self.params = params
+        self.config = LearnSearchConfig() if config is None else config
+
+    def init(self, key: jax.Array) -> LearnSearchState:
+        """No observation yet (deterministic: the key is not used)."""
+        d = self.params.obs_dim
+        empty = Observations(np.zeros((0, d)), np.zeros(0, np.int64), np.zeros(0), np.zeros(0),
+                             np.zeros(0, np.int64), np.zeros(0, np.int64))  # fmt: skip
+        return LearnSearchState(
+            empty, np.zeros(0, np.int64), np.zeros((1, 0), np.int64), np.zeros(1), self.params
+        )
+
+    def step(self, key: jax.Array, state: LearnSearchState, obs: Observations):
+        """Append ``obs`` (one or more observations) and search again over all of them."""
+        allobs = concat_observations([state.observations, obs])
+        res = learn_search(allobs, self.params, self.config)  # validates before searching
+        new = LearnSearchState(allobs, res.labels, res.hypotheses, res.log_scores, res.params)
+        return new, LearnSearchInfo(res.labels, float(res.log_scores[0]))
+
+
+def make(params: LSParams, config: LearnSearchConfig | None = None) -> LearnSearchTracker:
+    """The adapter for EM starting point / fixed ``params`` and a search ``config``."""
+    return LearnSearchTracker(params, config)
+
+
+def example(key: jax.Array) -> Example:
+    """A SIMULATED office (3 people, 3 cameras, 6 observations), T = 3, n0 = 2, fixed
+    parameters; bad: NaN appearance."""
+    from models.zajdel.learnsearch import params_from_zajdel
+    from models.zajdel.simulate import OfficeConfig, simulate_office
+
+    sc = simulate_office(seed_from_key(key), OfficeConfig(num_people=3, num_cameras=3, num_obs=6))
+    steps = [take(sc.obs, slice(i, i + 1)) for i in range(sc.obs.num_obs)]
+    bad = steps[1]._replace(appearance=np.full_like(steps[1].appearance, np.nan))
+    config = LearnSearchConfig(num_hypotheses=3, n0=2, learn=False)
+    return Example(make(params_from_zajdel(sc.params), config), steps, bad)
