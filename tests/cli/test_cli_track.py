@@ -170,3 +170,48 @@ def test_pathrecovery_bad_network(tmp_path, capsys):
     argv = ["track", "pathrecovery", str(d / "bad_edges.csv"), str(d / "observations.csv"),
             "-o", str(tmp_path)]  # fmt: skip
     _bad(capsys, argv, "bad_edges.csv", "sum")
+
+
+def test_jorge_track_eval(tmp_path, capsys):
+    d = DATA / "jorge"
+    out = _track(tmp_path, "jorge", [d / "caviar.xml"], "--truth", str(d / "caviar.xml"))
+    from models.io.jorge import read_mot, read_strokes
+    from models.jorge.online import label_online, score
+    from models.jorge.strokes import build_strokes, load_caviar
+
+    seed, rows = read_strokes(out / "strokes.csv")
+    strokes = build_strokes(3, load_caviar(d / "caviar.xml"))  # the batch labeller, same seed
+    ref = score(strokes, label_online(strokes).labels)
+    assert seed == 3 and len(rows) == len(strokes)
+    capsys.readouterr()
+    assert main(["eval", "jorge", str(out / "strokes.csv"), str(d / "caviar.xml"), "--json"]) == 0
+    metrics = json.loads(capsys.readouterr().out)
+    assert metrics == json.loads((out / "summary.json").read_text())["metrics"]
+    assert metrics["error_rate"] == pytest.approx(ref.error_rate)
+    tracks = read_mot(out / "tracks.txt")
+    assert tracks.frames.size > 0
+    assert main(["eval", "jorge", str(out / "tracks.txt"), str(d / "gt.txt"), "--json"]) == 0
+    mot = json.loads(capsys.readouterr().out)
+    assert -1.0 <= mot["mota"] <= 1.0 and 0.0 <= mot["idf1"] <= 1.0
+
+
+def test_jorge_formats_agree():
+    from models.io.jorge import read_boxes
+
+    d = DATA / "jorge"
+    a, b, c = (read_boxes(d / f) for f in ("caviar.xml", "pets2009.xml", "gt.txt"))
+    np.testing.assert_array_equal(a.ids, c.ids)
+    np.testing.assert_allclose(a.boxes, b.boxes)
+    rows = np.searchsorted(a.frames, c.frames)  # MOT files list no empty frame
+    assert np.isnan(np.delete(a.boxes, rows, axis=0)).all()
+    np.testing.assert_allclose(a.boxes[rows, :, 2:], c.boxes[:, :, 2:], atol=0.051)
+    np.testing.assert_allclose(a.boxes[rows, :, :2], c.boxes[:, :, :2], atol=0.11)
+
+
+def test_jorge_bad_files(tmp_path, capsys):
+    d = DATA / "jorge"
+    _bad(capsys, ["track", "jorge", str(d / "bad_gt.txt"), "-o", str(tmp_path)],
+         "bad_gt.txt:2:", "width")  # fmt: skip
+    bad = tmp_path / "broken.xml"
+    bad.write_text('<dataset>\n<frame number="0">\n<objectlist>\n</dataset>\n')
+    _bad(capsys, ["track", "jorge", str(bad), "-o", str(tmp_path)], "broken.xml:4:")
