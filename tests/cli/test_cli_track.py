@@ -84,14 +84,11 @@ def test_dbn_bad_evidence_names_file_and_line(tmp_path, capsys):
          "broken.bif")  # fmt: skip
 
 
-@pytest.mark.parametrize("layout", ["mrclam", "csv"])
-def test_localization_track_eval(tmp_path, capsys, layout):
+def test_localization_track_eval(tmp_path, capsys):
     d = DATA / "localization"
-    inputs = [d / "mrclam"] if layout == "mrclam" else [
-        d / f"{n}.csv" for n in ("odometry", "measurements", "landmarks", "groundtruth")]  # fmt: skip
     cfg = tmp_path / "cfg.json"
     cfg.write_text(json.dumps({"num_particles": 200, "duration": 3.0}))
-    out = _track(tmp_path, "localization", inputs, "--config", str(cfg),
+    out = _track(tmp_path, "localization", [d / "mrclam"], "--config", str(cfg),
                  "--truth", str(d / "groundtruth.csv"))  # fmt: skip
     from models.io.localization import read_poses
 
@@ -105,6 +102,19 @@ def test_localization_track_eval(tmp_path, capsys, layout):
     assert metrics["rmse_m"] < 0.2  # odometry noise alone drifts; landmarks every 0.2 s
 
 
+def test_localization_csv_layout_equals_mrclam_folder():
+    from models.io.localization import read_generic, read_mrclam_folder
+
+    d = DATA / "localization"
+    a = read_mrclam_folder(d / "mrclam", robot=1)
+    b = read_generic(*(d / f"{n}.csv" for n in ("odometry", "measurements", "landmarks",
+                                                 "groundtruth")))  # fmt: skip
+    for name in ("odometry", "measurements", "groundtruth", "landmarks", "landmark_subjects"):
+        np.testing.assert_allclose(getattr(a, name), getattr(b, name), err_msg=name)
+    ids = a.landmark_subjects
+    assert [a.barcode_to_subject[i] for i in ids] == [b.barcode_to_subject[i] for i in ids]
+
+
 def test_localization_bad_file(tmp_path, capsys):
     d = DATA / "localization"
     argv = ["track", "localization", str(d / "bad_odometry.csv"), str(d / "measurements.csv"),
@@ -115,7 +125,11 @@ def test_localization_bad_file(tmp_path, capsys):
 @pytest.mark.parametrize("name", ["zajdel_adf", "zajdel_learnsearch"])
 def test_zajdel_track_eval(tmp_path, capsys, name):
     d = DATA / "zajdel"
-    out = _track(tmp_path, name, [d / "observations.csv"], "--truth", str(d / "observations.csv"))
+    cfg = tmp_path / "cfg.json"  # small ADF tables (short compile), a narrower beam
+    small = {"max_open": 8, "persons_per_slot": 4, "init_persons": 16, "chunk": 4, "mix_top": 8}
+    cfg.write_text(json.dumps(small if name == "zajdel_adf" else {"num_hypotheses": 5}))
+    out = _track(tmp_path, name, [d / "observations.csv"], "--config", str(cfg),
+                 "--truth", str(d / "observations.csv"))  # fmt: skip
     from models.io.zajdel import read_labels, read_observations
     from models.zajdel.metrics import pairwise_prf
 
