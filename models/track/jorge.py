@@ -56,10 +56,13 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
 def _plot(ctx: RunContext, strokes, labels) -> None:
     import matplotlib
 
-    cmap = matplotlib.colormaps["tab10"]
+    tab = matplotlib.colormaps["tab10"]
+    palette = [tab(i) for i in range(10) if i != 7]  # tab10 without its grey
+    singles = sorted({o for lab in labels if len(lab) == 1 for o in lab})
+    colour_of = {o: palette[i % len(palette)] for i, o in enumerate(singles)}
     with ctx.figure("strokes.png", ncols=2, figsize=(13, 5)) as (_, (ax0, ax1)):
         for s, lab in zip(strokes, labels):
-            colour = cmap(min(lab) % 10) if len(lab) == 1 else "0.3"
+            colour = colour_of[min(lab)] if len(lab) == 1 else "0.3"
             ax0.plot([s.start, s.end], [s.index, s.index], color=colour, lw=3)
             ax0.annotate(",".join(map(str, sorted(lab))), (s.end, s.index), fontsize=6,
                          xytext=(2, -2), textcoords="offset points")  # fmt: skip
@@ -68,7 +71,7 @@ def _plot(ctx: RunContext, strokes, labels) -> None:
             )
         ax0.set_xlabel("frame")
         ax0.set_ylabel("stroke")
-        ax0.set_title("strokes and their labels (grey: groups)")
+        ax0.set_title("strokes and their labels (object ids; grey: groups)")
         ax1.invert_yaxis()
         ax1.set_aspect("equal")
         ax1.set_title("region centres (image coordinates)")
