@@ -268,3 +268,21 @@ def test_rjmcmc3d_bad_files(tmp_path, capsys):
     argv = ["eval", "rjmcmc3d", str(d / "bad_truth3d.txt"), str(d / "truth3d.txt")]
     _bad(capsys, argv, "bad_truth3d.txt:2:", "abc")
     _bad(capsys, ["track", "rjmcmc3d", str(tmp_path), "-o", str(tmp_path / "o")], "calibration")
+
+
+@pytest.mark.parametrize("command", ["track", "eval", "list", "demo"])
+def test_every_subcommand_has_help(capsys, command):
+    with pytest.raises(SystemExit) as exc:
+        main([command, "--help"])
+    assert exc.value.code == 0
+    assert "usage: dbntrack" in capsys.readouterr().out
+
+
+def test_data_option_sets_the_data_folder(tmp_path, monkeypatch, capsys):
+    from models import datasets
+
+    monkeypatch.setenv("DBNTRACK_DATA", "/nonexistent")  # restored after the test
+    assert main(["--data", str(tmp_path), "list", "--json"]) == 0
+    assert datasets.data_dir() == tmp_path.resolve()
+    with pytest.raises(FileNotFoundError, match="DBNTRACK_DATA"):
+        datasets.require("mrclam6", "Barcodes.dat.gz")
