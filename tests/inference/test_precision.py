@@ -69,8 +69,7 @@ def test_particle_filters_compute_in_their_dtype(dtype) -> None:
     final, infos, means = run(jax.random.key(0), pf, np.asarray(ys, dtype))
     assert final.log_weights.dtype == dtype and final.particles.dtype == dtype
     assert infos.log_likelihood.dtype == dtype and means.dtype == dtype
-    state, info = pf.step(jax.random.key(1), pf.init(jax.random.key(2)), np.asarray(ys[0], dtype))
-    assert state.log_weights.dtype == dtype and info.log_likelihood.dtype == dtype
+    assert pf.init(jax.random.key(2)).log_weights.dtype == dtype
     # and the result is the filter's, not float32 garbage: within Monte-Carlo error of Kalman
     exact = kalman_filter(params, ys).log_likelihood
     assert abs(float(np.asarray(infos.log_likelihood).sum()) - exact) < 0.5

@@ -161,6 +161,7 @@ def test_save_load_round_trip(name: str, tmp_path) -> None:
     _assert_same(a[1], b[1])
 
 
+@pytest.mark.slow  # compiles the scanned filter (~10-20 s)
 def test_localization_protocol_run_equals_the_batch_filter() -> None:
     """The adapter's step-by-step run is the library's scanned filter (same keys)."""
     from models.localization.tracker import localize
@@ -172,5 +173,27 @@ def test_localization_protocol_run_equals_the_batch_filter() -> None:
     obs = jax.tree_util.tree_map(lambda *a: np.stack(a), *[o.observation for o in ex.observations])
     obs = obs._replace(landmark=obs.landmark.astype(np.int32))
     res = localize(jax.random.key(3), tr.model, odo, obs, 200, "apf")
-    np.testing.assert_allclose([float(i.log_likelihood) for i in infos], np.asarray(res.infos.log_likelihood), rtol=1e-9)
-    np.testing.assert_allclose(np.asarray(states[-1].particles.particles), np.asarray(res.final_state.particles), atol=1e-9)
+    np.testing.assert_allclose(
+        [float(i.log_likelihood) for i in infos], np.asarray(res.infos.log_likelihood), rtol=1e-9
+    )
+    np.testing.assert_allclose(
+        np.asarray(states[-1].particles.particles), np.asarray(res.final_state.particles), atol=1e-9
+    )
+
+
+@pytest.mark.x32
+@pytest.mark.parametrize(
+    "name", [pytest.param("zajdel_adf", marks=pytest.mark.slow), "localization"]
+)  # zajdel_adf: a fresh compile of the ADF step in this mode (~15 s)
+def test_float64_trackers_need_no_global_x64(name: str) -> None:
+    """With jax in its default 32-bit mode the adapters still compute in float64."""
+    ex = _example(name)
+    tr = ex.tracker
+    state, info = tr.step(jax.random.key(2), tr.init(jax.random.key(1)), ex.observations[0])
+    floats = [
+        x
+        for x in jax.tree_util.tree_leaves((state, info))
+        if getattr(x, "dtype", np.dtype(int)).kind == "f"
+    ]
+    assert floats and all(x.dtype == np.float64 for x in floats)
+    assert not jax.config.jax_enable_x64

@@ -11,7 +11,6 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import inference  # noqa: F401
 from inference.kalman import LinearGaussianParams, kalman_filter, lgssm_sample
 from inference.particle import (
     LinearGaussianSSM,

@@ -9,7 +9,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import inference  # noqa: F401
 from inference.particle import RESAMPLERS, normalized_weights
 
 NAMES = sorted(RESAMPLERS)

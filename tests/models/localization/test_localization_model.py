@@ -13,7 +13,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.special import logsumexp
 
-import inference  # noqa: F401
 from dbn.errors import InputError, NonFiniteError, ShapeError
 from models.localization.model import (
     KNNLocalizationModel,

@@ -8,7 +8,6 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import inference  # noqa: F401
 from dbn.errors import InputError, NonFiniteError, ShapeError, TimeOrderError
 from models.localization.experiments import dead_reckoning
 from models.localization.model import RangeBearingObservation
