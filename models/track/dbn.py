@@ -45,7 +45,12 @@ def _generic(ctx, dbn, ev, method: str, hidden, options: dict):
         generic_filter = None
     if not callable(generic_filter):
         raise InputError(f"method {method!r} needs inference.filter, absent in this version")
-    res = generic_filter(dbn, ev, method, list(hidden), key=ctx.key(), **options)
+    try:
+        res = generic_filter(dbn, ev, method, list(hidden), key=ctx.key(), **options)
+    except ModuleNotFoundError as exc:  # an engine of inference.filter not installed yet
+        raise InputError(f"method {method!r} is not available here (missing {exc.name})") from None
+    except TypeError as exc:  # an option the engine does not take
+        raise InputError(f"method {method!r}: {exc}") from None
     return {n: np.asarray(res.marginals[n]) for n in hidden}, np.asarray(res.log_likelihoods)
 
 

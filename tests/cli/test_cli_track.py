@@ -286,3 +286,20 @@ def test_data_option_sets_the_data_folder(tmp_path, monkeypatch, capsys):
     assert datasets.data_dir() == tmp_path.resolve()
     with pytest.raises(FileNotFoundError, match="DBNTRACK_DATA"):
         datasets.require("mrclam6", "Barcodes.dat.gz")
+
+
+def test_dbn_generic_method_matches_exact_or_says_why(tmp_path, capsys):
+    d = DATA / "dbn"
+    argv = ["track", "dbn", str(d / "umbrella.bif"), str(d / "evidence.csv"), "--method", "auto"]
+    rc = main([*argv, "-o", str(tmp_path / "auto")])
+    if rc == 2:  # inference.filter (the generic engines) not in this version
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and "inference.filter" in err
+        return
+    assert rc == 0
+    assert main([*argv[:4], "-o", str(tmp_path / "exact")]) == 0
+    from models.io.dbn import read_marginals
+
+    a = read_marginals(tmp_path / "auto" / "marginals.csv")["Rain"][1]
+    b = read_marginals(tmp_path / "exact" / "marginals.csv")["Rain"][1]
+    np.testing.assert_allclose(a, b, atol=1e-10)
