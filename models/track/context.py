@@ -64,22 +64,20 @@ class RunContext:
         return jax.random.key(self.seed)
 
     @contextmanager
-    def figure(self, filename: str, **subplots: Any):
-        """``(fig, axes)`` of ``plt.subplots(**subplots)``, saved as ``outdir/filename``
-        (Agg backend, no window) and closed."""
-        import matplotlib
+    def figure(self, filename: str, figsize=None, layout=None, **subplots: Any):
+        """``(fig, axes)`` of ``Figure.subplots(**subplots)``, saved as ``outdir/filename``.
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        Uses :class:`matplotlib.figure.Figure` (Agg canvas) without pyplot, so no window
+        opens and the caller's matplotlib backend is left alone.
+        """
+        from matplotlib.figure import Figure
 
-        fig, axes = plt.subplots(**subplots)
-        try:
-            yield fig, axes
-            if "layout" not in subplots:
-                fig.tight_layout()
-            fig.savefig(self.outdir / filename, dpi=100)
-        finally:
-            plt.close(fig)
+        fig = Figure(figsize=figsize, layout=layout)
+        axes = fig.subplots(**subplots)
+        yield fig, axes
+        if layout is None:
+            fig.tight_layout()
+        fig.savefig(self.outdir / filename, dpi=100)
 
 
 def versions() -> dict[str, str]:
