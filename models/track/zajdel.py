@@ -125,6 +125,7 @@ def _plot(ctx: RunContext, table, labels: np.ndarray, matrix: np.ndarray) -> Non
         for te, tq, c, lab in zip(o.t_enter, o.t_quit, o.camera, labels):
             ax0.plot([te, tq], [c, c], lw=6, color=cmap(int(lab) % 20), solid_capstyle="butt")
             ax0.annotate(str(int(lab)), ((te + tq) / 2, c), ha="center", va="center", fontsize=7)
+        ax0.set_yticks(range(int(o.camera.max()) + 1))
         ax0.set_xlabel("time")
         ax0.set_ylabel("camera")
         ax0.set_title("passes coloured by track label")
