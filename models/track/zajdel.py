@@ -16,6 +16,7 @@ and the fields of :class:`~models.zajdel.tracker.ADFConfig` /
 
 from __future__ import annotations
 
+import jax
 import numpy as np
 
 from dbn.errors import InputError
@@ -89,14 +90,18 @@ def _run_adf(ctx: RunContext, table, start, config: dict):
 
 
 def _run_learnsearch(ctx: RunContext, table, start, config: dict):
-    from models.zajdel.learnsearch import LearnSearchConfig, learn_search
+    import models
+    from models.zajdel.learnsearch import LearnSearchConfig
 
     fields, cfg = _split_config(config, LearnSearchConfig)
-    res = learn_search(table.obs, start, cfg, progress=not ctx.quiet)
-    labels = res.labels
+    tracker = models.get("zajdel_learnsearch").make(params=start, config=cfg)
+    k_init, k_step = jax.random.split(ctx.key())
+    # one protocol step with every pass: one search over all of them (the adapter's
+    # step takes one or more observations; one per step would search K times)
+    state, info = tracker.step(k_step, tracker.init(k_init), table.obs)
+    labels = np.asarray(state.labels)
     onehot = np.eye(int(labels.max()) + 1)[labels]
-    return labels, onehot, {**fields, "em_iterations": res.em_iterations,
-                            "best_log_score": float(res.log_scores[0])}  # fmt: skip
+    return labels, onehot, {**fields, "best_log_score": float(info.log_score)}
 
 
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
