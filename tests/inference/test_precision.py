@@ -110,7 +110,9 @@ def test_localizer_runs_in_float64_by_default() -> None:
     )
     loc = Localizer(jax.random.key(0), model, 200)
     assert loc.state.particles.dtype == jnp.float64
-    obs = RangeBearingObservation(np.array([0, 1]), np.array([1.4, 4.1]), np.array([-2.3, -0.2]), np.array([True, True]))
+    obs = RangeBearingObservation(
+        np.array([0, 1]), np.array([1.4, 4.1]), np.array([-2.3, -0.2]), np.array([True, True])
+    )
     loc.update(jax.random.key(1), np.array([0.1, 0.0, 0.0, 0.1]), obs)
     assert loc.state.log_weights.dtype == jnp.float64 and loc.mean().dtype == np.float64
     assert not jax.config.jax_enable_x64
