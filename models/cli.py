@@ -4,12 +4,12 @@
 (real data from ``../shared/data`` where it is there; when it is not, the demo says so
 and falls back to simulated data). ``dbntrack demo --only NAME ...`` runs the named parts
 (``primer`` or a tracker of the registry, ``models.available()``); ``dbntrack list``
-prints the registry.
+prints the registry; ``dbntrack track`` / ``eval`` run a tracker on files
+(:mod:`models.commands`).
 """
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import importlib.util
 import sys
@@ -65,39 +65,13 @@ def demo(parts: list[str] | None = None) -> None:
         print(f"[{title}: {time.perf_counter() - t0:.1f} s]", flush=True)
 
 
-def list_trackers() -> None:
-    """Print the registry: name, seed paper, what it tracks, input formats."""
-    for name in models.available():
-        e = models.get(name)
-        print(f"{name}\n  seed paper: {e.seed_paper}\n  tracks: {e.tracks}")
-        for fmt in e.input_formats:
-            print(f"  input: {fmt}")
-
-
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="dbntrack",
-        description="Tracking with dynamic Bayesian networks: demos of the seed trackers.",
-    )
-    sub = parser.add_subparsers(dest="command", required=True)
-    names = [name for name, _, _ in demo_parts()]
-    p_demo = sub.add_parser("demo", help="run a short example of every model")
-    p_demo.add_argument(
-        "--only",
-        nargs="*",
-        metavar="NAME",
-        help=f"run only the named parts: {', '.join(names)}",
-    )
-    sub.add_parser("list", help="list the registered trackers")
-    args = parser.parse_args(argv)
-    if args.command == "demo":
-        unknown = [p for p in args.only or [] if p not in names]
-        if unknown:
-            p_demo.error(f"unknown part(s) {', '.join(unknown)}; valid: {', '.join(names)}")
-        demo(args.only)
-    elif args.command == "list":
-        list_trackers()
-    return 0
+    """Entry point of ``dbntrack`` (sub-commands in :mod:`models.commands`); returns the
+    exit status: 2 on bad input, with a one-line message on stderr."""
+    from models.commands import build_parser, dispatch
+
+    parser = build_parser(demo, [name for name, _, _ in demo_parts()])
+    return dispatch(parser, parser.parse_args(argv))
 
 
 if __name__ == "__main__":

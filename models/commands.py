@@ -1,0 +1,176 @@
+"""The sub-commands of ``dbntrack``: ``list``, ``track``, ``eval``, ``demo``.
+
+``track`` and ``eval`` go through :mod:`models.track` (one runner per tracker, each built
+on the registry :func:`models.get` and the protocol of :mod:`models.protocol`). Bad input
+(any :mod:`dbn.errors` class, a missing file) ends the command with exit status 2 and one
+line on stderr naming the file and the line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+__all__ = ["build_parser", "dispatch", "list_trackers", "track", "evaluate"]
+
+_EPILOG = "Input formats: docs/formats.md. Example files: tests/data/."
+
+
+def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentParser:
+    """The ``dbntrack`` argument parser (``demo`` runs the parts ``demo_names`` of
+    :mod:`models.cli`)."""
+    parser = argparse.ArgumentParser(
+        prog="dbntrack",
+        description="Tracking with dynamic Bayesian networks: run the seed trackers on your "
+        "files, evaluate results, or watch the demos.",
+        epilog=_EPILOG,
+    )
+    parser.add_argument("--data", metavar="DIR", help="real-data folder (default: "
+                        "$DBNTRACK_DATA, else ../shared/data beside the checkout)")  # fmt: skip
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("list", help="list the trackers, what they track and their inputs",
+                       description="List the trackers: name, seed paper, what it tracks, "
+                       "the inputs of `dbntrack track NAME`.")  # fmt: skip
+    p.add_argument("--json", action="store_true", help="one JSON object per tracker")
+    p = sub.add_parser(
+        "track", help="run a tracker on your files", epilog=_EPILOG,
+        description="Run tracker NAME on INPUT files; write results, summary.json and PNG "
+        "figures into OUTDIR. `dbntrack list` shows the inputs of each tracker.",
+    )  # fmt: skip
+    p.add_argument("name", metavar="NAME", help="tracker (see `dbntrack list`)")
+    p.add_argument("inputs", metavar="INPUT", nargs="+", help="input files or folders")
+    p.add_argument("-o", "--outdir", required=True, help="output folder (created)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    p.add_argument("--config", metavar="FILE", help="JSON file of tracker options")
+    p.add_argument("--truth", metavar="FILE", help="truth file: metrics go into summary.json")
+    p.add_argument("--method", help="dbn only: exact (default), auto, bk, particle, rbpf")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p = sub.add_parser("eval", help="score a result file against a truth file", epilog=_EPILOG,
+                       description="Metrics of tracker NAME's RESULT file against TRUTH: "
+                       "MOTA/IDF1 (jorge, rjmcmc3d), partition q and pairwise F1 (zajdel), "
+                       "label error rate (jorge, dbn), RMSE (localization, pathrecovery).")  # fmt: skip
+    p.add_argument("name", metavar="NAME")
+    p.add_argument("result", metavar="RESULT")
+    p.add_argument("truth", metavar="TRUTH")
+    p.add_argument("--json", action="store_true", help="print the metrics as one JSON line")
+    p = sub.add_parser("demo", help="run a short example of every model",
+                       description="Run a short example of every model (or of some).")  # fmt: skip
+    p.add_argument("--only", nargs="*", metavar="NAME",
+                   help=f"run only the named parts: {', '.join(demo_names)}")  # fmt: skip
+    p.set_defaults(demo=demo, demo_names=demo_names, demo_parser=p)
+    return parser
+
+
+def list_trackers(as_json: bool = False) -> None:
+    """Print the registry (and the generic ``dbn`` runner): what each tracks, the files
+    ``dbntrack track`` reads and what one protocol step takes."""
+    import models
+    from models.track import available, runner
+
+    runners = set(available())
+    for name in ["dbn", *models.available()]:
+        if name == "dbn":
+            info = {"name": "dbn", "seed_paper": "-", "tracks": "per-slice marginals of any "
+                    "discrete two-slice DBN (generic engines)", "step_input": []}  # fmt: skip
+        else:
+            e = models.get(name)
+            info = {"name": name, "seed_paper": e.seed_paper, "tracks": e.tracks,
+                    "step_input": list(e.input_formats)}  # fmt: skip
+        info["track_inputs"] = list(runner(name).INPUTS) if name in runners else []
+        if as_json:
+            print(json.dumps(info))
+            continue
+        print(f"{name}\n  seed paper: {info['seed_paper']}\n  tracks: {info['tracks']}")
+        files = info["track_inputs"] or ["(no file reader yet: use the Python API)"]
+        print("  dbntrack track inputs: " + "\n                         ".join(files))
+        for fmt in info["step_input"]:
+            print(f"  protocol step input: {fmt}")
+
+
+def track(args: argparse.Namespace) -> dict:
+    """Run ``dbntrack track``; returns the summary written to ``OUTDIR/summary.json``."""
+    from dbn.errors import InputError
+    from models.track import runner
+    from models.track.context import RunContext, clean, versions, write_summary
+
+    mod = runner(args.name)
+    config: dict = {}
+    if args.config:
+        from models.io.table import require_file
+
+        path = require_file(args.config, "config file")
+        try:
+            config = json.loads(path.read_text(encoding="utf-8"))
+        except json.JSONDecodeError as exc:
+            raise InputError(f"{path}:{exc.lineno}: not valid JSON ({exc.msg})") from None
+        if not isinstance(config, dict):
+            raise InputError(f"{path}:1: the config must be a JSON object")
+    if args.method:
+        if args.name != "dbn":
+            raise InputError(f"--method applies to dbn only, not {args.name!r}")
+        config["method"] = args.method
+    ctx = RunContext(args.name, Path(args.outdir), args.seed)
+    if args.quiet:
+        ctx.quiet = True
+    t0 = time.perf_counter()
+    summary = {"tracker": args.name, "inputs": [str(Path(p).resolve()) for p in args.inputs],
+               "seed": args.seed, "config": dict(config)}  # fmt: skip
+    summary.update(mod.track(ctx, list(args.inputs), config))
+    if args.truth:
+        with ctx.timed("eval"):
+            summary["truth"] = str(Path(args.truth).resolve())
+            summary["metrics"] = mod.evaluate(str(ctx.outdir / summary["outputs"][0]), args.truth)
+    ctx.timings["total"] = round(time.perf_counter() - t0, 4)
+    summary["timings_s"] = ctx.timings
+    summary["versions"] = versions()
+    write_summary(ctx.outdir / "summary.json", summary)
+    print(f"{args.name}: wrote {', '.join(summary['outputs'])}, summary.json to {ctx.outdir}")
+    if "metrics" in summary:
+        print(json.dumps(clean(summary["metrics"])))
+    return summary
+
+
+def evaluate(args: argparse.Namespace) -> dict:
+    """Run ``dbntrack eval``; prints the metrics."""
+    from models.track import runner
+    from models.track.context import clean
+
+    metrics = clean(runner(args.name).evaluate(args.result, args.truth))
+    if args.json:
+        print(json.dumps(metrics))
+    else:
+        for k, v in metrics.items():
+            print(f"{k}: {v:.6g}" if isinstance(v, float) else f"{k}: {v}")
+    return metrics
+
+
+def dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """Run the parsed command; bad input -> one line on stderr, exit status 2."""
+    from dbn.errors import DBNError
+
+    if args.data:
+        os.environ["DBNTRACK_DATA"] = str(Path(args.data).expanduser().resolve())
+    try:
+        if args.command == "list":
+            list_trackers(args.json)
+        elif args.command == "track":
+            track(args)
+        elif args.command == "eval":
+            evaluate(args)
+        elif args.command == "demo":
+            unknown = [p for p in args.only or [] if p not in args.demo_names]
+            if unknown:  # argparse's error: usage, one line, exit status 2
+                args.demo_parser.error(
+                    f"unknown part(s) {', '.join(unknown)}; valid: {', '.join(args.demo_names)}"
+                )
+            args.demo(args.only)
+    except (DBNError, FileNotFoundError) as exc:
+        msg = " ".join(str(exc).split())
+        print(f"dbntrack {args.command}: error: {msg}", file=sys.stderr)
+        return 2
+    return 0

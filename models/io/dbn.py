@@ -1,0 +1,151 @@
+"""Generic DBN files: a two-slice BIF file, an evidence CSV, a marginals CSV.
+
+Two-slice BIF (``docs/formats.md``): an ordinary BIF Bayes net over the variables of two
+consecutive slices, every name ending in ``_0`` (slice 0) or ``_1`` (slice ``t >= 1``).
+The CPDs of the ``_0`` variables are the initial slice; the CPDs of the ``_1`` variables
+are the transition, whose ``_0`` parents are the previous slice. This is the unrolled
+2-TBN of pgmpy's ``DynamicBayesianNetwork`` (nodes ``(X, 0)``, ``(X, 1)``) written as BIF.
+A variable ``X_1`` whose BIF has no ``X_0`` is an error.
+
+Evidence CSV: a header of observed variable names (the base names, without ``_0``/``_1``),
+then one row per slice; a field holds a state name (or its index), empty = unobserved.
+
+Marginals CSV (output): ``slice,variable,state,probability``, one row per slice, hidden
+variable and state, ``P(X_t = state | e_{0:t})``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from dbn.bayesnet import BayesNet
+from dbn.cpds import TabularCPD
+from dbn.dbn import TwoSliceDBN, prev
+from dbn.errors import DBNError, InputError
+from dbn.variables import DiscreteVariable
+from models.io.table import fail, read_rows, require_file, write_rows
+
+__all__ = [
+    "read_two_slice_bif",
+    "two_slice_from_bn",
+    "read_evidence",
+    "write_marginals",
+    "read_marginals",
+    "read_states",
+]
+
+
+def _split(name: str) -> tuple[str, int] | None:
+    base, _, t = name.rpartition("_")
+    return (base, int(t)) if base and t in ("0", "1") else None
+
+
+def two_slice_from_bn(bn: BayesNet, source: str = "model") -> TwoSliceDBN:
+    """The :class:`TwoSliceDBN` of a Bayes net over ``X_0`` / ``X_1`` variables."""
+    variables: dict[str, DiscreteVariable] = {}
+    initial, transition = [], []
+    if not bn.nodes:
+        raise InputError(f"{source}: no variable with a probability block (not a BIF network?)")
+    for name in bn.nodes:
+        parts = _split(name)
+        if parts is None:
+            raise InputError(f"{source}: variable {name!r} does not end in _0 or _1")
+        base, t = parts
+        v = bn.variable(name)
+        if t == 0:
+            variables[base] = DiscreteVariable(base, v.cardinality, v.state_names)
+    for name in bn.nodes:
+        base, t = _split(name)
+        if base not in variables:
+            raise InputError(f"{source}: {name!r} has no slice-0 variable {base + '_0'!r}")
+        parents = [_split(p) for p in bn.parents(name)]
+        if t == 0:
+            if any(pt != 0 for _, pt in parents):
+                raise InputError(f"{source}: slice-0 variable {name!r} has a slice-1 parent")
+            initial.append(TabularCPD(base, [p for p, _ in parents], bn.table(name)))
+        else:
+            names = [prev(p) if pt == 0 else p for p, pt in parents]
+            transition.append(TabularCPD(base, names, bn.table(name)))
+    missing = sorted(set(variables) - {c.variable for c in transition})
+    if missing:
+        raise InputError(f"{source}: no slice-1 CPD for {[m + '_1' for m in missing]}")
+    return TwoSliceDBN(list(variables.values()), initial, transition)
+
+
+def read_two_slice_bif(path: str | Path) -> TwoSliceDBN:
+    """Read a two-slice BIF file (see the module docstring)."""
+    from dbn.pgmpy_adapter import read_bif
+
+    path = require_file(path, "BIF file")
+    try:
+        bn = read_bif(path)
+    except DBNError as exc:
+        raise InputError(f"{path}: {exc}") from None
+    except Exception as exc:  # pgmpy's parser raises anything on a malformed file
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(f"{path}: not a valid BIF file ({msg})") from None
+    return two_slice_from_bn(bn, str(path))
+
+
+def _state_index(var: DiscreteVariable, text: str, path, line: int) -> int:
+    if text in var.state_names:
+        return var.state_names.index(text)
+    if text.isdigit() and int(text) < var.cardinality:
+        return int(text)
+    raise fail(path, line, f"{var.name} = {text!r} is not a state of {list(var.state_names)}")
+
+
+def read_states(path: str | Path, dbn: TwoSliceDBN) -> dict[str, np.ndarray]:
+    """Columns of states per slice: ``name -> (T,) int``, ``-1`` where the field is empty.
+
+    Used for evidence and for truth files (same format).
+    """
+    header, rows = read_rows(path, what="evidence CSV", keep_blank=True)
+    variables = {v.name: v for v in dbn.variables}
+    for col in header:
+        if col not in variables:
+            raise fail(path, 1, f"column {col!r} is not a variable of the DBN {sorted(variables)}")
+    if not rows:
+        raise fail(path, 0, "no slices (the file has a header only)")
+    cols = {c: np.full(len(rows), -1, dtype=np.int64) for c in header}
+    for t, row in enumerate(rows):
+        for c in header:
+            if row[c] != "":
+                cols[c][t] = _state_index(variables[c], row[c], path, row.line)
+    return cols
+
+
+read_evidence = read_states
+
+
+def write_marginals(path: str | Path, dbn: TwoSliceDBN, marginals: dict[str, np.ndarray]) -> Path:
+    """Write ``name -> (T, K)`` marginals as ``slice,variable,state,probability`` rows."""
+    states = {v.name: v.state_names for v in dbn.variables}
+    rows = []
+    for name, m in marginals.items():
+        for t in range(m.shape[0]):
+            rows += [(t, name, s, float(m[t, k])) for k, s in enumerate(states[name])]
+    rows.sort(key=lambda r: r[0])
+    return write_rows(path, ("slice", "variable", "state", "probability"), rows)
+
+
+def read_marginals(path: str | Path) -> dict[str, tuple[list[str], np.ndarray]]:
+    """Read a marginals CSV back: ``name -> (state names, (T, K) probabilities)``."""
+    _, rows = read_rows(path, ("slice", "variable", "state", "probability"), "marginals CSV")
+    table: dict[str, dict[str, dict[int, float]]] = {}
+    for r in rows:
+        table.setdefault(r["variable"], {}).setdefault(r["state"], {})[r.int("slice")] = r.float(
+            "probability"
+        )
+    out = {}
+    for name, by_state in table.items():
+        states = list(by_state)
+        T = 1 + max(max(d) for d in by_state.values())
+        m = np.full((T, len(states)), np.nan)
+        for k, s in enumerate(states):
+            for t, p in by_state[s].items():
+                m[t, k] = p
+        out[name] = (states, m)
+    return out

@@ -1,0 +1,131 @@
+"""Box files of the group labeller (seed 004): CAVIAR CVML XML, PETS2009 XML, MOTChallenge.
+
+Inputs (``docs/formats.md``): a CAVIAR CVML ground-truth file (``<frame number>``,
+``<objectlist><object id><box xc yc w h>``, ``<grouplist>``), a PETS2009 XML of the same
+frame/object/box layout, or a MOTChallenge text file ``frame,id,bb_left,bb_top,w,h[,conf,
+...]`` (``gt.txt``, or a tracker's output; rows with ``conf = 0`` are ignored, as in
+MOT16+ ``gt.txt``; ``id = -1`` detections cannot make strokes). Any of them may be gzipped.
+
+Outputs: strokes CSV ``stroke,start,end,label,truth`` (``label``: the object ids the
+stroke is labelled with, separated by spaces; ``truth``: the people in the region), with a
+``# seed=S`` first line; MOTChallenge tracks ``frame,id,bb_left,bb_top,w,h,1,-1,-1,-1``
+(one row per frame and per object of a stroke's label, the region's box).
+"""
+
+from __future__ import annotations
+
+import gzip
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from dbn.errors import DBNError, InputError
+from models.io.table import as_float, as_int, fail, require_file, write_rows
+
+__all__ = ["read_boxes", "read_mot", "write_strokes", "read_strokes", "write_mot_tracks"]
+
+
+def read_mot(path: str | Path):
+    """A MOTChallenge box file as a :class:`models.jorge.strokes.GroundTruth`."""
+    from models.jorge.strokes import _assemble
+
+    path = Path(path)
+    opener = gzip.open if path.suffix == ".gz" else open
+    frames: dict[int, dict[int, tuple]] = {}
+    with opener(path, "rt", encoding="utf-8") as f:
+        for line_no, line in enumerate(f, start=1):
+            fields = [x.strip() for x in line.replace(" ", ",").split(",") if x.strip()]
+            if not fields or fields[0].startswith("#"):
+                continue
+            if len(fields) < 6:
+                raise fail(path, line_no, f"{len(fields)} fields, need frame,id,x,y,w,h")
+            fr, oid = (
+                as_int(fields[0], path, line_no, "frame"),
+                as_int(fields[1], path, line_no, "id"),
+            )
+            x, y, w, h = (as_float(v, path, line_no, n) for v, n in zip(fields[2:6], "xywh"))
+            if len(fields) > 6 and as_float(fields[6], path, line_no, "conf") == 0:
+                continue
+            if oid < 0:
+                raise fail(path, line_no, f"id = {oid}: detections without ids cannot make "
+                           "strokes (give tracks with ids, e.g. gt.txt)")  # fmt: skip
+            if w <= 0 or h <= 0:
+                raise fail(path, line_no, f"box width/height must be > 0, got {w}, {h}")
+            objs = frames.setdefault(fr, {})
+            if oid in objs:
+                raise fail(path, line_no, f"id {oid} appears twice in frame {fr}")
+            objs[oid] = (x + w / 2, y + h / 2, w, h)
+    if not frames:
+        raise fail(path, 0, "no boxes")
+    return _assemble(path.name, sorted(frames.items()), [])
+
+
+def read_boxes(path: str | Path):
+    """A :class:`~models.jorge.strokes.GroundTruth` from CAVIAR / PETS2009 XML or MOT text."""
+    from models.jorge.strokes import load_ground_truth
+
+    path = require_file(path, "box file")
+    name = path.name.lower().removesuffix(".gz")
+    if not name.endswith(".xml"):
+        return read_mot(path)
+    try:
+        return load_ground_truth(path)
+    except ET.ParseError as exc:
+        line = exc.position[0] if getattr(exc, "position", None) else 0
+        raise fail(path, line, f"not well-formed XML ({exc})") from None
+    except DBNError as exc:
+        raise InputError(f"{path}: {exc}") from None
+
+
+def _ids(label) -> str:
+    return " ".join(str(int(o)) for o in sorted(label))
+
+
+def write_strokes(path, strokes, labels, seed: int) -> Path:
+    """``# seed=S`` then ``stroke,start,end,label,truth`` rows."""
+    path = Path(path)
+    rows = [(s.index, s.start, s.end, _ids(lab), _ids(s.truth)) for s, lab in zip(strokes, labels)]
+    write_rows(path, ("stroke", "start", "end", "label", "truth"), rows)
+    path.write_text(f"# seed={int(seed)}\n" + path.read_text(encoding="utf-8"), encoding="utf-8")
+    return path
+
+
+def read_strokes(path: str | Path) -> tuple[int | None, list[dict]]:
+    """``(seed, rows)`` of a strokes CSV; each row: ``stroke``, ``start``, ``end``,
+    ``label`` and ``truth`` (frozensets of ints)."""
+    from models.io.table import read_rows
+
+    path = require_file(path, "strokes CSV")
+    first = path.read_text(encoding="utf-8").split("\n", 1)[0]
+    seed = int(first.split("=", 1)[1]) if first.startswith("# seed=") else None
+    _, rows = read_rows(path, ("stroke", "start", "end", "label"), "strokes CSV")
+    out = []
+    for r in rows:
+        try:
+            label = frozenset(int(x) for x in r["label"].split())
+            truth = frozenset(int(x) for x in r.get("truth", "").split())
+        except ValueError:
+            raise r.fail(f"label {r['label']!r} / truth {r.get('truth')!r}: ints separated "
+                         "by spaces expected") from None  # fmt: skip
+        if not label:
+            raise r.fail("empty label")
+        out.append({"stroke": r.int("stroke"), "start": r.int("start"), "end": r.int("end"),
+                    "label": label, "truth": truth})  # fmt: skip
+    return seed, out
+
+
+def write_mot_tracks(path, strokes, labels) -> Path:
+    """MOTChallenge rows ``frame,id,bb_left,bb_top,w,h,1,-1,-1,-1`` (ids = object + 1)."""
+    rows = []
+    for s, lab in zip(strokes, labels):
+        ext = s.extent if s.extent is not None else np.full((s.frames.size, 2), 10.0)
+        for fr, (cx, cy), (w, h) in zip(s.frames, s.positions, ext):
+            for o in sorted(lab):
+                rows.append((int(fr), int(o) + 1, round(cx - w / 2, 2), round(cy - h / 2, 2),
+                             round(w, 2), round(h, 2), 1, -1, -1, -1))  # fmt: skip
+    rows.sort(key=lambda r: (r[0], r[1]))
+    path = Path(path)
+    with open(path, "w", encoding="utf-8") as f:
+        f.writelines(",".join(str(x) for x in r) + "\n" for r in rows)
+    return path

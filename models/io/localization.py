@@ -1,0 +1,127 @@
+"""Robot-localisation files: an MRCLAM dataset folder, or generic CSVs; pose tracks.
+
+MRCLAM folder (UTIAS Multi-Robot Cooperative Localization and Mapping, any dataset, any
+robot ``N``): ``RobotN_Odometry.dat`` (time, v, w), ``RobotN_Measurement.dat`` (time,
+barcode, range, bearing), ``Landmark_Groundtruth.dat`` (subject, x, y, ...),
+``Barcodes.dat`` (subject, barcode) and, optionally, ``RobotN_Groundtruth.dat`` (time, x,
+y, theta); each file may be gzipped (``.dat.gz``). Whitespace-separated, ``#`` comments.
+
+Generic CSVs (with a header line): ``odometry.csv`` ``t,v,w``; ``measurements.csv``
+``t,landmark,range,bearing``; ``landmarks.csv`` ``id,x,y``; optional ``groundtruth.csv``
+``t,x,y,theta``. Measurements of an id that is not a landmark are ignored (as MRCLAM's
+measurements of other robots).
+
+Pose track (output, and truth for ``dbntrack eval``): ``t,x,y,theta``.
+"""
+
+from __future__ import annotations
+
+import gzip
+from pathlib import Path
+
+import numpy as np
+
+from dbn.errors import InputError
+from models.io.table import as_float, fail, read_rows, write_rows
+from models.localization.mrclam import MRCLAMRobot
+
+__all__ = ["read_dat", "read_mrclam_folder", "read_generic", "write_poses", "read_poses"]
+
+
+def read_dat(path: str | Path, num_columns: int) -> np.ndarray:
+    """A whitespace-separated numeric file (``#`` comments, optionally gzipped) as an
+    array ``(rows, num_columns)`` (extra columns ignored); errors name file and line."""
+    path = Path(path)
+    opener = gzip.open if path.suffix == ".gz" else open
+    rows = []
+    with opener(path, "rt", encoding="utf-8") as f:
+        for line_no, line in enumerate(f, start=1):
+            fields = line.split("#", 1)[0].split()
+            if not fields:
+                continue
+            if len(fields) < num_columns:
+                raise fail(path, line_no, f"{len(fields)} fields, expected {num_columns}")
+            rows.append([as_float(x, path, line_no, f"column {k + 1}")
+                         for k, x in enumerate(fields[:num_columns])])  # fmt: skip
+    if not rows:
+        raise fail(path, 0, "no data rows")
+    return np.asarray(rows, dtype=np.float64)
+
+
+def _find(folder: Path, stem: str, required: bool = True) -> Path | None:
+    for name in (f"{stem}.dat", f"{stem}.dat.gz"):
+        if (folder / name).is_file():
+            return folder / name
+    if required:
+        raise InputError(f"{folder}: MRCLAM folder has no {stem}.dat (or .dat.gz)")
+    return None
+
+
+def _check_sorted(t: np.ndarray, path) -> None:
+    back = np.flatnonzero(np.diff(t) < 0)
+    if back.size:
+        raise InputError(f"{path}: row {int(back[0]) + 2}: time goes back ({t[back[0] + 1]})")
+
+
+def read_mrclam_folder(folder: str | Path, robot: int = 1) -> MRCLAMRobot:
+    """One robot of an MRCLAM dataset folder (see the module docstring)."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError(f"{folder}: not a folder (expected an MRCLAM dataset folder)")
+    odo_p = _find(folder, f"Robot{robot}_Odometry")
+    meas_p = _find(folder, f"Robot{robot}_Measurement")
+    gt_p = _find(folder, f"Robot{robot}_Groundtruth", required=False)
+    odo, meas = read_dat(odo_p, 3), read_dat(meas_p, 4)
+    gt = read_dat(gt_p, 4) if gt_p else None
+    for arr, p in ((odo, odo_p), (meas, meas_p), (gt, gt_p)):
+        if arr is not None:
+            _check_sorted(arr[:, 0], p)
+    lm = read_dat(_find(folder, "Landmark_Groundtruth"), 3)
+    codes = read_dat(_find(folder, "Barcodes"), 2)
+    barcodes = {int(b): int(s) for s, b in codes}
+    return MRCLAMRobot(odo, meas, gt, lm[:, 1:3].copy(), lm[:, 0].astype(int), barcodes)
+
+
+def _csv(path, columns: tuple[str, ...], what: str) -> np.ndarray:
+    _, rows = read_rows(path, columns, what)
+    if not rows:
+        raise fail(path, 0, f"{what} has no data rows")
+    return np.array([[r.float(c) for c in columns] for r in rows])
+
+
+def read_generic(
+    odometry: str | Path,
+    measurements: str | Path,
+    landmarks: str | Path,
+    groundtruth: str | Path | None = None,
+) -> MRCLAMRobot:
+    """The generic CSVs as an :class:`MRCLAMRobot` (landmark ids are their own barcodes)."""
+    odo = _csv(odometry, ("t", "v", "w"), "odometry CSV")
+    meas = _csv(measurements, ("t", "landmark", "range", "bearing"), "measurements CSV")
+    lm = _csv(landmarks, ("id", "x", "y"), "landmarks CSV")
+    gt = _csv(groundtruth, ("t", "x", "y", "theta"), "ground-truth CSV") if groundtruth else None
+    for arr, p in ((odo, odometry), (meas, measurements), (gt, groundtruth)):
+        if arr is not None:
+            _check_sorted(arr[:, 0], p)
+    ids = lm[:, 0].astype(int)
+    return MRCLAMRobot(odo, meas, gt, lm[:, 1:3].copy(), ids, {int(i): int(i) for i in ids})
+
+
+def write_poses(path: str | Path, times: np.ndarray, poses: np.ndarray) -> Path:
+    """Write a pose track ``t,x,y,theta``."""
+    rows = [(float(t), *map(float, p)) for t, p in zip(times, poses)]
+    return write_rows(path, ("t", "x", "y", "theta"), rows)
+
+
+def read_poses(path: str | Path, robot: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """``(times (n,), poses (n, 3))`` of a pose CSV, an MRCLAM ``.dat`` ground truth or an
+    MRCLAM folder (its ``RobotN_Groundtruth``)."""
+    path = Path(path)
+    if path.is_dir():
+        path = _find(path, f"Robot{robot}_Groundtruth")
+    if path.name.endswith((".dat", ".dat.gz")):
+        arr = read_dat(path, 4)
+    else:
+        arr = _csv(path, ("t", "x", "y", "theta"), "pose CSV")
+    _check_sorted(arr[:, 0], path)
+    return arr[:, 0], arr[:, 1:4]

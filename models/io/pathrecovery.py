@@ -1,0 +1,124 @@
+"""Path-recovery files (seed 001): a camera network, observations, a recovered path.
+
+Network ``edges.csv``: ``from,to,prob[,gap_mean]`` (0-based cameras): ``prob`` is
+``W^p(from, to)``, the rows of each ``from`` sum to 1, every camera has its self loop
+``c,c``; ``gap_mean`` is the mean travel time in steps of an edge crossing a blind gap
+(0 or empty: one step). Optional ``cameras.csv``: ``camera,x,y`` (plots only).
+
+Observations ``observations.csv``: ``t,camera,f0,f1,...`` (steps ``t = 0 .. T-1``),
+optional ``obs`` id (default: the data row's 0-based index) and ``object`` (truth).
+
+Path (output, and truth for eval): ``t,state,camera,ta,obs``: ``state`` visible or hidden,
+``camera`` the camera (visible) or destination (hidden), ``ta`` steps to arrival, ``obs``
+the id of the associated observation (-1 while hidden).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from dbn.errors import DBNError, InputError
+from models.io.table import fail, read_rows, write_rows
+
+__all__ = ["Observations", "read_network", "read_observations", "write_path", "read_path"]
+
+_FEAT = re.compile(r"^f(\d+)$")
+_KIND = {"visible": 0, "hidden": 1, "none": -1}
+
+
+def read_network(edges: str | Path, cameras: str | Path | None = None):
+    """A :class:`models.pathrecovery.model.CameraNetwork` from ``edges.csv`` (and
+    ``cameras.csv``); coordinates default to a circle."""
+    from models.pathrecovery.model import CameraNetwork
+
+    header, rows = read_rows(edges, ("from", "to", "prob"), "edges CSV")
+    if not rows:
+        raise fail(edges, 0, "no edges")
+    e = np.array([(r.int("from"), r.int("to"), r.float("prob"),
+                   r.float("gap_mean", allow_empty=True) if "gap_mean" in header else 0.0)
+                  for r in rows])  # fmt: skip
+    src, dst = e[:, 0].astype(np.int64), e[:, 1].astype(np.int64)
+    if (src < 0).any() or (dst < 0).any():
+        raise fail(edges, rows[int(np.argmax((src < 0) | (dst < 0)))].line, "negative camera")
+    gap = np.nan_to_num(e[:, 3])
+    n = int(max(src.max(), dst.max())) + 1
+    order = np.lexsort((dst, src))
+    if np.any((np.diff(src[order]) == 0) & (np.diff(dst[order]) == 0)):
+        raise fail(edges, 0, "an edge is listed twice")
+    coords = np.column_stack([np.cos(2 * np.pi * np.arange(n) / n),
+                              np.sin(2 * np.pi * np.arange(n) / n)])  # fmt: skip
+    if cameras is not None:
+        _, crow = read_rows(cameras, ("camera", "x", "y"), "cameras CSV")
+        for r in crow:
+            c = r.int("camera")
+            if not 0 <= c < n:
+                raise r.fail(f"camera {c} is not in the network (0..{n - 1})")
+            coords[c] = r.float("x"), r.float("y")
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(src, minlength=n))])
+    try:
+        return CameraNetwork(indptr, dst[order], e[order, 2], gap[order], coords, name=str(edges))
+    except DBNError as exc:
+        raise InputError(f"{edges}: {exc}") from None
+
+
+class Observations(NamedTuple):
+    """Observations sorted by step then camera (the filter's ODB layout): ``time_ptr``
+    (T + 1,), ``cam`` (n,), ``feat`` (n, d), ``ids`` (n,) file ids, ``obj`` (n,) or None."""
+
+    time_ptr: np.ndarray
+    cam: np.ndarray
+    feat: np.ndarray
+    ids: np.ndarray
+    obj: np.ndarray | None
+
+
+def read_observations(path: str | Path) -> Observations:
+    """Read ``observations.csv`` (module docstring) into the ODB layout."""
+    header, rows = read_rows(path, ("t", "camera"), "observations CSV")
+    fcols = sorted((c for c in header if _FEAT.match(c)), key=lambda c: int(c[1:]))
+    if not fcols or [int(c[1:]) for c in fcols] != list(range(len(fcols))):
+        raise fail(path, 1, f"need feature columns f0, f1, ... (found {fcols or 'none'})")
+    if not rows:
+        raise fail(path, 0, "no observations")
+    t = np.array([r.int("t") for r in rows])
+    cam = np.array([r.int("camera") for r in rows])
+    bad = np.flatnonzero((t < 0) | (cam < 0))
+    if bad.size:
+        raise rows[int(bad[0])].fail("t and camera must be >= 0")
+    feat = np.array([[r.float(c) for c in fcols] for r in rows])
+    ids = np.array([r.int("obs") for r in rows]) if "obs" in header else np.arange(len(rows))
+    if np.unique(ids).size != ids.size:
+        raise fail(path, 0, "obs ids are not unique")
+    obj = np.array([r.int("object") for r in rows]) if "object" in header else None
+    order = np.lexsort((cam, t))
+    T = int(t.max()) + 1
+    time_ptr = np.concatenate([[0], np.cumsum(np.bincount(t, minlength=T))])
+    pick = lambda a: None if a is None else a[order]  # noqa: E731
+    return Observations(time_ptr, cam[order], feat[order], ids[order], pick(obj))
+
+
+def write_path(path, t: np.ndarray, kind, cam, ta, obs_ids) -> Path:
+    """Write ``t,state,camera,ta,obs`` rows."""
+    names = {v: k for k, v in _KIND.items()}
+    rows = [(int(a), names[int(k)], int(c), int(b), int(o))
+            for a, k, c, b, o in zip(t, kind, cam, ta, obs_ids)]  # fmt: skip
+    return write_rows(path, ("t", "state", "camera", "ta", "obs"), rows)
+
+
+def read_path(path: str | Path) -> dict[int, tuple[int, int, int, int]]:
+    """``t -> (kind, camera, ta, obs)`` of a path CSV (kind 0 visible, 1 hidden)."""
+    _, rows = read_rows(path, ("t", "state", "obs"), "path CSV")
+    out = {}
+    for r in rows:
+        if r["state"] not in _KIND:
+            raise r.fail(f"state = {r['state']!r}, expected visible or hidden")
+        cam = r.int("camera") if r.get("camera", "") != "" else -1
+        ta = r.int("ta") if r.get("ta", "") != "" else 0
+        out[r.int("t")] = (_KIND[r["state"]], cam, ta, r.int("obs"))
+    if not out:
+        raise fail(path, 0, "no steps")
+    return out

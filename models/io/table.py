@@ -1,0 +1,125 @@
+"""CSV plumbing shared by the readers: rows with their line numbers, typed fields, and
+errors that name the file and the line (``FILE:LINE: message``)."""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+from dbn.errors import InputError
+
+__all__ = ["Row", "read_rows", "fail", "as_float", "as_int", "write_rows", "require_file"]
+
+
+class Row(dict):
+    """One CSV row (column name -> raw text) that remembers its file and line."""
+
+    path: str = ""
+    line: int = 0
+
+    def fail(self, message: str) -> InputError:
+        """An :class:`InputError` ``FILE:LINE: message`` for this row."""
+        return fail(self.path, self.line, message)
+
+    def float(self, name: str, *, allow_empty: bool = False) -> float:
+        """Field ``name`` as a finite float (``nan`` for an empty field if allowed)."""
+        return as_float(self.get(name, ""), self.path, self.line, name, allow_empty)
+
+    def int(self, name: str) -> int:
+        """Field ``name`` as an int."""
+        return as_int(self.get(name, ""), self.path, self.line, name)
+
+
+def fail(path: str | Path, line: int, message: str) -> InputError:
+    """``InputError("FILE:LINE: message")`` (line 0: the file as a whole)."""
+    where = f"{path}:{line}" if line else f"{path}"
+    return InputError(f"{where}: {message}")
+
+
+def require_file(path: str | Path, what: str) -> Path:
+    """``path`` as a Path; :class:`InputError` naming ``what`` when it is not a file."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"{p}: {what} not found (no such file)")
+    return p
+
+
+def as_float(text: str, path, line: int, name: str, allow_empty: bool = False) -> float:
+    """``text`` as a finite float, else ``InputError`` naming file, line and column."""
+    text = (text or "").strip()
+    if text == "" and allow_empty:
+        return math.nan
+    try:
+        value = float(text)
+    except ValueError:
+        raise fail(path, line, f"{name} = {text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise fail(path, line, f"{name} = {text!r} is not finite")
+    return value
+
+
+def as_int(text: str, path, line: int, name: str) -> int:
+    """``text`` as an int, else ``InputError`` naming file, line and column."""
+    text = (text or "").strip()
+    try:
+        return int(text)
+    except ValueError:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if value.is_integer():
+            return int(value)
+        raise fail(path, line, f"{name} = {text!r} is not an integer") from None
+
+
+def read_rows(
+    path: str | Path,
+    required: Sequence[str] = (),
+    what: str = "CSV file",
+    keep_blank: bool = False,
+) -> tuple[list[str], list[Row]]:
+    """The header and the rows of a CSV file with a header line.
+
+    Lines starting with ``#`` are skipped, and so are blank lines unless ``keep_blank``
+    (then a blank line after the header is a row of empty fields: a slice with no
+    evidence in a one-column file). Raises :class:`InputError`
+    (``FILE:LINE: ...``) for a missing file, a missing required column or a row with
+    more fields than the header.
+    """
+    path = require_file(path, what)
+    rows: list[Row] = []
+    header: list[str] | None = None
+    with open(path, newline="", encoding="utf-8") as f:
+        for line_no, fields in enumerate(csv.reader(f), start=1):
+            blank = not fields or all(not x.strip() for x in fields)
+            if (blank and not (keep_blank and header)) or (fields and fields[0].startswith("#")):
+                continue
+            fields = [x.strip() for x in fields]
+            if header is None:
+                header = fields
+                missing = [c for c in required if c not in header]
+                if missing:
+                    raise fail(path, line_no, f"missing column(s) {missing}; header is {header}")
+                continue
+            if len(fields) > len(header):
+                raise fail(path, line_no, f"{len(fields)} fields, header has {len(header)}")
+            row = Row(zip(header, fields + [""] * (len(header) - len(fields))))
+            row.path, row.line = str(path), line_no
+            rows.append(row)
+    if header is None:
+        raise fail(path, 0, "empty file (no header line)")
+    return header, rows
+
+
+def write_rows(path: str | Path, header: Sequence[str], rows: Iterable[Sequence]) -> Path:
+    """Write a CSV file with a header line; floats with full precision (``repr``)."""
+    path = Path(path)
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(header)
+        for r in rows:
+            w.writerow([repr(float(x)) if isinstance(x, float) else x for x in r])
+    return path

@@ -1,0 +1,125 @@
+"""``dbntrack track dbn MODEL.bif EVIDENCE.csv``: per-slice marginals of any discrete
+two-slice DBN (formats in :mod:`models.io.dbn`).
+
+``method = "exact"`` (default) runs :class:`inference.exact.DBNFilter` slice by slice and
+returns the filtered marginal of every hidden variable; ``auto``, ``bk``, ``particle`` and
+``rbpf`` go to the generic engines of ``inference.filter`` where that entry point exists.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dbn.dbn import TwoSliceDBN
+from dbn.errors import InputError
+from models.io.dbn import read_evidence, read_states, read_two_slice_bif, write_marginals
+from models.track.context import RunContext
+
+INPUTS = ("MODEL.bif: a two-slice BIF file (variables X_0 / X_1)",
+          "EVIDENCE.csv: one row per slice, one column per observed variable")  # fmt: skip
+METHODS = ("exact", "auto", "bk", "particle", "rbpf")
+
+
+def _exact(ctx: RunContext, dbn: TwoSliceDBN, ev: dict[str, np.ndarray], T: int, hidden):
+    from inference.exact.dbn_filter import DBNFilter
+
+    f = DBNFilter(dbn)
+    out = {n: np.zeros((T, f.cards[n])) for n in hidden}
+    loglik = np.zeros(T)
+    state = None
+    for t in ctx.progress(range(T), T, "slices"):
+        e = {n: int(c[t]) for n, c in ev.items() if c[t] >= 0}
+        m = f.slice_marginals(state, e)
+        for n in hidden:
+            out[n][t] = m[n]
+        new = f.init(e) if state is None else f.step(state, e)
+        loglik[t] = new.log_likelihood - (0.0 if state is None else state.log_likelihood)
+        state = new
+    return out, loglik
+
+
+def _generic(ctx, dbn, ev, method: str, hidden, options: dict):
+    try:
+        from inference import filter as generic_filter
+    except ImportError:
+        generic_filter = None
+    if not callable(generic_filter):
+        raise InputError(f"method {method!r} needs inference.filter, absent in this version")
+    try:
+        res = generic_filter(dbn, ev, method, list(hidden), key=ctx.key(), **options)
+    except ModuleNotFoundError as exc:  # an engine of inference.filter not installed yet
+        raise InputError(f"method {method!r} is not available here (missing {exc.name})") from None
+    except TypeError as exc:  # an option the engine does not take
+        raise InputError(f"method {method!r}: {exc}") from None
+    return {n: np.asarray(res.marginals[n]) for n in hidden}, np.asarray(res.log_likelihoods)
+
+
+def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
+    """Filter the evidence; write ``marginals.csv`` and ``marginals.png``."""
+    if len(inputs) != 2:
+        raise InputError(f"dbn needs 2 inputs (MODEL.bif EVIDENCE.csv), got {len(inputs)}")
+    method = config.pop("method", None) or "exact"
+    if method not in METHODS:
+        raise InputError(f"method = {method!r}; valid: {', '.join(METHODS)}")
+    with ctx.timed("read"):
+        dbn = read_two_slice_bif(inputs[0])
+        ev = read_evidence(inputs[1], dbn)
+    T = len(next(iter(ev.values())))
+    hidden = [n for n in dbn.names if n not in ev or (ev[n] < 0).any()]
+    with ctx.timed("filter"):
+        if method == "exact":
+            marg, loglik = _exact(ctx, dbn, ev, T, hidden)
+        else:
+            marg, loglik = _generic(ctx, dbn, ev, method, hidden, config)
+    write_marginals(ctx.outdir / "marginals.csv", dbn, marg)
+    _plot(ctx, dbn, marg)
+    summary = {
+        "parameters": {"method": method, "num_slices": T, "hidden": hidden, **config},
+        "outputs": ["marginals.csv", "marginals.png"],
+        "log_likelihood": float(np.sum(loglik)),
+    }
+    return summary
+
+
+def _plot(ctx: RunContext, dbn: TwoSliceDBN, marg: dict[str, np.ndarray]) -> None:
+    names = list(marg)[:8]
+    with ctx.figure("marginals.png", nrows=len(names), figsize=(8, 1.2 + 1.1 * len(names)),
+                    squeeze=False, layout="constrained") as (fig, axes):  # fmt: skip
+        states = {v.name: v.state_names for v in dbn.variables}
+        for ax, n in zip(axes[:, 0], names):
+            im = ax.imshow(marg[n].T, aspect="auto", origin="lower", vmin=0, vmax=1,
+                           cmap="viridis", interpolation="nearest")  # fmt: skip
+            ax.set_yticks(range(len(states[n])), states[n])
+            ax.set_ylabel(n)
+        axes[-1, 0].set_xlabel("slice")
+        fig.colorbar(im, ax=axes[:, 0].tolist(), label="P(state | evidence so far)")
+
+
+def evaluate(result: str, truth: str, model: str | None = None) -> dict:
+    """Label error rate (argmax of the marginal vs the true state) and mean log-loss, over
+    the slices and variables the truth CSV gives."""
+    from models.io.dbn import read_marginals
+    from models.io.table import read_rows
+
+    marg = read_marginals(result)
+    header, rows = read_rows(truth, what="truth CSV", keep_blank=True)
+    errors, losses = [], []
+    for col in header:
+        if col not in marg:
+            raise InputError(f"{truth}:1: column {col!r} has no marginals in {result}")
+        states, m = marg[col]
+        for t, row in enumerate(rows):
+            if row[col] == "" or t >= m.shape[0]:
+                continue
+            if row[col] not in states:
+                raise row.fail(f"{col} = {row[col]!r} is not a state of {states}")
+            k = states.index(row[col])
+            errors.append(int(np.argmax(m[t]) != k))
+            losses.append(-np.log(max(m[t, k], 1e-300)))
+    if not errors:
+        raise InputError(f"{truth}: no slice with a true state to compare")
+    return {"label_error_rate": float(np.mean(errors)), "mean_log_loss": float(np.mean(losses)),
+            "num_compared": len(errors)}  # fmt: skip
+
+
+__all__ = ["INPUTS", "METHODS", "track", "evaluate", "read_states"]

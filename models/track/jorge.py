@@ -1,0 +1,141 @@
+"""``dbntrack track jorge BOXES``: group/person labels of the strokes of a video (seed 004;
+formats in :mod:`models.io.jorge`).
+
+The boxes (CAVIAR / PETS2009 XML or MOTChallenge) go through the simulated low-level
+tracker :func:`models.jorge.strokes.build_strokes` (regions of overlapping boxes followed
+without a break; occlusion gaps and dominant colours simulated from ``--seed``, as in the
+benchmark), then the registry's on-line labeller, one stroke per protocol step, and its
+final re-identification pass. Config keys: the fields of
+:class:`~models.jorge.strokes.StrokeConfig` and ``fps``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dbn.errors import InputError
+from models.io.jorge import read_boxes, read_strokes, write_mot_tracks, write_strokes
+from models.track.context import RunContext
+
+INPUTS = ("BOXES: CAVIAR CVML .xml, PETS2009 .xml or MOTChallenge gt.txt (may be .gz)",)
+
+
+def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
+    """Label the strokes; write ``strokes.csv``, ``tracks.txt`` and ``strokes.png``."""
+    import models
+    from models.jorge.strokes import StrokeConfig, build_strokes
+    from models.protocol import split_run_keys
+
+    if len(inputs) != 1:
+        raise InputError(f"jorge needs one box file, got {len(inputs)} inputs")
+    known = set(StrokeConfig.__dataclass_fields__) | {"fps"}
+    if set(config) - known:
+        raise InputError(f"unknown config key(s) {sorted(set(config) - known)}")
+    with ctx.timed("read"):
+        truth = read_boxes(inputs[0])
+        scfg = StrokeConfig(**{k: v for k, v in config.items() if k != "fps"})
+        strokes = build_strokes(ctx.seed, truth, scfg)
+    fps = float(config.get("fps", truth.fps))
+    tracker = models.get("jorge").make(fps=fps)
+    k_init, keys = split_run_keys(ctx.key(), len(strokes))
+    with ctx.timed("label"):
+        state = tracker.init(k_init)
+        for k, s in ctx.progress(zip(keys, strokes), len(strokes), "strokes"):
+            state, _ = tracker.step(k, state, s)
+        final = state.labeller.finish()  # the re-identification pass (the batch's last step)
+    labels = [final[k] for k in range(len(strokes))]
+    write_strokes(ctx.outdir / "strokes.csv", strokes, labels, ctx.seed)
+    write_mot_tracks(ctx.outdir / "tracks.txt", strokes, labels)
+    _plot(ctx, strokes, labels)
+    params = {"num_strokes": len(strokes), "num_groups": strokes.num_groups, "fps": fps,
+              "num_frames": truth.num_frames, "sequence": truth.name,
+              **{k: getattr(scfg, k) for k in StrokeConfig.__dataclass_fields__}}  # fmt: skip
+    return {"parameters": params, "outputs": ["strokes.csv", "tracks.txt", "strokes.png"]}
+
+
+def _plot(ctx: RunContext, strokes, labels) -> None:
+    import matplotlib
+
+    tab = matplotlib.colormaps["tab10"]
+    palette = [tab(i) for i in range(10) if i != 7]  # tab10 without its grey
+    singles = sorted({o for lab in labels if len(lab) == 1 for o in lab})
+    colour_of = {o: palette[i % len(palette)] for i, o in enumerate(singles)}
+    with ctx.figure("strokes.png", ncols=2, figsize=(13, 5)) as (_, (ax0, ax1)):
+        for s, lab in zip(strokes, labels):
+            colour = colour_of[min(lab)] if len(lab) == 1 else "0.3"
+            ax0.plot([s.start, s.end], [s.index, s.index], color=colour, lw=3)
+            ax0.annotate(",".join(map(str, sorted(lab))), (s.end, s.index), fontsize=6,
+                         xytext=(2, -2), textcoords="offset points")  # fmt: skip
+            ax1.plot(
+                s.positions[:, 0], s.positions[:, 1], color=colour, lw=1.5 if len(lab) == 1 else 3
+            )
+        ax0.set_xlabel("frame")
+        ax0.set_ylabel("stroke")
+        ax0.set_title("strokes and their labels (object ids; grey: groups)")
+        ax1.invert_yaxis()
+        ax1.set_aspect("equal")
+        ax1.set_title("region centres (image coordinates)")
+
+
+def iou_distance(a: np.ndarray, b: np.ndarray, max_distance: float = 0.5) -> np.ndarray:
+    """``1 - IoU`` of boxes ``a`` (n, 4) and ``b`` (m, 4) as ``(left, top, w, h)``; NaN
+    (no match) above ``max_distance`` (motmetrics' convention; its own ``iou_matrix``
+    calls ``np.asfarray``, gone in numpy 2)."""
+    lo = np.maximum(a[:, None, :2], b[None, :, :2])
+    hi = np.minimum(a[:, None, :2] + a[:, None, 2:], b[None, :, :2] + b[None, :, 2:])
+    inter = np.prod(np.clip(hi - lo, 0, None), axis=-1)
+    union = np.prod(a[:, 2:], -1)[:, None] + np.prod(b[:, 2:], -1)[None] - inter
+    d = 1.0 - inter / union
+    return np.where(d > max_distance, np.nan, d)
+
+
+def _mot(result: str, truth: str) -> dict:
+    """MOTA, IDF1, ... of MOTChallenge tracks against the truth boxes (motmetrics, IoU)."""
+    import motmetrics as mm
+
+    from models.io.jorge import read_mot
+
+    pred, ref = read_mot(result), read_boxes(truth)
+    acc = mm.MOTAccumulator(auto_id=True)
+    pf = {int(f): i for i, f in enumerate(pred.frames)}
+
+    def tlwh(b):
+        return np.column_stack([b[:, 0] - b[:, 2] / 2, b[:, 1] - b[:, 3] / 2, b[:, 2], b[:, 3]])
+
+    for r, f in enumerate(ref.frames):
+        rb = ref.boxes[r]
+        ok = ~np.isnan(rb[:, 0])
+        pb = pred.boxes[pf[int(f)]] if int(f) in pf else np.zeros((0, 4))
+        pok = ~np.isnan(pb[:, 0])
+        d = iou_distance(tlwh(rb[ok]), tlwh(pb[pok]))
+        acc.update(ref.ids[ok].tolist(), pred.ids[pok].tolist() if int(f) in pf else [], d)
+    mh = mm.metrics.create()
+    s = mh.compute(acc, metrics=["mota", "idf1", "num_switches", "precision", "recall"], name="x")
+    return {k: float(s[k].iloc[0]) for k in s.columns}
+
+
+def evaluate(result: str, truth: str) -> dict:
+    """``strokes.csv``: label error rate LE / NT (seed 004, Table 3; objects matched to
+    people one to one, as the benchmark's ``error_rate``) against the truth boxes' strokes
+    rebuilt with the file's seed. ``tracks.txt`` (MOTChallenge): MOTA, IDF1 (motmetrics)."""
+    from types import SimpleNamespace
+
+    from models.jorge.online import score
+    from models.jorge.strokes import build_strokes
+
+    if not str(result).endswith(".csv"):
+        return _mot(result, truth)
+    seed, rows = read_strokes(result)
+    if seed is None:
+        raise InputError(f"{result}:1: no '# seed=S' line (written by dbntrack track jorge)")
+    strokes = build_strokes(seed, read_boxes(truth))
+    if len(strokes) != len(rows):
+        raise InputError(f"{result}: {len(rows)} strokes, but {truth} gives {len(strokes)} "
+                         f"with seed {seed}")  # fmt: skip
+    shown = [SimpleNamespace(index=r["stroke"], truth=s.truth) for r, s in zip(rows, strokes)]
+    sc = score(shown, [r["label"] for r in rows])
+    return {"error_rate": sc.error_rate, "label_errors": sc.label_errors,
+            "num_strokes": sc.num_strokes, "id_switches": sc.id_switches}  # fmt: skip
+
+
+__all__ = ["INPUTS", "track", "evaluate"]

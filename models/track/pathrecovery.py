@@ -1,0 +1,133 @@
+"""``dbntrack track pathrecovery EDGES.csv OBSERVATIONS.csv [CAMERAS.csv]``: the path of
+one target through a camera network (seed 001; formats in :mod:`models.io.pathrecovery`).
+
+The first phase runs through the registry's protocol adapter (one step per time step),
+the second (dynamic programming over the k-best lists) is
+:func:`models.pathrecovery.recover_path`. The target starts at its observation at
+``t = 0``: the only one there, or config ``target_obs`` (an obs id), or config ``c0`` and
+``f0``. ``sigma`` (the typical feature covariance of eq. 2) defaults to the covariance
+of all features. Other config keys: the fields of
+:class:`~models.pathrecovery.filter.FilterConfig` and ``k_dp`` (7, the second phase's k).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dbn.errors import InputError
+from models.io.pathrecovery import read_network, read_observations, read_path, write_path
+from models.track.context import RunContext
+
+INPUTS = ("EDGES.csv: from,to,prob[,gap_mean] camera network (with self loops)",
+          "OBSERVATIONS.csv: t,camera,f0,f1,... (the target's start at t = 0)",
+          "[CAMERAS.csv: camera,x,y positions, for the figure]")  # fmt: skip
+
+
+def _start(odb, config: dict) -> tuple[int, np.ndarray]:
+    if "c0" in config and "f0" in config:
+        return int(config["c0"]), np.asarray(config["f0"], float)
+    lo, hi = int(odb.time_ptr[0]), int(odb.time_ptr[1])
+    if "target_obs" in config:
+        hit = np.flatnonzero(odb.ids[lo:hi] == int(config["target_obs"]))
+        if hit.size != 1:
+            raise InputError(f"config target_obs = {config['target_obs']}: no such obs at t = 0")
+        i = lo + int(hit[0])
+    elif hi - lo == 1:
+        i = lo
+    else:
+        raise InputError(f"t = 0 has {hi - lo} observations: give target_obs (or c0 and f0) "
+                         "in --config")  # fmt: skip
+    return int(odb.cam[i]), odb.feat[i]
+
+
+def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
+    """Recover the target's path; write ``path.csv`` and ``path.png``."""
+    import models
+    from models.pathrecovery.api import PathObservation
+    from models.pathrecovery.filter import FilterConfig, KBestLists, make_model
+    from models.pathrecovery.recover import recover_path
+    from models.protocol import split_run_keys
+
+    if len(inputs) not in (2, 3):
+        raise InputError(f"pathrecovery needs EDGES.csv OBSERVATIONS.csv [CAMERAS.csv], "
+                         f"got {len(inputs)} input(s)")  # fmt: skip
+    with ctx.timed("read"):
+        net = read_network(inputs[0], inputs[2] if len(inputs) == 3 else None)
+        odb = read_observations(inputs[1])
+    known = set(FilterConfig._fields) | {"c0", "f0", "target_obs", "sigma", "k_dp"}
+    if set(config) - known:
+        raise InputError(f"unknown config key(s) {sorted(set(config) - known)}")
+    c0, f0 = _start(odb, config)
+    sigma = np.asarray(config.get("sigma", np.atleast_2d(np.cov(odb.feat.T))), float)
+    fcfg = FilterConfig(**{k: config[k] for k in FilterConfig._fields if k in config})
+    model = make_model(net, c0, f0, sigma, fcfg)
+    tracker = models.get("pathrecovery").make(model=model)
+    T = odb.time_ptr.size - 1
+    k_init, keys = split_run_keys(ctx.key(), T - 1)
+    state, infos = tracker.init(k_init), []
+    with ctx.timed("filter"):
+        for t in ctx.progress(range(1, T), T - 1, "steps"):
+            lo, hi = int(odb.time_ptr[t]), int(odb.time_ptr[t + 1])
+            state, info = tracker.step(keys[t - 1], state,
+                                       PathObservation(odb.cam[lo:hi], odb.feat[lo:hi], lo))  # fmt: skip
+            infos.append(info)
+    lists = KBestLists(*(np.stack([getattr(i, f) for i in infos])
+                         for f in ("kind", "cam", "ta", "obs", "mass", "num_tracked_cameras")),
+                       step_seconds=np.zeros(T - 1))  # fmt: skip
+    k_dp = int(config.get("k_dp", 7))
+    with ctx.timed("recover"):
+        path = recover_path(model, lists, odb.feat, k=min(k_dp, fcfg.k))
+    ids = np.where(path.obs >= 0, odb.ids[np.maximum(path.obs, 0)], -1)
+    write_path(ctx.outdir / "path.csv", np.arange(1, T), path.kind, path.cam, path.ta, ids)
+    _plot(ctx, net, path, c0)
+    params = {"num_steps": T, "num_cameras": net.indptr.size - 1, "c0": c0, "k_dp": k_dp,
+              **fcfg._asdict(), "jumps": int(path.jumped.sum())}  # fmt: skip
+    return {"parameters": params, "outputs": ["path.csv", "path.png"]}
+
+
+def _plot(ctx: RunContext, net, path, c0: int) -> None:
+    with ctx.figure("path.png", ncols=2, figsize=(12, 4.5)) as (_, (ax0, ax1)):
+        xy = net.coords
+        src = np.repeat(np.arange(net.indptr.size - 1), np.diff(net.indptr))
+        for a, b in zip(src, net.indices):
+            if a != b:
+                ax0.plot(*xy[[a, b]].T, color="0.85", lw=1, zorder=0)
+        ax0.scatter(*xy.T, s=12, color="0.5")
+        cams = np.concatenate([[c0], path.cam[path.kind == 0]])
+        ax0.plot(*xy[cams].T, "b.-", lw=1.5, label="recovered (visible states)")
+        ax0.plot(*xy[c0], "go", label="start")
+        ax0.legend(fontsize=8)
+        ax0.set_title("camera network and recovered path")
+        t = np.arange(1, path.kind.size + 1)
+        vis = path.kind == 0
+        ax1.plot(t[vis], path.cam[vis], "b.", label="visible: camera")
+        ax1.plot(t[~vis], path.cam[~vis], "r.", ms=3, label="hidden: destination")
+        ax1.set_xlabel("step")
+        ax1.set_ylabel("camera")
+        ax1.legend(fontsize=8)
+
+
+def evaluate(result: str, truth: str) -> dict:
+    """Seed 001's path score (sec. 7.2): fraction of steps whose state is correct, overall,
+    on visible and on hidden steps (:func:`models.pathrecovery.metrics.path_score`), and
+    the camera accuracy on visible steps, over the steps ``t >= 1`` of the truth."""
+    from models.pathrecovery.metrics import path_score
+
+    pred, true = read_path(result), read_path(truth)
+    steps = sorted(t for t in true if t >= 1)
+    missing = [t for t in steps if t not in pred]
+    if missing:
+        raise InputError(f"{result}: no state for step(s) {missing[:5]} of {truth}")
+    kind = np.array([pred[t][0] for t in steps])
+    obs = np.array([pred[t][3] for t in steps])
+    true_obs = np.array([true[t][3] if true[t][0] == 0 else -1 for t in steps])
+    ps = path_score(kind, obs, true_obs)
+    vis = true_obs >= 0
+    cam_ok = np.array([pred[t][1] == true[t][1] for t in steps])
+    return {"path_score": ps.overall, "path_score_visible": ps.visible,
+            "path_score_hidden": ps.hidden,
+            "camera_accuracy_visible": float(cam_ok[vis].mean()) if vis.any() else float("nan"),
+            "num_steps": len(steps)}  # fmt: skip
+
+
+__all__ = ["INPUTS", "track", "evaluate"]

@@ -1,0 +1,147 @@
+"""``dbntrack track rjmcmc3d VIEW_DIR...``: 3-D positions and identities of people seen by
+calibrated cameras (seed 003; formats in :mod:`models.io.rjmcmc3d`).
+
+Config keys: ``floor`` ``[x_min, x_max, y_min, y_max]`` (metres; default: the bounding box
+of the camera centres on the ground), ``scale`` (image rescaling of the calibration, 1),
+``min_blob`` (pixels, 40), ``sigma_px`` (detector foot noise, 4), and the fields of
+:class:`~models.rjmcmc3d.model.TrackerParams` (e.g. ``num_moves``, ``burn_in``, ``tau``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dbn.errors import InputError
+from models.io.rjmcmc3d import detections, read_png, read_tracks3d, read_view, warp, write_tracks3d
+from models.track.context import RunContext
+
+INPUTS = ("VIEW_DIR ...: one folder per camera: a Tsai calibration .xml and one foreground "
+          "mask .png per frame",)  # fmt: skip
+
+
+def _scene(ctx, views, config: dict):
+    from models.rjmcmc3d.scene import scene_from_cameras
+
+    cams = [v.camera for v in views]
+    centres = np.array([-c.R.T @ c.t for c in cams])
+    floor = np.asarray(config.get("floor", [*np.sort(centres[:, 0])[[0, -1]],
+                                            *np.sort(centres[:, 1])[[0, -1]]]), float)  # fmt: skip
+    if floor.shape != (4,) or not (floor[1] > floor[0] and floor[3] > floor[2]):
+        raise InputError(f"floor = {floor.tolist()}: need [x_min, x_max, y_min, y_max]")
+    V = len(cams)
+    sigma = np.full(V, float(config.get("sigma_px", 4.0)))
+    return scene_from_cameras(ctx.seed, cams, floor, np.ones((V, 3)), sigma)
+
+
+def _frames(views, scene, min_blob: int):
+    from models.rjmcmc3d.geometry import apply_homography, ground_homography
+    from models.rjmcmc3d.scene import Frame
+
+    shape = (scene.height, scene.width)
+    for t in range(len(views[0].masks)):
+        D, img, dv, dpx = [], [], [], []
+        for v, view in enumerate(views):
+            H = scene.rects[v].H
+            m = warp(read_png(view.masks[t], shape), H, shape)
+            c = read_png(view.colour[t], shape, 3) if view.colour else np.repeat(m[..., None], 3, 2)
+            D.append(m)
+            img.append(warp(c, H, shape, fill=0.5))
+            feet = detections(m, min_blob)
+            dv += [v] * len(feet)
+            dpx.append(feet)
+        dpx = np.concatenate(dpx) if dpx else np.zeros((0, 2))
+        dv = np.array(dv, dtype=np.int64)
+        ground = np.zeros((len(dv), 2))
+        for v in range(len(views)):
+            if (dv == v).any():
+                Hg = ground_homography(scene.P[v])
+                ground[dv == v] = apply_homography(np.linalg.inv(Hg), dpx[dv == v])
+        yield Frame(np.stack(D).astype(np.float32), np.stack(img).astype(np.float32), dv, dpx,
+                    ground)  # fmt: skip
+
+
+def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
+    """Track people in 3-D; write ``tracks3d.txt`` and ``tracks3d.png``."""
+    import models
+    from models.protocol import split_run_keys
+    from models.rjmcmc3d.model import TrackerParams
+
+    known = set(TrackerParams._fields) | {"floor", "scale", "min_blob", "sigma_px"}
+    if set(config) - known:
+        raise InputError(f"unknown config key(s) {sorted(set(config) - known)}")
+    with ctx.timed("read"):
+        views = [read_view(p, float(config.get("scale", 1.0))) for p in inputs]
+        n = {len(v.masks) for v in views}
+        if len(n) != 1:
+            raise InputError(f"the views have different numbers of masks: {sorted(n)}")
+        scene = _scene(ctx, views, config)
+    params = TrackerParams(**{k: config[k] for k in TrackerParams._fields if k in config})
+    tracker = models.get("rjmcmc3d").make(scene=scene, params=params)
+    T = len(views[0].masks)
+    k_init, keys = split_run_keys(ctx.key(), T)
+    frames, ids, X, pres = [], [], [], []
+    with ctx.timed("track"):
+        state = tracker.init(k_init)
+        frame_iter = _frames(views, scene, int(config.get("min_blob", 40)))
+        for t, frame in ctx.progress(enumerate(frame_iter), T, "frames"):
+            state, res = tracker.step(keys[t], state, frame)
+            frames.append(t + 1)
+            ids.append(res.ids)
+            X.append(res.X)
+            pres.append(res.presence)
+    write_tracks3d(ctx.outdir / "tracks3d.txt", frames, ids, X, pres)
+    _plot(ctx, scene, ids, X)
+    out = {"num_views": len(views), "num_frames": T, "floor": scene.floor.tolist(),
+           **params._asdict()}  # fmt: skip
+    return {"parameters": out, "outputs": ["tracks3d.txt", "tracks3d.png"]}
+
+
+def _plot(ctx: RunContext, scene, ids, X) -> None:
+    import matplotlib
+
+    cmap = matplotlib.colormaps["tab10"]
+    with ctx.figure("tracks3d.png", figsize=(6, 6)) as (_, ax):
+        fl = scene.floor
+        ax.plot(
+            [fl[0], fl[1], fl[1], fl[0], fl[0]], [fl[2], fl[2], fl[3], fl[3], fl[2]], "k--", lw=1
+        )
+        ax.plot(scene.centers[:, 0], scene.centers[:, 1], "k^", label="cameras")
+        tracks: dict[int, list] = {}
+        for i, x in zip(ids, X):
+            for k in range(len(i)):
+                tracks.setdefault(int(i[k]), []).append(x[k, :2])
+        for i, pts in tracks.items():
+            p = np.array(pts)
+            ax.plot(p[:, 0], p[:, 1], ".-", color=cmap(i % 10), label=f"id {i}")
+        ax.set_aspect("equal")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.legend(fontsize=7)
+        ax.set_title("ground-plane tracks")
+
+
+def evaluate(result: str, truth: str, threshold: float = 0.5) -> dict:
+    """MOTA, IDF1, ID switches, ... on ground-plane positions (match within 0.5 m), by
+    :func:`models.rjmcmc3d.metrics.evaluate` (the benchmark's metric), over the truth's
+    frames (a frame missing from the result has no hypothesis)."""
+    from models.rjmcmc3d.metrics import evaluate as mot_eval
+    from models.rjmcmc3d.scene import FrameTruth
+    from models.rjmcmc3d.tracker import FrameResult
+
+    pred, ref = read_tracks3d(result), read_tracks3d(truth)
+    if not ref:
+        raise InputError(f"{truth}: no rows")
+    frames = range(min(ref), max(ref) + 1)
+    empty = (np.zeros(0, np.int64), np.zeros((0, 2)))
+    gts, hyps = [], []
+    for f in frames:
+        i, u = ref.get(f, empty)
+        gts.append(FrameTruth(i, u, np.zeros(len(i)), np.zeros(len(i))))
+        j, x = pred.get(f, empty)
+        X = np.zeros((len(j), 6))
+        X[:, :2] = x
+        hyps.append(FrameResult(j, X, np.ones(len(j)), np.full(6, np.nan), 0.0))
+    return mot_eval(gts, hyps, threshold)
+
+
+__all__ = ["INPUTS", "track", "evaluate"]

@@ -1,0 +1,161 @@
+"""``dbntrack track zajdel_adf | zajdel_learnsearch OBSERVATIONS.csv``: who is who across
+non-overlapping cameras (formats in :mod:`models.io.zajdel`).
+
+Parameters are taken from ``--config`` where given, else from the data: the camera
+layout is uniform (every camera and border equally likely, for entries and transitions),
+the appearance mean is the data's mean and its variance is split evenly between people
+and within a person, travel times are broad guesses from the gaps between passes
+(:func:`models.zajdel.learnsearch.initial_params`). Learn-search then learns them by EM.
+
+Config keys: ``num_cameras``, ``num_borders`` (default: the largest index + 1), ``trans``
+``(C, B, C, B)``, ``entry`` ``(C, B)``, ``travel_mean``, ``travel_std``, ``window``,
+``p_new``, ``within_std``, ``between_std`` (ADF), ``decode`` ('chain' or 'online', ADF),
+and the fields of :class:`~models.zajdel.tracker.ADFConfig` /
+:class:`~models.zajdel.learnsearch.LearnSearchConfig`.
+"""
+
+from __future__ import annotations
+
+import jax
+import numpy as np
+
+from dbn.errors import InputError
+from models.io.zajdel import read_labels, read_observations, write_labels, write_partition
+from models.track.context import RunContext
+
+INPUTS = ("OBSERVATIONS.csv: one row per camera pass (or enter/leave events), "
+          "appearance columns a0..",)  # fmt: skip
+_MODEL_KEYS = {"num_cameras", "num_borders", "trans", "entry", "travel_mean", "travel_std",
+               "window", "p_new", "within_std", "between_std", "decode"}  # fmt: skip
+
+
+def _path_and_start(table, config: dict):
+    from models.zajdel.learnsearch import initial_params
+    from models.zajdel.path import make_path_model
+
+    o = table.obs
+    C = int(config.get("num_cameras", int(o.camera.max()) + 1))
+    B = int(config.get("num_borders", int(max(o.border_enter.max(), o.border_quit.max())) + 1))
+    trans = np.asarray(config.get("trans", np.full((C, B, C, B), 1.0 / (C * B))), float)
+    entry = np.asarray(config.get("entry", np.full((C, B), 1.0 / (C * B))), float)
+    span = float(o.t_quit.max() - o.t_enter.min())
+    window = float(config.get("window", max(span, 1.0)))
+    path = make_path_model(trans, entry, 1.0, 1.0, window)
+    start = initial_params(o, path, config.get("p_new"))
+    travel = {k: config[k] for k in ("travel_mean", "travel_std") if k in config}
+    if travel:
+        mu = np.broadcast_to(travel.get("travel_mean", start.path.travel_mean), (C, C))
+        sd = np.broadcast_to(travel.get("travel_std", start.path.travel_std), (C, C))
+        start = start._replace(path=make_path_model(trans, entry, mu, sd, window))
+    return start
+
+
+def _split_config(config: dict, cls) -> tuple[dict, object]:
+    fields = {k: config[k] for k in cls._fields if k in config}
+    unknown = set(config) - _MODEL_KEYS - set(cls._fields)
+    if unknown:
+        raise InputError(f"unknown config key(s) {sorted(unknown)}")
+    return fields, cls(**fields)
+
+
+def _run_adf(ctx: RunContext, table, start, config: dict):
+    import models
+    from models.protocol import split_run_keys
+    from models.zajdel.api import one_per_step
+    from models.zajdel.params import ZajdelParams, default_prior
+    from models.zajdel.tracker import ADFConfig, RunResult
+
+    v = float(np.mean(np.diag(start.prior_cov))) * 2.0
+    within = float(config.get("within_std", np.sqrt(v / 2)))
+    between = float(config.get("between_std", np.sqrt(v / 2)))
+    params = ZajdelParams(default_prior(start.mean, within, between), start.path, start.p_new)
+    fields, cfg = _split_config(config, ADFConfig)
+    tracker = models.get("zajdel_adf").make(params=params, config=cfg)
+    steps = one_per_step(table.obs)
+    k_init, keys = split_run_keys(ctx.key(), len(steps))
+    state, infos = tracker.init(k_init), []
+    for k, obs in ctx.progress(zip(keys, steps), len(steps), "observations"):
+        state, info = tracker.step(k, state, obs)
+        infos.append(info)
+    stacked = [np.stack([np.asarray(x[i]) for x in infos]) for i in range(len(infos[0]))]
+    res = RunResult(*stacked, counter=None, first_index=0)
+    decode = config.get("decode", "chain")
+    if decode not in ("chain", "online"):
+        raise InputError(f"decode = {decode!r}, expected 'chain' or 'online'")
+    labels = res.labels_chain() if decode == "chain" else res.labels_online()
+    extra = {"decode": decode, "within_std": within, "between_std": between, **fields,
+             "final_people_estimate": float(res.counter_mean[-1]),
+             "log_likelihood": float(res.loglik.sum())}  # fmt: skip
+    return labels, res.label_matrix(), extra
+
+
+def _run_learnsearch(ctx: RunContext, table, start, config: dict):
+    import models
+    from models.zajdel.learnsearch import LearnSearchConfig
+
+    fields, cfg = _split_config(config, LearnSearchConfig)
+    tracker = models.get("zajdel_learnsearch").make(params=start, config=cfg)
+    k_init, k_step = jax.random.split(ctx.key())
+    # one protocol step with every pass: one search over all of them (the adapter's
+    # step takes one or more observations; one per step would search K times)
+    state, info = tracker.step(k_step, tracker.init(k_init), table.obs)
+    labels = np.asarray(state.labels)
+    onehot = np.eye(int(labels.max()) + 1)[labels]
+    return labels, onehot, {**fields, "best_log_score": float(info.log_score)}
+
+
+def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
+    """Label every pass; write ``labels.csv``, ``partition.csv`` and ``labels.png``."""
+    if len(inputs) != 1:
+        raise InputError(f"{ctx.name} needs one input (OBSERVATIONS.csv), got {len(inputs)}")
+    with ctx.timed("read"):
+        table = read_observations(inputs[0])
+        start = _path_and_start(table, config)
+    run = _run_adf if ctx.name == "zajdel_adf" else _run_learnsearch
+    with ctx.timed("track"):
+        labels, matrix, extra = run(ctx, table, start, config)
+    write_labels(ctx.outdir / "labels.csv", table, labels)
+    write_partition(ctx.outdir / "partition.csv", table, labels)
+    _plot(ctx, table, labels, matrix)
+    params = {"num_passes": table.obs.num_obs, "num_cameras": start.path.num_cameras,
+              "num_borders": start.path.num_borders, "window": float(start.path.window),
+              "p_new": start.p_new, "num_tracks": int(np.unique(labels).size), **extra}  # fmt: skip
+    return {"parameters": params, "outputs": ["labels.csv", "partition.csv", "labels.png"]}
+
+
+def _plot(ctx: RunContext, table, labels: np.ndarray, matrix: np.ndarray) -> None:
+    o = table.obs
+    with ctx.figure("labels.png", ncols=2, figsize=(12, 4.5)) as (_, (ax0, ax1)):
+        cmap = __import__("matplotlib").colormaps["tab20"]
+        for te, tq, c, lab in zip(o.t_enter, o.t_quit, o.camera, labels):
+            ax0.plot([te, tq], [c, c], lw=6, color=cmap(int(lab) % 20), solid_capstyle="butt")
+            ax0.annotate(str(int(lab)), ((te + tq) / 2, c), ha="center", va="center", fontsize=7)
+        ax0.set_yticks(range(int(o.camera.max()) + 1))
+        ax0.set_xlabel("time")
+        ax0.set_ylabel("camera")
+        ax0.set_title("passes coloured by track label")
+        ax1.imshow(matrix, aspect="auto", cmap="Greys", vmin=0, vmax=1, interpolation="nearest")
+        ax1.set_xlabel("person / track")
+        ax1.set_ylabel("pass (quit-time order)")
+        ax1.set_title("label posterior" if ctx.name == "zajdel_adf" else "MAP partition")
+
+
+def evaluate(result: str, truth: str) -> dict:
+    """Partition accuracy q (seed 000, eqs. 7-8), pairwise precision/recall/F1 and the
+    number of tracks, over the passes both files label (matched by pass id)."""
+    from models.zajdel.metrics import num_objects, pairwise_prf, partition_accuracy
+
+    pred = read_labels(result, "label")
+    true = read_labels(truth, "person")
+    common = sorted(set(pred) & set(true))
+    if not common:
+        raise InputError(f"{result}: no pass id in common with {truth}")
+    p = np.array([pred[i] for i in common])
+    t = np.array([true[i] for i in common])
+    prec, rec, f1 = pairwise_prf(p, t)
+    return {"q": partition_accuracy(p, t), "pairwise_precision": prec, "pairwise_recall": rec,
+            "pairwise_f1": f1, "num_tracks": num_objects(p), "num_people": num_objects(t),
+            "num_compared": len(common)}  # fmt: skip
+
+
+__all__ = ["INPUTS", "track", "evaluate"]
