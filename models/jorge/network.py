@@ -33,6 +33,7 @@ from models.jorge.labels import (
     Label,
     LabelParams,
     admissible_labels,
+    birth_stroke,
     child_table,
     colour_log_likelihood,
     format_label,
@@ -108,8 +109,15 @@ class NetworkConfig:
         seed 004). Needs ``Stroke.extent`` (recorded by
         :func:`models.jorge.strokes.build_strokes`); strokes without it get none.
     size_mu_single, size_slope, size_sigma : float
-        mu_1, beta and sigma of the size likelihood, estimated on
-        CAVIAR with the held-out simulation seeds 20-39 (never the benchmark's 0-4).
+        mu_1, beta and sigma of the size likelihood (fitted by
+        :func:`models.jorge.fit.fit_parameters` on the training split).
+    size_reference_quantile : float
+        The reference "one person's size" is this quantile of the log areas of all the
+        strokes seen so far (recomputed as strokes arrive: on line, observable). The
+        median (0.5) is pulled up where groups are common (a sequence where one pair
+        walks together most of the time); a lower quantile stands for single people.
+    size_min_reference : int
+        No size evidence until this many other strokes have been seen.
     """
 
     v_max: float = 1.0
@@ -126,6 +134,8 @@ class NetworkConfig:
     size_mu_single: float = -0.14
     size_slope: float = 1.1 / float(np.log(2.0))
     size_sigma: float = 0.68
+    size_reference_quantile: float = 0.25
+    size_min_reference: int = 3
 
     def __post_init__(self) -> None:
         if self.v_max <= 0 or not np.isfinite(self.v_max):
@@ -176,10 +186,13 @@ class LabelGraph:
     Parameters
     ----------
     config : NetworkConfig
+    with_domains : bool
+        Compute label domains (``False``: links only, for counting training events).
     """
 
-    def __init__(self, config: NetworkConfig | None = None) -> None:
+    def __init__(self, config: NetworkConfig | None = None, with_domains: bool = True) -> None:
         self.config = NetworkConfig() if config is None else config
+        self.with_domains = with_domains
         self.nodes: list[_Node] = []
         n0 = 16
         self._end = np.zeros(n0, dtype=np.int64)
@@ -307,6 +320,8 @@ class LabelGraph:
             self.nodes[p].children.append(k)
         node = _Node(stroke, parents, [], (), rel_log_area=rel)
         self.nodes.append(node)
+        if not self.with_domains:
+            return k, []
         node.domain = self._admissible(k)
         # a parent that now splits changes its other child's structure: widen that domain
         widened = []
@@ -349,11 +364,14 @@ class LabelGraph:
     def _admissible(self, k: int) -> tuple[Label, ...]:
         return tuple(
             admissible_labels(self.parent_domains(k), self.shared(k), frozenset({k}),
-                              self.config.labels.max_group_size, self.config.labels.p_part > 0)
+                              self.config.labels.max_group_size, self.config.labels.p_part > 0,
+                              max_new=len(self.config.labels.new_group_probs),
+                              join=self.config.labels.p_join > 0)
         )
 
     def palettes(self, domain: Sequence[Label]) -> np.ndarray:
-        """Palette of each label (union of its objects' birth-stroke colours).
+        """Palette of each label (union of its objects' birth-stroke colours; the objects
+        of a new group share their birth stroke's palette).
 
         Returns
         -------
@@ -361,7 +379,7 @@ class LabelGraph:
         """
         out = np.zeros((len(domain), self.config.pool_size), dtype=bool)
         for i, lab in enumerate(domain):
-            out[i] = self._palettes[list(lab)].any(axis=0)
+            out[i] = self._palettes[[birth_stroke(o) for o in lab]].any(axis=0)
         return out
 
     def colour_loglik(self, k: int, domain: Sequence[Label] | None = None, mode: str | None = None) -> np.ndarray:
@@ -372,14 +390,31 @@ class LabelGraph:
         ndarray, shape (num_labels,)
         """
         domain = self.nodes[k].domain if domain is None else domain
-        new = frozenset({k})
-        is_new = np.array([lab == new for lab in domain])
         # a new label's palette comes from this stroke itself (seed 004, sec. 4.1)
-        # (``Stroke.palette``)
+        # (``Stroke.palette``): a label holding an object born here (a new group, or an
+        # inherited label joined by a newcomer) gets no colour evidence (ratio 1)
+        is_new = np.array([any(birth_stroke(o) == k for o in lab) for lab in domain])
         return colour_log_likelihood(
             self.nodes[k].stroke.colours, self.palettes(domain), is_new, self.config.match_prob,
             self.config.pool_size, self.config.colour_mode if mode is None else mode,
         )
+
+    def rel_log_area(self, k: int) -> float:
+        """Log area of stroke ``k``'s region minus the reference: the
+        ``size_reference_quantile`` of the log areas of the strokes seen so far, itself
+        included (NaN: no recorded size, or fewer than ``size_min_reference`` others)."""
+        n = len(self.nodes)
+        own = self._log_area[k]
+        if not np.isfinite(own):
+            return float("nan")
+        if getattr(self, "_ref_n", -1) != n:
+            seen = self._log_area[:n][np.isfinite(self._log_area[:n])]
+            self._ref_n = n
+            self._ref = (float(np.quantile(seen, self.config.size_reference_quantile)), seen.size)
+        ref, count = self._ref
+        if count - 1 < self.config.size_min_reference:
+            return float("nan")
+        return float(own - ref)
 
     def size_loglik(self, k: int, domain: Sequence[Label] | None = None) -> np.ndarray:
         """Region-size log-likelihood of stroke ``k`` for each label of ``domain``
@@ -392,7 +427,7 @@ class LabelGraph:
         """
         domain = self.nodes[k].domain if domain is None else domain
         cfg = self.config
-        rel = self.nodes[k].rel_log_area if cfg.size_evidence else float("nan")
+        rel = self.rel_log_area(k) if cfg.size_evidence else float("nan")
         sizes = np.array([len(lab) for lab in domain], dtype=np.int64)
         return size_log_likelihood(rel, sizes, cfg.size_mu_single, cfg.size_slope, cfg.size_sigma)
 
@@ -417,7 +452,7 @@ class LabelGraph:
         if node.parents:
             return child_table(self.parent_domains(k), self.shared(k), node.domain,
                                frozenset({k}), self.config.labels)
-        return root_table(node.domain, frozenset({k}))
+        return root_table(node.domain, frozenset({k}), self.config.labels)
 
     # --- freezing and pruning --------------------------------------------------------------
     def freeze(self, k: int, label: Label) -> None:

@@ -54,7 +54,7 @@ from scipy.optimize import linear_sum_assignment
 
 from dbn.errors import InputError, ModelError
 from inference.exact import JunctionTree, map_assignment
-from models.jorge.labels import Label, colour_log_likelihood, prune_labels
+from models.jorge.labels import NEW_STRIDE, Label, birth_stroke, colour_log_likelihood, prune_labels
 from models.jorge.network import LabelGraph, NetworkConfig, node_name
 from models.jorge.strokes import Stroke, StrokeSet
 
@@ -442,7 +442,7 @@ def _reidentify_pass(graph: LabelGraph, labels: list, prior: float) -> list:
     pal = graph.palettes([frozenset({o}) for o in objects])
     row = {o: i for i, o in enumerate(objects)}
     for i, b in enumerate(objects):
-        if labels[b] != frozenset({b}):
+        if b >= NEW_STRIDE or labels[b] != frozenset({b}):  # not born alone: kept as is
             roots.append(b)
             continue
         cands = [a for a in roots if last[a] < first[b]]
@@ -562,7 +562,7 @@ def score(strokes: Sequence[Stroke], labels: Sequence[Label], mapping: str = "op
         raise InputError(f"score: {len(labels)} labels for {len(strokes)} strokes")
     known = {s.index for s in strokes}
     for s, lab in zip(strokes, labels):
-        unknown = [o for o in lab if o not in known]
+        unknown = [o for o in lab if birth_stroke(o) not in known]
         if unknown or not lab:
             raise InputError(f"score: stroke {s.index} has label {set(lab)} with unknown object ids {unknown}")
     if mapping == "optimal":
