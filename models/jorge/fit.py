@@ -8,6 +8,9 @@ every stroke ``k`` of a training sequence, linked by :class:`LabelGraph` exactly
 labeller links it, with true people :math:`T_k` and parents' people :math:`T_p`:
 
 * inherited people :math:`I = T_k \cap \bigcup_p T_p`, newcomers :math:`T_k \setminus I`;
+Strokes whose region (or a parent's) holds more people than the largest admissible
+group are off the model and not counted.
+
 * ``new``: :math:`I = \emptyset` (a root, or a child sharing nobody with its parents);
   its size :math:`m = |T_k|` counts towards :math:`q_m` (``new_group_probs``);
 * otherwise ``join`` if there are newcomers (:math:`P_{join}`), ``merge`` if :math:`I`
@@ -52,6 +55,10 @@ __all__ = [
     "count_events",
     "fit_parameters",
     "load_sequence",
+    "training_strokes",
+    "labelling_error",
+    "SEARCH_GRID",
+    "search_settings",
 ]
 
 TRAIN_SEQUENCES = (
@@ -151,8 +158,11 @@ def count_events(strokes: StrokeSet, config: NetworkConfig | None = None, counts
         rel = g.rel_log_area(k)
         if np.isfinite(rel):
             c.sizes.append((len(s.truth), rel))
+    gmax = g.config.labels.max_group_size
     for k, node in enumerate(g.nodes):
         truth = node.stroke.truth
+        if max([len(truth)] + [len(g.nodes[p].stroke.truth) for p in node.parents]) > gmax:
+            continue  # off the model: a region larger than the largest admissible group
         if not node.parents:
             c.add_new(len(truth))
             continue
@@ -228,3 +238,49 @@ def training_strokes(sequences: Sequence[tuple[str, str]] = TRAIN_SEQUENCES,
             continue
         out += [build_strokes(s, truth) for s in seeds]
     return out
+
+
+def labelling_error(config: NetworkConfig, stroke_sets: Sequence[StrokeSet]) -> float:
+    """Mean over stroke sets of the labelling error rate (LE / NT) of the on-line
+    labeller with ``config`` (default on-line settings otherwise); each sequence weighs
+    the same, so a long dense crowd does not swamp the rest."""
+    from models.jorge.online import OnlineConfig, label_online, score
+
+    rates = [score(strokes, label_online(strokes, OnlineConfig(network=config)).labels).error_rate
+             for strokes in stroke_sets]
+    return float(np.mean(rates)) if rates else float("nan")
+
+
+SEARCH_GRID = {
+    "new_groups": (False, True),
+    "size_reference_neighbours": (0, 10),
+}
+"""The documented search over the settings the likelihood cannot choose (discrete model
+choices): whether a stroke seen first may be a new group (``q_m`` fitted, or only
+``m = 1``), and the size reference (all strokes, or the 10 nearest in image height).
+Each point is fitted by :func:`fit_parameters` and scored by :func:`labelling_error` on
+the training split (seeds ``TRAIN_SEEDS[:2]``); the lowest error wins."""
+
+
+def search_settings(fit_sets: Sequence[StrokeSet], score_sets: Sequence[StrokeSet],
+                    base: NetworkConfig | None = None) -> tuple[NetworkConfig, list]:
+    """Grid search of :data:`SEARCH_GRID` on the training split (never validation data).
+
+    Returns
+    -------
+    best : NetworkConfig
+    table : list of (settings dict, training error)
+    """
+    base = NetworkConfig() if base is None else base
+    table = []
+    best, best_err = None, np.inf
+    for new_groups in SEARCH_GRID["new_groups"]:
+        for m in SEARCH_GRID["size_reference_neighbours"]:
+            cfg = fit_parameters(fit_sets, replace(base, size_reference_neighbours=m))
+            if not new_groups:
+                cfg = replace(cfg, labels=replace(cfg.labels, new_group_probs=(1.0,)))
+            err = labelling_error(cfg, score_sets)
+            table.append(({"new_groups": new_groups, "size_reference_neighbours": m}, err))
+            if err < best_err:
+                best, best_err = cfg, err
+    return best, table

@@ -118,6 +118,8 @@ class NetworkConfig:
         walks together most of the time); a lower quantile stands for single people.
     size_min_reference : int
         No size evidence until this many other strokes have been seen.
+    size_reference_neighbours : int
+        The reference is taken over this many strokes nearest in image height (0: all).
     """
 
     v_max: float = 1.0
@@ -136,6 +138,7 @@ class NetworkConfig:
     size_sigma: float = 0.68
     size_reference_quantile: float = 0.25
     size_min_reference: int = 3
+    size_reference_neighbours: int = 10
 
     def __post_init__(self) -> None:
         if self.v_max <= 0 or not np.isfinite(self.v_max):
@@ -200,6 +203,7 @@ class LabelGraph:
         self._nchild = np.zeros(n0, dtype=np.int64)
         self._palettes = np.zeros((n0, self.config.pool_size), dtype=bool)
         self._log_area = np.full(n0, np.nan)
+        self._foot_y = np.full(n0, np.nan)
 
     # --- growth --------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -207,9 +211,9 @@ class LabelGraph:
 
     def _grow(self) -> None:
         n = self._end.shape[0] * 2
-        for name in ("_end", "_end_pos", "_nchild", "_palettes", "_log_area"):
+        for name in ("_end", "_end_pos", "_nchild", "_palettes", "_log_area", "_foot_y"):
             old = getattr(self, name)
-            new = np.full((n, *old.shape[1:]), np.nan) if name == "_log_area" else \
+            new = np.full((n, *old.shape[1:]), np.nan) if name in ("_log_area", "_foot_y") else \
                 np.zeros((n, *old.shape[1:]), dtype=old.dtype)
             new[: old.shape[0]] = old
             setattr(self, name, new)
@@ -312,14 +316,13 @@ class LabelGraph:
         ext = getattr(stroke, "extent", None)
         if ext is not None:
             self._log_area[k] = float(np.median(np.log(ext[:, 0] * ext[:, 1])))
-            seen = self._log_area[:k][np.isfinite(self._log_area[:k])]
-            if seen.size:
-                rel = float(self._log_area[k] - np.median(seen))
+            self._foot_y[k] = float(np.median(stroke.positions[:, 1] + ext[:, 1] / 2))
         for p in parents:
             self._nchild[p] += 1
             self.nodes[p].children.append(k)
         node = _Node(stroke, parents, [], (), rel_log_area=rel)
         self.nodes.append(node)
+        node.rel_log_area = self.rel_log_area(k)  # as seen when the stroke starts
         if not self.with_domains:
             return k, []
         node.domain = self._admissible(k)
@@ -401,20 +404,23 @@ class LabelGraph:
 
     def rel_log_area(self, k: int) -> float:
         """Log area of stroke ``k``'s region minus the reference: the
-        ``size_reference_quantile`` of the log areas of the strokes seen so far, itself
-        included (NaN: no recorded size, or fewer than ``size_min_reference`` others)."""
+        ``size_reference_quantile`` of the log areas of the ``size_reference_neighbours``
+        strokes seen so far whose region's bottom edge (the feet, on the ground plane) is
+        nearest in image height to stroke ``k``'s (itself included; people nearer the
+        camera are larger). NaN: no recorded size, or fewer than ``size_min_reference``
+        others."""
         n = len(self.nodes)
         own = self._log_area[k]
         if not np.isfinite(own):
             return float("nan")
-        if getattr(self, "_ref_n", -1) != n:
-            seen = self._log_area[:n][np.isfinite(self._log_area[:n])]
-            self._ref_n = n
-            self._ref = (float(np.quantile(seen, self.config.size_reference_quantile)), seen.size)
-        ref, count = self._ref
-        if count - 1 < self.config.size_min_reference:
+        ok = np.flatnonzero(np.isfinite(self._log_area[:n]))
+        if ok.size - 1 < self.config.size_min_reference:
             return float("nan")
-        return float(own - ref)
+        m = self.config.size_reference_neighbours
+        if 0 < m < ok.size:
+            near = np.argpartition(np.abs(self._foot_y[ok] - self._foot_y[k]), m - 1)[:m]
+            ok = ok[near]
+        return float(own - np.quantile(self._log_area[ok], self.config.size_reference_quantile))
 
     def size_loglik(self, k: int, domain: Sequence[Label] | None = None) -> np.ndarray:
         """Region-size log-likelihood of stroke ``k`` for each label of ``domain``
