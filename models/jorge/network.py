@@ -46,6 +46,7 @@ from models.jorge.strokes import Stroke, _check_colours
 
 __all__ = [
     "NetworkConfig",
+    "FITTED_LABELS",
     "LabelGraph",
     "WindowNet",
     "Inference",
@@ -69,6 +70,26 @@ def restriction_name(i: int, j: int) -> str:
 def colour_name(k: int) -> str:
     """Name of the explicit colour node (only in :meth:`WindowNet.with_colour_nodes`)."""
     return f"y{k}"
+
+
+FITTED_LABELS = LabelParams(
+    p_new=0.12637785183286337,
+    p_merge=0.7084468664850136,
+    p_merge_one_split=0.31690140845070425,
+    p_merge_both_split=0.172,
+    p_split=0.8118214716525934,
+    p_part=0.39555555555555555,
+    max_group_size=5,
+    new_group_probs=(1.0,),
+    p_join=0.0,
+)
+"""The label parameters of the default network: the output of
+:func:`models.jorge.fit.search_settings` on the declared training split
+(``models.jorge.fit.TRAIN_SEQUENCES``, simulation seeds 100-109; scored with seed 100).
+The search chose the maximum-likelihood CPD parameters and no new groups / joins (their
+fitted ``q_m`` and ``p_join`` raised the training error: the region-size evidence is too
+weak to tell a new group from a new person). ``tests/models/jorge/test_jorge_fit.py``
+re-runs the fit and checks these numbers."""
 
 
 @dataclass(frozen=True)
@@ -128,17 +149,17 @@ class NetworkConfig:
     max_parents: int = 2
     max_children: int = 2
     sibling_window: int = 20
-    labels: LabelParams = field(default_factory=LabelParams)
+    labels: LabelParams = field(default_factory=lambda: FITTED_LABELS)
     colour_mode: str = "hyper"
     match_prob: float = 0.8
     pool_size: int = 12
     size_evidence: bool = True
-    size_mu_single: float = -0.14
-    size_slope: float = 1.1 / float(np.log(2.0))
-    size_sigma: float = 0.68
-    size_reference_quantile: float = 0.25
-    size_min_reference: int = 3
-    size_reference_neighbours: int = 10
+    size_mu_single: float = -0.32198974081239023
+    size_slope: float = 0.654945292255393
+    size_sigma: float = 0.6665794021592003
+    size_reference_quantile: float = 0.5
+    size_min_reference: int = 1
+    size_reference_neighbours: int = 0
 
     def __post_init__(self) -> None:
         if self.v_max <= 0 or not np.isfinite(self.v_max):
