@@ -152,7 +152,7 @@ def count_events(strokes: StrokeSet, config: NetworkConfig | None = None, counts
     labeller links them; the true people of each stroke stand for its label.
     """
     c = EventCounts() if counts is None else counts
-    g = LabelGraph(config, with_domains=False)
+    g = LabelGraph(config, with_domains=False, fps=strokes.fps)
     for s in strokes:
         k, _ = g.add_stroke(s)
         rel = g.rel_log_area(k)
@@ -252,6 +252,7 @@ def labelling_error(config: NetworkConfig, stroke_sets: Sequence[StrokeSet]) -> 
 
 
 SEARCH_GRID = {
+    "gate": ("pixels", "scaled"),
     "parameters": ("previous", "ml"),
     "new_groups": (False, True),
 }
@@ -259,8 +260,9 @@ SEARCH_GRID = {
 parameters as fitted by :func:`fit_parameters` (``"ml"``) or the previous defaults
 (``"previous"``: chosen in issues 4-5 by labelling error with simulation seeds 20-39 on
 ms3ggt and mws1gt, both in the training split), and whether a stroke seen first may be
-a new group (``q_m`` fitted, or only ``m = 1``; ``p_join`` likewise). Each point is
-scored by :func:`labelling_error` on the training split (never validation data); the
+a new group (``q_m`` fitted, or only ``m = 1``; ``p_join`` likewise), and the link
+gate (pixels and frames as tuned on CAVIAR, or scaled by the region's size and the frame
+rate, ``NetworkConfig.gate``). Each point is scored by :func:`labelling_error` on the training split (never validation data); the
 lowest error wins."""
 
 
@@ -274,18 +276,25 @@ def search_settings(fit_sets: Sequence[StrokeSet], score_sets: Sequence[StrokeSe
     table : list of (settings dict, training error)
     """
     base = NetworkConfig() if base is None else base
-    fitted = fit_parameters(fit_sets, base)
     table = []
     best, best_err = None, np.inf
-    for params in SEARCH_GRID["parameters"]:
-        for new_groups in SEARCH_GRID["new_groups"]:
-            cfg = fitted if params == "ml" else base
-            labels = cfg.labels if new_groups else replace(cfg.labels, new_group_probs=(1.0,), p_join=0.0)
-            if new_groups and params == "previous":
-                labels = replace(labels, new_group_probs=fitted.labels.new_group_probs, p_join=fitted.labels.p_join)
-            cfg = replace(cfg, labels=labels)
-            err = labelling_error(cfg, score_sets)
-            table.append(({"parameters": params, "new_groups": new_groups}, err))
-            if err < best_err:
-                best, best_err = cfg, err
+    for gate in SEARCH_GRID["gate"]:
+        gated = replace(base, gate=gate)
+        fitted = fit_parameters(fit_sets, gated)
+        for params in SEARCH_GRID["parameters"]:
+            for new_groups in SEARCH_GRID["new_groups"]:
+                cfg = _grid_point(gated, fitted, params, new_groups)
+                err = labelling_error(cfg, score_sets)
+                table.append(({"gate": gate, "parameters": params, "new_groups": new_groups}, err))
+                if err < best_err:
+                    best, best_err = cfg, err
     return best, table
+
+
+def _grid_point(base: NetworkConfig, fitted: NetworkConfig, params: str, new_groups: bool) -> NetworkConfig:
+    cfg = fitted if params == "ml" else base
+    if new_groups:
+        labels = replace(cfg.labels, new_group_probs=fitted.labels.new_group_probs, p_join=fitted.labels.p_join)
+    else:
+        labels = replace(cfg.labels, new_group_probs=(1.0,), p_join=0.0)
+    return replace(cfg, labels=labels)

@@ -141,6 +141,14 @@ class NetworkConfig:
         No size evidence until this many other strokes have been seen.
     size_reference_neighbours : int
         The reference is taken over this many strokes nearest in image height (0: all).
+    gate : {"pixels", "scaled"}
+        Link gate. ``"pixels"``: ``radius`` + ``v_max`` * gap in pixels and frames (values
+        chosen on CAVIAR, 384x288 at 25 fps: they do not carry over to other image sizes
+        and frame rates). ``"scaled"``: the same in units of the parent region's size
+        (median square root of its box area) and seconds, ``radius_scaled`` +
+        ``v_max_scaled`` * gap_s, with ``max_gap_frames`` and ``sibling_window`` read
+        at 25 fps; 1.2 and 1.0 are the CAVIAR values in those units (people there are
+        about 25 px in that size and walk about 25 px per second).
     """
 
     v_max: float = 1.0
@@ -160,6 +168,9 @@ class NetworkConfig:
     size_reference_quantile: float = 0.5
     size_min_reference: int = 1
     size_reference_neighbours: int = 0
+    gate: str = "pixels"
+    radius_scaled: float = 1.2
+    v_max_scaled: float = 1.0
 
     def __post_init__(self) -> None:
         if self.v_max <= 0 or not np.isfinite(self.v_max):
@@ -172,6 +183,13 @@ class NetworkConfig:
             raise ModelError(
                 "NetworkConfig: at most 2 parents and 2 children per node (seed 004), got "
                 f"{self.max_parents} / {self.max_children}"
+            )
+        if self.gate not in ("pixels", "scaled"):
+            raise ModelError(f"NetworkConfig.gate must be 'pixels' or 'scaled', got {self.gate!r}")
+        if not self.radius_scaled >= 0 or not self.v_max_scaled > 0:
+            raise ModelError(
+                f"NetworkConfig: radius_scaled must be >= 0 and v_max_scaled > 0, got "
+                f"{self.radius_scaled} / {self.v_max_scaled}"
             )
         if self.colour_mode not in ("ratio", "hyper", "eq6"):
             raise ModelError(
@@ -212,10 +230,16 @@ class LabelGraph:
     config : NetworkConfig
     with_domains : bool
         Compute label domains (``False``: links only, for counting training events).
+    fps : float
+        Frame rate of the strokes (the ``"scaled"`` link gate works in seconds).
     """
 
-    def __init__(self, config: NetworkConfig | None = None, with_domains: bool = True) -> None:
+    def __init__(self, config: NetworkConfig | None = None, with_domains: bool = True,
+                 fps: float = 25.0) -> None:
         self.config = NetworkConfig() if config is None else config
+        if not fps > 0:
+            raise ModelError(f"LabelGraph: fps must be > 0, got {fps}")
+        self.fps = float(fps)
         self.with_domains = with_domains
         self.nodes: list[_Node] = []
         n0 = 16
@@ -225,6 +249,7 @@ class LabelGraph:
         self._palettes = np.zeros((n0, self.config.pool_size), dtype=bool)
         self._log_area = np.full(n0, np.nan)
         self._foot_y = np.full(n0, np.nan)
+        self._scale = np.full(n0, np.nan)
 
     # --- growth --------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -232,9 +257,9 @@ class LabelGraph:
 
     def _grow(self) -> None:
         n = self._end.shape[0] * 2
-        for name in ("_end", "_end_pos", "_nchild", "_palettes", "_log_area", "_foot_y"):
+        for name in ("_end", "_end_pos", "_nchild", "_palettes", "_log_area", "_foot_y", "_scale"):
             old = getattr(self, name)
-            new = np.full((n, *old.shape[1:]), np.nan) if name in ("_log_area", "_foot_y") else \
+            new = np.full((n, *old.shape[1:]), np.nan) if name in ("_log_area", "_foot_y", "_scale") else \
                 np.zeros((n, *old.shape[1:]), dtype=old.dtype)
             new[: old.shape[0]] = old
             setattr(self, name, new)
@@ -292,11 +317,23 @@ class LabelGraph:
         cfg = self.config
         gap = stroke.start - self._end[:n]
         dist = np.linalg.norm(self._end_pos[:n] - stroke.positions[0], axis=1)
-        ok = (gap > 0) & (gap <= cfg.max_gap_frames) & (dist <= cfg.radius + cfg.v_max * gap)
+        if cfg.gate == "scaled":
+            # distances in units of the parent region's size, times in seconds; a parent
+            # without a recorded size falls back to the pixel gate
+            unit = np.where(np.isfinite(self._scale[:n]), self._scale[:n], np.nan)
+            secs = gap / self.fps
+            f25 = 25.0 / self.fps  # the frame limits were set at 25 fps
+            reach = np.where(np.isfinite(unit), unit * (cfg.radius_scaled + cfg.v_max_scaled * secs),
+                             cfg.radius + cfg.v_max * gap)
+            max_gap, window = cfg.max_gap_frames / f25, cfg.sibling_window / f25
+        else:
+            reach = cfg.radius + cfg.v_max * gap
+            max_gap, window = cfg.max_gap_frames, cfg.sibling_window
+        ok = (gap > 0) & (gap <= max_gap) & (dist <= reach)
         ok &= self._nchild[:n] < cfg.max_children
         # a second child (the other part of a split) must start within ``sibling_window``
         # frames of the parent's end
-        ok &= (self._nchild[:n] == 0) | (gap <= cfg.sibling_window)
+        ok &= (self._nchild[:n] == 0) | (gap <= window)
         cand = np.flatnonzero(ok)
         # a candidate that is an ancestor of another candidate is superseded by it (the
         # new stroke continues the descendant, it is not its sibling)
@@ -338,6 +375,7 @@ class LabelGraph:
         if ext is not None:
             self._log_area[k] = float(np.median(np.log(ext[:, 0] * ext[:, 1])))
             self._foot_y[k] = float(np.median(stroke.positions[:, 1] + ext[:, 1] / 2))
+            self._scale[k] = float(np.median(np.sqrt(ext[:, 0] * ext[:, 1])))
         for p in parents:
             self._nchild[p] += 1
             self.nodes[p].children.append(k)

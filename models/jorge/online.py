@@ -172,7 +172,7 @@ class OnlineLabeller:
         if not fps > 0:
             raise ModelError(f"fps must be > 0, got {fps}")
         self.fps = float(fps)
-        self.graph = LabelGraph(self.config.network)
+        self.graph = LabelGraph(self.config.network, fps=fps)
         self.labels: dict[int, Label] = {}
         self.beliefs: dict[int, np.ndarray] = {}
         self.records: list[InferenceRecord] = []

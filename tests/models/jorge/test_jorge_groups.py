@@ -212,3 +212,30 @@ def test_join_label_admissible_only_with_p_join():
     assert F({1, 2, 7}) in with_join
     assert F({1, 2, 7}) not in admissible_labels([[F({1, 2})]], [False], F({7}), 5)
     assert F({1, 2, 7}) not in admissible_labels([[F({1, 2})]], [False], F({7}), 2, join=True)
+
+
+def _links(scale: float, fps: float, gate: str) -> list:
+    """Parents of every stroke of a merge/split layout drawn ``scale`` times larger and
+    sampled at ``fps`` (the same motion in seconds)."""
+    f = fps / 25.0
+    strokes = [
+        make_stroke(0, 0, int(10 * f), (0, 0), (scale * 20, 0), [0, 1], size=(scale * 25, scale * 25)),
+        make_stroke(1, 0, int(10 * f), (scale * 80, 0), (scale * 50, 0), [2, 3], size=(scale * 25, scale * 25)),
+        make_stroke(2, int(20 * f), int(30 * f), (scale * 35, 0), (scale * 35, 0), [0, 2],
+                    size=(scale * 50, scale * 25)),
+        make_stroke(3, int(40 * f), int(50 * f), (scale * 10, 0), (0, 0), [0, 1], size=(scale * 25, scale * 25)),
+        make_stroke(4, int(40 * f), int(50 * f), (scale * 60, 0), (scale * 90, 0), [2, 3],
+                    size=(scale * 25, scale * 25)),
+    ]
+    g = LabelGraph(NetworkConfig(gate=gate), fps=fps)
+    for s in strokes:
+        g.add_stroke(s)
+    return [n.parents for n in g.nodes]
+
+
+def test_scaled_gate_links_the_same_motion_at_any_image_scale_and_frame_rate():
+    want = [(), (), (0, 1), (2,), (2,)]
+    assert _links(1.0, 25.0, "scaled") == want
+    assert _links(2.0, 7.0, "scaled") == want
+    assert _links(1.0, 25.0, "pixels") == want
+    assert _links(2.0, 7.0, "pixels") != want  # the pixel gate does not carry over
