@@ -31,7 +31,7 @@ def test_event_counts_of_a_hand_made_merge_and_split():
         make_stroke(5, 32, 40, (0, 0), (0, 0), [0, 1, 9], {0, 3}, size=(40, 50)),
         make_stroke(6, 40, 50, (300, 300), (300, 300), [6, 7, 8], {2}, size=(20, 50)),
     ])
-    c = count_events(ss, NetworkConfig())
+    c = count_events(ss, NetworkConfig(gate="pixels"))
     # children: 2 (merge of 0 and 1), 3 and 4 (split parts of 2), 5 (0 and a newcomer)
     assert c.children == 4 and c.new == 0 and c.non_new == 4
     assert c.two_parent.tolist() == [1, 0, 0] and c.merge.tolist() == [1, 0, 0]
@@ -50,7 +50,7 @@ def test_fit_is_add_one_smoothed_frequencies():
         make_stroke(3, 22, 30, (10, 0), (0, 0), [0, 1, 2], {0}, size=(20, 50)),
         make_stroke(4, 22, 30, (30, 0), (40, 0), [3, 4, 5], {1}, size=(20, 50)),
     ])
-    cfg = fit_parameters([ss], NetworkConfig(labels=LabelParams(max_group_size=3)))
+    cfg = fit_parameters([ss], NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels"))
     L = cfg.labels
     assert L.p_new == pytest.approx((0 + 1) / (3 + 2))
     assert L.p_merge == pytest.approx((1 + 1) / (1 + 2))
@@ -79,7 +79,7 @@ def test_default_parameters_are_the_fit_on_the_training_split():
     sets = training_strokes(seeds=TRAIN_SEEDS)
     if len(sets) < len(TRAIN_SEQUENCES) * len(TRAIN_SEEDS):
         pytest.skip("training sequences absent (set DBNTRACK_DATA to the shared data folder)")
-    base = NetworkConfig(labels=LabelParams(max_group_size=5))
+    base = NetworkConfig(labels=LabelParams(max_group_size=5), gate="scaled")
     fitted = fit_parameters(sets, base).labels
     for name in ("p_new", "p_merge", "p_merge_one_split", "p_merge_both_split", "p_split", "p_part"):
         assert getattr(fitted, name) == pytest.approx(getattr(FITTED_LABELS, name), rel=1e-9), name
