@@ -5,6 +5,15 @@ A *label* is a frozenset of object ids: ``{3}`` is object 3 alone, ``{1, 2}`` th
 of objects 1 and 2. Objects are born at strokes: the new label ``l_new`` of stroke ``k``
 is ``{k}`` ("the object first seen in stroke k"), as in Table 2 of seed 004.
 
+Groups of any size (issue 16, our additions). In the seed a stroke seen for the first
+time is one new object, so a group that enters together (or is first seen as a group)
+can never be labelled as a group, nor can any of its later strokes; and a stroke that is
+its parent's group plus a person arriving unseen is not admissible. Hence, optionally:
+new groups, ``new_objects(k, m)`` (``m`` objects born at stroke ``k``, prior
+:math:`q_m`, ``LabelParams.new_group_probs``), and joins, an inherited label plus
+``{k}`` (``LabelParams.p_join``). The cap ``max_group_size`` (3 before issue 16, so a
+group of 4 or 5 was never admissible) is 5 by default.
+
 The seven basic structures
 --------------------------
 Seed 004 limits a node to two parents and two hidden children, and states that seven
