@@ -5,6 +5,15 @@ A *label* is a frozenset of object ids: ``{3}`` is object 3 alone, ``{1, 2}`` th
 of objects 1 and 2. Objects are born at strokes: the new label ``l_new`` of stroke ``k``
 is ``{k}`` ("the object first seen in stroke k"), as in Table 2 of seed 004.
 
+Groups of any size (issue 16, our additions). In the seed a stroke seen for the first
+time is one new object, so a group that enters together (or is first seen as a group)
+can never be labelled as a group, nor can any of its later strokes; and a stroke that is
+its parent's group plus a person arriving unseen is not admissible. Hence, optionally:
+new groups, ``new_objects(k, m)`` (``m`` objects born at stroke ``k``, prior
+:math:`q_m`, ``LabelParams.new_group_probs``), and joins, an inherited label plus
+``{k}`` (``LabelParams.p_join``). The cap ``max_group_size`` (3 before issue 16, so a
+group of 4 or 5 was never admissible) is 5 by default.
+
 The seven basic structures
 --------------------------
 Seed 004 limits a node to two parents and two hidden children, and states that seven
@@ -92,6 +101,10 @@ __all__ = [
     "colour_log_likelihood",
     "size_log_likelihood",
     "prune_labels",
+    "NEW_STRIDE",
+    "new_objects",
+    "birth_stroke",
+    "is_new_object",
 ]
 
 Label = frozenset
@@ -131,6 +144,15 @@ class LabelParams:
         0 gives eq. 10 of the seed exactly. Our addition.
     max_group_size : int
         Largest admissible group (labels with more objects are not admitted).
+    new_group_probs : tuple of float
+        :math:`q_m`, probability that a stroke seen for the first time holds ``m = 1, 2,
+        ...`` new objects (people entering together); ``(1.0,)`` (the default) is the
+        seed's single ``l_new``. Our addition: a group first seen as a group can only be
+        labelled as one if its new label can hold several objects.
+    p_join : float
+        Probability that a stroke with parents holds, besides what it inherits, one
+        object seen for the first time (a person joining while unseen or unlinked). 0
+        (the default) is the seed's model. Our addition.
     """
 
     p_new: float = 0.02
@@ -140,8 +162,20 @@ class LabelParams:
     p_part: float = 0.3
     p_merge_one_split: float = 0.15
     p_merge_both_split: float = 0.02
+    new_group_probs: tuple = (1.0,)
+    p_join: float = 0.0
 
     def __post_init__(self) -> None:
+        q = np.asarray(self.new_group_probs, dtype=np.float64)
+        if q.ndim != 1 or q.size < 1 or np.any(q < 0) or not np.all(np.isfinite(q)) or q[0] <= 0:
+            raise ModelError(
+                f"LabelParams.new_group_probs must be a non-empty list of probabilities with "
+                f"q_1 > 0, got {self.new_group_probs}"
+            )
+        if abs(q.sum() - 1.0) > 1e-9:
+            raise ModelError(f"LabelParams.new_group_probs must sum to 1, got {q.sum()}")
+        if not 0.0 <= self.p_join < 1.0:
+            raise ModelError(f"LabelParams.p_join must be in [0, 1), got {self.p_join}")
         for name in ("p_new", "p_merge", "p_split", "p_part", "p_merge_one_split", "p_merge_both_split"):
             v = getattr(self, name)
             if not 0.0 <= v <= 1.0 or not np.isfinite(v):
@@ -176,10 +210,41 @@ def structure_of(num_parents: int, shared: Sequence[bool]) -> str:
     raise ModelError(f"a node has at most 2 parents (seed 004, sec. 4), got {num_parents}")
 
 
+NEW_STRIDE = 1_000_000
+"""Object ids: the ``j``-th object born at stroke ``k`` is ``k + j * NEW_STRIDE`` (``j = 0``:
+``k`` itself, the seed's ``l_new``); so a stroke of a group seen for the first time (people
+entering together) can be labelled with a new group of ``m`` objects."""
+
+
+def new_objects(k: int, m: int = 1) -> Label:
+    """The new label of stroke ``k`` holding ``m`` new objects: ``{k, k + S, ..., k + (m-1) S}``
+    with ``S = NEW_STRIDE`` (``m = 1``: the seed's ``l_new = {k}``)."""
+    if m < 1:
+        raise InputError(f"new_objects: m must be >= 1, got {m}")
+    return frozenset(int(k) + j * NEW_STRIDE for j in range(m))
+
+
+def birth_stroke(o: int) -> int:
+    """The stroke where object ``o`` was born (whose palette it takes, sec. 4.1)."""
+    return int(o) % NEW_STRIDE
+
+
+def is_new_object(o: int, k: int) -> bool:
+    """Whether object ``o`` was born at stroke ``k``."""
+    return birth_stroke(o) == int(k)
+
+
+def _format_object(o: int) -> str:
+    j, k = divmod(int(o), NEW_STRIDE)
+    return str(k) if j == 0 else f"{k}.{j}"
+
+
 def format_label(label: Label) -> str:
-    """``{1}`` -> ``'1'``, ``{1, 2}`` -> ``'(1,2)'`` (the notation of seed 004, Table 2)."""
-    items = sorted(label)
-    return str(items[0]) if len(items) == 1 else "(" + ",".join(map(str, items)) + ")"
+    """``{1}`` -> ``'1'``, ``{1, 2}`` -> ``'(1,2)'`` (the notation of seed 004, Table 2); the
+    second object born at stroke 7 prints as ``7.1``."""
+    items = sorted(label, key=lambda o: (birth_stroke(o), o))
+    names = [_format_object(o) for o in items]
+    return names[0] if len(items) == 1 else "(" + ",".join(names) + ")"
 
 
 def _sort_key(label: Label) -> tuple:
@@ -217,6 +282,8 @@ def admissible_labels(
     new_label: Label,
     max_group_size: int,
     partial: bool = False,
+    max_new: int = 1,
+    join: bool = False,
 ) -> list[Label]:
     r"""Admissible labels :math:`L_k` of a node (seed 004, eqs. 2 and 7-9).
 
@@ -236,6 +303,12 @@ def admissible_labels(
     max_group_size : int
     partial : bool
         Whether an unshared parent may hand a part of a group (:math:`P_{part} > 0`).
+    max_new : int
+        Largest new group (``new_objects(k, m)`` for ``m <= max_new``; our addition, 1 is
+        the seed's single ``l_new``).
+    join : bool
+        Also admit every inherited label plus one new object, :math:`a \cup l_{new}`
+        (:math:`P_{join} > 0`; our addition).
 
     Returns
     -------
@@ -258,28 +331,49 @@ def admissible_labels(
             for b in parts[1]:
                 if not (a & b) and len(a) + len(b) <= max_group_size:
                     found.add(a | b)
+    if join and len(new_label) == 1:
+        found.update([lab | new_label for lab in found if len(lab) < max_group_size])
+    if len(new_label) == 1:
+        (k,) = tuple(new_label)
+        found.update(new_objects(k, m) for m in range(2, min(max_new, max_group_size) + 1))
     found.discard(new_label)
     others = sorted((lab for lab in found if len(lab) <= max_group_size), key=_sort_key)
     return [new_label, *others]
 
 
-def root_table(domain: Sequence[Label], new_label: Label) -> np.ndarray:
-    """CPD of structure (a) ROOT: a stroke with no parent is a new object.
+def root_table(domain: Sequence[Label], new_label: Label, params: LabelParams | None = None) -> np.ndarray:
+    """CPD of structure (a) ROOT: a stroke with no parent is new: ``m`` new objects with
+    probability :math:`q_m` (``params.new_group_probs``; without ``params`` the seed's
+    single :math:`l_{new}`), renormalised over the sizes in the domain.
 
-    ======================  =====
-    :math:`x_k`             p
-    ======================  =====
-    :math:`l_{new} = \\{k\\}`  1
-    any other label         0
-    ======================  =====
+    ==============================  ==============
+    :math:`x_k`                     p
+    ==============================  ==============
+    :math:`l_{new} = \\{k\\}`         :math:`q_1` (1 in the seed)
+    ``new_objects(k, m)``, m >= 2   :math:`q_m`
+    any other label                 0
+    ==============================  ==============
 
     Returns
     -------
     ndarray, shape (num_labels,)
     """
-    t = np.array([1.0 if lab == new_label else 0.0 for lab in domain])
-    if t.sum() != 1.0:
+    if new_label not in domain:
         raise ModelError(f"root_table: new label {set(new_label)} not in the domain")
+    t = _new_column(domain, new_label, params)
+    return t / t.sum()
+
+
+def _new_column(domain: Sequence[Label], new_label: Label, params: LabelParams | None) -> np.ndarray:
+    """:math:`q_m` at each new-group label of the domain (``new_label`` is ``m = 1``)."""
+    q = (1.0,) if params is None else params.new_group_probs
+    t = np.zeros(len(domain))
+    (k,) = tuple(new_label) if len(new_label) == 1 else (None,)
+    for i, lab in enumerate(domain):
+        if lab == new_label:
+            t[i] = q[0]
+        elif k is not None and len(lab) <= len(q) and lab == new_objects(k, len(lab)):
+            t[i] = q[len(lab) - 1]
     return t
 
 
@@ -317,7 +411,11 @@ def child_table(
      f   MERGE_BOTH_SPLITTING     as d, both parents handing pieces
     ===  =======================  ============================================================
 
-    then restricted to ``domain`` and each row renormalised (module docstring).
+    Our additions: the :math:`P_{new}` mass is shared among new groups of ``m`` objects by
+    :math:`q_m` (``new_group_probs``; the seed: all on :math:`l_{new}`), and a fraction
+    :math:`P_{join}` of the inherited mass on each label :math:`a` moves to
+    :math:`a \cup l_{new}` (a person joining unseen). Then restricted to ``domain`` and
+    each row renormalised (module docstring).
 
     Parameters
     ----------
@@ -341,7 +439,6 @@ def child_table(
     index = {lab: i for i, lab in enumerate(domain)}
     if new_label not in index:
         raise ModelError(f"child_table: new label {set(new_label)} not in the child's domain")
-    inew = index[new_label]
     p_new = params.p_new
     p_merge = 0.0
     if n == 2:
@@ -354,7 +451,6 @@ def child_table(
     ]
     shape = tuple(len(d) for d in parent_domains) + (len(domain),)
     table = np.zeros(shape)
-    table[..., inew] = p_new
     # single-parent inheritance: one slab per parent, broadcast over the other parent
     for p in range(n):
         slab = np.zeros((len(parent_domains[p]), len(domain)))
@@ -379,6 +475,18 @@ def child_table(
                         c = index.get(a | b)
                         if c is not None:
                             table[i, j, c] += p_merge * wa * wb
+    if params.p_join > 0:  # one new object joins what is inherited (our addition)
+        src, dst = [], []
+        for lab, c in index.items():
+            d = index.get(lab | new_label)
+            if d is not None and not (lab & new_label):
+                src.append(c)
+                dst.append(d)
+        moved = params.p_join * table[..., src]
+        table *= 1.0 - params.p_join
+        for t_i, d in enumerate(dst):
+            table[..., d] += moved[..., t_i]
+    table += p_new * _new_column(domain, new_label, params)
     return table / table.sum(axis=-1, keepdims=True)
 
 

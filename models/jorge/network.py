@@ -33,6 +33,7 @@ from models.jorge.labels import (
     Label,
     LabelParams,
     admissible_labels,
+    birth_stroke,
     child_table,
     colour_log_likelihood,
     format_label,
@@ -45,6 +46,7 @@ from models.jorge.strokes import Stroke, _check_colours
 
 __all__ = [
     "NetworkConfig",
+    "FITTED_LABELS",
     "LabelGraph",
     "WindowNet",
     "Inference",
@@ -68,6 +70,28 @@ def restriction_name(i: int, j: int) -> str:
 def colour_name(k: int) -> str:
     """Name of the explicit colour node (only in :meth:`WindowNet.with_colour_nodes`)."""
     return f"y{k}"
+
+
+FITTED_LABELS = LabelParams(
+    p_new=0.09293680297397769,
+    p_merge=0.7370892018779343,
+    p_merge_one_split=0.24305555555555555,
+    p_merge_both_split=0.08391608391608392,
+    p_split=0.8900226757369615,
+    p_part=0.3118594436310395,
+    max_group_size=5,
+    new_group_probs=(1.0,),
+    p_join=0.0,
+)
+"""The label parameters of the default network: the output of
+:func:`models.jorge.fit.search_settings` on the declared training split
+(``models.jorge.fit.TRAIN_SEQUENCES``, fitted with simulation seeds 100-109, scored with
+seed 100). Training errors (mean over the six training sequences): pixel gate 0.322
+(previous parameters) / 0.322 (ML), scaled gate 0.306 / **0.292** (ML, chosen); with new
+groups and joins 0.37-0.43 (their fitted ``q_m`` and ``p_join`` raise the error: the
+region-size evidence is too weak to tell a new group from a new person). So: the
+scale-free link gate, the maximum-likelihood CPD parameters, no new groups or joins.
+``tests/models/jorge/test_jorge_fit.py`` re-runs the fit and checks these numbers."""
 
 
 @dataclass(frozen=True)
@@ -108,8 +132,25 @@ class NetworkConfig:
         seed 004). Needs ``Stroke.extent`` (recorded by
         :func:`models.jorge.strokes.build_strokes`); strokes without it get none.
     size_mu_single, size_slope, size_sigma : float
-        mu_1, beta and sigma of the size likelihood, estimated on
-        CAVIAR with the held-out simulation seeds 20-39 (never the benchmark's 0-4).
+        mu_1, beta and sigma of the size likelihood (fitted by
+        :func:`models.jorge.fit.fit_parameters` on the training split).
+    size_reference_quantile : float
+        The reference "one person's size" is this quantile of the log areas of all the
+        strokes seen so far (recomputed as strokes arrive: on line, observable). The
+        median (0.5) is pulled up where groups are common (a sequence where one pair
+        walks together most of the time); a lower quantile stands for single people.
+    size_min_reference : int
+        No size evidence until this many other strokes have been seen.
+    size_reference_neighbours : int
+        The reference is taken over this many strokes nearest in image height (0: all).
+    gate : {"pixels", "scaled"}
+        Link gate. ``"pixels"``: ``radius`` + ``v_max`` * gap in pixels and frames (values
+        chosen on CAVIAR, 384x288 at 25 fps: they do not carry over to other image sizes
+        and frame rates). ``"scaled"``: the same in units of the parent region's size
+        (median square root of its box area) and seconds, ``radius_scaled`` +
+        ``v_max_scaled`` * gap_s, with ``max_gap_frames`` and ``sibling_window`` read
+        at 25 fps; 1.2 and 1.0 are the CAVIAR values in those units (people there are
+        about 25 px in that size and walk about 25 px per second).
     """
 
     v_max: float = 1.0
@@ -118,14 +159,20 @@ class NetworkConfig:
     max_parents: int = 2
     max_children: int = 2
     sibling_window: int = 20
-    labels: LabelParams = field(default_factory=LabelParams)
+    labels: LabelParams = field(default_factory=lambda: FITTED_LABELS)
     colour_mode: str = "hyper"
     match_prob: float = 0.8
     pool_size: int = 12
     size_evidence: bool = True
-    size_mu_single: float = -0.14
-    size_slope: float = 1.1 / float(np.log(2.0))
-    size_sigma: float = 0.68
+    size_mu_single: float = -0.32198974081239023
+    size_slope: float = 0.654945292255393
+    size_sigma: float = 0.6665794021592003
+    size_reference_quantile: float = 0.5
+    size_min_reference: int = 1
+    size_reference_neighbours: int = 0
+    gate: str = "scaled"
+    radius_scaled: float = 1.2
+    v_max_scaled: float = 1.0
 
     def __post_init__(self) -> None:
         if self.v_max <= 0 or not np.isfinite(self.v_max):
@@ -138,6 +185,13 @@ class NetworkConfig:
             raise ModelError(
                 "NetworkConfig: at most 2 parents and 2 children per node (seed 004), got "
                 f"{self.max_parents} / {self.max_children}"
+            )
+        if self.gate not in ("pixels", "scaled"):
+            raise ModelError(f"NetworkConfig.gate must be 'pixels' or 'scaled', got {self.gate!r}")
+        if not self.radius_scaled >= 0 or not self.v_max_scaled > 0:
+            raise ModelError(
+                f"NetworkConfig: radius_scaled must be >= 0 and v_max_scaled > 0, got "
+                f"{self.radius_scaled} / {self.v_max_scaled}"
             )
         if self.colour_mode not in ("ratio", "hyper", "eq6"):
             raise ModelError(
@@ -176,10 +230,19 @@ class LabelGraph:
     Parameters
     ----------
     config : NetworkConfig
+    with_domains : bool
+        Compute label domains (``False``: links only, for counting training events).
+    fps : float
+        Frame rate of the strokes (the ``"scaled"`` link gate works in seconds).
     """
 
-    def __init__(self, config: NetworkConfig | None = None) -> None:
+    def __init__(self, config: NetworkConfig | None = None, with_domains: bool = True,
+                 fps: float = 25.0) -> None:
         self.config = NetworkConfig() if config is None else config
+        if not fps > 0:
+            raise ModelError(f"LabelGraph: fps must be > 0, got {fps}")
+        self.fps = float(fps)
+        self.with_domains = with_domains
         self.nodes: list[_Node] = []
         n0 = 16
         self._end = np.zeros(n0, dtype=np.int64)
@@ -187,6 +250,8 @@ class LabelGraph:
         self._nchild = np.zeros(n0, dtype=np.int64)
         self._palettes = np.zeros((n0, self.config.pool_size), dtype=bool)
         self._log_area = np.full(n0, np.nan)
+        self._foot_y = np.full(n0, np.nan)
+        self._scale = np.full(n0, np.nan)
 
     # --- growth --------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -194,9 +259,9 @@ class LabelGraph:
 
     def _grow(self) -> None:
         n = self._end.shape[0] * 2
-        for name in ("_end", "_end_pos", "_nchild", "_palettes", "_log_area"):
+        for name in ("_end", "_end_pos", "_nchild", "_palettes", "_log_area", "_foot_y", "_scale"):
             old = getattr(self, name)
-            new = np.full((n, *old.shape[1:]), np.nan) if name == "_log_area" else \
+            new = np.full((n, *old.shape[1:]), np.nan) if name in ("_log_area", "_foot_y", "_scale") else \
                 np.zeros((n, *old.shape[1:]), dtype=old.dtype)
             new[: old.shape[0]] = old
             setattr(self, name, new)
@@ -254,11 +319,23 @@ class LabelGraph:
         cfg = self.config
         gap = stroke.start - self._end[:n]
         dist = np.linalg.norm(self._end_pos[:n] - stroke.positions[0], axis=1)
-        ok = (gap > 0) & (gap <= cfg.max_gap_frames) & (dist <= cfg.radius + cfg.v_max * gap)
+        if cfg.gate == "scaled":
+            # distances in units of the parent region's size, times in seconds; a parent
+            # without a recorded size falls back to the pixel gate
+            unit = np.where(np.isfinite(self._scale[:n]), self._scale[:n], np.nan)
+            secs = gap / self.fps
+            f25 = 25.0 / self.fps  # the frame limits were set at 25 fps
+            reach = np.where(np.isfinite(unit), unit * (cfg.radius_scaled + cfg.v_max_scaled * secs),
+                             cfg.radius + cfg.v_max * gap)
+            max_gap, window = cfg.max_gap_frames / f25, cfg.sibling_window / f25
+        else:
+            reach = cfg.radius + cfg.v_max * gap
+            max_gap, window = cfg.max_gap_frames, cfg.sibling_window
+        ok = (gap > 0) & (gap <= max_gap) & (dist <= reach)
         ok &= self._nchild[:n] < cfg.max_children
         # a second child (the other part of a split) must start within ``sibling_window``
         # frames of the parent's end
-        ok &= (self._nchild[:n] == 0) | (gap <= cfg.sibling_window)
+        ok &= (self._nchild[:n] == 0) | (gap <= window)
         cand = np.flatnonzero(ok)
         # a candidate that is an ancestor of another candidate is superseded by it (the
         # new stroke continues the descendant, it is not its sibling)
@@ -299,14 +376,16 @@ class LabelGraph:
         ext = getattr(stroke, "extent", None)
         if ext is not None:
             self._log_area[k] = float(np.median(np.log(ext[:, 0] * ext[:, 1])))
-            seen = self._log_area[:k][np.isfinite(self._log_area[:k])]
-            if seen.size:
-                rel = float(self._log_area[k] - np.median(seen))
+            self._foot_y[k] = float(np.median(stroke.positions[:, 1] + ext[:, 1] / 2))
+            self._scale[k] = float(np.median(np.sqrt(ext[:, 0] * ext[:, 1])))
         for p in parents:
             self._nchild[p] += 1
             self.nodes[p].children.append(k)
         node = _Node(stroke, parents, [], (), rel_log_area=rel)
         self.nodes.append(node)
+        node.rel_log_area = self.rel_log_area(k)  # as seen when the stroke starts
+        if not self.with_domains:
+            return k, []
         node.domain = self._admissible(k)
         # a parent that now splits changes its other child's structure: widen that domain
         widened = []
@@ -349,11 +428,14 @@ class LabelGraph:
     def _admissible(self, k: int) -> tuple[Label, ...]:
         return tuple(
             admissible_labels(self.parent_domains(k), self.shared(k), frozenset({k}),
-                              self.config.labels.max_group_size, self.config.labels.p_part > 0)
+                              self.config.labels.max_group_size, self.config.labels.p_part > 0,
+                              max_new=len(self.config.labels.new_group_probs),
+                              join=self.config.labels.p_join > 0)
         )
 
     def palettes(self, domain: Sequence[Label]) -> np.ndarray:
-        """Palette of each label (union of its objects' birth-stroke colours).
+        """Palette of each label (union of its objects' birth-stroke colours; the objects
+        of a new group share their birth stroke's palette).
 
         Returns
         -------
@@ -361,7 +443,7 @@ class LabelGraph:
         """
         out = np.zeros((len(domain), self.config.pool_size), dtype=bool)
         for i, lab in enumerate(domain):
-            out[i] = self._palettes[list(lab)].any(axis=0)
+            out[i] = self._palettes[[birth_stroke(o) for o in lab]].any(axis=0)
         return out
 
     def colour_loglik(self, k: int, domain: Sequence[Label] | None = None, mode: str | None = None) -> np.ndarray:
@@ -372,14 +454,34 @@ class LabelGraph:
         ndarray, shape (num_labels,)
         """
         domain = self.nodes[k].domain if domain is None else domain
-        new = frozenset({k})
-        is_new = np.array([lab == new for lab in domain])
         # a new label's palette comes from this stroke itself (seed 004, sec. 4.1)
-        # (``Stroke.palette``)
+        # (``Stroke.palette``): a label holding an object born here (a new group, or an
+        # inherited label joined by a newcomer) gets no colour evidence (ratio 1)
+        is_new = np.array([any(birth_stroke(o) == k for o in lab) for lab in domain])
         return colour_log_likelihood(
             self.nodes[k].stroke.colours, self.palettes(domain), is_new, self.config.match_prob,
             self.config.pool_size, self.config.colour_mode if mode is None else mode,
         )
+
+    def rel_log_area(self, k: int) -> float:
+        """Log area of stroke ``k``'s region minus the reference: the
+        ``size_reference_quantile`` of the log areas of the ``size_reference_neighbours``
+        strokes seen so far whose region's bottom edge (the feet, on the ground plane) is
+        nearest in image height to stroke ``k``'s (itself included; people nearer the
+        camera are larger). NaN: no recorded size, or fewer than ``size_min_reference``
+        others."""
+        n = len(self.nodes)
+        own = self._log_area[k]
+        if not np.isfinite(own):
+            return float("nan")
+        ok = np.flatnonzero(np.isfinite(self._log_area[:n]))
+        if ok.size - 1 < self.config.size_min_reference:
+            return float("nan")
+        m = self.config.size_reference_neighbours
+        if 0 < m < ok.size:
+            near = np.argpartition(np.abs(self._foot_y[ok] - self._foot_y[k]), m - 1)[:m]
+            ok = ok[near]
+        return float(own - np.quantile(self._log_area[ok], self.config.size_reference_quantile))
 
     def size_loglik(self, k: int, domain: Sequence[Label] | None = None) -> np.ndarray:
         """Region-size log-likelihood of stroke ``k`` for each label of ``domain``
@@ -392,7 +494,7 @@ class LabelGraph:
         """
         domain = self.nodes[k].domain if domain is None else domain
         cfg = self.config
-        rel = self.nodes[k].rel_log_area if cfg.size_evidence else float("nan")
+        rel = self.rel_log_area(k) if cfg.size_evidence else float("nan")
         sizes = np.array([len(lab) for lab in domain], dtype=np.int64)
         return size_log_likelihood(rel, sizes, cfg.size_mu_single, cfg.size_slope, cfg.size_sigma)
 
@@ -417,7 +519,7 @@ class LabelGraph:
         if node.parents:
             return child_table(self.parent_domains(k), self.shared(k), node.domain,
                                frozenset({k}), self.config.labels)
-        return root_table(node.domain, frozenset({k}))
+        return root_table(node.domain, frozenset({k}), self.config.labels)
 
     # --- freezing and pruning --------------------------------------------------------------
     def freeze(self, k: int, label: Label) -> None:

@@ -54,7 +54,7 @@ from scipy.optimize import linear_sum_assignment
 
 from dbn.errors import InputError, ModelError
 from inference.exact import JunctionTree, map_assignment
-from models.jorge.labels import Label, colour_log_likelihood, prune_labels
+from models.jorge.labels import NEW_STRIDE, Label, birth_stroke, colour_log_likelihood, prune_labels
 from models.jorge.network import LabelGraph, NetworkConfig, node_name
 from models.jorge.strokes import Stroke, StrokeSet
 
@@ -136,6 +136,9 @@ class InferenceRecord:
         Wall time of building the window net and solving it.
     log_prob : float
         MAP log probability.
+    pruned_mass : float
+        Largest posterior mass any active node's pruning dropped at this inference (the
+        probability, under the window's posterior, of the labels removed).
     """
 
     frame: int
@@ -145,6 +148,7 @@ class InferenceRecord:
     max_clique_entries: int
     seconds: float
     log_prob: float
+    pruned_mass: float = 0.0
 
 
 class OnlineLabeller:
@@ -164,6 +168,9 @@ class OnlineLabeller:
     labels : dict int -> Label
         Current label of every node.
     records : list of InferenceRecord
+    instant_pruned_mass : list of float
+        Posterior mass dropped each time a new node's eq. 12 posterior was capped to
+        ``max_labels`` labels.
     """
 
     def __init__(self, config: OnlineConfig | None = None, fps: float = 25.0,
@@ -172,7 +179,7 @@ class OnlineLabeller:
         if not fps > 0:
             raise ModelError(f"fps must be > 0, got {fps}")
         self.fps = float(fps)
-        self.graph = LabelGraph(self.config.network)
+        self.graph = LabelGraph(self.config.network, fps=fps)
         self.labels: dict[int, Label] = {}
         self.beliefs: dict[int, np.ndarray] = {}
         self.records: list[InferenceRecord] = []
@@ -181,6 +188,7 @@ class OnlineLabeller:
         self._period_frames = self.config.period_s * self.fps
         self._next_inference: float | None = None
         self._inferred: set[int] = set()
+        self.instant_pruned_mass: list[float] = []
 
     # --- eq. 12 ------------------------------------------------------------------------------
     def belief_of(self, k: int) -> np.ndarray:
@@ -236,6 +244,7 @@ class OnlineLabeller:
         if len(kept) < len(domain):
             idx = [domain.index(lab) for lab in kept]
             g.set_domain(k, kept)
+            self.instant_pruned_mass.append(float(1.0 - post[idx].sum()))
             post = post[idx] / post[idx].sum()
         self.beliefs[k] = post
         self.labels[k] = g.nodes[k].domain[int(np.argmax(post))]
@@ -283,6 +292,7 @@ class OnlineLabeller:
         assignment, log_prob = map_assignment(win.bn, win.evidence, win.soft_evidence)
         clique = 0
         marg = None
+        pruned = 0.0
         if cfg.marginals:
             jt = JunctionTree(win.bn)
             clique = jt.max_clique_size
@@ -299,12 +309,13 @@ class OnlineLabeller:
                 idx = [dom.index(x) for x in kept]
                 g.set_domain(k, kept)
                 b = marg[name][idx]
+                pruned = max(pruned, float(1.0 - b.sum()))
                 self.beliefs[k] = b / b.sum() if b.sum() > 0 else np.full(len(idx), 1.0 / len(idx))
         self._inferred.update(active)
         seconds = time.perf_counter() - t0
         rec = InferenceRecord(frame, len(active), len(win.boundary),
                               max(len(win.domains[node_name(k)]) for k in active), clique,
-                              seconds, log_prob)
+                              seconds, log_prob, pruned)
         self.records.append(rec)
         if self.keep_windows:
             self.windows.append(win)
@@ -442,7 +453,7 @@ def _reidentify_pass(graph: LabelGraph, labels: list, prior: float) -> list:
     pal = graph.palettes([frozenset({o}) for o in objects])
     row = {o: i for i, o in enumerate(objects)}
     for i, b in enumerate(objects):
-        if labels[b] != frozenset({b}):
+        if b >= NEW_STRIDE or labels[b] != frozenset({b}):  # not born alone: kept as is
             roots.append(b)
             continue
         cands = [a for a in roots if last[a] < first[b]]
@@ -562,7 +573,7 @@ def score(strokes: Sequence[Stroke], labels: Sequence[Label], mapping: str = "op
         raise InputError(f"score: {len(labels)} labels for {len(strokes)} strokes")
     known = {s.index for s in strokes}
     for s, lab in zip(strokes, labels):
-        unknown = [o for o in lab if o not in known]
+        unknown = [o for o in lab if birth_stroke(o) not in known]
         if unknown or not lab:
             raise InputError(f"score: stroke {s.index} has label {set(lab)} with unknown object ids {unknown}")
     if mapping == "optimal":

@@ -60,6 +60,7 @@ __all__ = [
     "gap_mask",
     "build_strokes",
     "make_stroke",
+    "PETS2009_FPS",
 ]
 
 
@@ -141,7 +142,13 @@ def _open_xml(path: str | Path) -> ET.Element:
         return ET.parse(fh).getroot()
 
 
-def _assemble(name: str, per_frame: list[tuple[int, dict[int, tuple[float, ...]]]], groups) -> GroundTruth:
+PETS2009_FPS = 7.0
+"""Frame rate of the PETS2009 cameras ("~7" fps for every view, PETS2009 dataset page,
+http://www.cvg.rdg.ac.uk/PETS2009/a.html); CAVIAR is 25 fps."""
+
+
+def _assemble(name: str, per_frame: list[tuple[int, dict[int, tuple[float, ...]]]], groups,
+              fps: float = 25.0) -> GroundTruth:
     frames = np.array([f for f, _ in per_frame], dtype=np.int64)
     if frames.size > 1 and np.any(np.diff(frames) <= 0):
         k = int(np.argmax(np.diff(frames) <= 0))
@@ -153,7 +160,7 @@ def _assemble(name: str, per_frame: list[tuple[int, dict[int, tuple[float, ...]]
         for i, b in objs.items():
             boxes[r, col[i]] = b
     return GroundTruth(name=name, frames=frames, ids=np.array(ids, dtype=np.int64),
-                       boxes=boxes, groups=tuple(groups))
+                       boxes=boxes, groups=tuple(groups), fps=fps)
 
 
 def _parse_box(elem: ET.Element | None, where: str) -> tuple[float, float, float, float]:
@@ -225,12 +232,13 @@ def load_caviar(path: str | Path) -> GroundTruth:
 def load_pets2009(path: str | Path) -> GroundTruth:
     """Load the PETS2009 S2.L1 ground truth (OpenTraj XML: frame -> object id -> box).
 
-    Same return value and errors as :func:`load_caviar`; ``groups`` is empty.
+    Same return value and errors as :func:`load_caviar`; ``groups`` is empty and ``fps``
+    is :data:`PETS2009_FPS` (7: the PETS2009 cameras' frame rate).
     """
     root = _open_xml(path)
     name = root.get("name") or Path(path).name.split(".")[0]
     per_frame, _ = _parse_frames(root, name, with_groups=False)
-    return _assemble(name, per_frame, [])
+    return _assemble(name, per_frame, [], fps=PETS2009_FPS)
 
 
 def load_ground_truth(path: str | Path) -> GroundTruth:

@@ -158,20 +158,25 @@ def _graph(size_evidence: bool = True, group_size=PAIR, child_size=SINGLE) -> La
     return g
 
 
-def test_relative_log_area_is_against_the_median_of_earlier_strokes():
+def test_relative_log_area_is_against_a_quantile_of_the_strokes_seen():
     g = _graph()
-    rel = [g.nodes[k].rel_log_area for k in range(6)]
-    assert np.isnan(rel[0])
-    single, pair = np.log(np.prod(SINGLE)), np.log(np.prod(PAIR))
-    assert rel[1] == pytest.approx(0.0)
-    assert rel[2] == pytest.approx(pair - single)
-    assert rel[3] == pytest.approx(0.0)  # median of (single, single, pair)
-    # a stroke without a size: no evidence, and it does not enter later references
+    areas = np.log([np.prod(s) for s in (SINGLE, SINGLE, PAIR, SINGLE, SINGLE, SINGLE)])
+    ref = np.quantile(areas, CFG.size_reference_quantile)
+    for k in range(6):
+        assert g.rel_log_area(k) == pytest.approx(areas[k] - ref)
+    # too few strokes seen: no evidence
+    g3 = LabelGraph(CFG)
+    for k in range(CFG.size_min_reference):
+        g3.add_stroke(make_stroke(k, 0, 10, (0, 30 * k), (10, 30 * k), [0, 1, 2], size=SINGLE))
+        assert np.isnan(g3.rel_log_area(k))
+    # a stroke without a size: no evidence, and it does not enter the reference
     g2 = LabelGraph(CFG)
     g2.add_stroke(make_stroke(0, 0, 10, (0, 10), (10, 10), [0, 1, 2]))
-    g2.add_stroke(make_stroke(1, 0, 10, (0, 40), (10, 40), [5, 6, 7], size=SINGLE))
-    assert np.isnan(g2.nodes[1].rel_log_area)
-    np.testing.assert_array_equal(g2.size_loglik(1), np.zeros(len(g2.nodes[1].domain)))
+    for k in range(1, 5):
+        g2.add_stroke(make_stroke(k, 0, 10, (0, 40 * k), (10, 40 * k), [5, 6, 7], size=SINGLE))
+    assert np.isnan(g2.rel_log_area(0))
+    assert g2.rel_log_area(4) == pytest.approx(0.0)
+    np.testing.assert_array_equal(g2.size_loglik(0), np.zeros(len(g2.nodes[0].domain)))
 
 
 def test_window_soft_evidence_is_colour_times_size():
@@ -181,7 +186,7 @@ def test_window_soft_evidence_is_colour_times_size():
         ll = g.colour_loglik(k) + g.size_loglik(k)
         np.testing.assert_allclose(win.soft_evidence[node_name(k)], np.exp(ll - ll.max()), rtol=1e-12)
         sizes = np.array([len(lab) for lab in g.nodes[k].domain])
-        want = size_log_likelihood(g.nodes[k].rel_log_area, sizes, CFG.size_mu_single,
+        want = size_log_likelihood(g.rel_log_area(k), sizes, CFG.size_mu_single,
                                    CFG.size_slope, CFG.size_sigma)
         np.testing.assert_allclose(g.size_loglik(k), want)
     off = _graph(size_evidence=False)
@@ -204,7 +209,9 @@ def test_a_single_sized_child_of_a_group_moves_mass_to_single_labels():
     """The case the size evidence is for: a group's only visible child. With a
     one-person-sized region the posterior mass on two-person labels drops."""
     def two_person_mass(size_evidence: bool) -> float:
-        g = LabelGraph(NetworkConfig(colour_mode="ratio", size_evidence=size_evidence))
+        # a size model in which a stroke of the reference size is one person
+        g = LabelGraph(NetworkConfig(colour_mode="ratio", size_evidence=size_evidence, size_mu_single=0.0,
+                                     size_slope=1.0 / np.log(2.0), size_sigma=0.68))
         g.add_stroke(make_stroke(0, 0, 10, (0, 10), (10, 10), [0, 1, 2, 3, 4], size=SINGLE))
         g.add_stroke(make_stroke(1, 0, 10, (0, 40), (10, 40), [5, 6, 7, 8, 9], size=SINGLE))
         g.add_stroke(make_stroke(2, 12, 20, (12, 25), (20, 25), [0, 1, 5, 6, 10], size=PAIR))

@@ -1,0 +1,85 @@
+"""Parameters learned on the declared training split (models/jorge/fit.py): event counts
+on hand-made strokes, the add-one maximum-likelihood rates, the split held out, and the
+default network's parameters reproduced by the fit on the real data."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dbn.errors import InputError
+from models.jorge.fit import (
+    TRAIN_SEEDS,
+    TRAIN_SEQUENCES,
+    VALIDATION_SEQUENCES,
+    count_events,
+    fit_parameters,
+    training_strokes,
+)
+from models.jorge.labels import LabelParams
+from models.jorge.network import FITTED_LABELS, NetworkConfig
+from models.jorge.strokes import StrokeSet, make_stroke
+
+
+def test_event_counts_of_a_hand_made_merge_and_split():
+    ss = StrokeSet.from_strokes([
+        make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2], {0}, size=(20, 50)),
+        make_stroke(1, 0, 10, (40, 0), (30, 0), [3, 4, 5], {1}, size=(20, 50)),
+        make_stroke(2, 12, 20, (20, 0), (20, 0), [0, 1, 3], {0, 1}, size=(40, 50)),
+        make_stroke(3, 22, 30, (10, 0), (0, 0), [0, 1, 2], {0}, size=(20, 50)),
+        make_stroke(4, 22, 30, (30, 0), (40, 0), [3, 4, 5], {1}, size=(20, 50)),
+        make_stroke(5, 32, 40, (0, 0), (0, 0), [0, 1, 9], {0, 3}, size=(40, 50)),
+        make_stroke(6, 40, 50, (300, 300), (300, 300), [6, 7, 8], {2}, size=(20, 50)),
+    ])
+    c = count_events(ss, NetworkConfig(gate="pixels"))
+    # children: 2 (merge of 0 and 1), 3 and 4 (split parts of 2), 5 (0 and a newcomer)
+    assert c.children == 4 and c.new == 0 and c.non_new == 4
+    assert c.two_parent.tolist() == [1, 0, 0] and c.merge.tolist() == [1, 0, 0]
+    assert (c.split_part, c.split_total) == (2, 2)
+    assert c.join == 1
+    # roots 0, 1, 6 are new single objects
+    assert c.new_sizes.tolist() == [3]
+    assert [k for k, _ in c.sizes] == [1, 1, 2, 1, 1, 2, 1][1:]  # the first has no reference
+
+
+def test_fit_is_add_one_smoothed_frequencies():
+    ss = StrokeSet.from_strokes([
+        make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2], {0}, size=(20, 50)),
+        make_stroke(1, 0, 10, (40, 0), (30, 0), [3, 4, 5], {1}, size=(20, 50)),
+        make_stroke(2, 12, 20, (20, 0), (20, 0), [0, 1, 3], {0, 1}, size=(40, 50)),
+        make_stroke(3, 22, 30, (10, 0), (0, 0), [0, 1, 2], {0}, size=(20, 50)),
+        make_stroke(4, 22, 30, (30, 0), (40, 0), [3, 4, 5], {1}, size=(20, 50)),
+    ])
+    cfg = fit_parameters([ss], NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels"))
+    L = cfg.labels
+    assert L.p_new == pytest.approx((0 + 1) / (3 + 2))
+    assert L.p_merge == pytest.approx((1 + 1) / (1 + 2))
+    assert L.p_merge_one_split == pytest.approx(0.5)  # no such node: the prior 1/2
+    assert L.p_split == pytest.approx((2 + 1) / (2 + 2))
+    assert L.p_join == pytest.approx((0 + 1) / (3 + 2))
+    np.testing.assert_allclose(L.new_group_probs, np.array([2 + 1, 0 + 1, 0 + 1]) / (2 + 3))
+    # sizes: log area grows by log 2 from one person to two, exactly
+    assert cfg.size_slope == pytest.approx(1.0, abs=1e-9)
+    assert cfg.size_sigma == pytest.approx(1e-3, abs=1e-3)
+
+
+def test_fit_needs_children():
+    lonely = StrokeSet.from_strokes([make_stroke(0, 0, 10, (0, 0), (1, 0), [0, 1], {0})])
+    with pytest.raises(InputError):
+        fit_parameters([lonely])
+
+
+def test_validation_is_held_out_of_training():
+    assert not set(TRAIN_SEQUENCES) & set(VALIDATION_SEQUENCES)
+    assert not set(TRAIN_SEEDS) & set(range(5))  # the benchmark's seeds
+
+
+@pytest.mark.slow
+def test_default_parameters_are_the_fit_on_the_training_split():
+    sets = training_strokes(seeds=TRAIN_SEEDS)
+    if len(sets) < len(TRAIN_SEQUENCES) * len(TRAIN_SEEDS):
+        pytest.skip("training sequences absent (set DBNTRACK_DATA to the shared data folder)")
+    base = NetworkConfig(labels=LabelParams(max_group_size=5), gate="scaled")
+    fitted = fit_parameters(sets, base).labels
+    for name in ("p_new", "p_merge", "p_merge_one_split", "p_merge_both_split", "p_split", "p_part"):
+        assert getattr(fitted, name) == pytest.approx(getattr(FITTED_LABELS, name), rel=1e-9), name
