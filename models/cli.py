@@ -58,9 +58,29 @@ def main(argv: list[str] | None = None) -> int:
         metavar="PART",
         help="run only the parts whose module contains PART (e.g. primer zajdel jorge)",
     )
+    p_sweep = sub.add_parser(
+        "sweep",
+        help="run a sweep (trackers x data x seeds x parameters) on Dask distributed",
+        description="Each grid point of CONFIG (TOML, format in models.experiments.load_sweep) "
+        "is one Dask task; results are appended to OUT as they finish.",
+    )
+    p_sweep.add_argument("config", help="sweep configuration (TOML)")
+    p_sweep.add_argument("-o", "--out", default="sweep.jsonl", help="results file (JSON lines)")
+    p_sweep.add_argument("--scheduler", help="address of a running Dask scheduler")
+    p_sweep.add_argument("--workers", type=int, help="local cluster size (default: cores)")
+    p_sweep.add_argument("--resume", action="store_true", help="skip points already done")
     args = parser.parse_args(argv)
     if args.command == "demo":
         demo(args.only)
+    elif args.command == "sweep":
+        from dbn.errors import DBNError
+        from models.experiments import sweep_main
+
+        try:
+            return sweep_main(args.config, args.out, args.scheduler, args.resume, args.workers)
+        except DBNError as exc:
+            print(f"dbntrack sweep: {exc}", file=sys.stderr)
+            return 2
     return 0
 
 
