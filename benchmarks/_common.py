@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import sys
 import time
@@ -10,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["best_time", "median_time", "log", "to_jsonable"]
+__all__ = ["best_time", "median_time", "log", "to_jsonable", "dask_mapper"]
 
 
 def log(*args: object) -> None:
@@ -61,3 +62,28 @@ def to_jsonable(obj: Any) -> Any:
     if hasattr(obj, "item") and callable(obj.item):  # jax scalars
         return to_jsonable(obj.item())
     return obj
+
+
+@contextlib.contextmanager
+def dask_mapper(address: str = "local"):
+    """``mapper(fn, items) -> list`` running one Dask task per item, results in order.
+
+    ``address="local"`` starts a local cluster (one worker per core) for the duration of
+    the context; otherwise it connects to the scheduler at ``address``. Benchmarks whose
+    ``run`` takes ``mapper`` (default the builtin serial ``map``) use it for their
+    multi-seed loops: ``python -m benchmarks NAME --dask [ADDRESS]``.
+    """
+    from dask.distributed import Client
+
+    from models.experiments import local_cluster
+
+    with contextlib.ExitStack() as stack:
+        if address == "local":
+            client = stack.enter_context(Client(stack.enter_context(local_cluster())))
+        else:
+            client = stack.enter_context(Client(address))
+
+        def mapper(fn, items):
+            return client.gather(client.map(fn, list(items), pure=False))
+
+        yield mapper

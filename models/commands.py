@@ -63,6 +63,18 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
     p.add_argument("--only", nargs="*", metavar="NAME",
                    help=f"run only the named parts: {', '.join(demo_names)}")  # fmt: skip
     p.set_defaults(demo=demo, demo_names=demo_names, demo_parser=p)
+    p = sub.add_parser(
+        "sweep", help="run a sweep (trackers x data x seeds x parameters) on Dask distributed",
+        description="Each grid point of CONFIG (TOML; format in models.experiments.load_sweep, "
+        "example tests/data/sweep_example.toml) is one Dask task; results are appended to OUT "
+        "as they finish.",
+    )  # fmt: skip
+    p.add_argument("config", help="sweep configuration (TOML)")
+    p.add_argument("-o", "--out", default="sweep.jsonl", help="results file (JSON lines)")
+    p.add_argument("--scheduler", help="address of a running Dask scheduler (default: a "
+                   "local cluster)")  # fmt: skip
+    p.add_argument("--workers", type=int, help="local cluster size (default: one per core)")
+    p.add_argument("--resume", action="store_true", help="skip points already done in OUT")
     return parser
 
 
@@ -169,6 +181,10 @@ def dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
                     f"unknown part(s) {', '.join(unknown)}; valid: {', '.join(args.demo_names)}"
                 )
             args.demo(args.only)
+        elif args.command == "sweep":
+            from models.experiments import sweep_main
+
+            return sweep_main(args.config, args.out, args.scheduler, args.resume, args.workers)
     except (DBNError, FileNotFoundError) as exc:
         msg = " ".join(str(exc).split())
         print(f"dbntrack {args.command}: error: {msg}", file=sys.stderr)
