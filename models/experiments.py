@@ -34,7 +34,15 @@ from typing import Any
 
 from dbn.errors import InputError
 
-__all__ = ["GridPoint", "make_grid", "run_grid", "read_results", "local_cluster"]
+__all__ = [
+    "GridPoint",
+    "make_grid",
+    "run_grid",
+    "read_results",
+    "local_cluster",
+    "load_sweep",
+    "example_task",
+]
 
 Task = Callable[["GridPoint"], Mapping[str, Any]]
 
@@ -264,6 +272,30 @@ def _records(task: Task, todo: list[GridPoint], client: Any, serial: bool, n_wor
             own_client.close()
         if own_cluster is not None:
             own_cluster.close()
+
+
+def example_task(point: GridPoint) -> dict[str, Any]:
+    """A sweep task over the tracker registry: run ``point.tracker`` on its tiny SIMULATED
+    example (``models.get(name).example``) through the protocol's ``run``.
+
+    The jax key is ``jax.random.key(point.rng_seed % 2**32)``; ``point.params`` are passed
+    to nothing (the example fixes its own settings). Returns the number of steps and the
+    sum of the tracker's one-step scores (its ``score_field``; ``None`` where it has none).
+    """
+    import jax
+    import numpy as np
+
+    import models
+
+    key = jax.random.key(point.rng_seed % 2**32)
+    k_example, k_run = jax.random.split(key)
+    ex = models.get(point.tracker).example(k_example)
+    _, infos = ex.tracker.run(k_run, ex.observations)
+    field_name = ex.tracker.score_field
+    score = None
+    if field_name is not None:
+        score = float(np.sum([np.sum(getattr(info, field_name)) for info in infos]))
+    return {"steps": len(infos), "score_field": field_name, "total_score": score}
 
 
 def load_sweep(path: str | os.PathLike) -> tuple[Task, list[GridPoint]]:
