@@ -37,6 +37,9 @@ __all__ = [
     "student_t_logpdf_np",
     "niw_predictive_logpdf",
     "niw_predictive_logpdf_np",
+    "niw_predictive_lognorm",
+    "niw_predictive_from_quad",
+    "niw_update_cached",
     "niw_expected_stats",
     "niw_expected_stats_np",
     "niw_from_stats",
@@ -228,30 +231,71 @@ def niw_predictive_logpdf_np(o: np.ndarray, theta: NIW) -> np.ndarray:
     return student_t_logpdf_np(o, nu, a, scale)
 
 
-def niw_predictive_logpdf(o: jnp.ndarray, a, kappa, eta, Cinv, logdetC) -> jnp.ndarray:
-    r"""Predictive log density of ``o`` under NIW(a, kappa, eta, C) (jax), from cached
-    :math:`C^{-1}` and :math:`\log|C|` (the tracker keeps them per slice).
-
-    Student-t with :math:`\nu = \eta-r+1`, scale :math:`\Sigma = C(\kappa+1)/(\kappa\nu)`:
-    :math:`\delta = \tfrac{\kappa\nu}{\kappa+1}(o-a)^T C^{-1}(o-a)`,
+def niw_predictive_lognorm(kappa, eta, logdetC, r: int):
+    r"""The data-free part of the Student-t predictive of NIW(a, kappa, eta, C) (jax):
+    :math:`\log\Gamma(\tfrac{\nu+r}2) - \log\Gamma(\tfrac\nu2) - \tfrac r2\log(\nu\pi)
+    - \tfrac12\log|\Sigma|` with :math:`\nu = \eta-r+1`,
     :math:`\log|\Sigma| = \log|C| + r\log\tfrac{\kappa+1}{\kappa\nu}`.
 
-    Shapes: o (..., r), a (..., r), kappa/eta/logdetC (...), Cinv (..., r, r); returns (...).
+    A filter that scores one observation against many stored NIWs keeps this per NIW
+    (it changes only when the NIW does). Shapes: kappa, eta, logdetC (...); returns (...).
     """
-    r = a.shape[-1]
     nu = eta - r + 1.0
-    d = o - a
-    q = jnp.einsum("...i,...ij,...j->...", d, Cinv, d)
     f = kappa * nu / (kappa + 1.0)
-    maha = f * q
-    logdet = logdetC - r * jnp.log(f)
     return (
         _jgammaln(0.5 * (nu + r))
         - _jgammaln(0.5 * nu)
         - 0.5 * r * (jnp.log(nu) + _LOGPI)
-        - 0.5 * logdet
-        - 0.5 * (nu + r) * jnp.log1p(maha / nu)
+        - 0.5 * (logdetC - r * jnp.log(f))
     )
+
+
+def niw_predictive_from_quad(q, kappa, eta, lognorm, r: int):
+    r"""Predictive log density from the quadratic form :math:`q = (o-a)^T C^{-1}(o-a)`
+    and :func:`niw_predictive_lognorm`: :math:`\text{lognorm} - \tfrac{\nu+r}2
+    \log(1 + \tfrac{\kappa}{\kappa+1} q)` (jax). Shapes: all (...); returns (...)."""
+    nu = eta - r + 1.0
+    f = kappa * nu / (kappa + 1.0)
+    return lognorm - 0.5 * (nu + r) * jnp.log1p(f * q / nu)
+
+
+def niw_predictive_logpdf(o: jnp.ndarray, a, kappa, eta, Cinv, logdetC) -> jnp.ndarray:
+    r"""Predictive log density of ``o`` under NIW(a, kappa, eta, C) (jax), from cached
+    :math:`C^{-1}` and :math:`\log|C|` (the tracker keeps them per slice).
+
+    Student-t with :math:`\nu = \eta-r+1`, scale :math:`\Sigma = C(\kappa+1)/(\kappa\nu)`
+    (:func:`niw_predictive_lognorm` + :func:`niw_predictive_from_quad`).
+
+    Shapes: o (..., r), a (..., r), kappa/eta/logdetC (...), Cinv (..., r, r); returns (...).
+    """
+    r = a.shape[-1]
+    d = o - a
+    q = jnp.einsum("...i,...ij,...j->...", d, Cinv, d)
+    return niw_predictive_from_quad(
+        q, kappa, eta, niw_predictive_lognorm(kappa, eta, logdetC, r), r
+    )
+
+
+def niw_update_cached(o, a, kappa, eta, C, Cinv, logdetC):
+    r"""Conjugate update ``theta (+) o`` carrying :math:`C^{-1}` and :math:`\log|C|`
+    along (jax; Sherman-Morrison on the cached inverse, no factorisation):
+    :math:`C'^{-1} = C^{-1} - \tfrac{\beta}{1+\beta q} C^{-1}uu^TC^{-1}`,
+    :math:`\log|C'| = \log|C| + \log(1+\beta q)`, :math:`u = o - a`,
+    :math:`\beta = \kappa/(\kappa+1)`, :math:`q = u^TC^{-1}u`; a, kappa, eta, C as
+    :func:`niw_update`.
+
+    Shapes: o (r,) or (..., r); a (..., r); kappa, eta, logdetC (...); C, Cinv
+    (..., r, r). Returns ``(a, kappa, eta, C, Cinv, logdetC)`` with the batch shape.
+    """
+    u = o - a
+    beta = kappa / (kappa + 1.0)
+    Cu = jnp.einsum("...ij,...j->...i", Cinv, u)
+    q = jnp.einsum("...i,...i->...", u, Cu)
+    den = 1.0 + beta * q
+    Cinv2 = Cinv - (beta / den)[..., None, None] * Cu[..., :, None] * Cu[..., None, :]
+    a2 = a + u / (kappa + 1.0)[..., None]
+    C2 = C + beta[..., None, None] * u[..., :, None] * u[..., None, :]
+    return a2, kappa + 1.0, eta + 1.0, C2, Cinv2, logdetC + jnp.log(den)
 
 
 # ------------------------------------------------------------- expected statistics
