@@ -10,20 +10,26 @@ Parameterisation (seed 002, eq. 1.15; ``../shared/spec/zajdel_adf.md``):
 Shapes use ``obs_dim = r``; leading axes of every field are batch axes:
 ``a (..., r)``, ``kappa (...)``, ``eta (...)``, ``C (..., r, r)``.
 
-Two implementations of the hot pieces are given: jax (jit-able, vmap-batched; the
-tracker's) and numpy ``*_np`` (the plain reference used by the oracle and by the
-numpy-loop baseline of the benchmark).
+Each formula is written once. The update and the Student-t run on numpy (``*_np``,
+host code: the exact oracle, the greedy baseline, track scores) or on jax (jit-able)
+through one array backend; the filter's hot loop (cached inverses, expected
+statistics, the projection) is jax only. The plain-numpy projection used as the
+projection's oracle lives in the tests (``tests/inference/adf/niw_oracle.py``).
+
+Precision: the jax functions compute in the dtype of their inputs (the caller's
+choice; filters use float64 inside ``jax.enable_x64``); :func:`niw_project` (a host
+entry point) runs in float64 itself.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from collections.abc import Callable
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.scipy.special import gammaln as _jgammaln
-from scipy.special import digamma as _digamma
 from scipy.special import gammaln as _gammaln
 from scipy.special import multigammaln as _multigammaln
 
@@ -41,10 +47,8 @@ __all__ = [
     "niw_predictive_from_quad",
     "niw_update_cached",
     "niw_expected_stats",
-    "niw_expected_stats_np",
     "niw_from_stats",
     "niw_project",
-    "niw_project_np",
     "niw_project_cached",
 ]
 
@@ -69,7 +73,33 @@ class NIW(NamedTuple):
     C: np.ndarray
 
 
+# ------------------------------------------------------------------ array backends
+class _Ops(NamedTuple):
+    """The array functions one formula needs, so that each formula is written once and
+    runs on numpy (host code: oracle, greedy, scores) or jax (jit-able filters)."""
+
+    xp: Any
+    gammaln: Callable
+    solve_lower: Callable  # solve L z = d for lower-triangular L (batched)
+
+
+_JAX = _Ops(jnp, _jgammaln, lambda L, d: jax.scipy.linalg.solve_triangular(L, d, lower=True))
+_NP = _Ops(np, _gammaln, np.linalg.solve)
+
+
+def _as_np(*xs):
+    return tuple(np.asarray(x, float) for x in xs)
+
+
 # ----------------------------------------------------------------------------- update
+def _niw_update(xp, theta: NIW, o) -> NIW:
+    d = o - theta.a
+    k1 = theta.kappa + 1.0
+    a = theta.a + d / k1[..., None]
+    C = theta.C + (theta.kappa / k1)[..., None, None] * d[..., :, None] * d[..., None, :]
+    return NIW(a, k1, theta.eta + 1.0, C)
+
+
 def niw_update(theta: NIW, o: jnp.ndarray) -> NIW:
     r"""Conjugate update of NIW(theta) with one vector ``o`` (jax; ``theta (+) o``).
 
@@ -85,25 +115,12 @@ def niw_update(theta: NIW, o: jnp.ndarray) -> NIW:
     -------
     NIW with the broadcast batch shape.
     """
-    d = o - theta.a
-    k1 = theta.kappa + 1.0
-    a = theta.a + d / k1[..., None]
-    C = theta.C + (theta.kappa / k1)[..., None, None] * d[..., :, None] * d[..., None, :]
-    return NIW(a, k1, theta.eta + 1.0, C)
+    return _niw_update(jnp, NIW(*(jnp.asarray(x) for x in theta)), jnp.asarray(o))
 
 
 def niw_update_np(theta: NIW, o: np.ndarray) -> NIW:
-    """numpy twin of :func:`niw_update` (same shapes, same formula)."""
-    a0 = np.asarray(theta.a, float)
-    kappa = np.asarray(theta.kappa, float)
-    d = np.asarray(o, float) - a0
-    k1 = kappa + 1.0
-    a = a0 + d / k1[..., None]
-    C = (
-        np.asarray(theta.C, float)
-        + (kappa / k1)[..., None, None] * d[..., :, None] * d[..., None, :]
-    )
-    return NIW(a, k1, np.asarray(theta.eta, float) + 1.0, C)
+    """:func:`niw_update` on numpy arrays (float64; the same formula)."""
+    return _niw_update(np, NIW(*_as_np(*theta)), np.asarray(o, float))
 
 
 # --------------------------------------------------------------------------- evidence
@@ -167,22 +184,27 @@ def _multigammaln_vec(x: np.ndarray, r: int) -> np.ndarray:
 
 
 # -------------------------------------------------------------------------- Student-t
-def student_t_logpdf(x, nu, loc, scale):
-    r"""Multivariate Student-t log density (jax, Cholesky solve); the same formula and
-    shapes as :func:`student_t_logpdf_np`."""
+def _student_t(ops: _Ops, x, nu, loc, scale):
+    xp = ops.xp
     r = x.shape[-1]
-    L = jnp.linalg.cholesky(scale)
-    d = jnp.broadcast_to(x - loc, L.shape[:-1])
-    z = jax.scipy.linalg.solve_triangular(L, d[..., None], lower=True)[..., 0]
+    L = xp.linalg.cholesky(scale)
+    d = xp.broadcast_to(x - loc, L.shape[:-1])
+    z = ops.solve_lower(L, d[..., None])[..., 0]
     maha = (z * z).sum(-1)
-    logdet = 2.0 * jnp.log(jnp.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
+    logdet = 2.0 * xp.log(xp.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
     return (
-        _jgammaln(0.5 * (nu + r))
-        - _jgammaln(0.5 * nu)
-        - 0.5 * r * (jnp.log(nu) + _LOGPI)
+        ops.gammaln(0.5 * (nu + r))
+        - ops.gammaln(0.5 * nu)
+        - 0.5 * r * (xp.log(nu) + _LOGPI)
         - 0.5 * logdet
-        - 0.5 * (nu + r) * jnp.log1p(maha / nu)
+        - 0.5 * (nu + r) * xp.log1p(maha / nu)
     )
+
+
+def student_t_logpdf(x, nu, loc, scale):
+    r"""Multivariate Student-t log density (jax, Cholesky solve); the formula and
+    shapes of :func:`student_t_logpdf_np`."""
+    return _student_t(_JAX, *(jnp.asarray(v) for v in (x, nu, loc, scale)))
 
 
 def student_t_logpdf_np(x: np.ndarray, nu, loc: np.ndarray, scale: np.ndarray) -> np.ndarray:
@@ -200,22 +222,7 @@ def student_t_logpdf_np(x: np.ndarray, nu, loc: np.ndarray, scale: np.ndarray) -
     -------
     array (...)
     """
-    x = np.asarray(x, float)
-    loc = np.asarray(loc, float)
-    nu = np.asarray(nu, float)
-    r = x.shape[-1]
-    L = np.linalg.cholesky(np.asarray(scale, float))
-    d = np.broadcast_to(x - loc, L.shape[:-1])
-    z = np.linalg.solve(L, d[..., None])[..., 0]
-    maha = (z * z).sum(-1)
-    logdet = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
-    return (
-        _gammaln(0.5 * (nu + r))
-        - _gammaln(0.5 * nu)
-        - 0.5 * r * (np.log(nu) + _LOGPI)
-        - 0.5 * logdet
-        - 0.5 * (nu + r) * np.log1p(maha / nu)
-    )
+    return _student_t(_NP, *_as_np(x, nu, loc, scale))
 
 
 def niw_predictive_logpdf_np(o: np.ndarray, theta: NIW) -> np.ndarray:
@@ -350,26 +357,6 @@ def niw_expected_stats(a, kappa, eta, Cinv, logdetC):
     return P, h, s, g
 
 
-def niw_expected_stats_np(theta: NIW):
-    """numpy twin of :func:`niw_expected_stats`, from C (Cholesky solve). Returns (P, h, s, g)."""
-    a = np.asarray(theta.a, float)
-    kappa = np.asarray(theta.kappa, float)
-    eta = np.asarray(theta.eta, float)
-    C = np.asarray(theta.C, float)
-    r = a.shape[-1]
-    L = np.linalg.cholesky(C)
-    eye = np.broadcast_to(np.eye(r), C.shape)
-    Linv = np.linalg.solve(L, eye)
-    Cinv = np.swapaxes(Linv, -1, -2) @ Linv
-    logdetC = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
-    P = eta[..., None, None] * Cinv
-    h = np.einsum("...ij,...j->...i", P, a)
-    s = r / kappa + np.einsum("...i,...i->...", a, h)
-    i = np.arange(r)
-    g = logdetC - r * _LOG2 - _digamma(0.5 * (eta[..., None] - i)).sum(-1)
-    return P, h, s, g
-
-
 # ------------------------------------------------------------------ projection
 _NEWTON_ITERS = 60
 
@@ -488,55 +475,13 @@ def niw_project(weights, theta: NIW) -> NIW:
     -------
     NIW with batch shape (num_mixtures,)
     """
-    w = jnp.asarray(weights, jnp.float64)
-    out = _project_batch(
-        w,
-        jnp.asarray(theta.a, jnp.float64),
-        jnp.asarray(theta.kappa, jnp.float64),
-        jnp.asarray(theta.eta, jnp.float64),
-        jnp.asarray(theta.C, jnp.float64),
-    )
+    with jax.enable_x64(True):
+        out = _project_batch(
+            jnp.asarray(weights, jnp.float64),
+            jnp.asarray(theta.a, jnp.float64),
+            jnp.asarray(theta.kappa, jnp.float64),
+            jnp.asarray(theta.eta, jnp.float64),
+            jnp.asarray(theta.C, jnp.float64),
+        )
     a, kappa, eta, C = out[0], out[1], out[2], out[3]
     return NIW(np.asarray(a), np.asarray(kappa), np.asarray(eta), np.asarray(C))
-
-
-def niw_project_np(weights: np.ndarray, theta: NIW, iters: int = _NEWTON_ITERS) -> NIW:
-    """Plain numpy twin of :func:`niw_project` for ONE mixture (reference/baseline).
-
-    weights (num_components,); theta batch shape (num_components,). Returns an NIW
-    with scalar batch shape."""
-    w = np.asarray(weights, float)
-    w = w / w.sum()
-    keep = w > 0
-    theta = NIW(*(np.asarray(x, float)[keep] for x in theta))
-    w = w[keep]
-    r = theta.a.shape[-1]
-    P, h, s, g = niw_expected_stats_np(theta)
-    Pm = np.einsum("m,mij->ij", w, P)
-    Pm = 0.5 * (Pm + Pm.T)
-    hm = w @ h
-    sm = float(w @ s)
-    gm = float(w @ g)
-    L = np.linalg.cholesky(Pm)
-    logdetP = 2.0 * np.log(np.diag(L)).sum()
-    gap = max(gm + logdetP, 1e-300)
-    eta0 = r * (r + 1.0) / (2.0 * gap) + (r - 1.0)
-    x = np.log(max(eta0 - (r - 1.0), 1e-8))
-    target = gm + logdetP + r * _LOG2
-    i = np.arange(r)
-    from scipy.special import polygamma
-
-    for _ in range(iters):
-        eta = (r - 1.0) + np.exp(x)
-        f = r * np.log(eta) - _digamma(0.5 * (eta - i)).sum() - target
-        dfe = r / eta - 0.5 * polygamma(1, 0.5 * (eta - i)).sum()
-        step = np.clip(f / (dfe * (eta - (r - 1.0))), -2.0, 2.0)
-        if not np.isfinite(step):
-            break
-        x = x - step
-    eta = (r - 1.0) + np.exp(x)
-    Pinv = np.linalg.solve(L.T, np.linalg.solve(L, np.eye(r)))
-    Pinv = 0.5 * (Pinv + Pinv.T)
-    a = Pinv @ hm
-    kappa = r / (sm - a @ hm)
-    return NIW(a, np.float64(kappa), np.float64(eta), eta * Pinv)

@@ -8,7 +8,6 @@ __all__ = ["run_demo"]
 
 def run_demo(quick: bool = True) -> None:
     """Simulate an office building, track with ADF, print partition scores."""
-    import inference  # noqa: F401
     from models.zajdel.greedy import greedy_labels
     from models.zajdel.metrics import num_objects, pairwise_prf, partition_accuracy
     from models.zajdel.model import declare_model
