@@ -47,6 +47,7 @@ __all__ = [
     "niw_predictive_from_quad",
     "niw_update_cached",
     "niw_expected_stats",
+    "niw_sum_digamma",
     "niw_from_stats",
     "niw_project",
     "niw_project_cached",
@@ -339,12 +340,21 @@ def _sum_trigamma_j(eta, r):
     return _jtrigamma(0.5 * (eta[..., None] - i)).sum(-1)
 
 
-def niw_expected_stats(a, kappa, eta, Cinv, logdetC):
+def niw_sum_digamma(eta, r: int):
+    r""":math:`\sum_{i=1}^r \psi((\eta - i + 1)/2)` (jax), the special-function part of
+    :math:`E[\log|V|]`; a filter may cache it per NIW and pass it to
+    :func:`niw_expected_stats` / :func:`niw_project_cached`. Shapes: eta (...) -> (...)."""
+    return _sum_digamma_j(eta, r)
+
+
+def niw_expected_stats(a, kappa, eta, Cinv, logdetC, sum_digamma=None):
     r"""The four expected sufficient statistics of NIW(a, kappa, eta, C) (jax):
 
     :math:`E[V^{-1}] = \eta C^{-1}`, :math:`E[V^{-1}m] = \eta C^{-1}a`,
     :math:`E[m^TV^{-1}m] = r/\kappa + \eta a^TC^{-1}a`,
     :math:`E[\log|V|] = \log|C| - r\log2 - \sum_{i=1}^r\psi((\eta-i+1)/2)`.
+
+    ``sum_digamma`` (...): :func:`niw_sum_digamma` of eta if cached by the caller.
 
     Shapes: a (..., r), kappa/eta/logdetC (...), Cinv (..., r, r). Returns
     ``(P (..., r, r), h (..., r), s (...), g (...))``.
@@ -353,7 +363,8 @@ def niw_expected_stats(a, kappa, eta, Cinv, logdetC):
     P = eta[..., None, None] * Cinv
     h = jnp.einsum("...ij,...j->...i", P, a)
     s = r / kappa + jnp.einsum("...i,...i->...", a, h)
-    g = logdetC - r * _LOG2 - _sum_digamma_j(eta, r)
+    psi = _sum_digamma_j(eta, r) if sum_digamma is None else sum_digamma
+    g = logdetC - r * _LOG2 - psi
     return P, h, s, g
 
 
@@ -411,7 +422,7 @@ def niw_from_stats(P, h, s, g):
     return a, kappa, eta, C, Cinv, logdetC
 
 
-def niw_project_cached(w, a, kappa, eta, Cinv, logdetC):
+def niw_project_cached(w, a, kappa, eta, Cinv, logdetC, sum_digamma=None):
     r"""KL projection of one weighted NIW mixture, components given with cached
     :math:`C^{-1}` and :math:`\log|C|` (jax, jit/vmap-able; the tracker's hot loop).
 
@@ -420,6 +431,7 @@ def niw_project_cached(w, a, kappa, eta, Cinv, logdetC):
     w : (num_components,) nonnegative weights (normalised inside; zero = padding)
     a : (num_components, r); kappa, eta, logdetC : (num_components,);
     Cinv : (num_components, r, r)
+    sum_digamma : (num_components,) :func:`niw_sum_digamma` of eta, optional (cached)
 
     Returns
     -------
@@ -427,7 +439,7 @@ def niw_project_cached(w, a, kappa, eta, Cinv, logdetC):
     """
     w = w / jnp.sum(w)
     # padding components may hold arbitrary finite values; zero weight removes them
-    P, h, s, g = niw_expected_stats(a, kappa, eta, Cinv, logdetC)
+    P, h, s, g = niw_expected_stats(a, kappa, eta, Cinv, logdetC, sum_digamma)
     Pm = jnp.einsum("m,mij->ij", w, P)
     hm = jnp.einsum("m,mi->i", w, h)
     sm = jnp.dot(w, jnp.where(w > 0, s, 0.0))

@@ -12,8 +12,9 @@ r"""The Zajdel tracker's ADF step as the three hooks of :mod:`inference.adf.driv
   bookkeeping (insertion, eviction of the track end seen longest ago, pruning) and the
   step's report.
 
-Each slot caches :math:`C^{-1}`, :math:`\log|C|` and the data-free part of its
-Student-t predictive (they change only when the slot's NIW does), and the path
+Each slot caches :math:`C^{-1}`, :math:`\log|C|`, the data-free part of its
+Student-t predictive and the digamma sum of its updated NIW's :math:`E[\log|V|]`
+(they change only when the slot's NIW does), and the path
 model's camera-pair normalisers are computed once (``ADFParams.path_lognorm``): the
 per-step work over the open slots needs no special function.
 """
@@ -31,6 +32,7 @@ from inference.adf.niw import (
     niw_predictive_from_quad,
     niw_predictive_lognorm,
     niw_project_cached,
+    niw_sum_digamma,
     niw_update_cached,
 )
 from models.zajdel.adf_types import ADFConfig, ADFInfo, ADFParams, ADFState
@@ -158,6 +160,7 @@ def _new_slice_niw(m: ADFParams, st: ADFState, o, w, w0, Mx: int):
         cat(ce, prior[2]),
         cat(cCinv, prior[4]),
         cat(cld, prior[5]),
+        cat(st.slot_psi_next[itop], m.psi0_next),
     )
     return new, comps, itop
 
@@ -238,12 +241,12 @@ def project(m: ADFParams, st: ADFState, x, posterior, cfg: ADFConfig):
     Mx = min(cfg.mix_top, S)
     (na, nk, ne, nC, nCinv, nld), comps, itop = _new_slice_niw(m, st, o, w, w0, Mx)
     sa, sk, se, sC, sCinv, sld = _slot_niws(st)
-    sln = st.slot_lognorm
+    sln, spsi = st.slot_lognorm, st.slot_psi_next
     if cfg.old_update == "seed":
-        sa, sk, se, sC, sCinv, sld = _old_slices_seed(
-            st, w, comps, itop, min(cfg.old_update_top, Mx)
-        )
+        M = min(cfg.old_update_top, Mx)
+        sa, sk, se, sC, sCinv, sld = _old_slices_seed(st, w, comps, itop, M)
         sln = niw_predictive_lognorm(sk, se, sld, r)
+        spsi = niw_sum_digamma(se + 1.0, r)
     idx, valid, person, pprob, closed = _insert_slot(cfg, st, qlab, pprob, new_p, new_n)
     new_state = ADFState(
         k=st.k + 1,
@@ -263,6 +266,7 @@ def project(m: ADFParams, st: ADFState, x, posterior, cfg: ADFConfig):
         slot_Cinv=sCinv.at[idx].set(nCinv),
         slot_logdetC=sld.at[idx].set(nld),
         slot_lognorm=sln.at[idx].set(niw_predictive_lognorm(nk, ne, nld, r)),
+        slot_psi_next=spsi.at[idx].set(niw_sum_digamma(ne + 1.0, r)),
         slot_person=person,
         slot_pprob=pprob,
     )

@@ -70,6 +70,9 @@ class ADFState(NamedTuple):
     slot_eta (S,), slot_C (S, r, r), slot_Cinv (S, r, r), slot_logdetC (S,),
     slot_lognorm (S,) the data-free part of each slot's Student-t predictive
     (:func:`inference.adf.niw.niw_predictive_lognorm`, cached: it needs log-gamma),
+    slot_psi_next (S,) :func:`inference.adf.niw.niw_sum_digamma` of ``slot_eta + 1``
+    (the digamma sum of the slot's NIW once updated with an observation, cached for
+    the projection),
     slot_person (S, W) int, slot_pprob (S, W) q(z^(person) = slot's j).
     """
 
@@ -90,6 +93,7 @@ class ADFState(NamedTuple):
     slot_Cinv: jnp.ndarray
     slot_logdetC: jnp.ndarray
     slot_lognorm: jnp.ndarray
+    slot_psi_next: jnp.ndarray
     slot_person: jnp.ndarray
     slot_pprob: jnp.ndarray
 
@@ -122,6 +126,7 @@ class ADFParams(NamedTuple):
 
     a0 (r,), k0 (), e0 (), C0 (r, r), Cinv0 (r, r), logdet0 (): theta_0 with its
     cached inverse and log-determinant; lognorm0 (): its predictive's data-free part;
+    psi0_next (): the digamma sum of ``e0 + 1``;
     path: PathModel; path_lognorm (C, C): :func:`models.zajdel.path.travel_log_norm`;
     p_new (): P(new) (0.5 placeholder under the uniform label prior).
     """
@@ -133,6 +138,7 @@ class ADFParams(NamedTuple):
     Cinv0: jnp.ndarray
     logdet0: jnp.ndarray
     lognorm0: jnp.ndarray
+    psi0_next: jnp.ndarray
     path: PathModel
     path_lognorm: jnp.ndarray
     p_new: jnp.ndarray

@@ -40,7 +40,7 @@ import numpy as np
 from dbn.errors import InputError, ModelError
 from inference.adf.checkpoint import load_state, save_state
 from inference.adf.driver import adf_filter, adf_filter_lag, adf_step, x64_context
-from inference.adf.niw import niw_predictive_lognorm
+from inference.adf.niw import niw_predictive_lognorm, niw_sum_digamma
 from models.zajdel.adf_hooks import zajdel_hooks
 from models.zajdel.adf_lag import lag_revision
 from models.zajdel.adf_types import DEFAULT_OLD_UPDATE, ADFConfig, ADFInfo, ADFParams, ADFState
@@ -59,7 +59,7 @@ __all__ = [
     "DEFAULT_OLD_UPDATE",
 ]
 
-_FORMAT = "zajdel-adf-state-v2"  # v2: slot_lognorm cached in the state
+_FORMAT = "zajdel-adf-state-v2"  # v2: slot_lognorm and slot_psi_next cached in the state
 
 
 def _adf_params(params: ZajdelParams) -> ADFParams:
@@ -81,6 +81,7 @@ def _adf_params(params: ZajdelParams) -> ADFParams:
         Cinv0=jnp.asarray(Linv.T @ Linv),
         logdet0=logdet0,
         lognorm0=niw_predictive_lognorm(k0, e0, logdet0, r),
+        psi0_next=niw_sum_digamma(e0 + 1.0, r),
         path=path,
         path_lognorm=travel_log_norm(path),
         p_new=jnp.asarray(f64(0.5 if params.p_new is None else params.p_new)),
@@ -164,6 +165,7 @@ class ZajdelADF:
                 slot_Cinv=jnp.broadcast_to(m.Cinv0, (S, r, r)),
                 slot_logdetC=jnp.broadcast_to(m.logdet0, (S,)),
                 slot_lognorm=jnp.broadcast_to(m.lognorm0, (S,)),
+                slot_psi_next=jnp.broadcast_to(m.psi0_next, (S,)),
                 slot_person=jnp.zeros((S, W), jnp.int64),
                 slot_pprob=jnp.zeros((S, W), jnp.float64),
             )
