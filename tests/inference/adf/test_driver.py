@@ -204,3 +204,12 @@ def test_bad_arguments_raise():
         adf_filter(hooks(), params, state, (ys, ys[:-1]), chunk=4)
     with pytest.raises(InputError):
         adf_filter_lag(ADFHooks(predict, condition, project), params, state, ys, 1, None, chunk=4)
+
+
+def test_runs_in_float64_with_x64_switched_off():
+    params, state, ys, _ = toy(9)
+    ref = adf_filter(hooks(), params, state, ys, chunk=4, grow=grow)
+    with jax.enable_x64(False):
+        out = adf_filter(hooks(), params, state, ys, chunk=4, grow=grow)
+    assert out.infos.loglik.dtype == np.float64 and out.state.b.dtype == np.float64
+    np.testing.assert_array_equal(out.infos.loglik, ref.infos.loglik)

@@ -225,3 +225,26 @@ def test_tracker_equals_numpy_loop_reference(old_update, prior):
     lab = res.label_matrix()
     np.testing.assert_allclose(lab, qlab[:, : lab.shape[1]], atol=1e-10)
     assert np.abs(qlab[:, lab.shape[1] :]).max(initial=0.0) < 1e-10
+
+
+def test_float64_without_global_x64(tmp_path):
+    """The tracker computes in float64 whatever jax's global setting (it enters
+    ``jax.enable_x64`` itself): the same results with x64 switched off around it."""
+    import jax
+
+    obs, params = scenario(3, 10)
+    tr = ZajdelADF(params, CFG)
+    ref_state, ref = tr.run(obs)
+    with jax.enable_x64(False):
+        tr32 = ZajdelADF(params, CFG)
+        state, res = tr32.run(take(obs, slice(0, 6)))
+        tr32.save(state, tmp_path / "s.npz")
+        state = tr32.load(tmp_path / "s.npz")
+        state, info = tr32.step(state, take(obs, slice(6, 7)))
+        state, res2 = tr32.run(take(obs, slice(7, 10)), state=state)
+    for f in ADFState._fields:
+        assert np.asarray(getattr(state, f)).dtype == np.asarray(getattr(ref_state, f)).dtype, f
+    assert np.asarray(state.counter).dtype == np.float64 and res.link_prob.dtype == np.float64
+    np.testing.assert_array_equal(res.link_prob, ref.link_prob[:6])
+    np.testing.assert_allclose(np.asarray(info.link_prob), ref.link_prob[6], atol=1e-12)
+    np.testing.assert_allclose(res2.link_prob, ref.link_prob[7:], atol=1e-12)
