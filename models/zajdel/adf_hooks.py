@@ -192,7 +192,10 @@ def _insert_slot(cfg: ADFConfig, st: ADFState, qlab, pprob, new_p, new_n):
     """Slot bookkeeping: the new slot takes a free slot, else the track end seen
     longest ago is closed; pointer mass of persons left out of the new slot's top
     entries, of an evicted slot, and below ``prune_eps`` becomes a closed end (every
-    person's pointer row still sums to 1). Returns (idx, valid, person, pprob, closed)."""
+    person's pointer row still sums to 1). Returns (idx, valid, person, pprob, closed).
+
+    Pruning the old slots scatters S x W entries; it runs only in steps where an old
+    entry fell below ``prune_eps`` (adding zeros changes nothing)."""
     N = st.never.shape[0]
     closed = st.closed * (1.0 - qlab)
     closed = closed + qlab - jnp.zeros(N, qlab.dtype).at[new_n].add(new_p)
@@ -202,13 +205,18 @@ def _insert_slot(cfg: ADFConfig, st: ADFState, qlab, pprob, new_p, new_n):
         jnp.any(free), jnp.argmax(free), jnp.argmin(jnp.where(valid, st.slot_tq, jnp.inf))
     )
     closed = closed.at[st.slot_person[idx]].add(jnp.where(valid[idx], pprob[idx], 0.0))
-    valid = valid.at[idx].set(True)
-    pprob = pprob.at[idx].set(new_p)
+    pprob = pprob.at[idx].set(0.0)
+    small_old = (pprob < cfg.prune_eps) & (pprob > 0)
+
+    def prune_old(c):
+        return c.at[st.slot_person.reshape(-1)].add(jnp.where(small_old, pprob, 0.0).reshape(-1))
+
+    closed = jax.lax.cond(jnp.any(small_old), prune_old, lambda c: c, closed)
+    small_new = new_p < cfg.prune_eps
+    closed = closed.at[new_n].add(jnp.where(small_new, new_p, 0.0))
+    pprob = jnp.where(small_old, 0.0, pprob).at[idx].set(jnp.where(small_new, 0.0, new_p))
     person = st.slot_person.at[idx].set(new_n)
-    small = pprob < cfg.prune_eps
-    closed = closed.at[person.reshape(-1)].add(jnp.where(small, pprob, 0.0).reshape(-1))
-    pprob = jnp.where(small, 0.0, pprob)
-    valid = valid & (jnp.sum(pprob, axis=1) > 0)
+    valid = valid.at[idx].set(True) & (jnp.sum(pprob, axis=1) > 0)
     return idx, valid, person, pprob, closed
 
 
