@@ -18,7 +18,7 @@ obs_per_s, compile_s, peak_open_tracks : streaming the large setting (20 cameras
     about 200 people at once; 10,000 observations, --quick the first 2,000) after
     warm-up; compile time of the first chunk; most open track ends at once
 speedup_vs_numpy_loop : time of the same ADF written as a plain numpy loop over
-    candidate links and mixture components (``models.zajdel.reference``) / ours, on the
+    candidate links and mixture components (``benchmarks._zajdel_numpy_loop``) / ours, on the
     first 1,000 observations of the large setting (--quick: 300; ours: best of 3); "ok" requires both to
     give the same link posteriors (1e-8)
 """
@@ -40,12 +40,11 @@ def _mean(x):
 
 
 def run(quick: bool, seed: int) -> dict:
-    import inference  # noqa: F401  (jax 64-bit)
+    from benchmarks._zajdel_numpy_loop import NumpyLoopADF
     from models.zajdel.data import take
     from models.zajdel.greedy import greedy_labels
     from models.zajdel.metrics import num_objects, pairwise_prf, partition_accuracy
     from models.zajdel.oracle import exact_filtering
-    from models.zajdel.reference import NumpyLoopADF
     from models.zajdel.simulate import large_config, simulate_office
     from models.zajdel.tracker import ADFConfig, ZajdelADF
 
@@ -88,8 +87,17 @@ def run(quick: bool, seed: int) -> dict:
             acc.setdefault("f1_" + name, []).append(pairwise_prf(lab, truth)[2])
             acc.setdefault("objects_" + name, []).append(abs(num_objects(lab) - n_true))
     log(f"office accuracy: {time.perf_counter() - t0:.1f} s")
-    for key in ("q_adf", "f1_adf", "f1_adf_online_map", "f1_adf_lag3", "q_greedy", "f1_greedy",
-                "q_adf_lag3", "f1_adf_chain_unconstrained", "f1_adf_chain_greedy_order"):
+    for key in (
+        "q_adf",
+        "f1_adf",
+        "f1_adf_online_map",
+        "f1_adf_lag3",
+        "q_greedy",
+        "f1_greedy",
+        "q_adf_lag3",
+        "f1_adf_chain_unconstrained",
+        "f1_adf_chain_greedy_order",
+    ):
         out[key] = _mean(acc[key])
     out["objects_abs_err"] = _mean(acc["objects_adf"])
     out["objects_abs_err_lag3"] = _mean(acc["objects_adf_lag3"])

@@ -1,13 +1,14 @@
 """Assumed-density filtering pieces (seed 002, section 1.2.2): categorical marginals,
 Gaussian moment matching, the Normal-Inverse-Wishart KL projection (jax, vmap, jit,
-float64) and the Student-t predictive."""
+float64) and the Student-t predictive; the generic ADF driver (``driver``: hooks
+predict / condition / project, chunked scan, capacity growth, fixed-lag revision) and
+state checkpoints (``checkpoint``)."""
 
 from inference.adf.categorical import categorical_marginals, mix_categoricals, normalize_log
 from inference.adf.gaussian import gaussian_moment_match
 from inference.adf.niw import (
     NIW,
     niw_expected_stats,
-    niw_expected_stats_np,
     niw_from_stats,
     niw_log_evidence_masked_np,
     niw_log_evidence_np,
@@ -15,7 +16,6 @@ from inference.adf.niw import (
     niw_predictive_logpdf_np,
     niw_project,
     niw_project_cached,
-    niw_project_np,
     niw_update,
     niw_update_np,
     student_t_logpdf,
@@ -29,7 +29,6 @@ __all__ = [
     "gaussian_moment_match",
     "NIW",
     "niw_expected_stats",
-    "niw_expected_stats_np",
     "niw_from_stats",
     "niw_log_evidence_masked_np",
     "niw_log_evidence_np",
@@ -37,7 +36,6 @@ __all__ = [
     "niw_predictive_logpdf_np",
     "niw_project",
     "niw_project_cached",
-    "niw_project_np",
     "niw_update",
     "niw_update_np",
     "student_t_logpdf",

@@ -10,20 +10,26 @@ Parameterisation (seed 002, eq. 1.15; ``../shared/spec/zajdel_adf.md``):
 Shapes use ``obs_dim = r``; leading axes of every field are batch axes:
 ``a (..., r)``, ``kappa (...)``, ``eta (...)``, ``C (..., r, r)``.
 
-Two implementations of the hot pieces are given: jax (jit-able, vmap-batched; the
-tracker's) and numpy ``*_np`` (the plain reference used by the oracle and by the
-numpy-loop baseline of the benchmark).
+Each formula is written once. The update and the Student-t run on numpy (``*_np``,
+host code: the exact oracle, the greedy baseline, track scores) or on jax (jit-able)
+through one array backend; the filter's hot loop (cached inverses, expected
+statistics, the projection) is jax only. The plain-numpy projection used as the
+projection's oracle lives in the tests (``tests/inference/adf/niw_oracle.py``).
+
+Precision: the jax functions compute in the dtype of their inputs (the caller's
+choice; filters use float64 inside ``jax.enable_x64``); :func:`niw_project` (a host
+entry point) runs in float64 itself.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from collections.abc import Callable
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.scipy.special import gammaln as _jgammaln
-from scipy.special import digamma as _digamma
 from scipy.special import gammaln as _gammaln
 from scipy.special import multigammaln as _multigammaln
 
@@ -37,11 +43,13 @@ __all__ = [
     "student_t_logpdf_np",
     "niw_predictive_logpdf",
     "niw_predictive_logpdf_np",
+    "niw_predictive_lognorm",
+    "niw_predictive_from_quad",
+    "niw_update_cached",
     "niw_expected_stats",
-    "niw_expected_stats_np",
+    "niw_sum_digamma",
     "niw_from_stats",
     "niw_project",
-    "niw_project_np",
     "niw_project_cached",
 ]
 
@@ -66,7 +74,33 @@ class NIW(NamedTuple):
     C: np.ndarray
 
 
+# ------------------------------------------------------------------ array backends
+class _Ops(NamedTuple):
+    """The array functions one formula needs, so that each formula is written once and
+    runs on numpy (host code: oracle, greedy, scores) or jax (jit-able filters)."""
+
+    xp: Any
+    gammaln: Callable
+    solve_lower: Callable  # solve L z = d for lower-triangular L (batched)
+
+
+_JAX = _Ops(jnp, _jgammaln, lambda L, d: jax.scipy.linalg.solve_triangular(L, d, lower=True))
+_NP = _Ops(np, _gammaln, np.linalg.solve)
+
+
+def _as_np(*xs):
+    return tuple(np.asarray(x, float) for x in xs)
+
+
 # ----------------------------------------------------------------------------- update
+def _niw_update(xp, theta: NIW, o) -> NIW:
+    d = o - theta.a
+    k1 = theta.kappa + 1.0
+    a = theta.a + d / k1[..., None]
+    C = theta.C + (theta.kappa / k1)[..., None, None] * d[..., :, None] * d[..., None, :]
+    return NIW(a, k1, theta.eta + 1.0, C)
+
+
 def niw_update(theta: NIW, o: jnp.ndarray) -> NIW:
     r"""Conjugate update of NIW(theta) with one vector ``o`` (jax; ``theta (+) o``).
 
@@ -82,25 +116,12 @@ def niw_update(theta: NIW, o: jnp.ndarray) -> NIW:
     -------
     NIW with the broadcast batch shape.
     """
-    d = o - theta.a
-    k1 = theta.kappa + 1.0
-    a = theta.a + d / k1[..., None]
-    C = theta.C + (theta.kappa / k1)[..., None, None] * d[..., :, None] * d[..., None, :]
-    return NIW(a, k1, theta.eta + 1.0, C)
+    return _niw_update(jnp, NIW(*(jnp.asarray(x) for x in theta)), jnp.asarray(o))
 
 
 def niw_update_np(theta: NIW, o: np.ndarray) -> NIW:
-    """numpy twin of :func:`niw_update` (same shapes, same formula)."""
-    a0 = np.asarray(theta.a, float)
-    kappa = np.asarray(theta.kappa, float)
-    d = np.asarray(o, float) - a0
-    k1 = kappa + 1.0
-    a = a0 + d / k1[..., None]
-    C = (
-        np.asarray(theta.C, float)
-        + (kappa / k1)[..., None, None] * d[..., :, None] * d[..., None, :]
-    )
-    return NIW(a, k1, np.asarray(theta.eta, float) + 1.0, C)
+    """:func:`niw_update` on numpy arrays (float64; the same formula)."""
+    return _niw_update(np, NIW(*_as_np(*theta)), np.asarray(o, float))
 
 
 # --------------------------------------------------------------------------- evidence
@@ -164,22 +185,27 @@ def _multigammaln_vec(x: np.ndarray, r: int) -> np.ndarray:
 
 
 # -------------------------------------------------------------------------- Student-t
-def student_t_logpdf(x, nu, loc, scale):
-    r"""Multivariate Student-t log density (jax, Cholesky solve); the same formula and
-    shapes as :func:`student_t_logpdf_np`."""
+def _student_t(ops: _Ops, x, nu, loc, scale):
+    xp = ops.xp
     r = x.shape[-1]
-    L = jnp.linalg.cholesky(scale)
-    d = jnp.broadcast_to(x - loc, L.shape[:-1])
-    z = jax.scipy.linalg.solve_triangular(L, d[..., None], lower=True)[..., 0]
+    L = xp.linalg.cholesky(scale)
+    d = xp.broadcast_to(x - loc, L.shape[:-1])
+    z = ops.solve_lower(L, d[..., None])[..., 0]
     maha = (z * z).sum(-1)
-    logdet = 2.0 * jnp.log(jnp.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
+    logdet = 2.0 * xp.log(xp.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
     return (
-        _jgammaln(0.5 * (nu + r))
-        - _jgammaln(0.5 * nu)
-        - 0.5 * r * (jnp.log(nu) + _LOGPI)
+        ops.gammaln(0.5 * (nu + r))
+        - ops.gammaln(0.5 * nu)
+        - 0.5 * r * (xp.log(nu) + _LOGPI)
         - 0.5 * logdet
-        - 0.5 * (nu + r) * jnp.log1p(maha / nu)
+        - 0.5 * (nu + r) * xp.log1p(maha / nu)
     )
+
+
+def student_t_logpdf(x, nu, loc, scale):
+    r"""Multivariate Student-t log density (jax, Cholesky solve); the formula and
+    shapes of :func:`student_t_logpdf_np`."""
+    return _student_t(_JAX, *(jnp.asarray(v) for v in (x, nu, loc, scale)))
 
 
 def student_t_logpdf_np(x: np.ndarray, nu, loc: np.ndarray, scale: np.ndarray) -> np.ndarray:
@@ -197,22 +223,7 @@ def student_t_logpdf_np(x: np.ndarray, nu, loc: np.ndarray, scale: np.ndarray) -
     -------
     array (...)
     """
-    x = np.asarray(x, float)
-    loc = np.asarray(loc, float)
-    nu = np.asarray(nu, float)
-    r = x.shape[-1]
-    L = np.linalg.cholesky(np.asarray(scale, float))
-    d = np.broadcast_to(x - loc, L.shape[:-1])
-    z = np.linalg.solve(L, d[..., None])[..., 0]
-    maha = (z * z).sum(-1)
-    logdet = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
-    return (
-        _gammaln(0.5 * (nu + r))
-        - _gammaln(0.5 * nu)
-        - 0.5 * r * (np.log(nu) + _LOGPI)
-        - 0.5 * logdet
-        - 0.5 * (nu + r) * np.log1p(maha / nu)
-    )
+    return _student_t(_NP, *_as_np(x, nu, loc, scale))
 
 
 def niw_predictive_logpdf_np(o: np.ndarray, theta: NIW) -> np.ndarray:
@@ -228,30 +239,71 @@ def niw_predictive_logpdf_np(o: np.ndarray, theta: NIW) -> np.ndarray:
     return student_t_logpdf_np(o, nu, a, scale)
 
 
-def niw_predictive_logpdf(o: jnp.ndarray, a, kappa, eta, Cinv, logdetC) -> jnp.ndarray:
-    r"""Predictive log density of ``o`` under NIW(a, kappa, eta, C) (jax), from cached
-    :math:`C^{-1}` and :math:`\log|C|` (the tracker keeps them per slice).
-
-    Student-t with :math:`\nu = \eta-r+1`, scale :math:`\Sigma = C(\kappa+1)/(\kappa\nu)`:
-    :math:`\delta = \tfrac{\kappa\nu}{\kappa+1}(o-a)^T C^{-1}(o-a)`,
+def niw_predictive_lognorm(kappa, eta, logdetC, r: int):
+    r"""The data-free part of the Student-t predictive of NIW(a, kappa, eta, C) (jax):
+    :math:`\log\Gamma(\tfrac{\nu+r}2) - \log\Gamma(\tfrac\nu2) - \tfrac r2\log(\nu\pi)
+    - \tfrac12\log|\Sigma|` with :math:`\nu = \eta-r+1`,
     :math:`\log|\Sigma| = \log|C| + r\log\tfrac{\kappa+1}{\kappa\nu}`.
 
-    Shapes: o (..., r), a (..., r), kappa/eta/logdetC (...), Cinv (..., r, r); returns (...).
+    A filter that scores one observation against many stored NIWs keeps this per NIW
+    (it changes only when the NIW does). Shapes: kappa, eta, logdetC (...); returns (...).
     """
-    r = a.shape[-1]
     nu = eta - r + 1.0
-    d = o - a
-    q = jnp.einsum("...i,...ij,...j->...", d, Cinv, d)
     f = kappa * nu / (kappa + 1.0)
-    maha = f * q
-    logdet = logdetC - r * jnp.log(f)
     return (
         _jgammaln(0.5 * (nu + r))
         - _jgammaln(0.5 * nu)
         - 0.5 * r * (jnp.log(nu) + _LOGPI)
-        - 0.5 * logdet
-        - 0.5 * (nu + r) * jnp.log1p(maha / nu)
+        - 0.5 * (logdetC - r * jnp.log(f))
     )
+
+
+def niw_predictive_from_quad(q, kappa, eta, lognorm, r: int):
+    r"""Predictive log density from the quadratic form :math:`q = (o-a)^T C^{-1}(o-a)`
+    and :func:`niw_predictive_lognorm`: :math:`\text{lognorm} - \tfrac{\nu+r}2
+    \log(1 + \tfrac{\kappa}{\kappa+1} q)` (jax). Shapes: all (...); returns (...)."""
+    nu = eta - r + 1.0
+    f = kappa * nu / (kappa + 1.0)
+    return lognorm - 0.5 * (nu + r) * jnp.log1p(f * q / nu)
+
+
+def niw_predictive_logpdf(o: jnp.ndarray, a, kappa, eta, Cinv, logdetC) -> jnp.ndarray:
+    r"""Predictive log density of ``o`` under NIW(a, kappa, eta, C) (jax), from cached
+    :math:`C^{-1}` and :math:`\log|C|` (the tracker keeps them per slice).
+
+    Student-t with :math:`\nu = \eta-r+1`, scale :math:`\Sigma = C(\kappa+1)/(\kappa\nu)`
+    (:func:`niw_predictive_lognorm` + :func:`niw_predictive_from_quad`).
+
+    Shapes: o (..., r), a (..., r), kappa/eta/logdetC (...), Cinv (..., r, r); returns (...).
+    """
+    r = a.shape[-1]
+    d = o - a
+    q = jnp.einsum("...i,...ij,...j->...", d, Cinv, d)
+    return niw_predictive_from_quad(
+        q, kappa, eta, niw_predictive_lognorm(kappa, eta, logdetC, r), r
+    )
+
+
+def niw_update_cached(o, a, kappa, eta, C, Cinv, logdetC):
+    r"""Conjugate update ``theta (+) o`` carrying :math:`C^{-1}` and :math:`\log|C|`
+    along (jax; Sherman-Morrison on the cached inverse, no factorisation):
+    :math:`C'^{-1} = C^{-1} - \tfrac{\beta}{1+\beta q} C^{-1}uu^TC^{-1}`,
+    :math:`\log|C'| = \log|C| + \log(1+\beta q)`, :math:`u = o - a`,
+    :math:`\beta = \kappa/(\kappa+1)`, :math:`q = u^TC^{-1}u`; a, kappa, eta, C as
+    :func:`niw_update`.
+
+    Shapes: o (r,) or (..., r); a (..., r); kappa, eta, logdetC (...); C, Cinv
+    (..., r, r). Returns ``(a, kappa, eta, C, Cinv, logdetC)`` with the batch shape.
+    """
+    u = o - a
+    beta = kappa / (kappa + 1.0)
+    Cu = jnp.einsum("...ij,...j->...i", Cinv, u)
+    q = jnp.einsum("...i,...i->...", u, Cu)
+    den = 1.0 + beta * q
+    Cinv2 = Cinv - (beta / den)[..., None, None] * Cu[..., :, None] * Cu[..., None, :]
+    a2 = a + u / (kappa + 1.0)[..., None]
+    C2 = C + beta[..., None, None] * u[..., :, None] * u[..., None, :]
+    return a2, kappa + 1.0, eta + 1.0, C2, Cinv2, logdetC + jnp.log(den)
 
 
 # ------------------------------------------------------------- expected statistics
@@ -288,12 +340,21 @@ def _sum_trigamma_j(eta, r):
     return _jtrigamma(0.5 * (eta[..., None] - i)).sum(-1)
 
 
-def niw_expected_stats(a, kappa, eta, Cinv, logdetC):
+def niw_sum_digamma(eta, r: int):
+    r""":math:`\sum_{i=1}^r \psi((\eta - i + 1)/2)` (jax), the special-function part of
+    :math:`E[\log|V|]`; a filter may cache it per NIW and pass it to
+    :func:`niw_expected_stats` / :func:`niw_project_cached`. Shapes: eta (...) -> (...)."""
+    return _sum_digamma_j(eta, r)
+
+
+def niw_expected_stats(a, kappa, eta, Cinv, logdetC, sum_digamma=None):
     r"""The four expected sufficient statistics of NIW(a, kappa, eta, C) (jax):
 
     :math:`E[V^{-1}] = \eta C^{-1}`, :math:`E[V^{-1}m] = \eta C^{-1}a`,
     :math:`E[m^TV^{-1}m] = r/\kappa + \eta a^TC^{-1}a`,
     :math:`E[\log|V|] = \log|C| - r\log2 - \sum_{i=1}^r\psi((\eta-i+1)/2)`.
+
+    ``sum_digamma`` (...): :func:`niw_sum_digamma` of eta if cached by the caller.
 
     Shapes: a (..., r), kappa/eta/logdetC (...), Cinv (..., r, r). Returns
     ``(P (..., r, r), h (..., r), s (...), g (...))``.
@@ -302,27 +363,8 @@ def niw_expected_stats(a, kappa, eta, Cinv, logdetC):
     P = eta[..., None, None] * Cinv
     h = jnp.einsum("...ij,...j->...i", P, a)
     s = r / kappa + jnp.einsum("...i,...i->...", a, h)
-    g = logdetC - r * _LOG2 - _sum_digamma_j(eta, r)
-    return P, h, s, g
-
-
-def niw_expected_stats_np(theta: NIW):
-    """numpy twin of :func:`niw_expected_stats`, from C (Cholesky solve). Returns (P, h, s, g)."""
-    a = np.asarray(theta.a, float)
-    kappa = np.asarray(theta.kappa, float)
-    eta = np.asarray(theta.eta, float)
-    C = np.asarray(theta.C, float)
-    r = a.shape[-1]
-    L = np.linalg.cholesky(C)
-    eye = np.broadcast_to(np.eye(r), C.shape)
-    Linv = np.linalg.solve(L, eye)
-    Cinv = np.swapaxes(Linv, -1, -2) @ Linv
-    logdetC = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
-    P = eta[..., None, None] * Cinv
-    h = np.einsum("...ij,...j->...i", P, a)
-    s = r / kappa + np.einsum("...i,...i->...", a, h)
-    i = np.arange(r)
-    g = logdetC - r * _LOG2 - _digamma(0.5 * (eta[..., None] - i)).sum(-1)
+    psi = _sum_digamma_j(eta, r) if sum_digamma is None else sum_digamma
+    g = logdetC - r * _LOG2 - psi
     return P, h, s, g
 
 
@@ -380,7 +422,7 @@ def niw_from_stats(P, h, s, g):
     return a, kappa, eta, C, Cinv, logdetC
 
 
-def niw_project_cached(w, a, kappa, eta, Cinv, logdetC):
+def niw_project_cached(w, a, kappa, eta, Cinv, logdetC, sum_digamma=None):
     r"""KL projection of one weighted NIW mixture, components given with cached
     :math:`C^{-1}` and :math:`\log|C|` (jax, jit/vmap-able; the tracker's hot loop).
 
@@ -389,6 +431,7 @@ def niw_project_cached(w, a, kappa, eta, Cinv, logdetC):
     w : (num_components,) nonnegative weights (normalised inside; zero = padding)
     a : (num_components, r); kappa, eta, logdetC : (num_components,);
     Cinv : (num_components, r, r)
+    sum_digamma : (num_components,) :func:`niw_sum_digamma` of eta, optional (cached)
 
     Returns
     -------
@@ -396,7 +439,7 @@ def niw_project_cached(w, a, kappa, eta, Cinv, logdetC):
     """
     w = w / jnp.sum(w)
     # padding components may hold arbitrary finite values; zero weight removes them
-    P, h, s, g = niw_expected_stats(a, kappa, eta, Cinv, logdetC)
+    P, h, s, g = niw_expected_stats(a, kappa, eta, Cinv, logdetC, sum_digamma)
     Pm = jnp.einsum("m,mij->ij", w, P)
     hm = jnp.einsum("m,mi->i", w, h)
     sm = jnp.dot(w, jnp.where(w > 0, s, 0.0))
@@ -444,55 +487,13 @@ def niw_project(weights, theta: NIW) -> NIW:
     -------
     NIW with batch shape (num_mixtures,)
     """
-    w = jnp.asarray(weights, jnp.float64)
-    out = _project_batch(
-        w,
-        jnp.asarray(theta.a, jnp.float64),
-        jnp.asarray(theta.kappa, jnp.float64),
-        jnp.asarray(theta.eta, jnp.float64),
-        jnp.asarray(theta.C, jnp.float64),
-    )
+    with jax.enable_x64(True):
+        out = _project_batch(
+            jnp.asarray(weights, jnp.float64),
+            jnp.asarray(theta.a, jnp.float64),
+            jnp.asarray(theta.kappa, jnp.float64),
+            jnp.asarray(theta.eta, jnp.float64),
+            jnp.asarray(theta.C, jnp.float64),
+        )
     a, kappa, eta, C = out[0], out[1], out[2], out[3]
     return NIW(np.asarray(a), np.asarray(kappa), np.asarray(eta), np.asarray(C))
-
-
-def niw_project_np(weights: np.ndarray, theta: NIW, iters: int = _NEWTON_ITERS) -> NIW:
-    """Plain numpy twin of :func:`niw_project` for ONE mixture (reference/baseline).
-
-    weights (num_components,); theta batch shape (num_components,). Returns an NIW
-    with scalar batch shape."""
-    w = np.asarray(weights, float)
-    w = w / w.sum()
-    keep = w > 0
-    theta = NIW(*(np.asarray(x, float)[keep] for x in theta))
-    w = w[keep]
-    r = theta.a.shape[-1]
-    P, h, s, g = niw_expected_stats_np(theta)
-    Pm = np.einsum("m,mij->ij", w, P)
-    Pm = 0.5 * (Pm + Pm.T)
-    hm = w @ h
-    sm = float(w @ s)
-    gm = float(w @ g)
-    L = np.linalg.cholesky(Pm)
-    logdetP = 2.0 * np.log(np.diag(L)).sum()
-    gap = max(gm + logdetP, 1e-300)
-    eta0 = r * (r + 1.0) / (2.0 * gap) + (r - 1.0)
-    x = np.log(max(eta0 - (r - 1.0), 1e-8))
-    target = gm + logdetP + r * _LOG2
-    i = np.arange(r)
-    from scipy.special import polygamma
-
-    for _ in range(iters):
-        eta = (r - 1.0) + np.exp(x)
-        f = r * np.log(eta) - _digamma(0.5 * (eta - i)).sum() - target
-        dfe = r / eta - 0.5 * polygamma(1, 0.5 * (eta - i)).sum()
-        step = np.clip(f / (dfe * (eta - (r - 1.0))), -2.0, 2.0)
-        if not np.isfinite(step):
-            break
-        x = x - step
-    eta = (r - 1.0) + np.exp(x)
-    Pinv = np.linalg.solve(L.T, np.linalg.solve(L, np.eye(r)))
-    Pinv = 0.5 * (Pinv + Pinv.T)
-    a = Pinv @ hm
-    kappa = r / (sm - a @ hm)
-    return NIW(a, np.float64(kappa), np.float64(eta), eta * Pinv)

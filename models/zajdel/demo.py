@@ -8,7 +8,6 @@ __all__ = ["run_demo"]
 
 def run_demo(quick: bool = True) -> None:
     """Simulate an office building, track with ADF, print partition scores."""
-    import inference  # noqa: F401
     from models.zajdel.greedy import greedy_labels
     from models.zajdel.metrics import num_objects, pairwise_prf, partition_accuracy
     from models.zajdel.model import declare_model
@@ -20,7 +19,9 @@ def run_demo(quick: bool = True) -> None:
         f"SIMULATED office: {sc.config.num_cameras} cameras, {num_objects(sc.labels)} people, "
         f"{sc.obs.num_obs} observations (no public data with per-pass appearance exists)"
     )
-    tracker = ZajdelADF(declare_model(sc.params), ADFConfig(max_open=64, init_persons=128, chunk=64))
+    tracker = ZajdelADF(
+        declare_model(sc.params), ADFConfig(max_open=64, init_persons=128, chunk=64)
+    )
     _, res = tracker.run(sc.obs)
     rows = {"ADF chain decoding": res.labels_chain(), "ADF on-line MAP": res.labels_online()}
     if not quick:
@@ -30,7 +31,9 @@ def run_demo(quick: bool = True) -> None:
     print(f"  {'method':22s} {'q':>6s} {'F1':>6s} objects")
     for name, lab in rows.items():
         f1 = pairwise_prf(lab, sc.labels)[2]
-        print(f"  {name:22s} {partition_accuracy(lab, sc.labels):6.3f} {f1:6.3f} {num_objects(lab):7d}")
+        print(
+            f"  {name:22s} {partition_accuracy(lab, sc.labels):6.3f} {f1:6.3f} {num_objects(lab):7d}"
+        )
     print(f"  final counter: {res.counter_mean[-1]:.2f} +- {res.counter_std[-1]:.2f} people")
 
 

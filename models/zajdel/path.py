@@ -31,6 +31,8 @@ __all__ = [
     "make_path_model",
     "log_p_delta",
     "log_p_delta_jax",
+    "travel_log_norm",
+    "log_p_delta_cached",
     "log_p_delta0",
     "pairwise_path_logprob",
 ]
@@ -161,14 +163,47 @@ def log_p_delta(path: PathModel, cam_j, bq_j, tq_j, cam, be, te) -> np.ndarray:
     array of the broadcast shape; -inf for an impossible move.
     """
     p = PathModel(*(np.asarray(x) for x in path))
-    return _log_p_delta(np, _log_ndtr, p, np.asarray(cam_j), np.asarray(bq_j),
-                        np.asarray(tq_j, float), np.asarray(cam), np.asarray(be),
-                        np.asarray(te, float))
+    return _log_p_delta(
+        np,
+        _log_ndtr,
+        p,
+        np.asarray(cam_j),
+        np.asarray(bq_j),
+        np.asarray(tq_j, float),
+        np.asarray(cam),
+        np.asarray(be),
+        np.asarray(te, float),
+    )
 
 
 def log_p_delta_jax(path: PathModel, cam_j, bq_j, tq_j, cam, be, te):
     """jax twin of :func:`log_p_delta` (jit-able)."""
     return _log_p_delta(jnp, _jlog_ndtr, path, cam_j, bq_j, tq_j, cam, be, te)
+
+
+def travel_log_norm(path: PathModel):
+    r"""The data-free part of the travel-time density, one entry per camera pair (jax):
+    :math:`-\tfrac12\log 2\pi - \log\sigma(l_j, l_k) - \log P(0 \le X \le
+    \text{max\_travel})`, shape (C, C). Computed once per model so that the per-link
+    path term (:func:`log_p_delta_cached`) needs no special function."""
+    mu, sd = path.travel_mean, path.travel_std
+    lo = _jlog_ndtr(mu / sd)
+    b = (mu - path.max_travel) / sd
+    hi = _jlog_ndtr(jnp.where(jnp.isfinite(b), b, -40.0))
+    lognorm = lo + jnp.log1p(-jnp.exp(jnp.minimum(hi - lo, 0.0)) * jnp.isfinite(b))
+    return -_HALF_LOG_2PI - jnp.log(sd) - lognorm
+
+
+def log_p_delta_cached(path: PathModel, log_norm, cam_j, bq_j, tq_j, cam, be, te):
+    """:func:`log_p_delta_jax` with the camera-pair normalisers precomputed
+    (``log_norm = travel_log_norm(path)``); equal to it up to rounding."""
+    lt = path.log_trans[cam_j, bq_j, cam, be]
+    mu = path.travel_mean[cam_j, cam]
+    x = te - tq_j
+    ok = (x >= 0) & (x <= path.max_travel)
+    z = (jnp.where(ok, x, mu) - mu) / path.travel_std[cam_j, cam]
+    tn = jnp.where(ok, -0.5 * z * z + log_norm[cam_j, cam], -jnp.inf)
+    return jnp.where(jnp.isfinite(lt), lt + tn, -jnp.inf)
 
 
 def log_p_delta0(path: PathModel, cam, be) -> np.ndarray:
@@ -192,8 +227,12 @@ def pairwise_path_logprob(obs, path: PathModel) -> tuple[np.ndarray, np.ndarray]
     K = obs.num_obs
     lp = log_p_delta(
         path,
-        obs.camera[:, None], obs.border_quit[:, None], obs.t_quit[:, None],
-        obs.camera[None, :], obs.border_enter[None, :], obs.t_enter[None, :],
+        obs.camera[:, None],
+        obs.border_quit[:, None],
+        obs.t_quit[:, None],
+        obs.camera[None, :],
+        obs.border_enter[None, :],
+        obs.t_enter[None, :],
     )
     j, k = np.indices((K, K))
     logpd = np.where(j < k, lp, -np.inf)

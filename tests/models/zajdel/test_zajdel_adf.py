@@ -7,14 +7,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import inference  # noqa: F401
+from benchmarks._zajdel_numpy_loop import NumpyLoopADF
 from dbn.errors import InputError, NonFiniteError, ShapeError, TimeOrderError
 from models.zajdel.data import Observations, take
 from models.zajdel.oracle import exact_filtering
 from models.zajdel.simulate import simulate_office
 from models.zajdel.tracker import ADFConfig, ADFState, ZajdelADF, chain_decode
 
-CFG = ADFConfig(max_open=12, persons_per_slot=8, init_persons=32, chunk=8, link_out=12, label_out=12)
+CFG = ADFConfig(
+    max_open=12, persons_per_slot=8, init_persons=32, chunk=8, link_out=12, label_out=12
+)
 
 
 def scenario(seed: int, k: int, p_new="sparse"):
@@ -31,7 +33,9 @@ def pointer_rows(state: ADFState) -> np.ndarray:
 
 def assert_state_equal(a: ADFState, b: ADFState) -> None:
     for f in ADFState._fields:
-        np.testing.assert_array_equal(np.asarray(getattr(a, f)), np.asarray(getattr(b, f)), err_msg=f)
+        np.testing.assert_array_equal(
+            np.asarray(getattr(a, f)), np.asarray(getattr(b, f)), err_msg=f
+        )
 
 
 @pytest.mark.parametrize("prior", ["sparse", "uniform"])
@@ -133,7 +137,15 @@ def test_save_load_resume_is_bit_identical(tmp_path):
     s2 = ZajdelADF(params, CFG).load(tmp_path / "state.npz")
     s3, second = tr.run(take(obs, slice(13, 30)), state=s2)
     assert_state_equal(full_state, s3)
-    for f in ("link_obs", "link_prob", "new_prob", "label_person", "label_prob", "counter_mean", "loglik"):
+    for f in (
+        "link_obs",
+        "link_prob",
+        "new_prob",
+        "label_person",
+        "label_prob",
+        "counter_mean",
+        "loglik",
+    ):
         a = getattr(full, f)
         b = np.concatenate([getattr(first, f), getattr(second, f)])
         np.testing.assert_array_equal(a, b, err_msg=f)
@@ -171,33 +183,68 @@ def test_chain_decoding_continues_each_observation_at_most_once():
 def test_step_eager_equals_jitted():
     import jax
 
-    from models.zajdel.tracker import _step, _step_jit
+    from inference.adf.driver import adf_step
 
     obs, params = scenario(7, 6)
     tr = ZajdelADF(params, CFG)
     state, _ = tr.run(take(obs, slice(0, 5)))
-    x = tuple(np.asarray(v)[5] for v in (obs.appearance, obs.camera, obs.border_enter,
-                                         obs.border_quit, obs.t_enter, obs.t_quit))
-    s1, i1 = _step_jit(tr._model, CFG, tr._uniform, state, x)
-    with jax.disable_jit():
-        s2, i2 = _step(tr._model, CFG, tr._uniform, state, x)
+    x = tuple(np.asarray(v)[5] for v in tr._xs(obs))
+    s1, i1 = adf_step(tr._hooks, tr._model, state, x)
+    h, m = tr._hooks, tr._model
+    with jax.disable_jit(), jax.enable_x64(True):
+        s2, i2 = h.project(m, state, x, h.condition(m, state, x, h.predict(m, state, x)))
     for f in ADFState._fields:
-        np.testing.assert_allclose(np.asarray(getattr(s1, f)), np.asarray(getattr(s2, f)),
-                                   rtol=1e-9, atol=1e-12, err_msg=f)
+        np.testing.assert_allclose(
+            np.asarray(getattr(s1, f)), np.asarray(getattr(s2, f)), rtol=1e-9, atol=1e-12, err_msg=f
+        )
     np.testing.assert_allclose(np.asarray(i1.link_prob), np.asarray(i2.link_prob), atol=1e-12)
 
 
-@pytest.mark.parametrize("old_update", ["keep", "seed"])
-def test_numpy_loop_twin_equals_jax_tracker(old_update):
-    from models.zajdel.reference import NumpyLoopADF
-
-    obs, params = scenario(8, 25)  # 25 observations > 12 slots: eviction and pruning run
-    cfg = CFG._replace(old_update=old_update, prune_eps=1e-6, mix_top=6)
+@pytest.mark.parametrize(
+    "old_update,prior", [("keep", "sparse"), ("seed", "sparse"), ("keep", "uniform")]
+)
+def test_tracker_equals_numpy_loop_reference(old_update, prior):
+    """Regression: the tracker on the generic driver gives what the tracker gave before
+    the move (the frozen plain-loop twin ``benchmarks._zajdel_numpy_loop``, equal to the
+    old tracker to 1e-12): link posteriors, P(new), one-step log-likelihoods, label
+    posteriors and counter means, with eviction and pruning active."""
+    K = 25
+    obs, params = scenario(8, K, prior)  # 25 observations > 12 slots
+    cfg = CFG._replace(old_update=old_update, prune_eps=1e-6, mix_top=6, label_out=32)
     _, res = ZajdelADF(params, cfg).run(obs)
-    lo, lp, npr = NumpyLoopADF(params, cfg, cfg.init_persons).run(obs)
-    B = np.zeros((25, 25))
-    kk = np.repeat(np.arange(25), lo.shape[1])
+    lo, lp, npr, lz, qlab, cmean = NumpyLoopADF(params, cfg, cfg.init_persons).run(obs, full=True)
+    B = np.zeros((K, K))
+    kk = np.repeat(np.arange(K), lo.shape[1])
     m = lo.reshape(-1) >= 0
     np.add.at(B, (kk[m], lo.reshape(-1)[m]), lp.reshape(-1)[m])
-    B[np.arange(25), np.arange(25)] += npr
+    B[np.arange(K), np.arange(K)] += npr
     np.testing.assert_allclose(res.link_matrix(), B, atol=1e-10)
+    np.testing.assert_allclose(res.new_prob, npr, atol=1e-10)
+    np.testing.assert_allclose(res.loglik, lz, rtol=1e-10)
+    np.testing.assert_allclose(res.counter_mean, cmean, rtol=1e-10)
+    lab = res.label_matrix()
+    np.testing.assert_allclose(lab, qlab[:, : lab.shape[1]], atol=1e-10)
+    assert np.abs(qlab[:, lab.shape[1] :]).max(initial=0.0) < 1e-10
+
+
+def test_float64_without_global_x64(tmp_path):
+    """The tracker computes in float64 whatever jax's global setting (it enters
+    ``jax.enable_x64`` itself): the same results with x64 switched off around it."""
+    import jax
+
+    obs, params = scenario(3, 10)
+    tr = ZajdelADF(params, CFG)
+    ref_state, ref = tr.run(obs)
+    with jax.enable_x64(False):
+        tr32 = ZajdelADF(params, CFG)
+        state, res = tr32.run(take(obs, slice(0, 6)))
+        tr32.save(state, tmp_path / "s.npz")
+        state = tr32.load(tmp_path / "s.npz")
+        state, info = tr32.step(state, take(obs, slice(6, 7)))
+        state, res2 = tr32.run(take(obs, slice(7, 10)), state=state)
+    for f in ADFState._fields:
+        assert np.asarray(getattr(state, f)).dtype == np.asarray(getattr(ref_state, f)).dtype, f
+    assert np.asarray(state.counter).dtype == np.float64 and res.link_prob.dtype == np.float64
+    np.testing.assert_array_equal(res.link_prob, ref.link_prob[:6])
+    np.testing.assert_allclose(np.asarray(info.link_prob), ref.link_prob[6], atol=1e-12)
+    np.testing.assert_allclose(res2.link_prob, ref.link_prob[7:], atol=1e-12)

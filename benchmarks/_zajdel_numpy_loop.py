@@ -1,7 +1,10 @@
 r"""The same ADF as :mod:`models.zajdel.tracker`, written as a plain numpy loop over
-candidate links and mixture components (the baseline of ``speedup_vs_numpy_loop`` in
-``benchmarks/zajdel_adf.py``, and a second implementation to check the jax one
-against).
+candidate links and mixture components: the baseline of ``speedup_vs_numpy_loop`` in
+``benchmarks/zajdel_adf.py``, and the regression oracle of the tracker's tests
+(``tests/models/zajdel/test_zajdel_adf.py``). It is a frozen, independent
+implementation of the tracker as it was before the ADF driver moved to
+:mod:`inference.adf.driver` (own Student-t, own NIW update and projection with
+scipy's digamma), so it lives here, outside the library.
 
 It follows the tracker step by step (seed 002, section 1.4.3; spec "One-slice
 update"): link prior, Student-t x path link weights, label posterior, counter,
@@ -30,8 +33,11 @@ def _t_logpdf(o, a, kappa, eta, C):
     L = np.linalg.cholesky(scale)
     z = np.linalg.solve(L, o - a)
     return (
-        gammaln(0.5 * (nu + r)) - gammaln(0.5 * nu) - 0.5 * r * np.log(nu * np.pi)
-        - np.log(np.diag(L)).sum() - 0.5 * (nu + r) * np.log1p(z @ z / nu)
+        gammaln(0.5 * (nu + r))
+        - gammaln(0.5 * nu)
+        - 0.5 * r * np.log(nu * np.pi)
+        - np.log(np.diag(L)).sum()
+        - 0.5 * (nu + r) * np.log1p(z @ z / nu)
     )
 
 
@@ -95,13 +101,16 @@ class NumpyLoopADF:
         self.cam = np.zeros(S, np.int64)
         self.bq = np.zeros(S, np.int64)
         self.tq = np.zeros(S)
-        self.niw = [(np.asarray(pr.a, float), float(pr.kappa), float(pr.eta), np.asarray(pr.C, float))] * S
+        self.niw = [
+            (np.asarray(pr.a, float), float(pr.kappa), float(pr.eta), np.asarray(pr.C, float))
+        ] * S
         self.person = np.zeros((S, W), np.int64)
         self.pprob = np.zeros((S, W))
         self.k = 0
 
     def step(self, o, cam, be, bq, te, tq):
-        """One observation; returns (link_obs (S,), link_prob (S,), new_prob)."""
+        """One observation; returns (link_obs (S,), link_prob (S,), new_prob, loglik,
+        label posterior q_k(l_k) (N,), counter mean)."""
         cfg, p, r = self.cfg, self.p, self.r
         S = cfg.max_open
         pr = p.prior
@@ -123,8 +132,10 @@ class NumpyLoopADF:
             else:
                 lp = np.log1p(-p.p_new) + np.log(open_[j]) - np.log(tot)
             a, kappa, eta, C = self.niw[j]
-            logw[j] = lp + _t_logpdf(o, a, kappa, eta, C) + float(
-                log_p_delta(p.path, self.cam[j], self.bq[j], self.tq[j], cam, be, te)
+            logw[j] = (
+                lp
+                + _t_logpdf(o, a, kappa, eta, C)
+                + float(log_p_delta(p.path, self.cam[j], self.bq[j], self.tq[j], cam, be, te))
             )
         logw0 = lp_new + _t_logpdf(o, *prior) + float(log_p_delta0(p.path, cam, be))
         allw = np.append(logw, logw0)
@@ -154,12 +165,19 @@ class NumpyLoopADF:
         for j in mix:  # loop over the mixture components (the mix_top best links)
             a, kappa, eta, C = self.niw[j]
             d = o - a
-            upd[j] = (a + d / (kappa + 1), kappa + 1, eta + 1, C + kappa / (kappa + 1) * np.outer(d, d))
+            upd[j] = (
+                a + d / (kappa + 1),
+                kappa + 1,
+                eta + 1,
+                C + kappa / (kappa + 1) * np.outer(d, d),
+            )
             comps.append(upd[j])
             weights.append(w[j])
         a, kappa, eta, C = prior
         d = o - a
-        comps.append((a + d / (kappa + 1), kappa + 1, eta + 1, C + kappa / (kappa + 1) * np.outer(d, d)))
+        comps.append(
+            (a + d / (kappa + 1), kappa + 1, eta + 1, C + kappa / (kappa + 1) * np.outer(d, d))
+        )
         weights.append(w0)
         new_niw = _project(weights, comps, r)
         niw = list(self.niw)
@@ -198,14 +216,32 @@ class NumpyLoopADF:
         self.niw = niw
         self.pprob = pprob
         self.k += 1
-        return link_obs, w, w0
+        cmean = float(np.arange(self.counter.size) @ self.counter)
+        return link_obs, w, w0, lz, qlab, cmean
 
-    def run(self, obs):
-        """Filter a batch; returns (link_obs (K, S), link_prob (K, S), new_prob (K,))."""
+    def run(self, obs, full: bool = False):
+        """Filter a batch; returns (link_obs (K, S), link_prob (K, S), new_prob (K,)) and
+        with ``full`` also (loglik (K,), label posterior (K, N), counter mean (K,))."""
         out = [
-            self.step(obs.appearance[k], obs.camera[k], obs.border_enter[k], obs.border_quit[k],
-                      obs.t_enter[k], obs.t_quit[k])
+            self.step(
+                obs.appearance[k],
+                obs.camera[k],
+                obs.border_enter[k],
+                obs.border_quit[k],
+                obs.t_enter[k],
+                obs.t_quit[k],
+            )
             for k in range(obs.num_obs)
         ]
-        return (np.stack([o[0] for o in out]), np.stack([o[1] for o in out]),
-                np.array([o[2] for o in out]))
+        res = (
+            np.stack([o[0] for o in out]),
+            np.stack([o[1] for o in out]),
+            np.array([o[2] for o in out]),
+        )
+        if full:
+            res = res + (
+                np.array([o[3] for o in out]),
+                np.stack([o[4] for o in out]),
+                np.array([o[5] for o in out]),
+            )
+        return res

@@ -1,0 +1,312 @@
+r"""The Zajdel tracker's ADF step as the three hooks of :mod:`inference.adf.driver`
+(seed 002, section 1.4.3; spec ``../shared/spec/zajdel_adf.md``, "One-slice update").
+
+* :func:`predict`: the link prior (spec step 1) times the Student-t appearance
+  predictive and the path model of every open slot, and of "a new person" (step 2,
+  unnormalised, log space);
+* :func:`condition`: normalise in log space (the link posterior and the one-step log
+  likelihood);
+* :func:`project`: label posterior, counter and pointers (steps 3-5), the new slice's
+  NIW as the KL projection of the mixture over links (step 6) and, with
+  ``old_update="seed"``, the seed's projection of the old slices; then the slot
+  bookkeeping (insertion, eviction of the track end seen longest ago, pruning) and the
+  step's report.
+
+Each slot caches :math:`C^{-1}`, :math:`\log|C|`, the data-free part of its
+Student-t predictive and the digamma sum of its updated NIW's :math:`E[\log|V|]`
+(they change only when the slot's NIW does), and the path
+model's camera-pair normalisers are computed once (``ADFParams.path_lognorm``): the
+per-step work over the open slots needs no special function.
+"""
+
+from __future__ import annotations
+
+from functools import cache, partial
+
+import jax
+import jax.numpy as jnp
+from jax.scipy.special import logsumexp
+
+from inference.adf.driver import ADFHooks
+from inference.adf.niw import (
+    niw_predictive_from_quad,
+    niw_predictive_lognorm,
+    niw_project_cached,
+    niw_sum_digamma,
+    niw_update_cached,
+)
+from models.zajdel.adf_types import ADFConfig, ADFInfo, ADFParams, ADFState
+from models.zajdel.path import log_p_delta_cached
+
+__all__ = ["predict", "condition", "project", "window_predict", "zajdel_hooks"]
+
+_COUNTER_EPS = 1e-15  # counter tails below this are dropped (keeps its support bounded)
+
+
+_TOPK_BLOCK = 16  # XLA's CPU top-k: a partial-sort kernel up to here, a full sort beyond
+
+
+def _top(x, k):
+    """Indices and values of the k largest entries of a vector of probabilities
+    (float64, no NaN, no -inf), largest first, ties to the lower index. The ranking is
+    done in float32 (XLA's CPU top-k is several times faster there; entries equal to
+    float32 precision may swap places), the values returned are the float64 ones.
+    ``k > 16`` is taken in blocks of 16 (each block's winners masked out before the
+    next): the same ranking as one top-k, without the full sort XLA would use."""
+    xf = x.astype(jnp.float32)
+    parts = []
+    for start in range(0, k, _TOPK_BLOCK):
+        _, i = jax.lax.top_k(xf, min(_TOPK_BLOCK, k - start))
+        parts.append(i)
+        if start + _TOPK_BLOCK < k:
+            xf = xf.at[i].set(-jnp.inf)
+    i = parts[0] if len(parts) == 1 else jnp.concatenate(parts)
+    return x[i], i
+
+
+def _link_prior(m: ADFParams, uniform: bool, st: ADFState):
+    """Spec step 1: log P(link j) (S,), log P(new) (), and which slots are open (S,)."""
+    open_ = jnp.sum(st.slot_pprob, axis=1)
+    valid = st.slot_valid & (open_ > 0)
+    safe_open = jnp.where(valid, open_, 1.0)
+    if uniform:
+        c = jnp.arange(st.counter.shape[0], dtype=st.counter.dtype)
+        e = jnp.sum(st.counter / (c + 1.0))
+        return jnp.log(e) + jnp.log(safe_open), jnp.log(e), valid
+    tot = jnp.sum(jnp.where(valid, open_, 0.0))
+    lp_link = jnp.log1p(-m.p_new) + jnp.log(safe_open) - jnp.log(jnp.where(tot > 0, tot, 1.0))
+    return lp_link, jnp.where(tot > 0, jnp.log(m.p_new), 0.0), valid
+
+
+def predict(m: ADFParams, st: ADFState, x, uniform: bool):
+    """Unnormalised log link weights ``(logw (S,), logw0 ())`` of observation
+    ``x = (o, cam, be, bq, te, tq)`` (spec steps 1-2):
+    :math:`\\log P(\\text{link } j) + \\log t(o_k|\\theta_j) + \\log p_\\delta(d_k|d_j)`
+    and :math:`\\log P(\\text{new}) + \\log t(o_k|\\theta_0) + \\log p_{\\delta_0}(d_k)`."""
+    o, cam, be, bq, te, tq = x
+    r = o.shape[0]
+    lp_link, lp_new, valid = _link_prior(m, uniform, st)
+    u = o - st.slot_a
+    qf = jnp.einsum("si,sij,sj->s", u, st.slot_Cinv, u)
+    app = niw_predictive_from_quad(qf, st.slot_kappa, st.slot_eta, st.slot_lognorm, r)
+    path = log_p_delta_cached(
+        m.path, m.path_lognorm, st.slot_cam, st.slot_bq, st.slot_tq, cam, be, te
+    )
+    logw = jnp.where(valid, lp_link + app + path, -jnp.inf)
+    u0 = o - m.a0
+    q0 = u0 @ m.Cinv0 @ u0
+    logw0 = (
+        lp_new
+        + niw_predictive_from_quad(q0, m.k0, m.e0, m.lognorm0, r)
+        + m.path.log_entry[cam, be]
+        - jnp.log(m.path.window)
+    )
+    return logw, logw0
+
+
+def condition(m: ADFParams, st: ADFState, x, scores):
+    """Normalise the link weights in log space: ``(w (S,), w0 (), log Z (),
+    impossible ())``; when nothing has positive density the observation is new."""
+    logw, logw0 = scores
+    allw = jnp.concatenate([logw, logw0[None]])
+    lz = logsumexp(allw)
+    impossible = ~jnp.isfinite(lz)
+    p = jnp.where(impossible, 0.0, jnp.exp(allw - jnp.where(impossible, 0.0, lz)))
+    p = p.at[-1].set(jnp.where(impossible, 1.0, p[-1]))
+    return p[:-1], p[-1], lz, impossible
+
+
+def _labels_counter_pointers(st: ADFState, w, w0, W: int):
+    """Spec steps 3-5: label posterior q_k(l_k = n) (N,), counter (N + 1,), pointers
+    of the old slots (S, W), never-seen (N,), and the new slot's top W persons."""
+    N = st.never.shape[0]
+    open_ = jnp.sum(st.slot_pprob, axis=1)
+    ratio = jnp.where(open_ > 0, w / jnp.where(open_ > 0, open_, 1.0), 0.0)
+    qlab = (
+        jnp.zeros(N, w.dtype)
+        .at[st.slot_person.reshape(-1)]
+        .add((st.slot_pprob * ratio[:, None]).reshape(-1))
+    )
+    qlab = qlab + w0 * st.counter[:N]
+    counter = (1.0 - w0) * st.counter + w0 * jnp.concatenate([jnp.zeros(1), st.counter[:-1]])
+    counter = jnp.where(counter >= _COUNTER_EPS, counter, 0.0)  # bounded support
+    counter = counter / jnp.sum(counter)
+    pprob = st.slot_pprob * (1.0 - qlab[st.slot_person])
+    never = st.never * (1.0 - qlab)
+    new_p, new_n = _top(qlab, W)
+    return qlab, counter, pprob, never, new_p, new_n
+
+
+def _slot_niws(st: ADFState, idx=None):
+    f = (st.slot_a, st.slot_kappa, st.slot_eta, st.slot_C, st.slot_Cinv, st.slot_logdetC)
+    return f if idx is None else tuple(v[idx] for v in f)
+
+
+def _new_slice_niw(m: ADFParams, st: ADFState, o, w, w0, Mx: int):
+    """Spec step 6: the new slice's NIW, the KL projection of
+    :math:`\\sum_j w_j NIW(\\theta_j \\oplus o_k) + w_0 NIW(\\theta_0 \\oplus o_k)` over the
+    ``Mx`` most probable links (the others' weights are negligible and dropped).
+    Returns the projection ``(a, kappa, eta, C, Cinv, logdetC)``, the updated
+    components of those links and their slot indices."""
+    _, itop = _top(w, Mx)
+    comps = niw_update_cached(o, *_slot_niws(st, itop))
+    prior = niw_update_cached(o, m.a0, m.k0, m.e0, m.C0, m.Cinv0, m.logdet0)
+    ca, ck, ce, _, cCinv, cld = comps
+    cat = lambda c, p: jnp.concatenate([c, p[None]])  # noqa: E731
+    new = niw_project_cached(
+        cat(w[itop], w0),
+        cat(ca, prior[0]),
+        cat(ck, prior[1]),
+        cat(ce, prior[2]),
+        cat(cCinv, prior[4]),
+        cat(cld, prior[5]),
+        cat(st.slot_psi_next[itop], m.psi0_next),
+    )
+    return new, comps, itop
+
+
+def _old_slices_seed(st: ADFState, w, comps, itop, M: int):
+    """The seed's old-slice update for the ``M`` most probable links j (the first of
+    ``itop``): the projection of :math:`w_j NIW(\\theta_j \\oplus o_k) + (1 - w_j)
+    NIW(\\theta_j)`. Returns the slots' six NIW arrays."""
+    old = _slot_niws(st)
+    it = itop[:M]
+    wt = w[it]
+
+    def proj2(wj, q, j):
+        ww = jnp.stack([wj, 1.0 - wj])
+        pick = [comps[i][q] for i in (0, 1, 2, 4, 5)]
+        keep = [old[i][j] for i in (0, 1, 2, 4, 5)]
+        return niw_project_cached(ww, *(jnp.stack([a, b]) for a, b in zip(pick, keep, strict=True)))
+
+    projected = jax.vmap(proj2)(wt, jnp.arange(M), it)
+    use = wt > 0
+
+    def sel(new, cur):
+        return cur.at[it].set(jnp.where(use.reshape((-1,) + (1,) * (new.ndim - 1)), new, cur[it]))
+
+    return tuple(sel(n, c) for n, c in zip(projected, old, strict=True))
+
+
+def _insert_slot(cfg: ADFConfig, st: ADFState, qlab, pprob, new_p, new_n):
+    """Slot bookkeeping: the new slot takes a free slot, else the track end seen
+    longest ago is closed; pointer mass of persons left out of the new slot's top
+    entries, of an evicted slot, and below ``prune_eps`` becomes a closed end (every
+    person's pointer row still sums to 1). Returns (idx, valid, person, pprob, closed).
+
+    Pruning the old slots scatters S x W entries; it runs only in steps where an old
+    entry fell below ``prune_eps`` (adding zeros changes nothing)."""
+    N = st.never.shape[0]
+    closed = st.closed * (1.0 - qlab)
+    closed = closed + qlab - jnp.zeros(N, qlab.dtype).at[new_n].add(new_p)
+    valid = st.slot_valid & (jnp.sum(pprob, axis=1) > 0)
+    free = ~valid
+    idx = jnp.where(
+        jnp.any(free), jnp.argmax(free), jnp.argmin(jnp.where(valid, st.slot_tq, jnp.inf))
+    )
+    closed = closed.at[st.slot_person[idx]].add(jnp.where(valid[idx], pprob[idx], 0.0))
+    pprob = pprob.at[idx].set(0.0)
+    small_old = (pprob < cfg.prune_eps) & (pprob > 0)
+
+    def prune_old(c):
+        return c.at[st.slot_person.reshape(-1)].add(jnp.where(small_old, pprob, 0.0).reshape(-1))
+
+    closed = jax.lax.cond(jnp.any(small_old), prune_old, lambda c: c, closed)
+    small_new = new_p < cfg.prune_eps
+    closed = closed.at[new_n].add(jnp.where(small_new, new_p, 0.0))
+    pprob = jnp.where(small_old, 0.0, pprob).at[idx].set(jnp.where(small_new, 0.0, new_p))
+    person = st.slot_person.at[idx].set(new_n)
+    valid = valid.at[idx].set(True) & (jnp.sum(pprob, axis=1) > 0)
+    return idx, valid, person, pprob, closed
+
+
+def _report(cfg: ADFConfig, st: ADFState, post, qlab, counter, valid, itop, qtop) -> ADFInfo:
+    """The step's report; ``itop`` (the mixture's ranking of the links) and ``qtop``
+    (the new slot's ranking of the persons) are reused when they are long enough."""
+    w, w0, lz, impossible = post
+    S = w.shape[0]
+    L = min(cfg.link_out, S)
+    lp, li = (w[itop[:L]], itop[:L]) if L <= itop.shape[0] else _top(w, L)
+    link_obs = jnp.where(lp > 0, st.slot_obs[li], -1)
+    if L < cfg.link_out:
+        link_obs = jnp.concatenate([link_obs, -jnp.ones(cfg.link_out - L, link_obs.dtype)])
+        lp = jnp.concatenate([lp, jnp.zeros(cfg.link_out - L)])
+    Lb = min(cfg.label_out, qlab.shape[0])
+    bp, bn = (qlab[qtop[:Lb]], qtop[:Lb]) if Lb <= qtop.shape[0] else _top(qlab, Lb)
+    cc = jnp.arange(counter.shape[0], dtype=counter.dtype)
+    cm = jnp.sum(counter * cc)
+    cs = jnp.sqrt(jnp.maximum(jnp.sum(counter * cc * cc) - cm * cm, 0.0))
+    return ADFInfo(link_obs, lp, w0, bn, bp, cm, cs, lz, jnp.sum(valid), impossible)
+
+
+def project(m: ADFParams, st: ADFState, x, posterior, cfg: ADFConfig):
+    """Spec steps 3-6 and the slot bookkeeping: ``(new state, ADFInfo)``."""
+    o, cam, be, bq, te, tq = x
+    w, w0, _, _ = posterior
+    S, W = st.slot_pprob.shape
+    r = o.shape[0]
+    qlab, counter, pprob, never, new_p, new_n = _labels_counter_pointers(st, w, w0, W)
+    Mx = min(cfg.mix_top, S)
+    (na, nk, ne, nC, nCinv, nld), comps, itop = _new_slice_niw(m, st, o, w, w0, Mx)
+    sa, sk, se, sC, sCinv, sld = _slot_niws(st)
+    sln, spsi = st.slot_lognorm, st.slot_psi_next
+    if cfg.old_update == "seed":
+        M = min(cfg.old_update_top, Mx)
+        sa, sk, se, sC, sCinv, sld = _old_slices_seed(st, w, comps, itop, M)
+        sln = niw_predictive_lognorm(sk, se, sld, r)
+        spsi = niw_sum_digamma(se + 1.0, r)
+    idx, valid, person, pprob, closed = _insert_slot(cfg, st, qlab, pprob, new_p, new_n)
+    new_state = ADFState(
+        k=st.k + 1,
+        last_tq=tq,
+        counter=counter,
+        never=never,
+        closed=closed,
+        slot_valid=valid,
+        slot_obs=st.slot_obs.at[idx].set(st.k),
+        slot_cam=st.slot_cam.at[idx].set(cam),
+        slot_bq=st.slot_bq.at[idx].set(bq),
+        slot_tq=st.slot_tq.at[idx].set(tq),
+        slot_a=sa.at[idx].set(na),
+        slot_kappa=sk.at[idx].set(nk),
+        slot_eta=se.at[idx].set(ne),
+        slot_C=sC.at[idx].set(nC),
+        slot_Cinv=sCinv.at[idx].set(nCinv),
+        slot_logdetC=sld.at[idx].set(nld),
+        slot_lognorm=sln.at[idx].set(niw_predictive_lognorm(nk, ne, nld, r)),
+        slot_psi_next=spsi.at[idx].set(niw_sum_digamma(ne + 1.0, r)),
+        slot_person=person,
+        slot_pprob=pprob,
+    )
+    return new_state, _report(cfg, st, posterior, qlab, counter, valid, itop, new_n)
+
+
+def window_predict(m: ADFParams, st: ADFState, xs, uniform: bool):
+    """Single-step link log weights of a window of observations against one belief
+    ``(logw (L, S), logw0 (L,))``, and the link prior of a window-internal link (an
+    open end of mass 1) for the fixed-lag revision."""
+    logw, logw0 = jax.vmap(lambda x: predict(m, st, x, uniform))(xs)
+    if uniform:
+        c = jnp.arange(st.counter.shape[0], dtype=st.counter.dtype)
+        lp_win = jnp.log(jnp.sum(st.counter / (c + 1.0)))
+    else:
+        tot = jnp.sum(st.slot_pprob)
+        lp_win = jnp.log1p(-m.p_new) - jnp.log(jnp.where(tot > 0, tot, 1.0))
+    return logw, logw0, lp_win
+
+
+def _record_counter(st: ADFState):
+    return st.counter
+
+
+@cache
+def zajdel_hooks(cfg: ADFConfig, uniform: bool) -> ADFHooks:
+    """The driver hooks for one configuration (cached: the same object per
+    ``(cfg, uniform)``, so the driver's compiled functions are reused)."""
+    return ADFHooks(
+        predict=partial(predict, uniform=uniform),
+        condition=condition,
+        project=partial(project, cfg=cfg),
+        record=_record_counter if cfg.record_counter else None,
+        window_predict=partial(window_predict, uniform=uniform),
+    )
