@@ -40,7 +40,7 @@ ENGINES = ("auto", "ve", "jt")
 _HANDFUL = 4  # at most this many queries: always per-query elimination
 _CLIQUE_OVERHEAD = 5e3  # table entries one einsum call's Python overhead is worth
 _JT_PER_ENTRY = 6.0  # Hugin touches each clique entry ~6 times (build, 2 sums, 2 products, ratio)
-_SMALL_TREE = 1e6  # a junction tree this small (entries) is taken without comparing
+_SMALL_TREE = 1e5  # a junction tree this small (entries) is taken without comparing
 _SAMPLE = 8  # queries compiled to estimate the cost of per-query elimination
 
 

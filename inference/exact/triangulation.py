@@ -106,17 +106,21 @@ def greedy_order(
         biggest = max(biggest, size)
         order.append(v)
         cliques.append((v, *sorted(nb, key=pos.__getitem__)))
-        touched = set(nb)
         for a in nb:
+            g[a].discard(v)
+        for a in nb:  # fill-in edges; a node outside nb seeing both ends loses one fill
             na = g[a]
-            na.discard(v)
-            new = nb - na
-            new.discard(a)
-            if new:
-                na |= new
-            touched |= na
-        for u in touched:
-            fill[u] = _fill(g, u)
+            for b in nb - na:
+                if b <= a:
+                    continue
+                for w in na & g[b]:
+                    if w not in nb:
+                        fill[w] -= 1
+        for a in nb:
+            g[a] |= nb
+            g[a].discard(a)
+        for a in nb:
+            fill[a] = _fill(g, a)
         for a in nb:
             weight[a] = logk[a] + sum(logk[u] for u in g[a])
         del fill[v], weight[v]
