@@ -189,8 +189,12 @@ def compile_tree(
     observed: frozenset[int],
     tri: Triangulation,
     limit: float,
+    root_var: int | None = None,
 ) -> CliqueTree:
     """The clique tree of ``tri`` over the evidence-reduced CPDs of ``factors``.
+
+    With ``root_var``, the tree is re-rooted at the clique holding that variable (the
+    query of a variable-elimination tree: :meth:`CliqueTree.collect` ends there).
 
     Raises
     ------
@@ -225,7 +229,21 @@ def compile_tree(
         rest = clique[1:]
         if rest:
             kids_of.setdefault(min(rest, key=pos.__getitem__), []).append(node)
+    if root_var is not None:
+        parent = _rerooted(parent, node_of[root_var])
     return _finish(net, factors, observed, cliques, parent, node_of, pos)
+
+
+def _rerooted(parent: list[int], root: int) -> list[int]:
+    """Parent pointers of the same tree hung from ``root`` (other trees unchanged)."""
+    path = [root]
+    while parent[path[-1]] >= 0:
+        path.append(parent[path[-1]])
+    out = list(parent)
+    out[root] = -1
+    for child, up in zip(path, path[1:]):  # reverse the edges on the path to the old root
+        out[up] = child
+    return out
 
 
 def _finish(

@@ -32,7 +32,7 @@ from dbn.bayesnet import BayesNet, check_evidence
 from dbn.errors import EvidenceError, MemoryLimitError, UnknownVariableError
 from inference.exact.cliquetree import CliqueTree, compile_tree
 from inference.exact.pruning import NetIndex, requisite
-from inference.exact.triangulation import triangulate
+from inference.exact.triangulation import Triangulation, triangulate
 
 __all__ = ["ExactInference", "Marginals", "default_table_limit"]
 
@@ -115,12 +115,13 @@ class ExactInference:
     def clear_cache(self) -> None:
         """Forget every compiled tree."""
         self._plans: dict[tuple, tuple[str, object]] = {}
-        self._ve: dict[tuple[frozenset[int], int], CliqueTree] = {}
+        self._ve: dict[tuple, CliqueTree] = {}
+        self._tri: dict[tuple, Triangulation] = {}
         self.compiles = 0
 
     @property
     def cache_size(self) -> int:
-        return len(self._plans) + len(self._ve)
+        return len(self._plans) + len(self._ve) + len(self._tri)
 
     # --- public API ---------------------------------------------------------------------
     def marginals(
@@ -146,7 +147,7 @@ class ExactInference:
         net = self._net
         hard, _ = check_evidence(self._bn, evidence)
         ev = {net.index[n]: s for n, s in hard.items()}
-        wanted = list(net.names) if nodes is None else list(nodes)
+        wanted = [n for n in net.names if n not in hard] if nodes is None else list(nodes)
         for n in wanted:
             if n not in net.index:
                 raise UnknownVariableError(f"query of unknown variable {n!r}")
@@ -186,43 +187,71 @@ class ExactInference:
         if not queries:
             return "ve", []
         if engine == "ve" or (engine == "auto" and len(queries) <= _HANDFUL):
-            return "ve", [(q, self._ve_tree(observed, q)) for q in queries]
+            return "ve", [
+                self._group_tree(observed, f, qs) for f, qs in self._groups(observed, queries)
+            ]
         net = self._net
         pr = requisite(net, queries, observed)
         scopes = [self._scope(n, observed) for n in pr.factors]
         tri = triangulate(scopes, net.cards, pr.hidden, self.restarts)
-        if engine == "jt":
+        if engine == "jt" or tri.total_size <= _SMALL_TREE:
             return "jt", compile_tree(net, pr.factors, observed, tri, self.max_table_size)
         jt_cost = _JT_PER_ENTRY * tri.total_size + _CLIQUE_OVERHEAD * len(tri.order)
-        if tri.total_size <= _SMALL_TREE:
-            return "jt", compile_tree(net, pr.factors, observed, tri, self.max_table_size)
+        groups = self._groups(observed, queries)
         if tri.max_size <= self.max_table_size:
-            sample = [queries[int(k)] for k in np.linspace(0, len(queries) - 1, _SAMPLE)]
-            ve_cost = 0.0
-            for q in dict.fromkeys(sample):
-                try:
-                    t = self._ve_tree(observed, q)
-                except MemoryLimitError:
-                    ve_cost = np.inf
-                    break
-                ve_cost += t.total_size + _CLIQUE_OVERHEAD * (len(t.cliques) + 4)
-            if jt_cost <= ve_cost * len(queries) / len(set(sample)):
+            # the group with most factors, and an even sample of the others
+            groups.sort(key=lambda g: -len(g[0]))
+            rest = groups[1:]
+            picks = [rest[int(k)] for k in np.linspace(0, len(rest) - 1, min(_SAMPLE, len(rest)))]
+            try:
+                costs = [
+                    self._group_cost(self._group_tree(observed, *g)) for g in [groups[0], *picks]
+                ]
+            except MemoryLimitError:
+                costs = [np.inf]
+            ve_cost = costs[0] + (float(np.mean(costs[1:])) * len(rest) if rest else 0.0)
+            if jt_cost <= ve_cost:
                 return "jt", compile_tree(net, pr.factors, observed, tri, self.max_table_size)
-        return "ve", [(q, self._ve_tree(observed, q)) for q in queries]
+        return "ve", [self._group_tree(observed, f, qs) for f, qs in groups]
 
     def _scope(self, n: int, observed: frozenset[int]) -> tuple[int, ...]:
         return tuple(v for v in (*self._net.parents[n], n) if v not in observed)
 
-    def _ve_tree(self, observed: frozenset[int], q: int) -> CliqueTree:
-        key = (observed, q)
+    def _groups(
+        self, observed: frozenset[int], queries: tuple[int, ...]
+    ) -> list[tuple[tuple[int, ...], tuple[int, ...]]]:
+        """Queries grouped by their requisite factor set (one tree answers a group)."""
+        groups: dict[tuple[int, ...], list[int]] = {}
+        for q in queries:
+            groups.setdefault(requisite(self._net, (q,), observed).factors, []).append(q)
+        return [(f, tuple(qs)) for f, qs in groups.items()]
+
+    @staticmethod
+    def _group_cost(group: tuple[tuple[int, ...], CliqueTree]) -> float:
+        queries, tree = group
+        per_entry = 1.0 if len(queries) == 1 else _JT_PER_ENTRY
+        return per_entry * tree.total_size + _CLIQUE_OVERHEAD * (len(tree.cliques) + 4)
+
+    def _group_tree(
+        self, observed: frozenset[int], factors: tuple[int, ...], queries: tuple[int, ...]
+    ) -> tuple[tuple[int, ...], CliqueTree]:
+        """The tree over ``factors`` for ``queries``: rooted at the query's clique for one
+        (variable elimination, collect only), calibrated for several."""
+        root = queries[0] if len(queries) == 1 else None
+        key = (observed, factors, root)
         tree = self._ve.get(key)
         if tree is None:
             net = self._net
-            pr = requisite(net, (q,), observed)
-            scopes = [self._scope(n, observed) for n in pr.factors]
-            tri = triangulate(scopes, net.cards, pr.hidden, self.restarts, last=(q,))
-            tree = self._ve[key] = compile_tree(net, pr.factors, observed, tri, self.max_table_size)
-        return tree
+            scopes = [self._scope(n, observed) for n in factors]
+            tri_key = (observed, factors)
+            tri = self._tri.get(tri_key)
+            if tri is None:
+                hidden = {v for sc in scopes for v in sc}
+                tri = self._tri[tri_key] = triangulate(scopes, net.cards, hidden, self.restarts)
+            tree = self._ve[key] = compile_tree(
+                net, factors, observed, tri, self.max_table_size, root_var=root
+            )
+        return queries, tree
 
     # --- running ------------------------------------------------------------------------
     def _check_constants(self, ev: Mapping[int, int]) -> None:
@@ -236,11 +265,16 @@ class ExactInference:
                 )
 
     def _run_ve(
-        self, trees: list[tuple[int, CliqueTree]], ev: Mapping[int, int]
+        self, groups: list[tuple[tuple[int, ...], CliqueTree]], ev: Mapping[int, int]
     ) -> dict[int, np.ndarray]:
         out = {}
-        for q, tree in trees:
-            root = tree.home[q]  # q is eliminated last: its clique is the root
+        for queries, tree in groups:
+            if len(queries) > 1:
+                pots = tree.calibrate(self._tables, ev)
+                out.update((q, tree.marginal(pots, q)) for q in queries)
+                continue
+            q = queries[0]
+            root = tree.home[q]  # the tree is rooted at q's clique
             table = tree.collect(root, self._tables, ev)
             m = np.einsum(table, tuple(range(table.ndim)), (tree.cliques[root].index(q),))
             z = m.sum()
