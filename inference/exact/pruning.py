@@ -115,7 +115,9 @@ def barren(net: NetIndex, keep: Iterable[int]) -> set[int]:
     return seen
 
 
-def requisite(net: NetIndex, query: Iterable[int], observed: Iterable[int]) -> Pruned:
+def requisite(
+    net: NetIndex, query: Iterable[int], observed: Iterable[int], anchors: Iterable[int] = ()
+) -> Pruned:
     """Barren-node and d-separation pruning for ``P(query | observed)``.
 
     Parameters
@@ -124,10 +126,13 @@ def requisite(net: NetIndex, query: Iterable[int], observed: Iterable[int]) -> P
         Query variables (not observed).
     observed : iterable of int
         Hard-evidence variables.
+    anchors : iterable of int
+        Unobserved variables carrying soft evidence (a likelihood factor on the variable
+        alone): they and their ancestors are not barren.
     """
     query = set(query)
     obs = set(observed)
-    ancestral = barren(net, query | obs)
+    ancestral = barren(net, query | obs | set(anchors))
     parents = net.parents
     # reduced scope of every ancestral CPD; link the hidden variables sharing a scope
     by_var: dict[int, list[int]] = {}
