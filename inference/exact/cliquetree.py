@@ -18,6 +18,7 @@ product and sum is one :func:`numpy.einsum` over the clique's axes.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -93,11 +94,11 @@ class CliqueTree:
             ops[c].append((tables[n][idx], sub))
         return ops
 
-    def _contract(
-        self, c: int, ops: list[tuple[np.ndarray, tuple[int, ...]]], out: Sequence[int]
-    ) -> np.ndarray:
-        """``sum_{C \\ out} prod ops`` over clique ``c`` (a variable no operand covers
-        counts as a factor of ones)."""
+    def _operands(
+        self, c: int, ops: list[tuple[np.ndarray, tuple[int, ...]]]
+    ) -> list[tuple[np.ndarray, tuple[int, ...]]]:
+        """``ops`` plus a vector of ones for every clique variable no operand covers, the
+        first ones folded into the full clique while there are too many for einsum."""
         clique = self.cliques[c]
         covered = {s for _, sub in ops for s in sub}
         ops = ops + [
@@ -105,18 +106,68 @@ class CliqueTree:
             for k in range(len(clique))
             if k not in covered
         ]
-        while len(ops) > _MAX_OPERANDS:  # fold the first operands into the full clique
+        while len(ops) > _MAX_OPERANDS:
             head, ops = ops[:_MAX_OPERANDS], ops[_MAX_OPERANDS:]
             full = tuple(range(len(clique)))
             ops.insert(0, (np.einsum(*_interleave(head), full), full))
-        args = _interleave(ops) + [tuple(out)]
+        return ops
+
+    def _path(self, c: int, args: list[object], ops: list, out: tuple[int, ...]) -> tuple:
+        """(path, FLOP estimate) of a pairwise contraction, found once per operand layout."""
+        key = (c, out, tuple(sub for _, sub in ops))
+        found = self._paths.get(key)
+        if found is None:
+            path, text = np.einsum_path(*args, optimize="greedy")
+            match = re.search(r"Optimized FLOP count:\s*([0-9.eE+-]+)", text)
+            flops = float(match.group(1)) if match else float(self.sizes[c] * len(ops))
+            found = self._paths[key] = (path, flops)
+        return found
+
+    def _contract(
+        self, c: int, ops: list[tuple[np.ndarray, tuple[int, ...]]], out: Sequence[int]
+    ) -> np.ndarray:
+        """``sum_{C \\ out} prod ops`` over clique ``c`` (a variable no operand covers
+        counts as a factor of ones)."""
+        ops = self._operands(c, ops)
+        out = tuple(out)
+        args = _interleave(ops) + [out]
         if len(ops) < 3 or self.sizes[c] < _PATH_ABOVE:
             return np.einsum(*args)
-        key = (c, tuple(out), len(ops))
-        path = self._paths.get(key)
-        if path is None:  # pairwise contraction order, found once per clique and reused
-            path = self._paths[key] = np.einsum_path(*args, optimize="greedy")[0]
-        return np.einsum(*args, optimize=path)
+        return np.einsum(*args, optimize=self._path(c, args, ops, out)[0])
+
+    def calibrate_cost(self) -> float:
+        """Predicted entry-operations of :meth:`calibrate`: every clique table is built from
+        its factors and incoming messages, then summed, multiplied and divided a few
+        times (``size * (operands + 3)`` per clique)."""
+        operands = [1 + sum(1 for p in self.parent if p == c) for c in range(len(self.cliques))]
+        for c, _, _ in self.factors:
+            operands[c] += 1
+        return float(sum(size * (k + 3) for size, k in zip(self.sizes, operands)))
+
+    def collect_cost(self, root: int) -> float:
+        """Predicted multiply-adds of :meth:`collect` to ``root`` (big cliques: the cached
+        pairwise einsum path's FLOP count; it is reused by the run)."""
+        net = self.net
+        ops: list[list[tuple[np.ndarray, tuple[int, ...]]]] = [[] for _ in self.cliques]
+        for c, _, sub in self.factors:
+            shape = tuple(int(net.cards[self.cliques[c][k]]) for k in sub)
+            ops[c].append((np.broadcast_to(1.0, shape), sub))
+        cost = 0.0
+        for c in self.postorder:
+            p = self.parent[c]
+            out = tuple(range(len(self.cliques[c]))) if c == root else self.sep[c]
+            operands = self._operands(c, ops[c])
+            if len(operands) < 3 or self.sizes[c] < _PATH_ABOVE:
+                cost += float(self.sizes[c]) * len(operands)
+            else:
+                args = _interleave(operands) + [out]
+                cost += self._path(c, args, operands, out)[1]
+            if c == root:
+                break
+            if p >= 0:
+                shape = tuple(int(net.cards[self.cliques[c][k]]) for k in self.sep[c])
+                ops[p].append((np.broadcast_to(1.0, shape), self.sep_in_parent[c]))
+        return cost
 
     def collect(
         self, root: int, tables: Mapping[int, np.ndarray], evidence: Mapping[int, int]

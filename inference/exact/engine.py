@@ -39,9 +39,9 @@ __all__ = ["ExactInference", "Marginals", "default_table_limit"]
 ENGINES = ("auto", "ve", "jt")
 _HANDFUL = 4  # at most this many queries: always per-query elimination
 _CLIQUE_OVERHEAD = 5e3  # table entries one einsum call's Python overhead is worth
-_JT_PER_ENTRY = 6.0  # Hugin touches each clique entry ~6 times (build, 2 sums, 2 products, ratio)
+_JT_UNIT = 4.0  # one entry-operand of a materialised einsum product, in einsum-path FLOPs
 _SMALL_TREE = 1e5  # a junction tree this small (entries) is taken without comparing
-_SAMPLE = 8  # queries compiled to estimate the cost of per-query elimination
+_SAMPLE = 16  # queries compiled to estimate the cost of per-query elimination
 
 
 def default_table_limit() -> int:
@@ -196,22 +196,24 @@ class ExactInference:
         tri = triangulate(scopes, net.cards, pr.hidden, self.restarts)
         if engine == "jt" or tri.total_size <= _SMALL_TREE:
             return "jt", compile_tree(net, pr.factors, observed, tri, self.max_table_size)
-        jt_cost = _JT_PER_ENTRY * tri.total_size + _CLIQUE_OVERHEAD * len(tri.order)
+        jt = compile_tree(net, pr.factors, observed, tri, np.inf)
+        jt_cost = _JT_UNIT * jt.calibrate_cost() + _CLIQUE_OVERHEAD * len(jt.cliques)
+        if tri.max_size > self.max_table_size:
+            jt_cost = np.inf
         groups = self._groups(observed, queries)
-        if tri.max_size <= self.max_table_size:
-            # the group with most factors, and an even sample of the others
-            groups.sort(key=lambda g: -len(g[0]))
-            rest = groups[1:]
-            picks = [rest[int(k)] for k in np.linspace(0, len(rest) - 1, min(_SAMPLE, len(rest)))]
-            try:
-                costs = [
-                    self._group_cost(self._group_tree(observed, *g)) for g in [groups[0], *picks]
-                ]
-            except MemoryLimitError:
-                costs = [np.inf]
-            ve_cost = costs[0] + (float(np.mean(costs[1:])) * len(rest) if rest else 0.0)
-            if jt_cost <= ve_cost:
-                return "jt", compile_tree(net, pr.factors, observed, tri, self.max_table_size)
+        # stratified sample: groups sorted by size, evenly spaced picks, each standing
+        # for its share of the groups
+        groups.sort(key=lambda g: -len(g[0]))
+        picks = sorted({int(k) for k in np.linspace(0, len(groups) - 1, _SAMPLE)})
+        try:
+            costs = [self._group_cost(self._group_tree(observed, *groups[i])) for i in picks]
+            ve_cost = float(np.mean(costs)) * len(groups)
+        except MemoryLimitError:
+            ve_cost = np.inf
+        if ve_cost == np.inf and jt_cost == np.inf:  # raise the guard's error, naming the clique
+            compile_tree(net, pr.factors, observed, tri, self.max_table_size)
+        if jt_cost <= ve_cost:
+            return "jt", jt
         return "ve", [self._group_tree(observed, f, qs) for f, qs in groups]
 
     def _scope(self, n: int, observed: frozenset[int]) -> tuple[int, ...]:
@@ -228,9 +230,12 @@ class ExactInference:
 
     @staticmethod
     def _group_cost(group: tuple[tuple[int, ...], CliqueTree]) -> float:
+        """Predicted work of one group: a calibration, or one collect to the query."""
         queries, tree = group
-        per_entry = 1.0 if len(queries) == 1 else _JT_PER_ENTRY
-        return per_entry * tree.total_size + _CLIQUE_OVERHEAD * (len(tree.cliques) + 4)
+        overhead = _CLIQUE_OVERHEAD * (len(tree.cliques) + 4)
+        if len(queries) > 1:
+            return _JT_UNIT * tree.calibrate_cost() + overhead
+        return tree.collect_cost(tree.home[queries[0]]) + overhead
 
     def _group_tree(
         self, observed: frozenset[int], factors: tuple[int, ...], queries: tuple[int, ...]
