@@ -19,6 +19,8 @@ import numpy as np
 
 __all__ = ["Triangulation", "triangulate", "greedy_order"]
 
+_RESTART_RATIO = 500.0
+
 
 @dataclass(frozen=True)
 class Triangulation:
@@ -148,7 +150,8 @@ def triangulate(
         Extra variables to include (isolated unless in a scope).
     restarts : int
         Randomised restarts per heuristic, run only when the best deterministic order's
-        total table size exceeds ``restart_above`` (cheap problems are not worth it).
+        total table size exceeds ``restart_above`` and ``500 n^2`` for ``n`` nodes
+        (where the restarts cannot cost more than they may save).
     seed : int
         Seed of the restarts' tie-breaking (fixed, so a compile is reproducible).
     last : iterable of int
@@ -164,7 +167,10 @@ def triangulate(
         (greedy_order(adj, logk, h, last=last) for h in ("min_fill", "min_weight")),
         key=lambda t: t.total_size,
     )
-    if restarts > 0 and best.total_size > restart_above:
+    # a greedy pass costs ~n^2 dictionary scans (~1 us each); a table entry ~1 ns per use:
+    # restart only where a better order can repay that
+    worth = best.total_size > max(restart_above, _RESTART_RATIO * len(adj) ** 2)
+    if restarts > 0 and worth:
         rng = np.random.default_rng(seed)
         for r in range(restarts):
             for h in ("min_fill", "min_weight"):
