@@ -23,6 +23,7 @@ evidence values is a pure einsum pass. Assigning a net of another structure to
 from __future__ import annotations
 
 import os
+import weakref
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
@@ -34,7 +35,7 @@ from inference.exact.cliquetree import CliqueTree, compile_tree
 from inference.exact.pruning import NetIndex, requisite
 from inference.exact.triangulation import Triangulation, triangulate
 
-__all__ = ["ExactInference", "Marginals", "default_table_limit"]
+__all__ = ["ExactInference", "Marginals", "default_table_limit", "posterior_marginals"]
 
 ENGINES = ("auto", "ve", "jt")
 _HANDFUL = 4  # at most this many queries: always per-query elimination
@@ -291,3 +292,20 @@ class ExactInference:
     def _run_jt(self, tree: CliqueTree, ev: Mapping[int, int]) -> dict[int, np.ndarray]:
         pots = tree.calibrate(self._tables, ev)
         return {v: tree.marginal(pots, v) for v in tree.home}
+
+
+_ENGINES: weakref.WeakKeyDictionary[BayesNet, ExactInference] = weakref.WeakKeyDictionary()
+
+
+def posterior_marginals(
+    bn: BayesNet,
+    evidence: Mapping[str, int | str] | None = None,
+    nodes: Iterable[str] | None = None,
+    engine: str = "auto",
+) -> Marginals:
+    """:meth:`ExactInference.marginals` on a per-net engine kept while ``bn`` lives, so
+    that repeated calls on one net reuse its compiled trees."""
+    inf = _ENGINES.get(bn)
+    if inf is None:
+        inf = _ENGINES[bn] = ExactInference(bn)
+    return inf.marginals(evidence, nodes, engine)

@@ -172,3 +172,15 @@ def _compare_with_pgmpy(name: str, seed: int, max_queries: int | None) -> None:
     theirs = pa.pgmpy_marginals(pa.to_pgmpy(bn), hidden, ev)
     for n in hidden:
         np.testing.assert_allclose(ours.marginals[n], theirs[n], atol=TOL, rtol=0)
+
+
+def test_posterior_marginals_keeps_one_engine_per_net() -> None:
+    from inference.exact import posterior_marginals
+
+    bn = _chain_net()
+    first = posterior_marginals(bn, {"c": 0})
+    again = posterior_marginals(bn, {"c": 1})
+    assert first.compiled and not again.compiled
+    expected, _ = brute_force_marginals(bn, {"c": 1})
+    np.testing.assert_allclose(again.marginals["b"], expected["b"], atol=TOL)
+    assert posterior_marginals(_chain_net(), {"c": 1}).compiled  # another net object
