@@ -25,9 +25,10 @@ TOL = 1e-9
     ev_seed=st.integers(0, 2**31 - 1),
     engine=st.sampled_from(["auto", "ve", "jt"]),
     subset=st.booleans(),
+    big=st.booleans(),
 )
-def test_marginals_equal_enumeration(factories, seed, ev_seed, engine, subset) -> None:
-    bn = factories.random_bn(seed)
+def test_marginals_equal_enumeration(factories, seed, ev_seed, engine, subset, big) -> None:
+    bn = factories.random_bn(seed, max_nodes=12, max_card=3) if big else factories.random_bn(seed)
     hard, _ = factories.random_evidence(ev_seed, bn, p_soft=0.0)
     rng = np.random.default_rng(ev_seed)
     hidden = [n for n in bn.nodes if n not in hard]
@@ -93,9 +94,14 @@ def test_cache_reused_for_new_values_and_invalidated_by_structure() -> None:
     assert inf.marginals({"asia": "yes"}).compiled
 
 
-def test_engines_both_available_and_choice_reported() -> None:
+def test_engines_both_available_and_choice_reported(monkeypatch) -> None:
+    import inference.exact.engine as engine_module
+
+    monkeypatch.setattr(engine_module, "_SMALL_TREE", 0)  # compare costs even on alarm
     bn = pa.bundled_network("alarm")
     inf = ExactInference(bn)
+    chosen = inf.marginals({"HR": "HIGH", "SAO2": "LOW"})
+    assert chosen.engine in ("ve", "jt")
     ev = {"HR": "HIGH", "SAO2": "LOW"}
     ve = inf.marginals(ev, engine="ve")
     jt = inf.marginals(ev, engine="jt")
@@ -103,7 +109,7 @@ def test_engines_both_available_and_choice_reported() -> None:
     assert (ve.engine, jt.engine, few.engine) == ("ve", "jt", "ve")
     for n, m in ve.marginals.items():
         np.testing.assert_allclose(m, jt.marginals[n], atol=TOL, rtol=0)
-    for n, m in few.marginals.items():
+    for n, m in [*few.marginals.items(), *chosen.marginals.items()]:
         np.testing.assert_allclose(m, jt.marginals[n], atol=TOL, rtol=0)
     with pytest.raises(ValueError, match="engine"):
         inf.marginals(ev, engine="bp")
