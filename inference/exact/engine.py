@@ -42,6 +42,7 @@ _HANDFUL = 4  # at most this many queries: always per-query elimination
 _CLIQUE_OVERHEAD = 5e3  # table entries one einsum call's Python overhead is worth
 _JT_UNIT = 4.0  # one entry-operand of a materialised einsum product, in einsum-path FLOPs
 _SMALL_TREE = 1e5  # a junction tree this small (entries) is taken without comparing
+_GROUP_RESTART_ABOVE = 1e7  # per-query trees are many and small: restart only huge ones
 _SAMPLE = 16  # queries compiled to estimate the cost of per-query elimination
 
 
@@ -253,7 +254,9 @@ class ExactInference:
             tri = self._tri.get(tri_key)
             if tri is None:
                 hidden = {v for sc in scopes for v in sc}
-                tri = self._tri[tri_key] = triangulate(scopes, net.cards, hidden, self.restarts)
+                tri = self._tri[tri_key] = triangulate(
+                    scopes, net.cards, hidden, self.restarts, restart_above=_GROUP_RESTART_ABOVE
+                )
             tree = self._ve[key] = compile_tree(
                 net, factors, observed, tri, self.max_table_size, root_var=root
             )
