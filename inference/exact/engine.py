@@ -112,7 +112,12 @@ class ExactInference:
         if self._net is None or net.fingerprint != self._net.fingerprint:
             self.clear_cache()  # another structure: every compiled tree is stale
         self._bn, self._net = bn, net
-        self._tables = {i: bn.table(n) for i, n in enumerate(net.names)}
+        # rows are accepted within 1e-9 of summing to 1; dividing by the sums makes
+        # barren-node pruning exact (else it shifts answers by up to ~1e-9 x nodes)
+        self._tables = {}
+        for i, n in enumerate(net.names):
+            t = bn.table(n)
+            self._tables[i] = t / t.sum(axis=-1, keepdims=True)
 
     def clear_cache(self) -> None:
         """Forget every compiled tree."""
