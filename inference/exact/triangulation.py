@@ -11,6 +11,7 @@ eliminated node and their neighbours change), so one greedy pass costs about
 
 from __future__ import annotations
 
+import heapq
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -92,16 +93,20 @@ def greedy_order(
     total = 0.0
     biggest = 0.0
     fill_first = heuristic == "min_fill"
-    while g:
+    jit = jitter or dict.fromkeys(g, 0.0)
+
+    def key(u: int) -> tuple:
         if fill_first:
-            if jitter is None:
-                v = min(g, key=lambda u: (u in last, fill[u], weight[u], pos[u]))
-            else:
-                v = min(g, key=lambda u: (u in last, fill[u] + jitter[u], weight[u]))
-        elif jitter is None:
-            v = min(g, key=lambda u: (u in last, weight[u], fill[u], pos[u]))
-        else:
-            v = min(g, key=lambda u: (u in last, weight[u] + jitter[u], fill[u]))
+            return (u in last, fill[u] + jit[u], weight[u], pos[u])
+        return (u in last, weight[u] + jit[u], fill[u], pos[u])
+
+    # a heap of (key, node); an entry is stale when its key is no longer the node's key
+    heap = [(key(u), u) for u in g]
+    heapq.heapify(heap)
+    while g:
+        k, v = heapq.heappop(heap)
+        if v not in g or k != key(v):
+            continue
         nb = g.pop(v)
         size = math.exp(weight[v])
         total += size
@@ -110,6 +115,7 @@ def greedy_order(
         cliques.append((v, *sorted(nb, key=pos.__getitem__)))
         for a in nb:
             g[a].discard(v)
+        changed = set(nb)
         for a in nb:  # fill-in edges; a node outside nb seeing both ends loses one fill
             na = g[a]
             for b in nb - na:
@@ -118,14 +124,16 @@ def greedy_order(
                 for w in na & g[b]:
                     if w not in nb:
                         fill[w] -= 1
+                        changed.add(w)
         for a in nb:
             g[a] |= nb
             g[a].discard(a)
         for a in nb:
             fill[a] = _fill(g, a)
-        for a in nb:
             weight[a] = logk[a] + sum(logk[u] for u in g[a])
         del fill[v], weight[v]
+        for u in changed:
+            heapq.heappush(heap, (key(u), u))
     return Triangulation(tuple(order), tuple(cliques), total, biggest, heuristic)
 
 
