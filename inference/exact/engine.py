@@ -4,20 +4,29 @@
 engines over the *pruned* net (:mod:`inference.exact.pruning`):
 
 - ``"ve"``: variable elimination per query, on the factors that query needs (barren and
-  d-separated nodes removed), the query eliminated last;
+  d-separated nodes removed), the tree rooted at the query's clique (collect only);
 - ``"jt"``: one junction tree over the factors all the queries need, calibrated once.
 
-``engine="auto"`` picks ``"ve"`` for a handful of queries and otherwise compares the
-predicted work (total clique table entries plus a per-clique overhead) of one calibrated
-tree against that of per-query elimination, estimated on a sample of the queries; the
-choice is reported in the result. Orders come from :func:`~inference.exact.triangulation.
-triangulate` (min-fill and min-weight, randomised restarts, smallest total table).
+``engine="auto"`` picks ``"ve"`` for a handful of queries; otherwise it takes a junction
+tree outright when that tree is small (1e5 entries), and else compares its predicted
+work (clique entries times operands, per contraction) with that of per-query
+elimination (the FLOP counts of the einsum paths each query's collect will use,
+estimated on a stratified sample of the queries). Queries whose requisite factors are
+the same share one calibrated tree. The choice is reported in the result. Orders come
+from :func:`~inference.exact.triangulation.triangulate` (min-fill and min-weight,
+randomised restarts, smallest total table).
 
 Compiled trees are cached per ``(set of observed variables, query set, engine)``; the
 numbers (evidence values, CPD tables) are read at every call, so a repeat with other
 evidence values is a pure einsum pass. Assigning a net of another structure to
 :attr:`ExactInference.bn` empties the cache. A tree whose largest clique would exceed
 ``max_table_size`` entries raises :class:`~dbn.errors.MemoryLimitError` before allocating.
+
+CPD rows are divided by their sums (a net accepts rows within 1e-9 of 1; exact sums make
+dropping barren nodes exact). Evidence of probability zero raises
+:class:`~dbn.errors.EvidenceError` whenever it lies in the part of the net a query needs,
+so always when every marginal is asked for; with a few queries, an impossible
+observation d-separated from all of them goes unnoticed (as with pgmpy's pruning).
 """
 
 from __future__ import annotations
