@@ -41,7 +41,7 @@ def run(quick: bool, seed: int) -> dict:
         names += ["asia", "cancer", "earthquake", "sachs", "survey"]
     rows = []
     for name in names:
-        bn = pa.example_network(name)
+        bn = pa.bundled_network(name)
         model = pa.to_pgmpy(bn)
         ev = random_evidence(bn, rng)
         hidden = [n for n in bn.nodes if n not in ev]

@@ -24,6 +24,7 @@ __all__ = [
     "ShapeError",
     "NonFiniteError",
     "TimeOrderError",
+    "MemoryLimitError",
 ]
 
 
@@ -85,3 +86,9 @@ class NonFiniteError(InputError):
 
 class TimeOrderError(InputError):
     """Observations or log timestamps go backwards in time (or quit before enter)."""
+
+
+# --- resources -------------------------------------------------------------------------
+class MemoryLimitError(DBNError):
+    """An exact engine would allocate a table larger than its limit (the message names
+    the clique and its size); raised before anything is allocated."""

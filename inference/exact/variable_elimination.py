@@ -15,6 +15,7 @@ from dbn.bayesnet import BayesNet, check_evidence
 from dbn.errors import EvidenceError, ModelError, UnknownVariableError
 from inference.exact.factor import Factor, product
 from inference.exact.graph import elimination_order, interaction_graph
+from inference.exact.pruning import barren, net_index, requisite
 
 __all__ = ["evidence_factors", "variable_elimination", "log_evidence", "eliminate"]
 
@@ -108,6 +109,7 @@ def variable_elimination(
         raise EvidenceError(f"query variable(s) {clash} are observed")
     if len(set(query)) != len(query):
         raise EvidenceError(f"query lists a variable twice: {query}")
+    factors = _requisite_factors(bn, factors, query, hard, soft_evidence)
     graph = interaction_graph(f.variables for f in factors)
     cards = {n: bn.cardinality(n) for n in bn.nodes}
     hidden = [n for n in graph.nodes if n not in query]
@@ -118,6 +120,41 @@ def variable_elimination(
     if missing:  # a query variable in no factor cannot happen in a BN; keep it safe
         raise ModelError(f"query variables {missing} are in no factor")
     return joint.normalize().transpose(query)
+
+
+def _requisite_factors(
+    bn: BayesNet,
+    factors: list[Factor],
+    query: Sequence[str],
+    hard: Mapping[str, int],
+    soft_evidence: Mapping[str, ArrayLike] | None,
+) -> list[Factor]:
+    """The factors ``P(query | evidence)`` needs: barren and d-separated ones dropped (see
+    :mod:`inference.exact.pruning`); ``factors`` is :func:`evidence_factors`' list.
+
+    The d-separated, non-barren factors do not change the posterior but their sum is
+    ``P(e)`` of their part: it is eliminated (on its own) to check that it is not zero.
+    """
+    net = net_index(bn)
+    soft = [n for n in (soft_evidence or {}) if n not in hard]
+    q = [net.index[n] for n in query]
+    obs = [net.index[n] for n in hard]
+    pr = requisite(net, q, obs, [net.index[n] for n in soft])
+    hidden = {net.names[i] for i in pr.hidden}
+    soft_factors = list(zip(factors[len(net.names) :], soft_evidence or {}))
+    keep = [factors[i] for i in pr.factors]  # the CPD factors come first, in node order
+    keep += [f for f, n in soft_factors if n not in hard and n in hidden]
+    kept = set(pr.factors)
+    ancestral = barren(net, {*q, *obs, *(net.index[n] for n in soft)})
+    rest = [factors[i] for i in ancestral if i not in kept]
+    rest += [f for f, n in soft_factors if n in hard or n not in hidden]
+    if rest:
+        graph = interaction_graph(f.variables for f in rest)
+        order = elimination_order(graph, {n: bn.cardinality(n) for n in graph.nodes})
+        remaining, _ = eliminate(rest, order, "sum")
+        if not np.isfinite(np.sum([f.log_normalizer() for f in remaining])):
+            raise EvidenceError("the evidence has probability zero")
+    return keep
 
 
 def log_evidence(

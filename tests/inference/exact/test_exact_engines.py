@@ -76,7 +76,7 @@ def test_factor_value_semantics() -> None:
 
 
 def test_bad_evidence_leaves_tree_usable_and_unchanged() -> None:
-    bn = pa.example_network("asia")
+    bn = pa.bundled_network("asia")
     jt = JunctionTree(bn)
     before = jt.calibrate({"asia": "yes"})
     with pytest.raises(EvidenceError, match="unknown"):
@@ -97,7 +97,7 @@ def test_bad_evidence_leaves_tree_usable_and_unchanged() -> None:
 
 @pytest.mark.parametrize("name", pa.EXAMPLE_NETWORKS)
 def test_example_networks_equal_pgmpy(name: str) -> None:
-    bn = pa.example_network(name)
+    bn = pa.bundled_network(name)
     model = pa.to_pgmpy(bn)
     jt = JunctionTree(bn)
     rng = np.random.default_rng(abs(hash(name)) % 2**32)
