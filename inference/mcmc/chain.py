@@ -113,9 +113,9 @@ def sample(
     best_value, best_step = value, -1
     best = (snapshot(state) if snapshot is not None else state) if keep_best else None
     last = int(burn_in)  # first kept sample not yet recorded
-    step = kernel.step
+    decide, apply = kernel.decide, kernel.apply
     for it in range(num_steps):
-        new_state, info = step(rng, state, value, log_target)
+        proposal, info = decide(rng, state, value, log_target)
         tried[info.move] += 1
         if not info.accepted:
             continue
@@ -124,7 +124,7 @@ def sample(
             if record is not None and it > last:
                 record(state, it - last)
             last = it
-        state, value = new_state, info.log_target
+        state, value = apply(state, proposal), info.log_target
         if value > best_value or (best_value == -math.inf and value > -math.inf):
             best_value, best_step = value, it
             if keep_best:

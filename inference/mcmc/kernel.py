@@ -281,7 +281,30 @@ class MoveKernel:
         log_target_value: float,
         log_target: Callable[[Any], float] | None = None,
     ) -> tuple[Any, RJInfo]:
-        """One reversible-jump step: select, propose, accept or reject.
+        """One reversible-jump step: :meth:`decide`, then :meth:`apply` if accepted.
+
+        Parameters and randomness as in :meth:`decide`.
+
+        Returns
+        -------
+        state : Any
+        info : RJInfo
+        """
+        proposal, info = self.decide(rng, state, log_target_value, log_target)
+        return (self.apply(state, proposal), info) if info.accepted else (state, info)
+
+    def apply(self, state: Any, proposal: Proposal) -> Any:
+        """The state after an accepted ``proposal`` (``commit`` or its state)."""
+        return proposal.state if self.commit is None else self.commit(state, proposal.state)
+
+    def decide(
+        self,
+        rng: np.random.Generator,
+        state: Any,
+        log_target_value: float,
+        log_target: Callable[[Any], float] | None = None,
+    ) -> tuple[Proposal | None, RJInfo]:
+        """Select a move, propose, and accept or reject (seed 003, eq. 11); no commit.
 
         Parameters
         ----------
@@ -299,14 +322,16 @@ class MoveKernel:
 
         Returns
         -------
-        state : Any
+        proposal : Proposal or None
+            The proposal (``None`` if the move could not be made).
         info : RJInfo
+            ``info.log_target`` is that of the state after :meth:`apply` if accepted.
         """
         m = self.select(rng)
         proposal = self.moves[m].propose(rng, state)
         if proposal is None:
             rng.random()  # keep the random stream aligned with an evaluated proposal
-            return state, RJInfo(m, False, -math.inf, log_target_value)
+            return None, RJInfo(m, False, -math.inf, log_target_value)
         if proposal.log_target_delta is not None:
             delta = float(proposal.log_target_delta)
             if math.isfinite(log_target_value):
@@ -331,9 +356,8 @@ class MoveKernel:
             self.log_p_reverse[m],
         )
         if not metropolis_accept(rng, log_a):
-            return state, RJInfo(m, False, log_a, log_target_value)
-        new_state = proposal.state if self.commit is None else self.commit(state, proposal.state)
-        return new_state, RJInfo(m, True, log_a, new_value)
+            return proposal, RJInfo(m, False, log_a, log_target_value)
+        return proposal, RJInfo(m, True, log_a, new_value)
 
 
 def select_move(rng: np.random.Generator, move_probs: np.ndarray) -> int:

@@ -23,7 +23,7 @@ never mutates the state it is given.
 
 from __future__ import annotations
 
-import bisect
+import functools
 import math
 import time
 from collections.abc import Iterable
@@ -34,7 +34,7 @@ from scipy.special import i0e
 from tqdm.auto import tqdm
 
 from dbn.errors import InputError, ShapeError
-from inference.mcmc import log_acceptance_ratio, metropolis_accept, select_move
+from inference.mcmc import Move, MoveKernel, Proposal, sample
 from models.rjmcmc3d.likelihood import (
     Config,
     IncrementalLikelihood,
@@ -52,7 +52,7 @@ from models.rjmcmc3d.model import (
 )
 from models.rjmcmc3d.scene import BoxProjector, Frame, Scene
 
-__all__ = ["FrameResult", "RJMCMCTracker", "TrackState", "MOVE_NAMES"]
+__all__ = ["FrameChain", "FrameResult", "MOVES", "MOVE_NAMES", "RJMCMCTracker", "TrackState"]
 
 MOVE_NAMES = ("add", "delete", "stay", "leave", "switch", "update")
 ADD, DELETE, STAY, LEAVE, SWITCH, UPDATE = range(6)
@@ -118,8 +118,11 @@ class FrameResult(NamedTuple):
     log_target: float
 
 
-class _Chain:
-    """Working state of one frame's chain (mutated in place; private)."""
+class FrameChain:
+    """Working state of one frame's chain (updated in place by the accepted moves).
+
+    Built by :meth:`RJMCMCTracker.frame_chain`; :meth:`run` samples it.
+    """
 
     def __init__(self, tracker: RJMCMCTracker, state: TrackState, frame: Frame, likelihood: str):
         p = tracker.params
@@ -199,7 +202,6 @@ class _Chain:
         else:
             self.lik = None
             self.loglik = full_loglik(p, self.data, cfg, self.sref, self.nref)
-        self.log_probs = np.log(np.asarray(p.move_probs)).tolist()
         self.probs = np.asarray(p.move_probs)
         self._kernel_memo = {}
         self.lik_time = 0.0  # seconds spent projecting boxes and evaluating the likelihood
@@ -527,70 +529,71 @@ class _Chain:
         lq_r = self._log_q_update(x0, y0, x1, y1)
         return S, present.copy(), [i], lq_f, lq_r
 
+    def full_loglik(self) -> float:
+        """Eqs. 8-10 of the current configuration recomputed from scratch (the oracle)."""
+        return full_loglik(
+            self.p, self.data, self._config(self.S, self.present), self.sref, self.nref
+        )
+
+    def record(self, count: int) -> None:
+        """Add the current configuration, held for ``count`` kept samples, to the sums."""
+        pm = self.present.astype(float) * count
+        self.cnt += pm
+        self.su += pm[:, None] * self.S[:, :2]
+        self.suu += pm[:, None, None] * self.S[:, :2, None] * self.S[:, None, :2]
+        self.sh += pm * self.S[:, 2]
+        self.sc[:, 0] += pm * np.cos(self.S[:, 3])
+        self.sc[:, 1] += pm * np.sin(self.S[:, 3])
+
     def run(self, rng: np.random.Generator) -> dict:
+        """Run the frame's chain through :func:`inference.mcmc.sample` (seed 003, eq. 11).
+
+        Returns the moment sums of the kept samples (``presence``, ``cnt``, ``su``,
+        ``suu``, ``sh``, ``sc``) and the acceptance rate of each move.
+        """
         p = self.p
         M = self.M
-        tried = np.zeros(6)
-        acc = np.zeros(6)
-        n_kept = p.num_moves - p.burn_in
-        cnt = np.zeros(M)
-        su = np.zeros((M, 2))
-        suu = np.zeros((M, 2, 2))
-        sh = np.zeros(M)
-        sc = np.zeros((M, 2))
-        last = p.burn_in
-
-        def flush(upto: int) -> None:
-            nonlocal last
-            w = upto - last
-            if w <= 0:
-                return
-            pm = self.present.astype(float) * w
-            cnt[:] += pm
-            su[:] += pm[:, None] * self.S[:, :2]
-            suu[:] += pm[:, None, None] * self.S[:, :2, None] * self.S[:, None, :2]
-            sh[:] += pm * self.S[:, 2]
-            sc[:, 0] += pm * np.cos(self.S[:, 3])
-            sc[:, 1] += pm * np.sin(self.S[:, 3])
-            last = upto
-
-        cum = np.cumsum(self.probs).tolist()
-        for it in range(p.num_moves):
-            m = (
-                select_move(rng, self.probs)
-                if it == 0
-                else min(bisect.bisect_right(cum, rng.random()), 5)
-            )
-            tried[m] += 1
-            prop = self.propose(rng, m)
-            if prop is None:
-                rng.random()
-                continue
-            S_new, pr_new, changed, lq_f, lq_r = prop
-            if lq_r == -math.inf:
-                rng.random()
-                continue
-            delta, commit = self._evaluate(S_new, pr_new, changed)
-            log_a = log_acceptance_ratio(
-                delta, lq_f, lq_r, self.log_probs[m], self.log_probs[REVERSE[m]]
-            )
-            if metropolis_accept(rng, log_a):
-                if it >= p.burn_in:
-                    flush(it)
-                self._commit(commit)
-                acc[m] += 1
-        flush(p.num_moves)
-        with np.errstate(invalid="ignore"):
-            rates = acc / tried
+        self.cnt, self.su, self.suu = np.zeros(M), np.zeros((M, 2)), np.zeros((M, 2, 2))
+        self.sh, self.sc = np.zeros(M), np.zeros((M, 2))
+        kernel = MoveKernel(MOVES, self.probs, commit=_commit)
+        rec = sample(rng, kernel, self, p.num_moves, 0.0, burn_in=p.burn_in, record=_record)
         return {
-            "presence": cnt / n_kept,
-            "cnt": cnt,
-            "su": su,
-            "suu": suu,
-            "sh": sh,
-            "sc": sc,
-            "accept_rate": rates,
+            "presence": self.cnt / (p.num_moves - p.burn_in),
+            "cnt": self.cnt,
+            "su": self.su,
+            "suu": self.suu,
+            "sh": self.sh,
+            "sc": self.sc,
+            "accept_rate": rec.accept_rate,
         }
+
+
+def _propose_move(move: int, rng: np.random.Generator, chain: FrameChain) -> Proposal | None:
+    """Declaration of move ``move`` for :class:`inference.mcmc.MoveKernel`: the proposal,
+    its two log densities and the incremental log target change (eqs. 2 and 8-10)."""
+    prop = chain.propose(rng, move)
+    if prop is None:
+        return None
+    S_new, pr_new, changed, lq_f, lq_r = prop
+    if lq_r == -math.inf:  # impossible reverse: rejected without evaluating the target
+        return Proposal(None, lq_f, lq_r, -math.inf)
+    delta, pending = chain._evaluate(S_new, pr_new, changed)
+    return Proposal(pending, lq_f, lq_r, delta)
+
+
+def _commit(chain: FrameChain, pending: tuple) -> FrameChain:
+    chain._commit(pending)
+    return chain
+
+
+def _record(chain: FrameChain, count: int) -> None:
+    chain.record(count)
+
+
+#: the six moves of seed 003, sec. 3.4, in the order of ``TrackerParams.move_probs``
+MOVES = tuple(
+    Move(name, functools.partial(_propose_move, m), REVERSE[m]) for m, name in enumerate(MOVE_NAMES)
+)
 
 
 class RJMCMCTracker:
@@ -665,6 +668,25 @@ class RJMCMCTracker:
             0,
         )
 
+    def frame_chain(
+        self, state: TrackState, frame: Frame, likelihood: str | None = None
+    ) -> FrameChain:
+        """The chain of one frame before sampling (for benchmarks and diagnostics).
+
+        Parameters
+        ----------
+        state : TrackState
+            Previous posterior summary (not mutated).
+        frame : Frame
+        likelihood : {"incremental", "full"}, optional
+            Default: the tracker's.
+        """
+        self._check_frame(frame)
+        mode = self.likelihood if likelihood is None else likelihood
+        if mode not in ("incremental", "full"):
+            raise InputError(f"likelihood={mode!r} must be 'incremental' or 'full'")
+        return FrameChain(self, state, frame, mode)
+
     def _check_frame(self, frame: Frame) -> None:
         sc = self.scene
         shape = (sc.num_views, sc.height, sc.width)
@@ -705,12 +727,12 @@ class RJMCMCTracker:
         """
         self._check_frame(frame)
         rng = np.random.default_rng(seed)
-        chain = _Chain(self, state, frame, self.likelihood)
+        chain = FrameChain(self, state, frame, self.likelihood)
         out = chain.run(rng)
         return self._posterior(state, chain, out)
 
     def _posterior(
-        self, state: TrackState, chain: _Chain, out: dict
+        self, state: TrackState, chain: FrameChain, out: dict
     ) -> tuple[TrackState, FrameResult]:
         p = self.params
         exist = out["presence"] > 0.5
@@ -759,7 +781,7 @@ class RJMCMCTracker:
         )
         return new_state, result
 
-    def _update_refs(self, chain: _Chain, state: TrackState, exist, mu, h, alpha):
+    def _update_refs(self, chain: FrameChain, state: TrackState, exist, mu, h, alpha):
         """Reference histogram update from the mean state (seed 003, sec. 3.3)."""
         p = self.params
         refs = np.where(exist[:, None, None, None], state.refs, 0.0)
