@@ -211,7 +211,9 @@ def test_scalar_interaction_matches_vectorised(scene, tracker) -> None:
     from models.rjmcmc3d.model import interaction_penalty
 
     truth = simulate_walkers(5, scene, 3, 5)
-    chain = tracker.frame_chain(tracker.init_state(), render_frame(6, scene, truth, 0), "incremental")
+    chain = tracker.frame_chain(
+        tracker.init_state(), render_frame(6, scene, truth, 0), "incremental"
+    )
     rng = np.random.default_rng(1)
     for _ in range(50):
         si = [*rng.uniform(0, 3, 2), 1.7, rng.uniform(-3, 3)]
