@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from models.rjmcmc3d.model import TrackerParams
-from models.rjmcmc3d.scene import Frame
+from models.rjmcmc3d.types import Frame
 
 __all__ = [
     "Config",

@@ -50,7 +50,8 @@ from models.rjmcmc3d.model import (
     ground_noise_map,
     predict,
 )
-from models.rjmcmc3d.scene import BoxProjector, Frame, Scene
+from models.rjmcmc3d.projection import BoxProjector
+from models.rjmcmc3d.types import Frame, Scene
 
 __all__ = ["FrameChain", "FrameResult", "MOVES", "MOVE_NAMES", "RJMCMCTracker", "TrackState"]
 
