@@ -412,85 +412,102 @@ class IncrementalLikelihood:
         delta = 0.0
         patches = []
         colour = []
+        stay = [k for k in self.alive if k not in ov]  # present, unchanged
+        for v in range(self.num_views):
+            got = self._foreground_view(v, items, stay)
+            if got is None:
+                continue
+            patch, others = got
+            delta += patch[2]
+            patches.append(patch)
+            for c in self._colour_view(v, items, stay, others):
+                delta += c[2] - self.cc[v][c[1]]
+                colour.append(c)
+        return delta, _Pending(delta, patches, colour, ov)
+
+    def _foreground_view(self, v: int, items: list, stay: list) -> tuple | None:
+        """Eq. 9 change in view ``v`` and the unchanged people meeting the changed area.
+
+        Returns ``None`` when no changed person is (or becomes) visible in the view, else
+        ``((v, signed boxes, d_fg, new union sums), others)``.
+        """
+        present_l = self.present_l
+        nz_v = self.nz_l[v]
+        signed = []
+        new_nz = []
+        for j, (pr, bx, _, _) in items:
+            if present_l[j]:
+                signed += [(bx_, -1) for bx_ in nz_v[j]]
+            nz = [b for b in bx[v] if b[2] > b[0] and b[3] > b[1]] if pr else []
+            new_nz.append(nz)
+            signed += [(bx_, 1) for bx_ in nz]
+        if not signed:
+            return None
+        X0 = Y0 = 1 << 40
+        X1 = Y1 = -1
+        for (b0, b1, b2, b3), _ in signed:
+            X0 = b0 if b0 < X0 else X0
+            Y0 = b1 if b1 < Y0 else Y0
+            X1 = b2 if b2 > X1 else X1
+            Y1 = b3 if b3 > Y1 else Y1
+        bbox_v = self.bbox_l[v]
+        others = []  # unchanged people whose boxes meet the changed area
+        for k in stay:
+            kx0, ky0, kx1, ky1 = bbox_v[k]
+            if kx0 >= X1 or kx1 <= X0 or ky0 >= Y1 or ky1 <= Y0:
+                continue
+            others.append(k)
+        get = self.data.ii[v].item
+        st = self._stride
+        new_usum = {}
+        for (j, _), nz in zip(items, new_nz):
+            new_usum[j] = _union_sum(get, st, nz) if nz else 0.0
+        if not others and len(items) == 1:
+            # nobody else covers these pixels: eq. 9 change from the integral image
+            j = items[0][0]
+            d_fg = new_usum[j] - (self.usum[v][j] if present_l[j] else 0.0)
+        else:
+            cold = self.count[v, Y0:Y1, X0:X1]
+            cnew = cold.copy()
+            for (bx0, by0, bx1, by1), sign in signed:
+                cnew[by0 - Y0 : by1 - Y0, bx0 - X0 : bx1 - X0] += sign
+            f = self.data.fgw[v, Y0:Y1, X0:X1]
+            d_fg = float(
+                np.add.reduce(f, axis=None, where=cnew > 0)
+                - np.add.reduce(f, axis=None, where=cold > 0)
+            )
+        return (v, signed, d_fg, new_usum), others
+
+    def _colour_view(self, v: int, items: list, stay: list, others: list) -> list:
+        """Eq. 10 terms ``(v, j, new cost)`` of the changed people and of the unchanged
+        ones behind a changed person (their visible pixels change) in view ``v``."""
         active = self.active_l
         present_l = self.present_l
-        stay = [k for k in self.alive if k not in ov]  # present, unchanged
-        ii = self.data.ii
-        st = self._stride
-        for v in range(self.num_views):
-            nz_v = self.nz_l[v]
-            signed = []
-            new_nz = []
-            for j, (pr, bx, _, _) in items:
-                if present_l[j]:
-                    signed += [(bx_, -1) for bx_ in nz_v[j]]
-                nz = [b for b in bx[v] if b[2] > b[0] and b[3] > b[1]] if pr else []
-                new_nz.append(nz)
-                signed += [(bx_, 1) for bx_ in nz]
-            if not signed:
+        boxes_v, depth_v, bbox_v = self.boxes_l[v], self.depth_l[v], self.bbox_l[v]
+        # the configuration after the move, as seen from view v
+        occ = [(k, boxes_v[k], bbox_v[k], depth_v[k]) for k in stay]
+        occ += [(j, bx[v], bb[v], dp[v]) for j, (pr, bx, bb, dp) in items if pr]
+        out = []
+        for j, (pr, bx, bb, dp) in items:
+            if active[j]:
+                c_new = self._slot_cost(v, j, bx[v], bb[v], dp[v], occ) if pr else 0.0
+                out.append((v, j, c_new))
+        for k in others:
+            if not active[k]:
                 continue
-            X0 = Y0 = 1 << 40
-            X1 = Y1 = -1
-            for (b0, b1, b2, b3), _ in signed:
-                X0 = b0 if b0 < X0 else X0
-                Y0 = b1 if b1 < Y0 else Y0
-                X1 = b2 if b2 > X1 else X1
-                Y1 = b3 if b3 > Y1 else Y1
-            bbox_v = self.bbox_l[v]
-            others = []  # unchanged people whose boxes meet the changed area
-            for k in stay:
-                kx0, ky0, kx1, ky1 = bbox_v[k]
-                if kx0 >= X1 or kx1 <= X0 or ky0 >= Y1 or ky1 <= Y0:
-                    continue
-                others.append(k)
-            get = ii[v].item
-            new_usum = {}
-            for (j, _), nz in zip(items, new_nz):
-                new_usum[j] = _union_sum(get, st, nz) if nz else 0.0
-            if not others and len(items) == 1:
-                # nobody else covers these pixels: eq. 9 change from the integral image
-                j = items[0][0]
-                d_fg = new_usum[j] - (self.usum[v][j] if present_l[j] else 0.0)
+            # k's visible pixels change only if a changed person is (or was) nearer
+            dk = depth_v[k]
+            for j, (pr, _, _, dp) in items:
+                dj = depth_v[j]
+                if present_l[j] and (dj < dk or (dj == dk and j < k)):
+                    break
+                dj = dp[v]
+                if pr and (dj < dk or (dj == dk and j < k)):
+                    break
             else:
-                cold = self.count[v, Y0:Y1, X0:X1]
-                cnew = cold.copy()
-                for (bx0, by0, bx1, by1), sign in signed:
-                    cnew[by0 - Y0 : by1 - Y0, bx0 - X0 : bx1 - X0] += sign
-                f = self.data.fgw[v, Y0:Y1, X0:X1]
-                d_fg = float(
-                    np.add.reduce(f, axis=None, where=cnew > 0)
-                    - np.add.reduce(f, axis=None, where=cold > 0)
-                )
-            delta += d_fg
-            patches.append((v, signed, d_fg, new_usum))
-            # the configuration after the move, as seen from view v
-            boxes_v, depth_v = self.boxes_l[v], self.depth_l[v]
-            occ = [(k, boxes_v[k], bbox_v[k], depth_v[k]) for k in stay]
-            occ += [(j, bx[v], bb[v], dp[v]) for j, (pr, bx, bb, dp) in items if pr]
-            cc_v = self.cc[v]
-            for j, (pr, bx, bb, dp) in items:
-                if active[j]:
-                    c_new = self._slot_cost(v, j, bx[v], bb[v], dp[v], occ) if pr else 0.0
-                    delta += c_new - cc_v[j]
-                    colour.append((v, j, c_new))
-            for k in others:
-                if not active[k]:
-                    continue
-                # k's visible pixels change only if a changed person is (or was) nearer
-                dk = depth_v[k]
-                for j, (pr, _, _, dp) in items:
-                    dj = depth_v[j]
-                    if present_l[j] and (dj < dk or (dj == dk and j < k)):
-                        break
-                    dj = dp[v]
-                    if pr and (dj < dk or (dj == dk and j < k)):
-                        break
-                else:
-                    continue
-                c_new = self._slot_cost(v, k, boxes_v[k], bbox_v[k], dk, occ)
-                delta += c_new - cc_v[k]
-                colour.append((v, k, c_new))
-        return delta, _Pending(delta, patches, colour, ov)
+                continue
+            out.append((v, k, self._slot_cost(v, k, boxes_v[k], bbox_v[k], dk, occ)))
+        return out
 
     def commit(self, pending: _Pending) -> None:
         """Make the proposed configuration current."""

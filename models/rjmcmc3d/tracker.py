@@ -129,8 +129,7 @@ class FrameChain:
         p = tracker.params
         self.p = p
         self.t = tracker
-        M = p.max_objects
-        self.M = M
+        self.M = p.max_objects
         self.scene = tracker.scene
         self.proj = tracker.projector
         self.data = prepare_frame(p, frame)
@@ -139,10 +138,23 @@ class FrameChain:
         self.floor = fl.tolist()
         self.log_area = math.log((fl[1] - fl[0]) * (fl[3] - fl[2]))
         self.ta = p.tau * p.a
-        # previous-frame summary -> prediction (eq. 7)
+        self._predict(state)
+        self._detections(frame)
+        # colour references
+        self.refs = state.refs
+        self.nref = state.nref
+        self.sref = np.sqrt(state.refs)
+        self._initial_configuration()
+        self.probs = np.asarray(p.move_probs)
+        self._kernel_memo = {}
+        self.lik_time = 0.0  # seconds spent projecting boxes and evaluating the likelihood
+
+    def _predict(self, state: TrackState) -> None:
+        """Previous-frame summary -> prediction (eq. 7), height, orientation, leave terms."""
+        p = self.p
         self.prev = state.alive.copy()
         self.prev_l = self.prev.tolist()
-        m, P = predict(p, tracker.noise, state.mean, state.cov)
+        m, P = predict(p, self.t.noise, state.mean, state.cov)
         self.m = m
         self.P = P
         Puu = P[:, :2, :2] + 1e-9 * np.eye(2)
@@ -163,32 +175,34 @@ class FrameChain:
         z = np.clip(inside / (p.leave_ramp / 4.0), -50, 50)
         self.p_leave = p.p_leave_inside + (0.999 - p.p_leave_inside) / (1.0 + np.exp(z))
         self.log_vm = -math.log(2 * math.pi * i0e(p.alpha_kappa))
-        # detections inside the floor, with their single-view covariances
+        self.h_pred_l = self.h_pred.tolist()
+        self.alpha_pred_l = self.alpha_pred.tolist()
+        self.p_leave_l = self.p_leave.tolist()
+
+    def _detections(self, frame: Frame) -> None:
+        """Detections inside the floor, with their single-view covariances (sec. 3.4)."""
+        p = self.p
         sel = self._signed_inside(frame.det_ground) > 0
         self.det = frame.det_ground[sel]
         self.det_l = self.det.tolist()
         dv = frame.det_view[sel]
         if p.ground_noise:
-            i, j = tracker.noise.index(self.det)
-            cov = tracker.noise.view_cov[dv, i, j] + p.min_sd**2 * np.eye(2)
+            i, j = self.t.noise.index(self.det)
+            cov = self.t.noise.view_cov[dv, i, j] + p.min_sd**2 * np.eye(2)
         else:
             cov = np.broadcast_to(p.fixed_sd**2 * np.eye(2), (len(dv), 2, 2)).copy()
         self.det_L = np.linalg.cholesky(cov) if len(dv) else np.zeros((0, 2, 2))
         gate_cov = cov + 0.3**2 * np.eye(2)
         self.det_gate_L = np.linalg.cholesky(gate_cov) if len(dv) else np.zeros((0, 2, 2))
-        # colour references
-        self.refs = state.refs
-        self.nref = state.nref
-        self.sref = np.sqrt(state.refs)
-        # initial configuration: previous people at their predicted means if inside
-        self.present = self.prev & (self._signed_inside(m[:, :2]) > 0)
+
+    def _initial_configuration(self) -> None:
+        """Previous people at their predicted means if inside; priors, boxes, likelihood."""
+        p, M = self.p, self.M
+        self.present = self.prev & (self._signed_inside(self.m[:, :2]) > 0)
         self.S = np.zeros((M, 4))  # x, y, h, alpha
-        self.S[:, :2] = m[:, :2]
+        self.S[:, :2] = self.m[:, :2]
         self.S[:, 2] = np.where(self.prev, self.h_pred, p.h_mean)
         self.S[:, 3] = self.alpha_pred
-        self.h_pred_l = self.h_pred.tolist()
-        self.alpha_pred_l = self.alpha_pred.tolist()
-        self.p_leave_l = self.p_leave.tolist()
         self.lp = [self._slot_prior(i, self.S[i].tolist(), bool(self.present[i])) for i in range(M)]
         self.upr = [self._upr(i, self.S[i, 0], self.S[i, 1]) for i in range(M)]
         self.boxdata = [self.proj.one(*self.S[i].tolist()) for i in range(M)]
@@ -197,15 +211,12 @@ class FrameChain:
         self.alive = [j for j in range(M) if self.present_l[j]]
         cfg = self._config_from_boxdata(self.boxdata, self.present)
         self.G = self._interaction_matrix()
-        if likelihood == "incremental":
+        if self.likelihood == "incremental":
             self.lik = IncrementalLikelihood(p, self.data, cfg, self.sref, self.nref)
             self.loglik = self.lik.total
         else:
             self.lik = None
             self.loglik = full_loglik(p, self.data, cfg, self.sref, self.nref)
-        self.probs = np.asarray(p.move_probs)
-        self._kernel_memo = {}
-        self.lik_time = 0.0  # seconds spent projecting boxes and evaluating the likelihood
 
     # ---- geometry helpers --------------------------------------------------------------
     def _signed_inside(self, u: np.ndarray) -> np.ndarray:
@@ -440,82 +451,104 @@ class FrameChain:
 
     # ---- the six moves (seed 003, sec. 3.4) ---------------------------------------------
     def propose(self, rng: np.random.Generator, move: int):
-        """Return ``(S_new, present_new, changed, log_q_fwd, log_q_rev)`` or ``None``."""
+        """Return ``(S_new, present_new, changed, log_q_fwd, log_q_rev)`` or ``None``.
+
+        ``move`` indexes :data:`MOVE_NAMES` (seed 003, sec. 3.4); the proposal densities
+        count only the choices possible from the current state.
+        """
+        return _PROPOSALS[move](self, rng)
+
+    def _add(self, rng: np.random.Generator):
+        """Add: a newborn near a detection far from every present person."""
         p = self.p
         present = self.present
-        if move == ADD:
-            free = np.flatnonzero(~present & ~self.prev)
-            elig = self._eligible(present)
-            if free.size == 0 or not elig.any():
-                return None
-            cand = np.flatnonzero(elig)
-            d = int(cand[int(rng.random() * cand.size)])
-            i = int(free[0])
-            u = self.det[d] + self.det_L[d] @ rng.normal(size=2)
-            h = p.h_mean + p.h_sd0 * rng.normal()
-            a = rng.uniform(-math.pi, math.pi)
-            S = self.S.copy()
-            S[i] = (u[0], u[1], h, a)
-            pr = present.copy()
-            pr[i] = True
-            n_born = int((pr & ~self.prev).sum())
-            return S, pr, [i], self._log_q_add(u, h, elig), -math.log(n_born)
-        if move == DELETE:
-            born = np.flatnonzero(present & ~self.prev)
-            if born.size == 0:
-                return None
-            i = int(born[int(rng.random() * born.size)])
-            pr = present.copy()
-            pr[i] = False
-            lq_rev = self._log_q_add(self.S[i, :2], float(self.S[i, 2]), self._eligible(pr))
-            return self.S.copy(), pr, [i], -math.log(born.size), lq_rev
-        if move == STAY:
-            left = np.flatnonzero(self.prev & ~present)
-            if left.size == 0:
-                return None
-            i = int(left[int(rng.random() * left.size)])
-            u = self.m[i, :2] + self.Luu[i] @ rng.normal(size=2)
-            h = self.h_pred_l[i] + p.h_sd * rng.normal()
-            a = float(rng.vonmises(self.alpha_pred_l[i], p.alpha_kappa))
-            S = self.S.copy()
-            S[i] = (u[0], u[1], h, a)
-            pr = present.copy()
-            pr[i] = True
-            n_stay = int((pr & self.prev).sum())
-            lq = -math.log(left.size) + self._log_pred(i, S[i].tolist())
-            return S, pr, [i], lq, -math.log(n_stay)
-        if move == LEAVE:
-            stay = np.flatnonzero(self.prev & present)
-            if stay.size == 0:
-                return None
-            i = int(stay[int(rng.random() * stay.size)])
-            pr = present.copy()
-            pr[i] = False
-            n_left = int((self.prev & ~pr).sum())
-            lq_rev = -math.log(n_left) + self._log_pred(i, self.S[i].tolist())
-            return self.S.copy(), pr, [i], -math.log(stay.size), lq_rev
-        if move == SWITCH:
-            idx = np.flatnonzero(present)
-            if idx.size < 2:
-                return None
-            U = self.S[idx, :2]
-            dist = np.hypot(U[:, None, 0] - U[None, :, 0], U[:, None, 1] - U[None, :, 1])
-            ii, jj = np.nonzero(np.triu(dist < p.switch_dist, 1))
-            if ii.size == 0:
-                return None
-            k = int(rng.random() * ii.size)
-            a, b = int(idx[ii[k]]), int(idx[jj[k]])
-            S = self.S.copy()
-            S[[a, b]] = S[[b, a]]
-            return S, present.copy(), [a, b], 0.0, 0.0
-        # UPDATE
+        free = np.flatnonzero(~present & ~self.prev)
+        elig = self._eligible(present)
+        if free.size == 0 or not elig.any():
+            return None
+        cand = np.flatnonzero(elig)
+        d = int(cand[int(rng.random() * cand.size)])
+        i = int(free[0])
+        u = self.det[d] + self.det_L[d] @ rng.normal(size=2)
+        h = p.h_mean + p.h_sd0 * rng.normal()
+        a = rng.uniform(-math.pi, math.pi)
+        S = self.S.copy()
+        S[i] = (u[0], u[1], h, a)
+        pr = present.copy()
+        pr[i] = True
+        n_born = int((pr & ~self.prev).sum())
+        return S, pr, [i], self._log_q_add(u, h, elig), -math.log(n_born)
+
+    def _delete(self, rng: np.random.Generator):
+        """Delete: remove a person born in this frame (reverse of add)."""
+        present = self.present
+        born = np.flatnonzero(present & ~self.prev)
+        if born.size == 0:
+            return None
+        i = int(born[int(rng.random() * born.size)])
+        pr = present.copy()
+        pr[i] = False
+        lq_rev = self._log_q_add(self.S[i, :2], float(self.S[i, 2]), self._eligible(pr))
+        return self.S.copy(), pr, [i], -math.log(born.size), lq_rev
+
+    def _stay(self, rng: np.random.Generator):
+        """Stay: bring back a person of the previous frame, drawn from its prediction."""
+        p = self.p
+        present = self.present
+        left = np.flatnonzero(self.prev & ~present)
+        if left.size == 0:
+            return None
+        i = int(left[int(rng.random() * left.size)])
+        u = self.m[i, :2] + self.Luu[i] @ rng.normal(size=2)
+        h = self.h_pred_l[i] + p.h_sd * rng.normal()
+        a = float(rng.vonmises(self.alpha_pred_l[i], p.alpha_kappa))
+        S = self.S.copy()
+        S[i] = (u[0], u[1], h, a)
+        pr = present.copy()
+        pr[i] = True
+        n_stay = int((pr & self.prev).sum())
+        lq = -math.log(left.size) + self._log_pred(i, S[i].tolist())
+        return S, pr, [i], lq, -math.log(n_stay)
+
+    def _leave(self, rng: np.random.Generator):
+        """Leave: a person of the previous frame leaves (reverse of stay)."""
+        present = self.present
+        stay = np.flatnonzero(self.prev & present)
+        if stay.size == 0:
+            return None
+        i = int(stay[int(rng.random() * stay.size)])
+        pr = present.copy()
+        pr[i] = False
+        n_left = int((self.prev & ~pr).sum())
+        lq_rev = -math.log(n_left) + self._log_pred(i, self.S[i].tolist())
+        return self.S.copy(), pr, [i], -math.log(stay.size), lq_rev
+
+    def _switch(self, rng: np.random.Generator):
+        """Switch: exchange the states of two close people (symmetric)."""
+        present = self.present
+        idx = np.flatnonzero(present)
+        if idx.size < 2:
+            return None
+        U = self.S[idx, :2]
+        dist = np.hypot(U[:, None, 0] - U[None, :, 0], U[:, None, 1] - U[None, :, 1])
+        ii, jj = np.nonzero(np.triu(dist < self.p.switch_dist, 1))
+        if ii.size == 0:
+            return None
+        k = int(rng.random() * ii.size)
+        a, b = int(idx[ii[k]]), int(idx[jj[k]])
+        S = self.S.copy()
+        S[[a, b]] = S[[b, a]]
+        return S, present.copy(), [a, b], 0.0, 0.0
+
+    def _update(self, rng: np.random.Generator):
+        """Update: a ``Sigma(u)`` random walk or a jump to a gated detection (mixture)."""
         alive = self.alive
         if not alive:
             return None
         i = alive[int(rng.random() * len(alive))]
         x0, y0, h0, a0 = self.S_l[i]
         L, near = self._kernel_at(x0, y0)
-        if near and rng.random() < p.p_det_update:
+        if near and rng.random() < self.p.p_det_update:
             cx, cy = near[int(rng.random() * len(near))]
         else:
             cx, cy = x0, y0
@@ -525,10 +558,10 @@ class FrameChain:
         S = self.S.copy()
         S[i] = (x1, y1, h0 + 0.01 * w3, (a0 + 0.3 * w4 + math.pi) % (2 * math.pi) - math.pi)
         if not self._inside(x1, y1):
-            return S, present.copy(), [i], 0.0, -math.inf  # impossible: rejected
+            return S, self.present.copy(), [i], 0.0, -math.inf  # impossible: rejected
         lq_f = self._log_q_update(x1, y1, x0, y0)
         lq_r = self._log_q_update(x0, y0, x1, y1)
-        return S, present.copy(), [i], lq_f, lq_r
+        return S, self.present.copy(), [i], lq_f, lq_r
 
     def full_loglik(self) -> float:
         """Eqs. 8-10 of the current configuration recomputed from scratch (the oracle)."""
@@ -590,6 +623,15 @@ def _commit(chain: FrameChain, pending: tuple) -> FrameChain:
 def _record(chain: FrameChain, count: int) -> None:
     chain.record(count)
 
+
+_PROPOSALS = (
+    FrameChain._add,
+    FrameChain._delete,
+    FrameChain._stay,
+    FrameChain._leave,
+    FrameChain._switch,
+    FrameChain._update,
+)
 
 #: the six moves of seed 003, sec. 3.4, in the order of ``TrackerParams.move_probs``
 MOVES = tuple(

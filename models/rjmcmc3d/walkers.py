@@ -93,55 +93,16 @@ def simulate_walkers(
     a = math.exp(-beta * tau)
     b = 0.3 * speed * math.sqrt(1 - a * a)
     floor = scene.floor
-    walkers: list[dict] = []
     colours: list[np.ndarray] = []
-    next_id = 0
-    pending = []  # frames at which new walkers enter
-
-    def new_walker(inside: bool) -> dict:
-        nonlocal next_id
-        if inside:
-            start = np.array(
-                [rng.uniform(floor[0] + 1, floor[1] - 1), rng.uniform(floor[2] + 1, floor[3] - 1)]
-            )
-            side = int(rng.integers(4))
-        else:
-            start, side = _random_boundary_point(rng, floor)
-        goal = _goal_for(rng, floor, side)
-        d = goal - start
-        v = speed * rng.uniform(0.8, 1.2) * d / np.linalg.norm(d)
-        skin = np.array([0.55, 0.4, 0.3]) + rng.normal(0, 0.06, 3)
-        colours.append(
-            np.clip(
-                np.stack(
-                    [
-                        _LEGS_PALETTE[rng.integers(len(_LEGS_PALETTE))] + rng.normal(0, 0.05, 3),
-                        _TORSO_PALETTE[rng.integers(len(_TORSO_PALETTE))] + rng.normal(0, 0.05, 3),
-                        skin,
-                    ]
-                ),
-                0,
-                1,
-            )
-        )
-        w = {
-            "id": next_id,
-            "u": start,
-            "v": v,
-            "goal": goal,
-            "pref": np.linalg.norm(v),
-            "h": float(np.clip(rng.normal(1.72, 0.08), 1.5, 1.95)),
-        }
-        next_id += 1
-        return w
-
-    for _ in range(num_people):
-        walkers.append(new_walker(inside=True))
+    walkers = [_new_walker(rng, floor, speed, i, True, colours) for i in range(num_people)]
+    next_id = num_people
+    pending: list[int] = []  # frames at which new walkers enter
     frames = []
     for t in range(num_frames):
         while pending and pending[0] <= t:
             pending.pop(0)
-            walkers.append(new_walker(inside=False))
+            walkers.append(_new_walker(rng, floor, speed, next_id, False, colours))
+            next_id += 1
         for w in walkers:
             d = w["goal"] - w["u"]
             vgoal = w["pref"] * d / max(np.linalg.norm(d), 1e-9)
@@ -156,9 +117,47 @@ def simulate_walkers(
                 pending.append(t + 1 + int(rng.geometric(0.25)))
         pending.sort()
         walkers = alive
-        ids = np.array([w["id"] for w in walkers], dtype=np.int64)
-        u = np.array([w["u"] for w in walkers]).reshape(-1, 2)
-        hh = np.array([w["h"] for w in walkers])
-        al = np.array([math.atan2(w["v"][1], w["v"][0]) for w in walkers])
-        frames.append(FrameTruth(ids, u, hh, al))
+        frames.append(_frame_truth(walkers))
     return Truth(frames, np.stack(colours), tau)
+
+
+def _new_walker(
+    rng: np.random.Generator,
+    floor: np.ndarray,
+    speed: float,
+    walker_id: int,
+    inside: bool,
+    colours: list,
+) -> dict:
+    """A walker starting inside the floor or at its edge, heading to an exit; its region
+    colours (legs, torso, skin) are appended to ``colours``."""
+    if inside:
+        start = np.array(
+            [rng.uniform(floor[0] + 1, floor[1] - 1), rng.uniform(floor[2] + 1, floor[3] - 1)]
+        )
+        side = int(rng.integers(4))
+    else:
+        start, side = _random_boundary_point(rng, floor)
+    goal = _goal_for(rng, floor, side)
+    d = goal - start
+    v = speed * rng.uniform(0.8, 1.2) * d / np.linalg.norm(d)
+    skin = np.array([0.55, 0.4, 0.3]) + rng.normal(0, 0.06, 3)
+    legs = _LEGS_PALETTE[rng.integers(len(_LEGS_PALETTE))] + rng.normal(0, 0.05, 3)
+    torso = _TORSO_PALETTE[rng.integers(len(_TORSO_PALETTE))] + rng.normal(0, 0.05, 3)
+    colours.append(np.clip(np.stack([legs, torso, skin]), 0, 1))
+    return {
+        "id": walker_id,
+        "u": start,
+        "v": v,
+        "goal": goal,
+        "pref": np.linalg.norm(v),
+        "h": float(np.clip(rng.normal(1.72, 0.08), 1.5, 1.95)),
+    }
+
+
+def _frame_truth(walkers: list[dict]) -> FrameTruth:
+    ids = np.array([w["id"] for w in walkers], dtype=np.int64)
+    u = np.array([w["u"] for w in walkers]).reshape(-1, 2)
+    hh = np.array([w["h"] for w in walkers])
+    al = np.array([math.atan2(w["v"][1], w["v"][0]) for w in walkers])
+    return FrameTruth(ids, u, hh, al)

@@ -390,6 +390,41 @@ def chain_step(
     return new, info.move, info.accepted
 
 
+def _check_config(cfg: MCMCConfig, num_samples: int, num_chains: int) -> np.ndarray:
+    """Validated move probabilities (4,); raises InputError naming the bad field."""
+    probs = np.asarray(cfg.move_probs, float)
+    if probs.shape != (4,) or (probs < 0).any() or abs(probs.sum() - 1.0) > 1e-9:
+        raise InputError(f"move_probs = {cfg.move_probs}: need 4 non-negative numbers summing to 1")
+    if (probs[2] > 0) != (probs[3] > 0):
+        raise InputError(
+            f"move_probs = {cfg.move_probs}: split and merge are each other's "
+            "reverse; give both a positive probability or neither"
+        )
+    if cfg.init not in ("greedy", "random"):
+        raise InputError(f"init = {cfg.init!r}: must be 'greedy' or 'random'")
+    if num_samples < 1 or num_chains < 1:
+        raise InputError(f"num_samples = {num_samples}, num_chains = {num_chains}: must be >= 1")
+    return probs
+
+
+def _initial_labels(
+    rng,
+    obs: Observations,
+    params: LSParams,
+    cfg: MCMCConfig,
+    num_chains: int,
+    init_labels: np.ndarray | None,
+) -> np.ndarray:
+    """Starting labels (num_chains, num_obs): given, greedy (T = 1 search) or random."""
+    K = obs.num_obs
+    if init_labels is not None:
+        return np.broadcast_to(np.asarray(init_labels, np.int64), (num_chains, K))
+    if cfg.init == "greedy":
+        g = learn_search(obs, params, LearnSearchConfig(num_hypotheses=1, learn=False, n0=1)).labels
+        return np.broadcast_to(g, (num_chains, K))
+    return rng.integers(K, size=(num_chains, K))
+
+
 # ----------------------------------------------------------------------------- driver
 def partition_mcmc(
     seed,
@@ -424,18 +459,7 @@ def partition_mcmc(
     acceptance rate per move, final state, score trace (num_samples, num_chains).
     """
     cfg = MCMCConfig() if config is None else config
-    probs = np.asarray(cfg.move_probs, float)
-    if probs.shape != (4,) or (probs < 0).any() or abs(probs.sum() - 1.0) > 1e-9:
-        raise InputError(f"move_probs = {cfg.move_probs}: need 4 non-negative numbers summing to 1")
-    if (probs[2] > 0) != (probs[3] > 0):
-        raise InputError(
-            f"move_probs = {cfg.move_probs}: split and merge are each other's "
-            "reverse; give both a positive probability or neither"
-        )
-    if cfg.init not in ("greedy", "random"):
-        raise InputError(f"init = {cfg.init!r}: must be 'greedy' or 'random'")
-    if num_samples < 1 or num_chains < 1:
-        raise InputError(f"num_samples = {num_samples}, num_chains = {num_chains}: must be >= 1")
+    probs = _check_config(cfg, num_samples, num_chains)
     _check_params(params)
     obs = validate_observations(
         obs, params.obs_dim, params.path.num_cameras, params.path.num_borders
@@ -445,13 +469,7 @@ def partition_mcmc(
         raise InputError("num_obs = 0: nothing to sample")
     start = time.perf_counter()
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
-    if init_labels is not None:
-        lab0 = np.broadcast_to(np.asarray(init_labels, np.int64), (num_chains, K))
-    elif cfg.init == "greedy":
-        g = learn_search(obs, params, LearnSearchConfig(num_hypotheses=1, learn=False, n0=1)).labels
-        lab0 = np.broadcast_to(g, (num_chains, K))
-    else:
-        lab0 = rng.integers(K, size=(num_chains, K))
+    lab0 = _initial_labels(rng, obs, params, cfg, num_chains, init_labels)
     t = _terms(obs, params)
     state = chain_init(lab0, obs, params)
     marks = {int(n) for n in checkpoints if 1 <= int(n) <= num_samples}
