@@ -29,6 +29,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from models.rjmcmc3d import compiled
+from models.rjmcmc3d.compiled import region_colour_cost
 from models.rjmcmc3d.model import TrackerParams
 from models.rjmcmc3d.types import Frame
 
@@ -282,6 +284,7 @@ class IncrementalLikelihood:
         self.data = data
         self.sref = sref
         self.nref_l = nref.tolist()
+        self.nref_a = np.ascontiguousarray(nref, dtype=np.int64)
         self.active_l = (nref.sum(1) > 0).tolist()
         V, H, W = data.fgw.shape
         self.num_views = V
@@ -364,8 +367,39 @@ class IncrementalLikelihood:
         """Colour term of person ``j`` in view ``v`` with part boxes ``boxes``.
 
         ``occ`` lists the other present people of the configuration as
-        ``(k, boxes_k, bbox_k, depth_k)``; the nearer ones hide their pixels.
+        ``(k, boxes_k, bbox_k, depth_k)``; the nearer ones hide their pixels. Compiled
+        (:func:`~models.rjmcmc3d.compiled.region_colour_cost`) when numba is available.
         """
+        if not compiled.AVAILABLE:
+            return self._slot_cost_numpy(v, j, boxes, bbox, dj, occ)
+        x0, y0, x1, y1 = bbox
+        if x1 <= x0 or y1 <= y0:
+            return 0.0
+        hidden = []
+        for k, bk, bbk, dk in occ:
+            if dk > dj or (dk == dj and k > j) or k == j:
+                continue
+            if bbk[0] >= x1 or bbk[2] <= x0 or bbk[1] >= y1 or bbk[3] <= y0:
+                continue
+            hidden += bk
+        p = self.params
+        return region_colour_cost(
+            self.data.code[v],
+            np.array(bbox, dtype=np.int64),
+            np.array(boxes, dtype=np.int64),
+            np.array(hidden, dtype=np.int64).reshape(-1, 4),
+            self.sref[j],
+            self.nref_a[j],
+            self.data.num_bins,
+            p.lambda_im,
+            p.lambda_f,
+            p.d_min,
+        )
+
+    def _slot_cost_numpy(
+        self, v: int, j: int, boxes: list, bbox: list, dj: float, occ: list
+    ) -> float:
+        """:meth:`_slot_cost` with numpy (the reference of the compiled path)."""
         x0, y0, x1, y1 = bbox
         if x1 <= x0 or y1 <= y0:
             return 0.0

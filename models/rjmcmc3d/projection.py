@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 
+from models.rjmcmc3d import compiled
+from models.rjmcmc3d.compiled import project_person
 from models.rjmcmc3d.types import Scene
 
 __all__ = [
@@ -160,9 +162,23 @@ class BoxProjector:
         self.limits = _box_limits(scene.width, scene.height)
         self.width, self.height = scene.width, scene.height
         self.centers = scene.centers[:, :2].tolist()
+        self.centers_a = np.ascontiguousarray(scene.centers[:, :2], dtype=np.float64)
 
     def one(self, x: float, y: float, h: float, a: float) -> tuple[list, list, list]:
-        """Boxes (V, 3, 4), union boxes (V, 4) and camera distances (V,) as lists."""
+        """Boxes (V, 3, 4), union boxes (V, 4) and camera distances (V,) as lists.
+
+        Compiled (:func:`~models.rjmcmc3d.compiled.project_person`) when numba is
+        available.
+        """
+        if compiled.AVAILABLE:
+            b, bb, d = project_person(
+                self.C, x, y, h, a, self.V, self.width, self.height, self.centers_a
+            )
+            return b.tolist(), bb.tolist(), d.tolist()
+        return self.one_numpy(x, y, h, a)
+
+    def one_numpy(self, x: float, y: float, h: float, a: float) -> tuple[list, list, list]:
+        """:meth:`one` with numpy (the reference of the compiled path)."""
         feat = [x, y, 1.0, math.cos(a), math.sin(a), h]
         b = _boxes_from_points(np.dot(feat, self.C).reshape(self.shape), self.limits)
         boxes = b.reshape(self.V, 3, 4).tolist()
