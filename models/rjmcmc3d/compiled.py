@@ -22,7 +22,13 @@ import math
 
 import numpy as np
 
-__all__ = ["AVAILABLE", "project_person", "region_colour_cost"]
+__all__ = [
+    "AVAILABLE",
+    "patch_foreground_delta",
+    "project_person",
+    "region_colour_cost",
+    "union_sum",
+]
 
 try:  # numba is optional: the numpy paths are the reference
     from numba import njit
@@ -191,3 +197,61 @@ def region_colour_cost(
         d2h = min(max(1.0 - bh / math.sqrt(nF), 0.0), 1.0) if nF > 0 else d2H
         total -= lambda_im * nR * ((1.0 - lambda_f) * d2H + lambda_f * d2h - d_min)
     return total
+
+
+@njit(cache=True, nogil=True)
+def _rect(ii: np.ndarray, st: int, x0: int, y0: int, x1: int, y1: int) -> float:
+    if x1 <= x0 or y1 <= y0:
+        return 0.0
+    return ii[y1 * st + x1] - ii[y0 * st + x1] - ii[y1 * st + x0] + ii[y0 * st + x0]
+
+
+@njit(cache=True, nogil=True)
+def union_sum(ii: np.ndarray, st: int, boxes: np.ndarray) -> float:
+    """Sum of an image over the union of up to three boxes (k, 4), by inclusion-exclusion
+    on its flattened integral image ``ii`` (row stride ``st``); the arithmetic (and its
+    order) of :func:`models.rjmcmc3d.likelihood._union_sum`."""
+    total = 0.0
+    n = boxes.shape[0]
+    for a in range(n):
+        total += _rect(ii, st, boxes[a, 0], boxes[a, 1], boxes[a, 2], boxes[a, 3])
+        for b in range(a + 1, n):
+            x0 = max(boxes[a, 0], boxes[b, 0])
+            y0 = max(boxes[a, 1], boxes[b, 1])
+            x1 = min(boxes[a, 2], boxes[b, 2])
+            y1 = min(boxes[a, 3], boxes[b, 3])
+            if x1 <= x0 or y1 <= y0:
+                continue
+            total -= _rect(ii, st, x0, y0, x1, y1)
+            for c in range(b + 1, n):
+                cx0 = max(x0, boxes[c, 0])
+                cy0 = max(y0, boxes[c, 1])
+                cx1 = min(x1, boxes[c, 2])
+                cy1 = min(y1, boxes[c, 3])
+                total += _rect(ii, st, cx0, cy0, cx1, cy1)
+    return total
+
+
+@njit(cache=True, nogil=True)
+def patch_foreground_delta(
+    count: np.ndarray, fgw: np.ndarray, bounds: np.ndarray, signed: np.ndarray
+) -> float:
+    """Change of eq. 9's foreground sum inside ``bounds`` (x0, y0, x1, y1) when the boxes
+    ``signed[:, :4]`` are added (``signed[:, 4] = +1``) or removed (``-1``) from the
+    per-pixel coverage counts ``count`` (height, width)."""
+    X0, Y0, X1, Y1 = bounds[0], bounds[1], bounds[2], bounds[3]
+    patch = np.zeros((Y1 - Y0, X1 - X0), dtype=np.int64)
+    for r in range(signed.shape[0]):
+        for yy in range(signed[r, 1], signed[r, 3]):
+            for xx in range(signed[r, 0], signed[r, 2]):
+                patch[yy - Y0, xx - X0] += signed[r, 4]
+    d = 0.0
+    for yy in range(Y0, Y1):
+        for xx in range(X0, X1):
+            old = count[yy, xx] > 0
+            new = count[yy, xx] + patch[yy - Y0, xx - X0] > 0
+            if new and not old:
+                d += fgw[yy, xx]
+            elif old and not new:
+                d -= fgw[yy, xx]
+    return d

@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from models.rjmcmc3d import compiled
-from models.rjmcmc3d.compiled import region_colour_cost
+from models.rjmcmc3d.compiled import patch_foreground_delta, region_colour_cost, union_sum
 from models.rjmcmc3d.model import TrackerParams
 from models.rjmcmc3d.types import Frame
 
@@ -491,15 +491,27 @@ class IncrementalLikelihood:
             if kx0 >= X1 or kx1 <= X0 or ky0 >= Y1 or ky1 <= Y0:
                 continue
             others.append(k)
-        get = self.data.ii[v].item
         st = self._stride
         new_usum = {}
-        for (j, _), nz in zip(items, new_nz):
-            new_usum[j] = _union_sum(get, st, nz) if nz else 0.0
+        if compiled.AVAILABLE:
+            ii_v = self.data.ii[v]
+            for (j, _), nz in zip(items, new_nz):
+                new_usum[j] = union_sum(ii_v, st, np.array(nz, dtype=np.int64)) if nz else 0.0
+        else:
+            get = self.data.ii[v].item
+            for (j, _), nz in zip(items, new_nz):
+                new_usum[j] = _union_sum(get, st, nz) if nz else 0.0
         if not others and len(items) == 1:
             # nobody else covers these pixels: eq. 9 change from the integral image
             j = items[0][0]
             d_fg = new_usum[j] - (self.usum[v][j] if present_l[j] else 0.0)
+        elif compiled.AVAILABLE:
+            d_fg = patch_foreground_delta(
+                self.count[v],
+                self.data.fgw[v],
+                np.array((X0, Y0, X1, Y1), dtype=np.int64),
+                np.array([(*b, sign) for b, sign in signed], dtype=np.int64),
+            )
         else:
             cold = self.count[v, Y0:Y1, X0:X1]
             cnew = cold.copy()
