@@ -22,12 +22,15 @@ import math
 
 import numpy as np
 
+LOG_2PI = math.log(2.0 * math.pi)
+
 __all__ = [
     "AVAILABLE",
     "patch_foreground_delta",
     "project_person",
     "region_colour_cost",
     "union_sum",
+    "update_log_q",
 ]
 
 try:  # numba is optional: the numpy paths are the reference
@@ -255,3 +258,50 @@ def patch_foreground_delta(
             elif old and not new:
                 d -= fgw[yy, xx]
     return d
+
+
+@njit(cache=True, nogil=True)
+def _log_gauss2(x: float, y: float, mx: float, my: float, l00: float, l10: float, l11: float):
+    z1 = (x - mx) / l00
+    z2 = (y - my - l10 * z1) / l11
+    return -0.5 * (z1 * z1 + z2 * z2) - math.log(l00 * l11) - LOG_2PI
+
+
+@njit(cache=True, nogil=True)
+def update_log_q(
+    x1: float,
+    y1: float,
+    x0: float,
+    y0: float,
+    l00: float,
+    l10: float,
+    l11: float,
+    det: np.ndarray,
+    gate2: float,
+    w: float,
+) -> float:
+    """``log q(u1 | u0)`` of seed 003's update move: with weight ``1 - w`` a random walk
+    ``N(u0, L L^T)``, with weight ``w`` a jump ``N(d, L L^T)`` to a detection ``d`` (rows
+    of ``det``) chosen uniformly among those within the Mahalanobis gate ``gate2`` of
+    ``u0``; the arithmetic (and its order) of ``FrameChain._log_q_update``."""
+    l_rw = _log_gauss2(x1, y1, x0, y0, l00, l10, l11)
+    ls = np.empty(det.shape[0])
+    n = 0
+    for d in range(det.shape[0]):
+        dx, dy = det[d, 0], det[d, 1]
+        z1 = (dx - x0) / l00
+        z2 = (dy - y0 - l10 * z1) / l11
+        if z1 * z1 + z2 * z2 < gate2:
+            ls[n] = _log_gauss2(x1, y1, dx, dy, l00, l10, l11)
+            n += 1
+    if n == 0:
+        return l_rw
+    mx = ls[0]
+    for k in range(1, n):
+        mx = max(mx, ls[k])
+    mx = max(mx, l_rw)
+    s = 0.0
+    for k in range(n):
+        s += math.exp(ls[k] - mx)
+    mix = (1 - w) * math.exp(l_rw - mx) + w * s / n
+    return mx + math.log(mix)

@@ -35,6 +35,8 @@ from tqdm.auto import tqdm
 
 from dbn.errors import InputError, ShapeError
 from inference.mcmc import Move, MoveKernel, Proposal, sample
+from models.rjmcmc3d import compiled
+from models.rjmcmc3d.compiled import update_log_q
 from models.rjmcmc3d.likelihood import (
     Config,
     IncrementalLikelihood,
@@ -439,7 +441,13 @@ class FrameChain:
 
     def _log_q_update(self, x1: float, y1: float, x0: float, y0: float) -> float:
         """``log q(u1 | u0)`` of the update mixture (random walk + detection-driven)."""
-        L, near = self._kernel_at(x0, y0)
+        got = self._kernel_memo.get((x0, y0))
+        if got is None and compiled.AVAILABLE:  # a new point: one compiled call
+            L = self.t.update_chol(x0, y0)
+            g2 = self.p.det_gate**2
+            w = self.p.p_det_update
+            return update_log_q(x1, y1, x0, y0, L[0], L[1], L[2], self.det, g2, w)
+        L, near = got if got is not None else self._kernel_at(x0, y0)
         l_rw = self._lg(x1, y1, x0, y0, L)
         if not near:
             return l_rw

@@ -62,3 +62,23 @@ def test_colour_cost_equals_numpy(scene) -> None:
             checked += ref != 0.0
     assert checked > 50
     assert prepare_frame(params, render_frame(4, scene, truth, 4)).code.dtype == np.int64
+
+
+def test_update_density_equals_python(scene) -> None:
+    truth = simulate_walkers(3, scene, 2, 7)
+    tracker = RJMCMCTracker(scene, TrackerParams(num_moves=300, burn_in=50))
+    chain = tracker.frame_chain(tracker.init_state(), render_frame(4, scene, truth, 1))
+    assert chain.det.shape[0] >= 3
+    rng = np.random.default_rng(2)
+    p = tracker.params
+    near_seen = 0
+    for _ in range(300):
+        d = chain.det[int(rng.integers(chain.det.shape[0]))]
+        x0, y0 = (d + rng.normal(0, 0.3, 2)).tolist()
+        x1, y1 = (d + rng.normal(0, 0.3, 2)).tolist()
+        L, near = chain._kernel_at(x0, y0)  # memoised: the python path below
+        near_seen += bool(near)
+        ref = chain._log_q_update(x1, y1, x0, y0)
+        got = compiled.update_log_q(x1, y1, x0, y0, *L, chain.det, p.det_gate**2, p.p_det_update)
+        assert got == pytest.approx(ref, rel=1e-12, abs=1e-12)
+    assert near_seen > 100
