@@ -26,6 +26,8 @@ LOG_2PI = math.log(2.0 * math.pi)
 
 __all__ = [
     "AVAILABLE",
+    "add_log_q",
+    "far_detections",
     "patch_foreground_delta",
     "project_person",
     "region_colour_cost",
@@ -305,3 +307,60 @@ def update_log_q(
         s += math.exp(ls[k] - mx)
     mix = (1 - w) * math.exp(l_rw - mx) + w * s / n
     return mx + math.log(mix)
+
+
+@njit(cache=True, nogil=True)
+def far_detections(det: np.ndarray, gate_L: np.ndarray, pts: np.ndarray, gate2: float):
+    """Detections (nd, 2) whose Mahalanobis distance (gate factors (nd, 2, 2)) to every
+    point of ``pts`` (n, 2) exceeds ``sqrt(gate2)``: the add move's candidates (seed 003,
+    sec. 3.4); the arithmetic of ``FrameChain._eligible``."""
+    nd = det.shape[0]
+    out = np.ones(nd, dtype=np.bool_)
+    for d in range(nd):
+        l00, l10, l11 = gate_L[d, 0, 0], gate_L[d, 1, 0], gate_L[d, 1, 1]
+        c = math.log(l00 * l11)
+        for k in range(pts.shape[0]):
+            z1 = (pts[k, 0] - det[d, 0]) / l00
+            z2 = (pts[k, 1] - det[d, 1] - l10 * z1) / l11
+            lp = -0.5 * (z1 * z1 + z2 * z2) - c - LOG_2PI
+            if not -2.0 * (lp + c + LOG_2PI) > gate2:
+                out[d] = False
+                break
+    return out
+
+
+@njit(cache=True, nogil=True)
+def add_log_q(
+    ux: float,
+    uy: float,
+    h: float,
+    det: np.ndarray,
+    det_L: np.ndarray,
+    elig: np.ndarray,
+    h_mean: float,
+    h_sd0: float,
+) -> float:
+    """``log q`` of the add move: a detection chosen uniformly among ``elig``, the position
+    drawn from its single-view Gaussian, the height from ``N(h_mean, h_sd0^2)``, the
+    orientation uniform; the arithmetic of ``FrameChain._log_q_add``."""
+    lps = np.empty(det.shape[0])
+    n = 0
+    for d in range(det.shape[0]):
+        if not elig[d]:
+            continue
+        l00, l10, l11 = det_L[d, 0, 0], det_L[d, 1, 0], det_L[d, 1, 1]
+        z1 = (ux - det[d, 0]) / l00
+        z2 = (uy - det[d, 1] - l10 * z1) / l11
+        lps[n] = -0.5 * (z1 * z1 + z2 * z2) - math.log(l00 * l11) - LOG_2PI
+        n += 1
+    if n == 0:
+        return -math.inf
+    mx = lps[0]
+    for k in range(1, n):
+        mx = max(mx, lps[k])
+    s = 0.0
+    for k in range(n):
+        s += math.exp(lps[k] - mx)
+    lq = mx + math.log(s / n)
+    zh = (h - h_mean) / h_sd0
+    return lq - 0.5 * zh * zh - math.log(h_sd0) - 0.5 * LOG_2PI - LOG_2PI

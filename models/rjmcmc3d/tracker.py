@@ -36,7 +36,7 @@ from tqdm.auto import tqdm
 from dbn.errors import InputError, ShapeError
 from inference.mcmc import Move, MoveKernel, Proposal, sample
 from models.rjmcmc3d import compiled
-from models.rjmcmc3d.compiled import update_log_q
+from models.rjmcmc3d.compiled import add_log_q, far_detections, update_log_q
 from models.rjmcmc3d.likelihood import (
     Config,
     IncrementalLikelihood,
@@ -386,12 +386,19 @@ class FrameChain:
         idx = np.flatnonzero(present)
         if idx.size == 0:
             return np.ones(nd, dtype=bool)
+        if compiled.AVAILABLE:
+            return far_detections(self.det, self.det_gate_L, self.S[idx, :2], self.p.add_gate**2)
         lp = gauss2_logpdf(self.S[None, idx, :2], self.det[:, None, :], self.det_gate_L[:, None])
         L = self.det_gate_L
         maha2 = -2.0 * (lp + np.log(L[:, 0, 0] * L[:, 1, 1])[:, None] + LOG_2PI)
         return np.all(maha2 > self.p.add_gate**2, axis=1)
 
     def _log_q_add(self, u: np.ndarray, h: float, elig: np.ndarray) -> float:
+        if compiled.AVAILABLE:
+            p = self.p
+            return add_log_q(
+                float(u[0]), float(u[1]), h, self.det, self.det_L, elig, p.h_mean, p.h_sd0
+            )
         if not elig.any():
             return -math.inf
         lp = gauss2_logpdf(u[None, :], self.det[elig], self.det_L[elig])

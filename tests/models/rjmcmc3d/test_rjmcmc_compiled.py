@@ -82,3 +82,18 @@ def test_update_density_equals_python(scene) -> None:
         got = compiled.update_log_q(x1, y1, x0, y0, *L, chain.det, p.det_gate**2, p.p_det_update)
         assert got == pytest.approx(ref, rel=1e-12, abs=1e-12)
     assert near_seen > 100
+
+
+def test_compiled_and_numpy_chains_coincide(scene, monkeypatch) -> None:
+    """The whole tracker with and without the compiled loops: the same tracks."""
+    truth = simulate_walkers(3, scene, 5, 7)
+    tracker = RJMCMCTracker(scene, TrackerParams(num_moves=400, burn_in=100))
+    frames = [render_frame(4, scene, truth, t) for t in range(5)]
+    fast = tracker.run(11, frames)
+    monkeypatch.setattr(compiled, "AVAILABLE", False)
+    ref = tracker.run(11, frames)
+    for a, b in zip(fast, ref, strict=True):
+        assert np.array_equal(a.ids, b.ids)
+        np.testing.assert_allclose(a.X, b.X, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(a.accept_rate, b.accept_rate, equal_nan=True)
+    assert sum(len(a.ids) for a in fast) >= 10
