@@ -28,6 +28,7 @@ __all__ = [
     "AVAILABLE",
     "add_log_q",
     "far_detections",
+    "frame_codes",
     "patch_foreground_delta",
     "project_person",
     "region_colour_cost",
@@ -364,3 +365,45 @@ def add_log_q(
     lq = mx + math.log(s / n)
     zh = (h - h_mean) / h_sd0
     return lq - 0.5 * zh * zh - math.log(h_sd0) - 0.5 * LOG_2PI - LOG_2PI
+
+
+@njit(cache=True, nogil=True)
+def frame_codes(image: np.ndarray, D: np.ndarray, levels: int, c1: float, c2: float):
+    """Per-pixel colour code, foreground gain and its integral image of one frame, in one
+    pass (float32 images); the arithmetic of ``likelihood.prepare_frame``.
+
+    Returns
+    -------
+    code : ndarray, shape (V, H, W), int64
+        Colour bin ``+ levels^3 [D > c2]``.
+    fgw : ndarray, shape (V, H, W)
+        ``c1 (D - c2)``.
+    ii : ndarray, shape (V, (H + 1) (W + 1))
+        Flattened integral images of ``fgw`` (cumulated over rows, then columns).
+    """
+    V, H, W = D.shape
+    nb = levels**3
+    Lf = np.float32(levels)
+    c2f = np.float32(c2)
+    code = np.empty((V, H, W), dtype=np.int64)
+    fgw = np.empty((V, H, W))
+    ii = np.zeros((V, H + 1, W + 1))
+    col = np.zeros(W)
+    for v in range(V):
+        col[:] = 0.0
+        for y in range(H):
+            run = 0.0
+            for x in range(W):
+                b = 0
+                for k in range(3):
+                    q = int(image[v, y, x, k] * Lf)
+                    q = min(max(q, 0), levels - 1)
+                    b = b * levels + q
+                d = D[v, y, x]
+                code[v, y, x] = b + (nb if d > c2f else 0)
+                g = c1 * (np.float64(d) - c2)
+                fgw[v, y, x] = g
+                col[x] += g
+                run += col[x]
+                ii[v, y + 1, x + 1] = run
+    return code, fgw, ii.reshape(V, (H + 1) * (W + 1))

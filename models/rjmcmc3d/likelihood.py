@@ -30,7 +30,12 @@ from typing import NamedTuple
 import numpy as np
 
 from models.rjmcmc3d import compiled
-from models.rjmcmc3d.compiled import patch_foreground_delta, region_colour_cost, union_sum
+from models.rjmcmc3d.compiled import (
+    frame_codes,
+    patch_foreground_delta,
+    region_colour_cost,
+    union_sum,
+)
 from models.rjmcmc3d.model import TrackerParams
 from models.rjmcmc3d.types import Frame
 
@@ -90,6 +95,9 @@ class Config(NamedTuple):
 def prepare_frame(params: TrackerParams, frame: Frame) -> FrameData:
     """Quantise the colour images and weight the foreground maps of one frame."""
     L = params.colour_levels
+    if compiled.AVAILABLE and frame.image.dtype == np.float32 and frame.D.dtype == np.float32:
+        code, fgw, ii = frame_codes(frame.image, frame.D, L, params.c1, params.c2)
+        return FrameData(fgw, code, L**3, ii)
     q = np.clip((frame.image * L).astype(np.int64), 0, L - 1)
     bins = (q[..., 0] * L + q[..., 1]) * L + q[..., 2]
     nb = L**3

@@ -97,3 +97,14 @@ def test_compiled_and_numpy_chains_coincide(scene, monkeypatch) -> None:
         np.testing.assert_allclose(a.X, b.X, rtol=1e-9, atol=1e-9)
         np.testing.assert_allclose(a.accept_rate, b.accept_rate, equal_nan=True)
     assert sum(len(a.ids) for a in fast) >= 10
+
+
+def test_frame_codes_equal_numpy(scene, monkeypatch) -> None:
+    truth = simulate_walkers(3, scene, 2, 7)
+    frame = render_frame(4, scene, truth, 1)
+    params = TrackerParams()
+    fast = prepare_frame(params, frame)
+    monkeypatch.setattr(compiled, "AVAILABLE", False)
+    ref = prepare_frame(params, frame)
+    for a, b in zip(fast, ref, strict=True):
+        assert np.array_equal(a, b)
