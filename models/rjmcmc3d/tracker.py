@@ -448,13 +448,12 @@ class FrameChain:
 
     def _log_q_update(self, x1: float, y1: float, x0: float, y0: float) -> float:
         """``log q(u1 | u0)`` of the update mixture (random walk + detection-driven)."""
-        got = self._kernel_memo.get((x0, y0))
-        if got is None and compiled.AVAILABLE:  # a new point: one compiled call
+        if compiled.AVAILABLE:  # one compiled call (gating and mixture)
             L = self.t.update_chol(x0, y0)
             g2 = self.p.det_gate**2
             w = self.p.p_det_update
             return update_log_q(x1, y1, x0, y0, L[0], L[1], L[2], self.det, g2, w)
-        L, near = got if got is not None else self._kernel_at(x0, y0)
+        L, near = self._kernel_at(x0, y0)
         l_rw = self._lg(x1, y1, x0, y0, L)
         if not near:
             return l_rw
