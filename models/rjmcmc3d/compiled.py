@@ -29,6 +29,7 @@ __all__ = [
     "add_log_q",
     "far_detections",
     "frame_codes",
+    "interaction_row",
     "patch_foreground_delta",
     "project_person",
     "region_colour_cost",
@@ -158,28 +159,29 @@ def region_colour_cost(
         Square roots of the reference histograms; ``nref`` (3,) how many are valid.
     """
     X0, Y0, X1, Y1 = bbox[0], bbox[1], bbox[2], bbox[3]
+    lab = np.full((Y1 - Y0, X1 - X0), -1, dtype=np.int8)  # region per pixel, -1: none
+    for b in range(3):  # a later part owns the pixels it shares with an earlier one
+        for yy in range(max(parts[b, 1], Y0), min(parts[b, 3], Y1)):
+            for xx in range(max(parts[b, 0], X0), min(parts[b, 2], X1)):
+                lab[yy - Y0, xx - X0] = b
+    for o in range(hidden.shape[0]):
+        for yy in range(max(hidden[o, 1], Y0), min(hidden[o, 3], Y1)):
+            for xx in range(max(hidden[o, 0], X0), min(hidden[o, 2], X1)):
+                lab[yy - Y0, xx - X0] = -1
     counts = np.zeros((3, 2, num_bins))
     for yy in range(Y0, Y1):
         for xx in range(X0, X1):
-            lab = -1
-            for b in range(3):
-                if parts[b, 0] <= xx < parts[b, 2] and parts[b, 1] <= yy < parts[b, 3]:
-                    lab = b
-            if lab < 0:
-                continue
-            for o in range(hidden.shape[0]):
-                if hidden[o, 0] <= xx < hidden[o, 2] and hidden[o, 1] <= yy < hidden[o, 3]:
-                    lab = -1
-                    break
-            if lab < 0:
+            r = lab[yy - Y0, xx - X0]
+            if r < 0:
                 continue
             c = code[yy, xx]
             if c >= num_bins:
-                counts[lab, 1, c - num_bins] += 1.0
+                counts[r, 1, c - num_bins] += 1.0
             else:
-                counts[lab, 0, c] += 1.0
+                counts[r, 0, c] += 1.0
     total = 0.0
     K = sref.shape[1]
+    sq = np.empty((2, num_bins))
     for b in range(3):
         k = nref[b]
         nR = 0.0
@@ -189,14 +191,17 @@ def region_colour_cost(
             nF += counts[b, 1, c]
         if k == 0 or nR == 0.0:
             continue
+        for c in range(num_bins):
+            sq[0, c] = math.sqrt(counts[b, 0, c] + counts[b, 1, c])
+            sq[1, c] = math.sqrt(counts[b, 1, c])
         bH = -1.0
         bh = -1.0
         for r in range(min(k, K)):
             sH = 0.0
             sh = 0.0
             for c in range(num_bins):
-                sH += sref[b, r, c] * math.sqrt(counts[b, 0, c] + counts[b, 1, c])
-                sh += sref[b, r, c] * math.sqrt(counts[b, 1, c])
+                sH += sref[b, r, c] * sq[0, c]
+                sh += sref[b, r, c] * sq[1, c]
             bH = max(bH, sH)
             bh = max(bh, sh)
         d2H = min(max(1.0 - bH / math.sqrt(nR), 0.0), 1.0)
@@ -407,3 +412,42 @@ def frame_codes(image: np.ndarray, D: np.ndarray, levels: int, c1: float, c2: fl
                 run += col[x]
                 ii[v, y + 1, x + 1] = run
     return code, fgw, ii.reshape(V, (H + 1) * (W + 1))
+
+
+@njit(cache=True, nogil=True)
+def interaction_row(
+    s: np.ndarray,
+    u: np.ndarray,
+    S: np.ndarray,
+    upr: np.ndarray,
+    live: np.ndarray,
+    s_along: float,
+    s_across: float,
+) -> np.ndarray:
+    """Pair penalties ``g(X, X_j)`` of sec. 3.2 between one person (state ``s`` = (x, y,
+    h, alpha), predicted position ``u``) and the people ``live`` (rows of ``S`` (M, 4) and
+    ``upr`` (M, 2)); zero elsewhere. The arithmetic of ``FrameChain._pair``.
+
+    Returns
+    -------
+    ndarray, shape (M,)
+    """
+    row = np.zeros(S.shape[0])
+    for n in range(live.shape[0]):
+        j = live[n]
+        total = 0.0
+        for k in range(2):
+            if k == 0:
+                dx, dy = s[0] - S[j, 0], s[1] - S[j, 1]
+            else:
+                dx, dy = u[0] - upr[j, 0], u[1] - upr[j, 1]
+            if dx * dx + dy * dy > 9.0:  # psi < 1e-21 beyond 3 m
+                continue
+            for m in range(2):
+                a = s[3] if m == 0 else S[j, 3]
+                c, sn = math.cos(a), math.sin(a)
+                al = (dx * c + dy * sn) / s_along
+                ac = (-dx * sn + dy * c) / s_across
+                total += math.exp(-0.5 * (al * al + ac * ac))
+        row[j] = total
+    return row

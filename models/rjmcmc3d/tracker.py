@@ -36,7 +36,12 @@ from tqdm.auto import tqdm
 from dbn.errors import InputError, ShapeError
 from inference.mcmc import Move, MoveKernel, Proposal, sample
 from models.rjmcmc3d import compiled
-from models.rjmcmc3d.compiled import add_log_q, far_detections, update_log_q
+from models.rjmcmc3d.compiled import (
+    add_log_q,
+    far_detections,
+    interaction_row,
+    update_log_q,
+)
 from models.rjmcmc3d.likelihood import (
     Config,
     IncrementalLikelihood,
@@ -207,6 +212,7 @@ class FrameChain:
         self.S[:, 3] = self.alpha_pred
         self.lp = [self._slot_prior(i, self.S[i].tolist(), bool(self.present[i])) for i in range(M)]
         self.upr = [self._upr(i, self.S[i, 0], self.S[i, 1]) for i in range(M)]
+        self.upr_a = np.array(self.upr, dtype=np.float64)  # array mirror (compiled loops)
         self.boxdata = [self.proj.one(*self.S[i].tolist()) for i in range(M)]
         self.S_l = self.S.tolist()  # list mirrors of S and present (the per-move code)
         self.present_l = self.present.tolist()
@@ -318,7 +324,17 @@ class FrameChain:
         ]
         for c in changed:
             row = [0.0] * self.M
-            if pr_new[c]:
+            if pr_new[c] and compiled.AVAILABLE and len(changed) == 1:
+                others = np.array([j for j in live if j != c], dtype=np.int64)
+                row = interaction_row(
+                    np.array(rows_s[c]),
+                    np.array(upr_new[c]),
+                    self.S,
+                    self.upr_a,
+                    others,
+                    *self.p.shape_sd,
+                ).tolist()
+            elif pr_new[c]:
                 sc, uc = rows_s[c], upr_new[c]
                 for j in live:
                     if j == c:
@@ -367,6 +383,7 @@ class FrameChain:
             self.present_l[i] = bool(present_new[i])
             self.lp[i] = lp_new[i]
             self.upr[i] = upr_new[i]
+            self.upr_a[i] = upr_new[i]
             self.boxdata[i] = boxdata[i]
             row = rows[i]
             self.G[i] = row
