@@ -28,6 +28,7 @@ __all__ = [
     "AVAILABLE",
     "add_log_q",
     "far_detections",
+    "foreground_one",
     "frame_codes",
     "interaction_row",
     "patch_foreground_delta",
@@ -451,3 +452,97 @@ def interaction_row(
                 total += math.exp(-0.5 * (al * al + ac * ac))
         row[j] = total
     return row
+
+
+@njit(cache=True, nogil=True)
+def _nonempty(boxes: np.ndarray, present: bool) -> np.ndarray:
+    out = np.empty((3, 4), dtype=np.int64)
+    n = 0
+    if present:
+        for b in range(3):
+            if boxes[b, 2] > boxes[b, 0] and boxes[b, 3] > boxes[b, 1]:
+                out[n] = boxes[b]
+                n += 1
+    return out[:n]
+
+
+@njit(cache=True, nogil=True)
+def foreground_one(
+    count: np.ndarray,
+    fgw: np.ndarray,
+    ii: np.ndarray,
+    stride: int,
+    old_present: bool,
+    old_boxes: np.ndarray,
+    old_usum: np.ndarray,
+    new_present: bool,
+    new_boxes: np.ndarray,
+    stay_bbox: np.ndarray,
+):
+    """Eq. 9 change, view by view, when one person's boxes change (the others stay).
+
+    Parameters
+    ----------
+    count : ndarray, shape (V, H, W)
+        Coverage counts of the current configuration.
+    fgw, ii : ndarray, shapes (V, H, W) and (V, (H + 1) (W + 1))
+        Foreground gains and their integral images (row stride ``stride``).
+    old_present, old_boxes, old_usum : bool, (V, 3, 4), (V,)
+        The person's current existence, part boxes and per-view union sums of ``fgw``.
+    new_present, new_boxes : bool, (V, 3, 4)
+        Its proposed existence and boxes.
+    stay_bbox : ndarray, shape (V, n, 4)
+        Union boxes of the unchanged present people.
+
+    Returns
+    -------
+    touched : (V,) bool, whether the view changes; d_fg : (V,) eq. 9 change;
+    new_usum : (V,) union sums of the new boxes; others : (V, n) bool, the unchanged
+    people whose boxes meet the changed area (the arithmetic of
+    ``IncrementalLikelihood._foreground_view``).
+    """
+    V = count.shape[0]
+    touched = np.zeros(V, dtype=np.bool_)
+    d_fg = np.zeros(V)
+    new_usum = np.zeros(V)
+    others = np.zeros((V, stay_bbox.shape[1]), dtype=np.bool_)
+    for v in range(V):
+        old = _nonempty(old_boxes[v], old_present)
+        new = _nonempty(new_boxes[v], new_present)
+        if old.shape[0] == 0 and new.shape[0] == 0:
+            continue
+        touched[v] = True
+        X0 = Y0 = 1 << 40
+        X1 = Y1 = -1
+        for B in (old, new):
+            for r in range(B.shape[0]):
+                X0 = min(X0, B[r, 0])
+                Y0 = min(Y0, B[r, 1])
+                X1 = max(X1, B[r, 2])
+                Y1 = max(Y1, B[r, 3])
+        any_other = False
+        for n in range(stay_bbox.shape[1]):
+            k0, k1, k2, k3 = (
+                stay_bbox[v, n, 0],
+                stay_bbox[v, n, 1],
+                stay_bbox[v, n, 2],
+                stay_bbox[v, n, 3],
+            )
+            if not (k0 >= X1 or k2 <= X0 or k1 >= Y1 or k3 <= Y0):
+                others[v, n] = True
+                any_other = True
+        if new.shape[0]:
+            new_usum[v] = union_sum(ii[v], stride, new)
+        if not any_other:
+            d_fg[v] = new_usum[v] - (old_usum[v] if old_present else 0.0)
+            continue
+        signed = np.empty((old.shape[0] + new.shape[0], 5), dtype=np.int64)
+        for r in range(old.shape[0]):
+            signed[r, :4] = old[r]
+            signed[r, 4] = -1
+        for r in range(new.shape[0]):
+            signed[old.shape[0] + r, :4] = new[r]
+            signed[old.shape[0] + r, 4] = 1
+        bounds = np.array([X0, Y0, X1, Y1], dtype=np.int64)
+        d_fg[v] = patch_foreground_delta(count[v], fgw[v], bounds, signed)
+    return touched, d_fg, new_usum, others

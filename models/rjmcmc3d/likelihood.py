@@ -31,6 +31,7 @@ import numpy as np
 
 from models.rjmcmc3d import compiled
 from models.rjmcmc3d.compiled import (
+    foreground_one,
     frame_codes,
     patch_foreground_delta,
     region_colour_cost,
@@ -340,6 +341,10 @@ class IncrementalLikelihood:
             ]
             for v in range(V)
         ]  # label of covered pixels: a bin beyond the 3 regions
+        # array mirrors of the per-view geometry (the compiled path)
+        self.usum_a = np.array(self.usum, dtype=np.float64).reshape(V, M)
+        self.boxes_a = np.array(cfg.boxes, dtype=np.int64, order="C")
+        self.bbox_a = np.array(cfg.bbox, dtype=np.int64, order="C")
 
     def _colour_one(self, counts: np.ndarray, j: int) -> float:
         """:func:`colour_cost` of one person from its (3, 2, num_bins) counts (fast path)."""
@@ -455,6 +460,8 @@ class IncrementalLikelihood:
         patches = []
         colour = []
         stay = [k for k in self.alive if k not in ov]  # present, unchanged
+        if compiled.AVAILABLE and len(items) == 1:
+            return self._propose_one(items, stay, ov)
         for v in range(self.num_views):
             got = self._foreground_view(v, items, stay)
             if got is None:
@@ -463,6 +470,36 @@ class IncrementalLikelihood:
             delta += patch[2]
             patches.append(patch)
             for c in self._colour_view(v, items, stay, others):
+                delta += c[2] - self.cc[v][c[1]]
+                colour.append(c)
+        return delta, _Pending(delta, patches, colour, ov)
+
+    def _propose_one(self, items: list, stay: list, ov: dict) -> tuple[float, _Pending]:
+        """:meth:`propose` for one changed person, eq. 9 in one compiled call."""
+        j, (pr, bx, _, _) = items[0]
+        stay_a = np.array(stay, dtype=np.int64)
+        touched, d_fg, new_usum, others = foreground_one(
+            self.count,
+            self.data.fgw,
+            self.data.ii,
+            self._stride,
+            self.present_l[j],
+            self.boxes_a[:, j],
+            self.usum_a[:, j],
+            pr,
+            np.array(bx, dtype=np.int64),
+            self.bbox_a[:, stay_a],
+        )
+        delta = 0.0
+        patches = []
+        colour = []
+        others_l = others.tolist()
+        for v in np.flatnonzero(touched).tolist():
+            d = float(d_fg[v])
+            delta += d
+            patches.append((v, None, d, {j: float(new_usum[v])}))
+            near = [k for k, hit in zip(stay, others_l[v]) if hit]
+            for c in self._colour_view(v, items, stay, near):
                 delta += c[2] - self.cc[v][c[1]]
                 colour.append(c)
         return delta, _Pending(delta, patches, colour, ov)
@@ -568,6 +605,12 @@ class IncrementalLikelihood:
         for v, signed, d_fg, new_usum in pending.patches:
             for j, u in new_usum.items():
                 self.usum[v][j] = u
+                self.usum_a[v, j] = u
+            if signed is None:  # one changed person: its old boxes out, its new ones in
+                ((j, (pr, bx, _, _)),) = pending.ov.items()
+                signed = [(b, -1) for b in self.nz_l[v][j]] if self.present_l[j] else []
+                if pr:
+                    signed += [(b, 1) for b in bx[v] if b[2] > b[0] and b[3] > b[1]]
             cv = self.count[v]
             for (bx0, by0, bx1, by1), sign in signed:
                 cv[by0:by1, bx0:bx1] += sign
@@ -582,5 +625,7 @@ class IncrementalLikelihood:
                 self.bbox_l[v][j] = bb[v]
                 self.depth_l[v][j] = dp[v]
                 self.nz_l[v][j] = [b for b in bx[v] if b[2] > b[0] and b[3] > b[1]] if pr else []
+            self.boxes_a[:, j] = bx
+            self.bbox_a[:, j] = bb
         self.alive = [j for j in range(self.M) if self.present_l[j]]
         self.total += pending.delta
