@@ -376,7 +376,9 @@ class IncrementalLikelihood:
             total -= p.lambda_im * nR * ((1.0 - lf) * d2H + lf * d2h - p.d_min)
         return total
 
-    def _slot_cost(self, v: int, j: int, boxes: list, bbox: list, dj: float, occ: list) -> float:
+    def _slot_cost(
+        self, v: int, j: int, boxes: list, bbox: list, dj: float, occ: list, arrays=None
+    ) -> float:
         """Colour term of person ``j`` in view ``v`` with part boxes ``boxes``.
 
         ``occ`` lists the other present people of the configuration as
@@ -398,8 +400,8 @@ class IncrementalLikelihood:
         p = self.params
         return region_colour_cost(
             self.data.code[v],
-            np.array(bbox, dtype=np.int64),
-            np.array(boxes, dtype=np.int64),
+            np.array(bbox, dtype=np.int64) if arrays is None else arrays[1],
+            np.array(boxes, dtype=np.int64) if arrays is None else arrays[0],
             np.array(hidden, dtype=np.int64).reshape(-1, 4),
             self.sref[j],
             self.nref_a[j],
@@ -476,7 +478,9 @@ class IncrementalLikelihood:
 
     def _propose_one(self, items: list, stay: list, ov: dict) -> tuple[float, _Pending]:
         """:meth:`propose` for one changed person, eq. 9 in one compiled call."""
-        j, (pr, bx, _, _) = items[0]
+        j, val = items[0]
+        pr, bx = val[0], val[1]
+        bxa = val[4] if len(val) > 4 else np.array(bx, dtype=np.int64)
         stay_a = np.array(stay, dtype=np.int64)
         touched, d_fg, new_usum, others = foreground_one(
             self.count,
@@ -487,7 +491,7 @@ class IncrementalLikelihood:
             self.boxes_a[:, j],
             self.usum_a[:, j],
             pr,
-            np.array(bx, dtype=np.int64),
+            bxa,
             self.bbox_a[:, stay_a],
         )
         delta = 0.0
@@ -514,7 +518,7 @@ class IncrementalLikelihood:
         nz_v = self.nz_l[v]
         signed = []
         new_nz = []
-        for j, (pr, bx, _, _) in items:
+        for j, (pr, bx, *_) in items:
             if present_l[j]:
                 signed += [(bx_, -1) for bx_ in nz_v[j]]
             nz = [b for b in bx[v] if b[2] > b[0] and b[3] > b[1]] if pr else []
@@ -577,18 +581,19 @@ class IncrementalLikelihood:
         boxes_v, depth_v, bbox_v = self.boxes_l[v], self.depth_l[v], self.bbox_l[v]
         # the configuration after the move, as seen from view v
         occ = [(k, boxes_v[k], bbox_v[k], depth_v[k]) for k in stay]
-        occ += [(j, bx[v], bb[v], dp[v]) for j, (pr, bx, bb, dp) in items if pr]
+        occ += [(j, bx[v], bb[v], dp[v]) for j, (pr, bx, bb, dp, *_) in items if pr]
         out = []
-        for j, (pr, bx, bb, dp) in items:
+        for j, (pr, bx, bb, dp, *arr) in items:
             if active[j]:
-                c_new = self._slot_cost(v, j, bx[v], bb[v], dp[v], occ) if pr else 0.0
+                a = (arr[0][v], arr[1][v]) if arr else None
+                c_new = self._slot_cost(v, j, bx[v], bb[v], dp[v], occ, a) if pr else 0.0
                 out.append((v, j, c_new))
         for k in others:
             if not active[k]:
                 continue
             # k's visible pixels change only if a changed person is (or was) nearer
             dk = depth_v[k]
-            for j, (pr, _, _, dp) in items:
+            for j, (pr, _, _, dp, *_) in items:
                 dj = depth_v[j]
                 if present_l[j] and (dj < dk or (dj == dk and j < k)):
                     break
@@ -597,7 +602,8 @@ class IncrementalLikelihood:
                     break
             else:
                 continue
-            out.append((v, k, self._slot_cost(v, k, boxes_v[k], bbox_v[k], dk, occ)))
+            a = (self.boxes_a[v, k], self.bbox_a[v, k])
+            out.append((v, k, self._slot_cost(v, k, boxes_v[k], bbox_v[k], dk, occ, a)))
         return out
 
     def commit(self, pending: _Pending) -> None:
@@ -607,7 +613,7 @@ class IncrementalLikelihood:
                 self.usum[v][j] = u
                 self.usum_a[v, j] = u
             if signed is None:  # one changed person: its old boxes out, its new ones in
-                ((j, (pr, bx, _, _)),) = pending.ov.items()
+                ((j, (pr, bx, *_)),) = pending.ov.items()
                 signed = [(b, -1) for b in self.nz_l[v][j]] if self.present_l[j] else []
                 if pr:
                     signed += [(b, 1) for b in bx[v] if b[2] > b[0] and b[3] > b[1]]
@@ -618,7 +624,7 @@ class IncrementalLikelihood:
         ov = pending.ov
         for v, j, c in pending.colour:
             self.cc[v][j] = c
-        for j, (pr, bx, bb, dp) in ov.items():
+        for j, (pr, bx, bb, dp, *_) in ov.items():
             self.present_l[j] = pr
             for v in range(self.num_views):
                 self.boxes_l[v][j] = bx[v]

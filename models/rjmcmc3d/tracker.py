@@ -396,7 +396,7 @@ class FrameChain:
         d_e = sum(row) - sum(old) - (row[c] - old[c])
         d_int = -2.0 * self.p.lambda_g * d_e
         t0 = time.perf_counter()
-        boxdata = self.boxdata[c] if self.S_l[c] == row_s else self.proj.one(*row_s)
+        boxdata = self.boxdata[c] if self.S_l[c] == row_s else self.proj.one_arrays(*row_s)
         if self.lik is not None:
             d_lik, pending = self.lik.propose({c: (pr_c, *boxdata)})
         else:
