@@ -169,17 +169,16 @@ def region_colour_cost(
         for yy in range(max(hidden[o, 1], Y0), min(hidden[o, 3], Y1)):
             for xx in range(max(hidden[o, 0], X0), min(hidden[o, 2], X1)):
                 lab[yy - Y0, xx - X0] = -1
-    counts = np.zeros((3, 2, num_bins))
+    flat = np.zeros(3 * 2 * num_bins, dtype=np.int64)  # (region, fg, bin) = region, code
+    nb2 = 2 * num_bins
     for yy in range(Y0, Y1):
+        row = code[yy]
+        labs = lab[yy - Y0]
         for xx in range(X0, X1):
-            r = lab[yy - Y0, xx - X0]
-            if r < 0:
-                continue
-            c = code[yy, xx]
-            if c >= num_bins:
-                counts[r, 1, c - num_bins] += 1.0
-            else:
-                counts[r, 0, c] += 1.0
+            r = labs[xx - X0]
+            if r >= 0:
+                flat[r * nb2 + row[xx]] += 1
+    counts = flat.reshape((3, 2, num_bins)).astype(np.float64)
     total = 0.0
     K = sref.shape[1]
     sq = np.empty((2, num_bins))
