@@ -31,6 +31,7 @@ __all__ = [
     "foreground_one",
     "frame_codes",
     "interaction_row",
+    "one_person_delta",
     "patch_foreground_delta",
     "project_person",
     "region_colour_cost",
@@ -545,3 +546,187 @@ def foreground_one(
         bounds = np.array([X0, Y0, X1, Y1], dtype=np.int64)
         d_fg[v] = patch_foreground_delta(count[v], fgw[v], bounds, signed)
     return touched, d_fg, new_usum, others
+
+
+@njit(cache=True, nogil=True)
+def _hidden_boxes(
+    i, di, bbox, stay, boxes_a, bbox_a, depth_a, v, j, new_present, new_boxes, new_bbox, new_depth
+):
+    """Part boxes (n, 4) of the people nearer than person ``i`` (depth ``di``) whose union
+    box meets ``bbox``, in the configuration after the move (``_slot_cost``'s ``occ``)."""
+    out = np.zeros((3 * (stay.shape[0] + 1), 4), dtype=np.int64)
+    n = 0
+    x0, y0, x1, y1 = bbox[0], bbox[1], bbox[2], bbox[3]
+    for s in range(stay.shape[0] + 1):
+        if s < stay.shape[0]:
+            k = stay[s]
+            dk = depth_a[v, k]
+            bbk = bbox_a[v, k]
+            bk = boxes_a[v, k]
+        else:
+            if not new_present:
+                continue
+            k = j
+            dk = new_depth[v]
+            bbk = new_bbox[v]
+            bk = new_boxes[v]
+        if dk > di or (dk == di and k > i) or k == i:
+            continue
+        if bbk[0] >= x1 or bbk[2] <= x0 or bbk[1] >= y1 or bbk[3] <= y0:
+            continue
+        for b in range(3):
+            out[n] = bk[b]
+            n += 1
+    return out[:n]
+
+
+@njit(cache=True, nogil=True)
+def one_person_delta(
+    count,
+    fgw,
+    ii,
+    stride,
+    code,
+    j,
+    old_present,
+    present,
+    active,
+    boxes_a,
+    bbox_a,
+    depth_a,
+    usum_a,
+    cc_a,
+    new_present,
+    new_boxes,
+    new_bbox,
+    new_depth,
+    sref,
+    nref,
+    lambda_im,
+    lambda_f,
+    d_min,
+):
+    """Eqs. 8-10 change when person ``j`` alone changes, all views, in one call: the
+    arithmetic and order of ``IncrementalLikelihood.propose`` (eq. 9 per view, then the
+    colour terms of ``j`` and of the unchanged people behind it).
+
+    Returns
+    -------
+    delta, touched (V,), d_fg (V,), new_usum (V,), and the recomputed colour terms as
+    views (n,), people (n,), values (n,).
+    """
+    V = count.shape[0]
+    M = present.shape[0]
+    num_bins = sref.shape[3]
+    n_stay = 0
+    stay = np.empty(M, dtype=np.int64)
+    for k in range(M):
+        if present[k] and k != j:
+            stay[n_stay] = k
+            n_stay += 1
+    stay = stay[:n_stay]
+    stay_bbox = np.empty((V, n_stay, 4), dtype=np.int64)
+    for v in range(V):
+        for s in range(n_stay):
+            stay_bbox[v, s] = bbox_a[v, stay[s]]
+    touched, d_fg, new_usum, others = foreground_one(
+        count,
+        fgw,
+        ii,
+        stride,
+        old_present,
+        boxes_a[:, j],
+        usum_a[:, j],
+        new_present,
+        new_boxes,
+        stay_bbox,
+    )
+    out_v = np.empty(V * (M + 1), dtype=np.int64)
+    out_k = np.empty(V * (M + 1), dtype=np.int64)
+    out_c = np.empty(V * (M + 1))
+    n = 0
+    delta = 0.0
+    for v in range(V):
+        if not touched[v]:
+            continue
+        delta += d_fg[v]
+        if active[j]:
+            c_new = 0.0
+            bb = new_bbox[v]
+            if new_present and bb[2] > bb[0] and bb[3] > bb[1]:
+                hid = _hidden_boxes(
+                    j,
+                    new_depth[v],
+                    bb,
+                    stay,
+                    boxes_a,
+                    bbox_a,
+                    depth_a,
+                    v,
+                    j,
+                    new_present,
+                    new_boxes,
+                    new_bbox,
+                    new_depth,
+                )
+                c_new = region_colour_cost(
+                    code[v],
+                    bb,
+                    new_boxes[v],
+                    hid,
+                    sref[j],
+                    nref[j],
+                    num_bins,
+                    lambda_im,
+                    lambda_f,
+                    d_min,
+                )
+            delta += c_new - cc_a[v, j]
+            out_v[n], out_k[n], out_c[n] = v, j, c_new
+            n += 1
+        for s in range(n_stay):
+            k = stay[s]
+            if not others[v, s] or not active[k]:
+                continue
+            dk = depth_a[v, k]
+            dj = depth_a[v, j]
+            nearer = old_present and (dj < dk or (dj == dk and j < k))
+            if not nearer:
+                dj = new_depth[v]
+                nearer = new_present and (dj < dk or (dj == dk and j < k))
+            if not nearer:
+                continue
+            bb = bbox_a[v, k]
+            c_new = 0.0
+            if bb[2] > bb[0] and bb[3] > bb[1]:
+                hid = _hidden_boxes(
+                    k,
+                    dk,
+                    bb,
+                    stay,
+                    boxes_a,
+                    bbox_a,
+                    depth_a,
+                    v,
+                    j,
+                    new_present,
+                    new_boxes,
+                    new_bbox,
+                    new_depth,
+                )
+                c_new = region_colour_cost(
+                    code[v],
+                    bb,
+                    boxes_a[v, k],
+                    hid,
+                    sref[k],
+                    nref[k],
+                    num_bins,
+                    lambda_im,
+                    lambda_f,
+                    d_min,
+                )
+            delta += c_new - cc_a[v, k]
+            out_v[n], out_k[n], out_c[n] = v, k, c_new
+            n += 1
+    return delta, touched, d_fg, new_usum, out_v[:n], out_k[:n], out_c[:n]

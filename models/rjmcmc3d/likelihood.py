@@ -31,8 +31,8 @@ import numpy as np
 
 from models.rjmcmc3d import compiled
 from models.rjmcmc3d.compiled import (
-    foreground_one,
     frame_codes,
+    one_person_delta,
     patch_foreground_delta,
     region_colour_cost,
     union_sum,
@@ -345,6 +345,10 @@ class IncrementalLikelihood:
         self.usum_a = np.array(self.usum, dtype=np.float64).reshape(V, M)
         self.boxes_a = np.array(cfg.boxes, dtype=np.int64, order="C")
         self.bbox_a = np.array(cfg.bbox, dtype=np.int64, order="C")
+        self.depth_a = np.array(cfg.depth, dtype=np.float64, order="C")
+        self.cc_a = np.array(self.cc, dtype=np.float64).reshape(V, M)
+        self.present_a = np.array(self.present_l, dtype=np.bool_)
+        self.active_a = np.array(self.active_l, dtype=np.bool_)
 
     def _colour_one(self, counts: np.ndarray, j: int) -> float:
         """:func:`colour_cost` of one person from its (3, 2, num_bins) counts (fast path)."""
@@ -477,35 +481,49 @@ class IncrementalLikelihood:
         return delta, _Pending(delta, patches, colour, ov)
 
     def _propose_one(self, items: list, stay: list, ov: dict) -> tuple[float, _Pending]:
-        """:meth:`propose` for one changed person, eq. 9 in one compiled call."""
+        """:meth:`propose` for one changed person: eqs. 8-10 in one compiled call."""
         j, val = items[0]
-        pr, bx = val[0], val[1]
-        bxa = val[4] if len(val) > 4 else np.array(bx, dtype=np.int64)
-        stay_a = np.array(stay, dtype=np.int64)
-        touched, d_fg, new_usum, others = foreground_one(
+        pr = val[0]
+        if len(val) > 4:
+            bxa, bba, dpa = val[4], val[5], val[6]
+        else:
+            bxa = np.array(val[1], dtype=np.int64)
+            bba = np.array(val[2], dtype=np.int64)
+            dpa = np.array(val[3], dtype=np.float64)
+        p = self.params
+        delta, touched, d_fg, new_usum, cv, ck, cc = one_person_delta(
             self.count,
             self.data.fgw,
             self.data.ii,
             self._stride,
+            self.data.code,
+            j,
             self.present_l[j],
-            self.boxes_a[:, j],
-            self.usum_a[:, j],
+            self.present_a,
+            self.active_a,
+            self.boxes_a,
+            self.bbox_a,
+            self.depth_a,
+            self.usum_a,
+            self.cc_a,
             pr,
             bxa,
-            self.bbox_a[:, stay_a],
+            bba,
+            dpa,
+            self.sref,
+            self.nref_a,
+            p.lambda_im,
+            p.lambda_f,
+            p.d_min,
         )
-        delta = 0.0
-        patches = []
-        colour = []
-        others_l = others.tolist()
-        for v in np.flatnonzero(touched).tolist():
-            d = float(d_fg[v])
-            delta += d
-            patches.append((v, None, d, {j: float(new_usum[v])}))
-            near = [k for k, hit in zip(stay, others_l[v]) if hit]
-            for c in self._colour_view(v, items, stay, near):
-                delta += c[2] - self.cc[v][c[1]]
-                colour.append(c)
+        patches = [
+            (v, None, d, {j: u})
+            for v, d, u, t in zip(
+                range(self.num_views), d_fg.tolist(), new_usum.tolist(), touched.tolist()
+            )
+            if t
+        ]
+        colour = list(zip(cv.tolist(), ck.tolist(), cc.tolist()))
         return delta, _Pending(delta, patches, colour, ov)
 
     def _foreground_view(self, v: int, items: list, stay: list) -> tuple | None:
@@ -624,6 +642,7 @@ class IncrementalLikelihood:
         ov = pending.ov
         for v, j, c in pending.colour:
             self.cc[v][j] = c
+            self.cc_a[v, j] = c
         for j, (pr, bx, bb, dp, *_) in ov.items():
             self.present_l[j] = pr
             for v in range(self.num_views):
@@ -633,5 +652,7 @@ class IncrementalLikelihood:
                 self.nz_l[v][j] = [b for b in bx[v] if b[2] > b[0] and b[3] > b[1]] if pr else []
             self.boxes_a[:, j] = bx
             self.bbox_a[:, j] = bb
+            self.depth_a[:, j] = dp
+            self.present_a[j] = pr
         self.alive = [j for j in range(self.M) if self.present_l[j]]
         self.total += pending.delta

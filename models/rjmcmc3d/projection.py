@@ -178,12 +178,12 @@ class BoxProjector:
         return self.one_numpy(x, y, h, a)
 
     def one_arrays(self, x: float, y: float, h: float, a: float) -> tuple:
-        """:meth:`one` followed by the boxes (V, 3, 4) and union boxes (V, 4) as int64
-        arrays (the compiled likelihood reads those; only with numba)."""
+        """:meth:`one` followed by the boxes (V, 3, 4), union boxes (V, 4) (int64) and
+        distances (V,) as arrays (the compiled likelihood reads those; only with numba)."""
         b, bb, d = project_person(
             self.C, x, y, h, a, self.V, self.width, self.height, self.centers_a
         )
-        return b.tolist(), bb.tolist(), d.tolist(), b, bb
+        return b.tolist(), bb.tolist(), d.tolist(), b, bb, d
 
     def one_numpy(self, x: float, y: float, h: float, a: float) -> tuple[list, list, list]:
         """:meth:`one` with numpy (the reference of the compiled path)."""
