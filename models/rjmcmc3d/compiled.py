@@ -161,23 +161,40 @@ def region_colour_cost(
         Square roots of the reference histograms; ``nref`` (3,) how many are valid.
     """
     X0, Y0, X1, Y1 = bbox[0], bbox[1], bbox[2], bbox[3]
-    lab = np.full((Y1 - Y0, X1 - X0), -1, dtype=np.int8)  # region per pixel, -1: none
-    for b in range(3):  # a later part owns the pixels it shares with an earlier one
-        for yy in range(max(parts[b, 1], Y0), min(parts[b, 3], Y1)):
-            for xx in range(max(parts[b, 0], X0), min(parts[b, 2], X1)):
-                lab[yy - Y0, xx - X0] = b
-    for o in range(hidden.shape[0]):
-        for yy in range(max(hidden[o, 1], Y0), min(hidden[o, 3], Y1)):
-            for xx in range(max(hidden[o, 0], X0), min(hidden[o, 2], X1)):
-                lab[yy - Y0, xx - X0] = -1
     flat = np.zeros(3 * 2 * num_bins, dtype=np.int64)  # (region, fg, bin) = region, code
     nb2 = 2 * num_bins
+    nh = hidden.shape[0]
+    lo = np.empty(3, dtype=np.int64)  # this row's x-interval of each part (later wins)
+    hi = np.empty(3, dtype=np.int64)
+    hlo = np.empty(nh, dtype=np.int64)  # and of each hiding box
+    hhi = np.empty(nh, dtype=np.int64)
     for yy in range(Y0, Y1):
+        for b in range(3):
+            inside = parts[b, 1] <= yy < parts[b, 3]
+            lo[b] = max(parts[b, 0], X0) if inside else 0
+            hi[b] = min(parts[b, 2], X1) if inside else 0
+        nrow = 0
+        for o in range(nh):
+            if hidden[o, 1] <= yy < hidden[o, 3] and hidden[o, 2] > hidden[o, 0]:
+                hlo[nrow] = hidden[o, 0]
+                hhi[nrow] = hidden[o, 2]
+                nrow += 1
         row = code[yy]
-        labs = lab[yy - Y0]
         for xx in range(X0, X1):
-            r = labs[xx - X0]
-            if r >= 0:
+            if lo[2] <= xx < hi[2]:
+                r = 2
+            elif lo[1] <= xx < hi[1]:
+                r = 1
+            elif lo[0] <= xx < hi[0]:
+                r = 0
+            else:
+                continue
+            seen = True
+            for o in range(nrow):
+                if hlo[o] <= xx < hhi[o]:
+                    seen = False
+                    break
+            if seen:
                 flat[r * nb2 + row[xx]] += 1
     counts = flat.reshape((3, 2, num_bins)).astype(np.float64)
     total = 0.0
