@@ -206,7 +206,9 @@ def metropolis_accept_batch(rng: np.random.Generator, log_accept_ratio: np.ndarr
     """
     log_a = np.asarray(log_accept_ratio, dtype=np.float64)
     u = rng.random(log_a.shape[0])
-    with np.errstate(divide="ignore"):
+    if u.min(initial=1.0) > 0.0:
+        return (log_a >= 0.0) | (np.log(u) < log_a)
+    with np.errstate(divide="ignore"):  # log(0) = -inf: accepted only if log a >= 0
         return (log_a >= 0.0) | (np.log(u) < log_a)
 
 

@@ -221,8 +221,8 @@ def _proposal(lab, new, slots, ok, log_q_forward, log_q_reverse) -> BatchProposa
     n = lab.shape[0]
     return BatchProposal(
         _Candidate(new, slots),
-        np.broadcast_to(log_q_forward, (n,)),
-        np.broadcast_to(log_q_reverse, (n,)),
+        log_q_forward if np.ndim(log_q_forward) else np.full(n, log_q_forward),
+        log_q_reverse if np.ndim(log_q_reverse) else np.full(n, log_q_reverse),
         ok,
     )
 
