@@ -37,6 +37,7 @@ __all__ = [
     "region_colour_cost",
     "union_sum",
     "update_log_q",
+    "update_log_q_at",
 ]
 
 try:  # numba is optional: the numpy paths are the reference
@@ -291,6 +292,27 @@ def _log_gauss2(x: float, y: float, mx: float, my: float, l00: float, l10: float
     z1 = (x - mx) / l00
     z2 = (y - my - l10 * z1) / l11
     return -0.5 * (z1 * z1 + z2 * z2) - math.log(l00 * l11) - LOG_2PI
+
+
+@njit(cache=True, nogil=True)
+def update_log_q_at(
+    x1: float,
+    y1: float,
+    x0: float,
+    y0: float,
+    chol: np.ndarray,
+    origin: np.ndarray,
+    step: float,
+    det: np.ndarray,
+    gate2: float,
+    w: float,
+) -> float:
+    """:func:`update_log_q` with the kernel factor looked up at ``(x0, y0)`` in the grid
+    ``chol`` (nx, ny, 3) of ``(l00, l10, l11)`` (cell of the rounded position, clipped),
+    the lookup of ``RJMCMCTracker.update_chol``."""
+    i = min(max(int(round((x0 - origin[0]) / step)), 0), chol.shape[0] - 1)
+    j = min(max(int(round((y0 - origin[1]) / step)), 0), chol.shape[1] - 1)
+    return update_log_q(x1, y1, x0, y0, chol[i, j, 0], chol[i, j, 1], chol[i, j, 2], det, gate2, w)
 
 
 @njit(cache=True, nogil=True)

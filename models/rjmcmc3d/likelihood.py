@@ -462,12 +462,12 @@ class IncrementalLikelihood:
             Pass to :meth:`commit` if the move is accepted.
         """
         items = list(ov.items())
+        if compiled.AVAILABLE and len(items) == 1:
+            return self._propose_one(items, ov)
         delta = 0.0
         patches = []
         colour = []
         stay = [k for k in self.alive if k not in ov]  # present, unchanged
-        if compiled.AVAILABLE and len(items) == 1:
-            return self._propose_one(items, stay, ov)
         for v in range(self.num_views):
             got = self._foreground_view(v, items, stay)
             if got is None:
@@ -480,7 +480,7 @@ class IncrementalLikelihood:
                 colour.append(c)
         return delta, _Pending(delta, patches, colour, ov)
 
-    def _propose_one(self, items: list, stay: list, ov: dict) -> tuple[float, _Pending]:
+    def _propose_one(self, items: list, ov: dict) -> tuple[float, _Pending]:
         """:meth:`propose` for one changed person: eqs. 8-10 in one compiled call."""
         j, val = items[0]
         pr = val[0]
@@ -650,9 +650,10 @@ class IncrementalLikelihood:
                 self.bbox_l[v][j] = bb[v]
                 self.depth_l[v][j] = dp[v]
                 self.nz_l[v][j] = [b for b in bx[v] if b[2] > b[0] and b[3] > b[1]] if pr else []
-            self.boxes_a[:, j] = bx
-            self.bbox_a[:, j] = bb
-            self.depth_a[:, j] = dp
+            arrays = ov[j][4:]  # the projection's arrays, when it gave them
+            self.boxes_a[:, j] = arrays[0] if arrays else bx
+            self.bbox_a[:, j] = arrays[1] if arrays else bb
+            self.depth_a[:, j] = arrays[2] if arrays else dp
             self.present_a[j] = pr
         self.alive = [j for j in range(self.M) if self.present_l[j]]
         self.total += pending.delta

@@ -40,7 +40,7 @@ from models.rjmcmc3d.compiled import (
     add_log_q,
     far_detections,
     interaction_row,
-    update_log_q,
+    update_log_q_at,
 )
 from models.rjmcmc3d.likelihood import (
     Config,
@@ -510,11 +510,11 @@ class FrameChain:
 
     def _log_q_update(self, x1: float, y1: float, x0: float, y0: float) -> float:
         """``log q(u1 | u0)`` of the update mixture (random walk + detection-driven)."""
-        if compiled.AVAILABLE:  # one compiled call (gating and mixture)
-            L = self.t.update_chol(x0, y0)
+        if compiled.AVAILABLE:  # one compiled call (kernel lookup, gating and mixture)
+            t = self.t
             g2 = self.p.det_gate**2
             w = self.p.p_det_update
-            return update_log_q(x1, y1, x0, y0, L[0], L[1], L[2], self.det, g2, w)
+            return update_log_q_at(x1, y1, x0, y0, t._upd_a, t._origin_a, t._step, self.det, g2, w)
         L, near = self._kernel_at(x0, y0)
         l_rw = self._lg(x1, y1, x0, y0, L)
         if not near:
@@ -756,7 +756,9 @@ class RJMCMCTracker:
         else:
             upd = np.broadcast_to(p.fixed_sd**2 * np.eye(2), self.noise.cov.shape)
         L = np.linalg.cholesky(upd)
-        self._upd = np.stack([L[..., 0, 0], L[..., 1, 0], L[..., 1, 1]], axis=-1).tolist()
+        self._upd_a = np.ascontiguousarray(np.stack([L[..., 0, 0], L[..., 1, 0], L[..., 1, 1]], -1))
+        self._upd = self._upd_a.tolist()
+        self._origin_a = np.asarray(self.noise.origin, dtype=np.float64)
         self._origin = self.noise.origin.tolist()
         self._step = self.noise.step
         self._shape = self.noise.cov.shape[:2]
