@@ -181,6 +181,15 @@ def region_colour_cost(
                 hhi[nrow] = hidden[o, 2]
                 nrow += 1
         row = code[yy]
+        only = -1  # the one part on this row, when alone and unhidden (the usual case)
+        for b in range(3):
+            if hi[b] > lo[b]:
+                only = b if only == -1 else -2
+        if only >= 0 and nrow == 0:
+            off = only * nb2
+            for xx in range(lo[only], hi[only]):
+                flat[off + row[xx]] += 1
+            continue
         for xx in range(X0, X1):
             if lo[2] <= xx < hi[2]:
                 r = 2
