@@ -162,6 +162,14 @@ def region_colour_cost(
         Square roots of the reference histograms; ``nref`` (3,) how many are valid.
     """
     X0, Y0, X1, Y1 = bbox[0], bbox[1], bbox[2], bbox[3]
+    counts = _region_counts(code, X0, Y0, X1, Y1, parts, hidden, num_bins)
+    return _colour_term(counts, sref, nref, num_bins, lambda_im, lambda_f, d_min)
+
+
+@njit(cache=True, nogil=True)
+def _region_counts(code, X0, Y0, X1, Y1, parts, hidden, num_bins):
+    """Pixel counts (3, 2, num_bins) per part region, background/foreground and colour
+    bin, of the pixels of ``[Y0, Y1) x [X0, X1)`` in a part box and in no hiding box."""
     flat = np.zeros(3 * 2 * num_bins, dtype=np.int64)  # (region, fg, bin) = region, code
     nb2 = 2 * num_bins
     nh = hidden.shape[0]
@@ -206,7 +214,12 @@ def region_colour_cost(
                     break
             if seen:
                 flat[r * nb2 + row[xx]] += 1
-    counts = flat.reshape((3, 2, num_bins)).astype(np.float64)
+    return flat.reshape((3, 2, num_bins)).astype(np.float64)
+
+
+@njit(cache=True, nogil=True)
+def _colour_term(counts, sref, nref, num_bins, lambda_im, lambda_f, d_min):
+    """``-lambda_im sum_b |R_b| (D_c - D_min)`` from region counts (eq. 10)."""
     total = 0.0
     K = sref.shape[1]
     sq = np.empty((2, num_bins))
@@ -629,6 +642,32 @@ def _hidden_boxes(
 
 
 @njit(cache=True, nogil=True)
+def _stay_people(present: np.ndarray, j: int, bbox_a: np.ndarray):
+    """The present people other than ``j`` (index order) and their union boxes (V, n, 4)."""
+    M = present.shape[0]
+    stay = np.empty(M, dtype=np.int64)
+    n = 0
+    for k in range(M):
+        if present[k] and k != j:
+            stay[n] = k
+            n += 1
+    stay = stay[:n]
+    out = np.empty((bbox_a.shape[0], n, 4), dtype=np.int64)
+    for v in range(bbox_a.shape[0]):
+        for s in range(n):
+            out[v, s] = bbox_a[v, stay[s]]
+    return stay, out
+
+
+@njit(cache=True, nogil=True)
+def _behind(k, j, dk, dj_old, dj_new, old_present, new_present) -> bool:
+    """Whether person ``j`` is (or was) nearer than ``k`` (ties: the smaller index)."""
+    if old_present and (dj_old < dk or (dj_old == dk and j < k)):
+        return True
+    return new_present and (dj_new < dk or (dj_new == dk and j < k))
+
+
+@njit(cache=True, nogil=True)
 def one_person_delta(
     count,
     fgw,
@@ -666,17 +705,8 @@ def one_person_delta(
     V = count.shape[0]
     M = present.shape[0]
     num_bins = sref.shape[3]
-    n_stay = 0
-    stay = np.empty(M, dtype=np.int64)
-    for k in range(M):
-        if present[k] and k != j:
-            stay[n_stay] = k
-            n_stay += 1
-    stay = stay[:n_stay]
-    stay_bbox = np.empty((V, n_stay, 4), dtype=np.int64)
-    for v in range(V):
-        for s in range(n_stay):
-            stay_bbox[v, s] = bbox_a[v, stay[s]]
+    stay, stay_bbox = _stay_people(present, j, bbox_a)
+    n_stay = stay.shape[0]
     touched, d_fg, new_usum, others = foreground_one(
         count,
         fgw,
@@ -703,32 +733,13 @@ def one_person_delta(
             bb = new_bbox[v]
             if new_present and bb[2] > bb[0] and bb[3] > bb[1]:
                 hid = _hidden_boxes(
-                    j,
-                    new_depth[v],
-                    bb,
-                    stay,
-                    boxes_a,
-                    bbox_a,
-                    depth_a,
-                    v,
-                    j,
-                    new_present,
-                    new_boxes,
-                    new_bbox,
-                    new_depth,
-                )
+                    j, new_depth[v], bb, stay, boxes_a, bbox_a, depth_a, v, j,
+                    new_present, new_boxes, new_bbox, new_depth,
+                )  # fmt: skip
                 c_new = region_colour_cost(
-                    code[v],
-                    bb,
-                    new_boxes[v],
-                    hid,
-                    sref[j],
-                    nref[j],
-                    num_bins,
-                    lambda_im,
-                    lambda_f,
-                    d_min,
-                )
+                    code[v], bb, new_boxes[v], hid, sref[j], nref[j], num_bins, lambda_im,
+                    lambda_f, d_min,
+                )  # fmt: skip
             delta += c_new - cc_a[v, j]
             out_v[n], out_k[n], out_c[n] = v, j, c_new
             n += 1
@@ -736,44 +747,20 @@ def one_person_delta(
             k = stay[s]
             if not others[v, s] or not active[k]:
                 continue
-            dk = depth_a[v, k]
-            dj = depth_a[v, j]
-            nearer = old_present and (dj < dk or (dj == dk and j < k))
-            if not nearer:
-                dj = new_depth[v]
-                nearer = new_present and (dj < dk or (dj == dk and j < k))
-            if not nearer:
+            if not _behind(k, j, depth_a[v, k], depth_a[v, j], new_depth[v], old_present,
+                           new_present):  # fmt: skip
                 continue
             bb = bbox_a[v, k]
             c_new = 0.0
             if bb[2] > bb[0] and bb[3] > bb[1]:
                 hid = _hidden_boxes(
-                    k,
-                    dk,
-                    bb,
-                    stay,
-                    boxes_a,
-                    bbox_a,
-                    depth_a,
-                    v,
-                    j,
-                    new_present,
-                    new_boxes,
-                    new_bbox,
-                    new_depth,
-                )
+                    k, depth_a[v, k], bb, stay, boxes_a, bbox_a, depth_a, v, j,
+                    new_present, new_boxes, new_bbox, new_depth,
+                )  # fmt: skip
                 c_new = region_colour_cost(
-                    code[v],
-                    bb,
-                    boxes_a[v, k],
-                    hid,
-                    sref[k],
-                    nref[k],
-                    num_bins,
-                    lambda_im,
-                    lambda_f,
-                    d_min,
-                )
+                    code[v], bb, boxes_a[v, k], hid, sref[k], nref[k], num_bins, lambda_im,
+                    lambda_f, d_min,
+                )  # fmt: skip
             delta += c_new - cc_a[v, k]
             out_v[n], out_k[n], out_c[n] = v, k, c_new
             n += 1
