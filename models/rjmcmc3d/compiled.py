@@ -482,21 +482,23 @@ def interaction_row(
     u: np.ndarray,
     S: np.ndarray,
     upr: np.ndarray,
-    live: np.ndarray,
+    present: np.ndarray,
+    c: int,
     s_along: float,
     s_across: float,
 ) -> np.ndarray:
     """Pair penalties ``g(X, X_j)`` of sec. 3.2 between one person (state ``s`` = (x, y,
-    h, alpha), predicted position ``u``) and the people ``live`` (rows of ``S`` (M, 4) and
-    ``upr`` (M, 2)); zero elsewhere. The arithmetic of ``FrameChain._pair``.
+    h, alpha), predicted position ``u``) and every present person other than ``c`` (rows
+    of ``S`` (M, 4) and ``upr`` (M, 2)); zero elsewhere. The arithmetic of ``FrameChain._pair``.
 
     Returns
     -------
     ndarray, shape (M,)
     """
     row = np.zeros(S.shape[0])
-    for n in range(live.shape[0]):
-        j = live[n]
+    for j in range(S.shape[0]):
+        if not present[j] or j == c:
+            continue
         total = 0.0
         for k in range(2):
             if k == 0:

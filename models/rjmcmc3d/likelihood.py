@@ -256,6 +256,15 @@ def _union_sum(get, st: int, boxes: list) -> float:
     return total
 
 
+def _with_lists(val: tuple) -> tuple:
+    """``ov`` entry ``(present, boxes, bbox, depth, *arrays)`` with its lists filled in
+    from the arrays when the proposal carried arrays only."""
+    if val[1] is not None:
+        return val
+    b, bb, d = val[4:7]
+    return (val[0], b.tolist(), bb.tolist(), d.tolist(), b, bb, d)
+
+
 class _Pending(NamedTuple):
     delta: float
     patches: list
@@ -626,12 +635,13 @@ class IncrementalLikelihood:
 
     def commit(self, pending: _Pending) -> None:
         """Make the proposed configuration current."""
+        ov = {j: _with_lists(val) for j, val in pending.ov.items()}
         for v, signed, d_fg, new_usum in pending.patches:
             for j, u in new_usum.items():
                 self.usum[v][j] = u
                 self.usum_a[v, j] = u
             if signed is None:  # one changed person: its old boxes out, its new ones in
-                ((j, (pr, bx, *_)),) = pending.ov.items()
+                ((j, (pr, bx, *_)),) = ov.items()
                 signed = [(b, -1) for b in self.nz_l[v][j]] if self.present_l[j] else []
                 if pr:
                     signed += [(b, 1) for b in bx[v] if b[2] > b[0] and b[3] > b[1]]
@@ -639,7 +649,6 @@ class IncrementalLikelihood:
             for (bx0, by0, bx1, by1), sign in signed:
                 cv[by0:by1, bx0:bx1] += sign
             self.fg[v] += d_fg
-        ov = pending.ov
         for v, j, c in pending.colour:
             self.cc[v][j] = c
             self.cc_a[v, j] = c

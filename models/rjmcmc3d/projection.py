@@ -177,6 +177,11 @@ class BoxProjector:
             return b.tolist(), bb.tolist(), d.tolist()
         return self.one_numpy(x, y, h, a)
 
+    def arrays(self, x: float, y: float, h: float, a: float) -> tuple:
+        """Boxes (V, 3, 4), union boxes (V, 4) (int64) and distances (V,) as arrays (the
+        compiled projection; only with numba)."""
+        return project_person(self.C, x, y, h, a, self.V, self.width, self.height, self.centers_a)
+
     def one_arrays(self, x: float, y: float, h: float, a: float) -> tuple:
         """:meth:`one` followed by the boxes (V, 3, 4), union boxes (V, 4) (int64) and
         distances (V,) as arrays (the compiled likelihood reads those; only with numba)."""

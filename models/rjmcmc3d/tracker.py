@@ -387,16 +387,20 @@ class FrameChain:
         upr_c = self._upr(c, row_s[0], row_s[1])
         old = self.G[c]
         if pr_c:
-            others = np.array([j for j in self.alive if j != c], dtype=np.int64)
             row = interaction_row(
-                S_new[c], upr_c, self.S, self.upr_a, others, *self.p.shape_sd
+                S_new[c], upr_c, self.S, self.upr_a, self.present, c, *self.p.shape_sd
             ).tolist()
         else:
             row = [0.0] * self.M
         d_e = sum(row) - sum(old) - (row[c] - old[c])
         d_int = -2.0 * self.p.lambda_g * d_e
         t0 = time.perf_counter()
-        boxdata = self.boxdata[c] if self.S_l[c] == row_s else self.proj.one_arrays(*row_s)
+        if self.S_l[c] == row_s:  # delete, leave: the current geometry
+            boxdata = self.boxdata[c]
+        elif self.lik is not None:  # arrays only; lists made if accepted (_commit)
+            boxdata = (None, None, None, *self.proj.arrays(*row_s))
+        else:
+            boxdata = self.proj.one_arrays(*row_s)
         if self.lik is not None:
             d_lik, pending = self.lik.propose({c: (pr_c, *boxdata)})
         else:
@@ -429,7 +433,7 @@ class FrameChain:
             self.lp[i] = lp_new[i]
             self.upr[i] = upr_new[i]
             self.upr_a[i] = upr_new[i]
-            self.boxdata[i] = boxdata[i]
+            self.boxdata[i] = _with_lists(boxdata[i])
             row = rows[i]
             self.G[i] = row
             for j in range(self.M):
@@ -678,10 +682,18 @@ class FrameChain:
         }
 
 
+def _with_lists(boxdata: tuple) -> tuple:
+    """A projection ``(boxes, bbox, depth, *arrays)`` with its nested lists filled in."""
+    if boxdata[0] is not None:
+        return boxdata
+    b, bb, d = boxdata[3:6]
+    return (b.tolist(), bb.tolist(), d.tolist(), b, bb, d)
+
+
 def _propose_move(move: int, rng: np.random.Generator, chain: FrameChain) -> Proposal | None:
     """Declaration of move ``move`` for :class:`inference.mcmc.MoveKernel`: the proposal,
     its two log densities and the incremental log target change (eqs. 2 and 8-10)."""
-    prop = chain.propose(rng, move)
+    prop = _PROPOSALS[move](chain, rng)
     if prop is None:
         return None
     S_new, pr_new, changed, lq_f, lq_r = prop
