@@ -38,6 +38,7 @@ __all__ = [
     "union_sum",
     "update_log_q",
     "update_log_q_at",
+    "update_log_q_pair",
 ]
 
 try:  # numba is optional: the numpy paths are the reference
@@ -767,3 +768,12 @@ def one_person_delta(
             out_v[n], out_k[n], out_c[n] = v, k, c_new
             n += 1
     return delta, touched, d_fg, new_usum, out_v[:n], out_k[:n], out_c[:n]
+
+
+@njit(cache=True, nogil=True)
+def update_log_q_pair(x1, y1, x0, y0, chol, origin, step, det, gate2, w):
+    """``(log q(u1 | u0), log q(u0 | u1))`` of the update move in one call
+    (:func:`update_log_q_at` both ways)."""
+    fwd = update_log_q_at(x1, y1, x0, y0, chol, origin, step, det, gate2, w)
+    rev = update_log_q_at(x0, y0, x1, y1, chol, origin, step, det, gate2, w)
+    return fwd, rev

@@ -41,6 +41,7 @@ from models.rjmcmc3d.compiled import (
     far_detections,
     interaction_row,
     update_log_q_at,
+    update_log_q_pair,
 )
 from models.rjmcmc3d.likelihood import (
     Config,
@@ -639,8 +640,15 @@ class FrameChain:
         S[i] = (x1, y1, h0 + 0.01 * w3, (a0 + 0.3 * w4 + math.pi) % (2 * math.pi) - math.pi)
         if not self._inside(x1, y1):
             return S, self.present.copy(), [i], 0.0, -math.inf  # impossible: rejected
-        lq_f = self._log_q_update(x1, y1, x0, y0)
-        lq_r = self._log_q_update(x0, y0, x1, y1)
+        if compiled.AVAILABLE:  # both densities in one compiled call
+            t, p = self.t, self.p
+            lq_f, lq_r = update_log_q_pair(
+                x1, y1, x0, y0, t._upd_a, t._origin_a, t._step, self.det, p.det_gate**2,
+                p.p_det_update,
+            )  # fmt: skip
+        else:
+            lq_f = self._log_q_update(x1, y1, x0, y0)
+            lq_r = self._log_q_update(x0, y0, x1, y1)
         return S, self.present.copy(), [i], lq_f, lq_r
 
     def full_loglik(self) -> float:
