@@ -31,6 +31,7 @@ probability accounts for it.
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple
@@ -42,10 +43,12 @@ from dbn.errors import InputError, NegativeProbabilityError, NotNormalizedError
 __all__ = [
     "MHInfo",
     "Move",
+    "MoveKernel",
     "Proposal",
     "RJInfo",
     "log_acceptance_ratio",
     "metropolis_accept",
+    "metropolis_accept_batch",
     "mh_step",
     "rj_step",
     "run_chain",
@@ -182,7 +185,31 @@ def metropolis_accept(rng: np.random.Generator, log_accept_ratio: float) -> bool
     u = rng.random()
     if log_accept_ratio >= 0.0:
         return True
-    return bool(math.log(u) < log_accept_ratio) if u > 0.0 else True
+    if u == 0.0:
+        return log_accept_ratio > -math.inf
+    return math.log(u) < log_accept_ratio
+
+
+def metropolis_accept_batch(rng: np.random.Generator, log_accept_ratio: np.ndarray) -> np.ndarray:
+    """:func:`metropolis_accept` for independent chains: one uniform per chain.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Explicit source of randomness (``rng.random(num_chains)`` is drawn, always).
+    log_accept_ratio : ndarray, shape (num_chains,)
+        ``log a`` of each chain's proposal (``-inf``: impossible, never accepted).
+
+    Returns
+    -------
+    ndarray, shape (num_chains,), bool
+    """
+    log_a = np.asarray(log_accept_ratio, dtype=np.float64)
+    u = rng.random(log_a.shape[0])
+    if u.min(initial=1.0) > 0.0:
+        return (log_a >= 0.0) | (np.log(u) < log_a)
+    with np.errstate(divide="ignore"):  # log(0) = -inf: accepted only if log a >= 0
+        return (log_a >= 0.0) | (np.log(u) < log_a)
 
 
 def _check_move_probs(move_probs: np.ndarray, num_moves: int) -> np.ndarray:
@@ -194,6 +221,145 @@ def _check_move_probs(move_probs: np.ndarray, num_moves: int) -> np.ndarray:
     if abs(probs.sum() - 1.0) > 1e-9:
         raise NotNormalizedError(f"move_probs={probs.tolist()} sums to {probs.sum()}, not 1")
     return probs
+
+
+class MoveKernel:
+    """A move set with its selection probabilities, validated once (seed 003, eq. 11).
+
+    The kernel picks a move (``p_m``), asks it for a :class:`Proposal`, applies the
+    acceptance rule of :func:`log_acceptance_ratio` / :func:`metropolis_accept` and, when
+    accepted, moves to the proposed state. Two kinds of state are supported:
+
+    * immutable states (tuples, arrays): the proposal's ``state`` is the new state;
+    * a state updated in place (a working object the moves read): ``commit(state,
+      proposal_state) -> state`` applies an accepted proposal (``proposal_state`` is then
+      whatever the move needs to apply it, e.g. a pending change).
+
+    Parameters
+    ----------
+    moves : sequence of Move, length num_moves
+        ``moves[m].reverse`` indexes the move that undoes move ``m``.
+    move_probs : array-like, shape (num_moves,)
+        Selection probabilities ``p_m`` (non-negative, summing to one).
+    commit : callable, optional
+        ``commit(state, proposal_state) -> state`` (default: the proposal's state).
+
+    Raises
+    ------
+    InputError, NegativeProbabilityError, NotNormalizedError
+        On a bad move list or probabilities.
+    """
+
+    def __init__(
+        self,
+        moves: Sequence[Move],
+        move_probs: np.ndarray | Sequence[float],
+        commit: Callable[[Any, Any], Any] | None = None,
+    ) -> None:
+        self.moves = tuple(moves)
+        if not self.moves:
+            raise InputError("moves is empty: a kernel needs at least one move")
+        self.probs = _check_move_probs(np.asarray(move_probs), len(self.moves))
+        for m, mv in enumerate(self.moves):
+            if not 0 <= int(mv.reverse) < len(self.moves):
+                raise InputError(f"moves[{m}].reverse={mv.reverse} is not a move index")
+        with np.errstate(divide="ignore"):
+            log_p = np.log(self.probs)
+        self.log_p = log_p.tolist()
+        self.log_p_reverse = [self.log_p[mv.reverse] for mv in self.moves]
+        self.cum = np.cumsum(self.probs).tolist()
+        self.last = len(self.moves) - 1
+        self.commit = commit
+
+    def select(self, rng: np.random.Generator) -> int:
+        """Draw a move index (one uniform; the same draw as :func:`select_move`)."""
+        m = bisect.bisect_right(self.cum, rng.random())
+        return m if m < self.last else self.last
+
+    def step(
+        self,
+        rng: np.random.Generator,
+        state: Any,
+        log_target_value: float,
+        log_target: Callable[[Any], float] | None = None,
+    ) -> tuple[Any, RJInfo]:
+        """One reversible-jump step: :meth:`decide`, then :meth:`apply` if accepted.
+
+        Parameters and randomness as in :meth:`decide`.
+
+        Returns
+        -------
+        state : Any
+        info : RJInfo
+        """
+        proposal, info = self.decide(rng, state, log_target_value, log_target)
+        return (self.apply(state, proposal), info) if info.accepted else (state, info)
+
+    def apply(self, state: Any, proposal: Proposal) -> Any:
+        """The state after an accepted ``proposal`` (``commit`` or its state)."""
+        return proposal.state if self.commit is None else self.commit(state, proposal.state)
+
+    def decide(
+        self,
+        rng: np.random.Generator,
+        state: Any,
+        log_target_value: float,
+        log_target: Callable[[Any], float] | None = None,
+    ) -> tuple[Proposal | None, RJInfo]:
+        """Select a move, propose, and accept or reject (seed 003, eq. 11); no commit.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Explicit source of randomness: one uniform for the move, the move's own
+            draws, one uniform for the acceptance (drawn even for an impossible move, so
+            the stream does not depend on the outcome).
+        state : Any
+            Current state.
+        log_target_value : float
+            ``log pi(state)`` (up to a constant shared by all states).
+        log_target : callable, optional
+            ``log pi``; needed only by moves whose proposals leave ``log_target_delta``
+            as ``None``.
+
+        Returns
+        -------
+        proposal : Proposal or None
+            The proposal (``None`` if the move could not be made).
+        info : RJInfo
+            ``info.log_target`` is that of the state after :meth:`apply` if accepted.
+        """
+        m = self.select(rng)
+        proposal = self.moves[m].propose(rng, state)
+        if proposal is None:
+            rng.random()  # keep the random stream aligned with an evaluated proposal
+            return None, RJInfo(m, False, -math.inf, log_target_value)
+        if proposal.log_target_delta is not None:
+            delta = float(proposal.log_target_delta)
+            if math.isfinite(log_target_value):
+                new_value = log_target_value + delta
+            else:
+                new_value = math.inf if delta == math.inf else -math.inf
+        elif proposal.log_q_reverse == -math.inf:
+            delta = new_value = -math.inf  # rejected whatever the target: not evaluated
+        else:
+            if log_target is None:
+                raise InputError(
+                    f"move {self.moves[m].name!r} gave no log_target_delta and no "
+                    "log_target was passed"
+                )
+            new_value = float(log_target(proposal.state))
+            delta = _target_delta(new_value, log_target_value)
+        log_a = log_acceptance_ratio(
+            delta,
+            proposal.log_q_forward,
+            proposal.log_q_reverse,
+            self.log_p[m],
+            self.log_p_reverse[m],
+        )
+        if not metropolis_accept(rng, log_a):
+            return proposal, RJInfo(m, False, log_a, log_target_value)
+        return proposal, RJInfo(m, True, log_a, new_value)
 
 
 def select_move(rng: np.random.Generator, move_probs: np.ndarray) -> int:
@@ -281,36 +447,9 @@ def rj_step(
     info : RJInfo
         Move index, acceptance, ``log a`` and ``log pi`` of the returned state.
     """
-    probs = _check_move_probs(move_probs, len(moves))
-    for m, mv in enumerate(moves):
-        if not 0 <= mv.reverse < len(moves):
-            raise InputError(f"moves[{m}].reverse={mv.reverse} is not a move index")
+    kernel = MoveKernel(moves, move_probs)
     current = float(log_target(state)) if log_target_value is None else float(log_target_value)
-    m = select_move(rng, probs)
-    proposal = moves[m].propose(rng, state)
-    if proposal is None:
-        rng.random()  # keep the random stream aligned with an evaluated proposal
-        return state, RJInfo(m, False, -math.inf, current)
-    if proposal.log_target_delta is None:
-        new_value = float(log_target(proposal.state))
-        delta = _target_delta(new_value, current)
-    else:
-        delta = float(proposal.log_target_delta)
-        new_value = (
-            current + delta
-            if math.isfinite(current)
-            else (math.inf if delta == math.inf else -math.inf)
-        )
-    log_a = log_acceptance_ratio(
-        delta,
-        proposal.log_q_forward,
-        proposal.log_q_reverse,
-        math.log(probs[m]) if probs[m] > 0 else -math.inf,
-        math.log(probs[moves[m].reverse]) if probs[moves[m].reverse] > 0 else -math.inf,
-    )
-    if metropolis_accept(rng, log_a):
-        return proposal.state, RJInfo(m, True, log_a, new_value)
-    return state, RJInfo(m, False, log_a, current)
+    return kernel.step(rng, state, current, log_target)
 
 
 def run_chain(
@@ -342,10 +481,11 @@ def run_chain(
     """
     if int(num_steps) < 1:
         raise InputError(f"num_steps={num_steps} must be >= 1")
+    kernel = MoveKernel(moves, move_probs)
     value = float(log_target(state))
     states, infos = [], []
     for _ in range(int(num_steps)):
-        state, info = rj_step(rng, state, moves, log_target, move_probs, value)
+        state, info = kernel.step(rng, state, value, log_target)
         value = info.log_target
         states.append(state)
         infos.append(info)

@@ -2,17 +2,23 @@
 
 - :mod:`~models.rjmcmc3d.geometry`: pinhole cameras, ground homographies and the
   slant-removing rectification ``H = G R T`` (section 2);
-- :mod:`~models.rjmcmc3d.scene`: the calibrated scene (Tsai XML loader) and the
-  SIMULATED observations (foreground maps, colour images, detector, walkers);
+- :mod:`~models.rjmcmc3d.types`: Scene, Frame, Truth;
+- :mod:`~models.rjmcmc3d.calibration`: the Tsai XML loader and the default scene;
+- :mod:`~models.rjmcmc3d.projection`: the body model projected to part boxes;
+- :mod:`~models.rjmcmc3d.walkers`, :mod:`~models.rjmcmc3d.rendering`,
+  :mod:`~models.rjmcmc3d.detection`: the SIMULATED walkers, foreground maps and colour
+  images, and detector (:mod:`~models.rjmcmc3d.scene` re-exports all of these);
 - :mod:`~models.rjmcmc3d.model`: parameters, dynamics (eq. 7 with ``C(u)``), priors;
 - :mod:`~models.rjmcmc3d.likelihood`: eqs. 8-10, incremental and from scratch;
 - :mod:`~models.rjmcmc3d.tracker`: the six-move RJ-MCMC filter (eqs. 2, 5, 11);
 - :mod:`~models.rjmcmc3d.metrics`: MOTA / IDF1 / ID switches through py-motmetrics.
 """
 
+from models.rjmcmc3d.calibration import default_scene
 from models.rjmcmc3d.model import TrackerParams
-from models.rjmcmc3d.scene import default_scene, render_frame, simulate_walkers
+from models.rjmcmc3d.rendering import render_frame
 from models.rjmcmc3d.tracker import FrameResult, RJMCMCTracker, TrackState
+from models.rjmcmc3d.walkers import simulate_walkers
 
 __all__ = [
     "FrameResult",

@@ -29,8 +29,16 @@ from typing import NamedTuple
 
 import numpy as np
 
+from models.rjmcmc3d import compiled
+from models.rjmcmc3d.compiled import (
+    frame_codes,
+    one_person_delta,
+    patch_foreground_delta,
+    region_colour_cost,
+    union_sum,
+)
 from models.rjmcmc3d.model import TrackerParams
-from models.rjmcmc3d.scene import Frame
+from models.rjmcmc3d.types import Frame
 
 __all__ = [
     "Config",
@@ -88,6 +96,9 @@ class Config(NamedTuple):
 def prepare_frame(params: TrackerParams, frame: Frame) -> FrameData:
     """Quantise the colour images and weight the foreground maps of one frame."""
     L = params.colour_levels
+    if compiled.AVAILABLE and frame.image.dtype == np.float32 and frame.D.dtype == np.float32:
+        code, fgw, ii = frame_codes(frame.image, frame.D, L, params.c1, params.c2)
+        return FrameData(fgw, code, L**3, ii)
     q = np.clip((frame.image * L).astype(np.int64), 0, L - 1)
     bins = (q[..., 0] * L + q[..., 1]) * L + q[..., 2]
     nb = L**3
@@ -245,6 +256,15 @@ def _union_sum(get, st: int, boxes: list) -> float:
     return total
 
 
+def _with_lists(val: tuple) -> tuple:
+    """``ov`` entry ``(present, boxes, bbox, depth, *arrays)`` with its lists filled in
+    from the arrays when the proposal carried arrays only."""
+    if val[1] is not None:
+        return val
+    b, bb, d = val[4:7]
+    return (val[0], b.tolist(), bb.tolist(), d.tolist(), b, bb, d)
+
+
 class _Pending(NamedTuple):
     delta: float
     patches: list
@@ -282,6 +302,7 @@ class IncrementalLikelihood:
         self.data = data
         self.sref = sref
         self.nref_l = nref.tolist()
+        self.nref_a = np.ascontiguousarray(nref, dtype=np.int64)
         self.active_l = (nref.sum(1) > 0).tolist()
         V, H, W = data.fgw.shape
         self.num_views = V
@@ -329,6 +350,14 @@ class IncrementalLikelihood:
             ]
             for v in range(V)
         ]  # label of covered pixels: a bin beyond the 3 regions
+        # array mirrors of the per-view geometry (the compiled path)
+        self.usum_a = np.array(self.usum, dtype=np.float64).reshape(V, M)
+        self.boxes_a = np.array(cfg.boxes, dtype=np.int64, order="C")
+        self.bbox_a = np.array(cfg.bbox, dtype=np.int64, order="C")
+        self.depth_a = np.array(cfg.depth, dtype=np.float64, order="C")
+        self.cc_a = np.array(self.cc, dtype=np.float64).reshape(V, M)
+        self.present_a = np.array(self.present_l, dtype=np.bool_)
+        self.active_a = np.array(self.active_l, dtype=np.bool_)
 
     def _colour_one(self, counts: np.ndarray, j: int) -> float:
         """:func:`colour_cost` of one person from its (3, 2, num_bins) counts (fast path)."""
@@ -360,12 +389,45 @@ class IncrementalLikelihood:
             total -= p.lambda_im * nR * ((1.0 - lf) * d2H + lf * d2h - p.d_min)
         return total
 
-    def _slot_cost(self, v: int, j: int, boxes: list, bbox: list, dj: float, occ: list) -> float:
+    def _slot_cost(
+        self, v: int, j: int, boxes: list, bbox: list, dj: float, occ: list, arrays=None
+    ) -> float:
         """Colour term of person ``j`` in view ``v`` with part boxes ``boxes``.
 
         ``occ`` lists the other present people of the configuration as
-        ``(k, boxes_k, bbox_k, depth_k)``; the nearer ones hide their pixels.
+        ``(k, boxes_k, bbox_k, depth_k)``; the nearer ones hide their pixels. Compiled
+        (:func:`~models.rjmcmc3d.compiled.region_colour_cost`) when numba is available.
         """
+        if not compiled.AVAILABLE:
+            return self._slot_cost_numpy(v, j, boxes, bbox, dj, occ)
+        x0, y0, x1, y1 = bbox
+        if x1 <= x0 or y1 <= y0:
+            return 0.0
+        hidden = []
+        for k, bk, bbk, dk in occ:
+            if dk > dj or (dk == dj and k > j) or k == j:
+                continue
+            if bbk[0] >= x1 or bbk[2] <= x0 or bbk[1] >= y1 or bbk[3] <= y0:
+                continue
+            hidden += bk
+        p = self.params
+        return region_colour_cost(
+            self.data.code[v],
+            np.array(bbox, dtype=np.int64) if arrays is None else arrays[1],
+            np.array(boxes, dtype=np.int64) if arrays is None else arrays[0],
+            np.array(hidden, dtype=np.int64).reshape(-1, 4),
+            self.sref[j],
+            self.nref_a[j],
+            self.data.num_bins,
+            p.lambda_im,
+            p.lambda_f,
+            p.d_min,
+        )
+
+    def _slot_cost_numpy(
+        self, v: int, j: int, boxes: list, bbox: list, dj: float, occ: list
+    ) -> float:
+        """:meth:`_slot_cost` with numpy (the reference of the compiled path)."""
         x0, y0, x1, y1 = bbox
         if x1 <= x0 or y1 <= y0:
             return 0.0
@@ -409,107 +471,198 @@ class IncrementalLikelihood:
             Pass to :meth:`commit` if the move is accepted.
         """
         items = list(ov.items())
+        if compiled.AVAILABLE and len(items) == 1:
+            return self._propose_one(items, ov)
         delta = 0.0
         patches = []
         colour = []
-        active = self.active_l
-        present_l = self.present_l
         stay = [k for k in self.alive if k not in ov]  # present, unchanged
-        ii = self.data.ii
-        st = self._stride
         for v in range(self.num_views):
-            nz_v = self.nz_l[v]
-            signed = []
-            new_nz = []
-            for j, (pr, bx, _, _) in items:
-                if present_l[j]:
-                    signed += [(bx_, -1) for bx_ in nz_v[j]]
-                nz = [b for b in bx[v] if b[2] > b[0] and b[3] > b[1]] if pr else []
-                new_nz.append(nz)
-                signed += [(bx_, 1) for bx_ in nz]
-            if not signed:
+            got = self._foreground_view(v, items, stay)
+            if got is None:
                 continue
-            X0 = Y0 = 1 << 40
-            X1 = Y1 = -1
-            for (b0, b1, b2, b3), _ in signed:
-                X0 = b0 if b0 < X0 else X0
-                Y0 = b1 if b1 < Y0 else Y0
-                X1 = b2 if b2 > X1 else X1
-                Y1 = b3 if b3 > Y1 else Y1
-            bbox_v = self.bbox_l[v]
-            others = []  # unchanged people whose boxes meet the changed area
-            for k in stay:
-                kx0, ky0, kx1, ky1 = bbox_v[k]
-                if kx0 >= X1 or kx1 <= X0 or ky0 >= Y1 or ky1 <= Y0:
-                    continue
-                others.append(k)
-            get = ii[v].item
-            new_usum = {}
+            patch, others = got
+            delta += patch[2]
+            patches.append(patch)
+            for c in self._colour_view(v, items, stay, others):
+                delta += c[2] - self.cc[v][c[1]]
+                colour.append(c)
+        return delta, _Pending(delta, patches, colour, ov)
+
+    def _propose_one(self, items: list, ov: dict) -> tuple[float, _Pending]:
+        """:meth:`propose` for one changed person: eqs. 8-10 in one compiled call."""
+        j, val = items[0]
+        pr = val[0]
+        if len(val) > 4:
+            bxa, bba, dpa = val[4], val[5], val[6]
+        else:
+            bxa = np.array(val[1], dtype=np.int64)
+            bba = np.array(val[2], dtype=np.int64)
+            dpa = np.array(val[3], dtype=np.float64)
+        p = self.params
+        delta, touched, d_fg, new_usum, cv, ck, cc = one_person_delta(
+            self.count,
+            self.data.fgw,
+            self.data.ii,
+            self._stride,
+            self.data.code,
+            j,
+            self.present_l[j],
+            self.present_a,
+            self.active_a,
+            self.boxes_a,
+            self.bbox_a,
+            self.depth_a,
+            self.usum_a,
+            self.cc_a,
+            pr,
+            bxa,
+            bba,
+            dpa,
+            self.sref,
+            self.nref_a,
+            p.lambda_im,
+            p.lambda_f,
+            p.d_min,
+        )
+        patches = [
+            (v, None, d, {j: u})
+            for v, d, u, t in zip(
+                range(self.num_views), d_fg.tolist(), new_usum.tolist(), touched.tolist()
+            )
+            if t
+        ]
+        colour = list(zip(cv.tolist(), ck.tolist(), cc.tolist()))
+        return delta, _Pending(delta, patches, colour, ov)
+
+    def _foreground_view(self, v: int, items: list, stay: list) -> tuple | None:
+        """Eq. 9 change in view ``v`` and the unchanged people meeting the changed area.
+
+        Returns ``None`` when no changed person is (or becomes) visible in the view, else
+        ``((v, signed boxes, d_fg, new union sums), others)``.
+        """
+        present_l = self.present_l
+        nz_v = self.nz_l[v]
+        signed = []
+        new_nz = []
+        for j, (pr, bx, *_) in items:
+            if present_l[j]:
+                signed += [(bx_, -1) for bx_ in nz_v[j]]
+            nz = [b for b in bx[v] if b[2] > b[0] and b[3] > b[1]] if pr else []
+            new_nz.append(nz)
+            signed += [(bx_, 1) for bx_ in nz]
+        if not signed:
+            return None
+        X0 = Y0 = 1 << 40
+        X1 = Y1 = -1
+        for (b0, b1, b2, b3), _ in signed:
+            X0 = b0 if b0 < X0 else X0
+            Y0 = b1 if b1 < Y0 else Y0
+            X1 = b2 if b2 > X1 else X1
+            Y1 = b3 if b3 > Y1 else Y1
+        bbox_v = self.bbox_l[v]
+        others = []  # unchanged people whose boxes meet the changed area
+        for k in stay:
+            kx0, ky0, kx1, ky1 = bbox_v[k]
+            if kx0 >= X1 or kx1 <= X0 or ky0 >= Y1 or ky1 <= Y0:
+                continue
+            others.append(k)
+        st = self._stride
+        new_usum = {}
+        if compiled.AVAILABLE:
+            ii_v = self.data.ii[v]
+            for (j, _), nz in zip(items, new_nz):
+                new_usum[j] = union_sum(ii_v, st, np.array(nz, dtype=np.int64)) if nz else 0.0
+        else:
+            get = self.data.ii[v].item
             for (j, _), nz in zip(items, new_nz):
                 new_usum[j] = _union_sum(get, st, nz) if nz else 0.0
-            if not others and len(items) == 1:
-                # nobody else covers these pixels: eq. 9 change from the integral image
-                j = items[0][0]
-                d_fg = new_usum[j] - (self.usum[v][j] if present_l[j] else 0.0)
+        if not others and len(items) == 1:
+            # nobody else covers these pixels: eq. 9 change from the integral image
+            j = items[0][0]
+            d_fg = new_usum[j] - (self.usum[v][j] if present_l[j] else 0.0)
+        elif compiled.AVAILABLE:
+            d_fg = patch_foreground_delta(
+                self.count[v],
+                self.data.fgw[v],
+                np.array((X0, Y0, X1, Y1), dtype=np.int64),
+                np.array([(*b, sign) for b, sign in signed], dtype=np.int64),
+            )
+        else:
+            cold = self.count[v, Y0:Y1, X0:X1]
+            cnew = cold.copy()
+            for (bx0, by0, bx1, by1), sign in signed:
+                cnew[by0 - Y0 : by1 - Y0, bx0 - X0 : bx1 - X0] += sign
+            f = self.data.fgw[v, Y0:Y1, X0:X1]
+            d_fg = float(
+                np.add.reduce(f, axis=None, where=cnew > 0)
+                - np.add.reduce(f, axis=None, where=cold > 0)
+            )
+        return (v, signed, d_fg, new_usum), others
+
+    def _colour_view(self, v: int, items: list, stay: list, others: list) -> list:
+        """Eq. 10 terms ``(v, j, new cost)`` of the changed people and of the unchanged
+        ones behind a changed person (their visible pixels change) in view ``v``."""
+        active = self.active_l
+        present_l = self.present_l
+        boxes_v, depth_v, bbox_v = self.boxes_l[v], self.depth_l[v], self.bbox_l[v]
+        # the configuration after the move, as seen from view v
+        occ = [(k, boxes_v[k], bbox_v[k], depth_v[k]) for k in stay]
+        occ += [(j, bx[v], bb[v], dp[v]) for j, (pr, bx, bb, dp, *_) in items if pr]
+        out = []
+        for j, (pr, bx, bb, dp, *arr) in items:
+            if active[j]:
+                a = (arr[0][v], arr[1][v]) if arr else None
+                c_new = self._slot_cost(v, j, bx[v], bb[v], dp[v], occ, a) if pr else 0.0
+                out.append((v, j, c_new))
+        for k in others:
+            if not active[k]:
+                continue
+            # k's visible pixels change only if a changed person is (or was) nearer
+            dk = depth_v[k]
+            for j, (pr, _, _, dp, *_) in items:
+                dj = depth_v[j]
+                if present_l[j] and (dj < dk or (dj == dk and j < k)):
+                    break
+                dj = dp[v]
+                if pr and (dj < dk or (dj == dk and j < k)):
+                    break
             else:
-                cold = self.count[v, Y0:Y1, X0:X1]
-                cnew = cold.copy()
-                for (bx0, by0, bx1, by1), sign in signed:
-                    cnew[by0 - Y0 : by1 - Y0, bx0 - X0 : bx1 - X0] += sign
-                f = self.data.fgw[v, Y0:Y1, X0:X1]
-                d_fg = float(
-                    np.add.reduce(f, axis=None, where=cnew > 0)
-                    - np.add.reduce(f, axis=None, where=cold > 0)
-                )
-            delta += d_fg
-            patches.append((v, signed, d_fg, new_usum))
-            # the configuration after the move, as seen from view v
-            boxes_v, depth_v = self.boxes_l[v], self.depth_l[v]
-            occ = [(k, boxes_v[k], bbox_v[k], depth_v[k]) for k in stay]
-            occ += [(j, bx[v], bb[v], dp[v]) for j, (pr, bx, bb, dp) in items if pr]
-            cc_v = self.cc[v]
-            for j, (pr, bx, bb, dp) in items:
-                if active[j]:
-                    c_new = self._slot_cost(v, j, bx[v], bb[v], dp[v], occ) if pr else 0.0
-                    delta += c_new - cc_v[j]
-                    colour.append((v, j, c_new))
-            for k in others:
-                if not active[k]:
-                    continue
-                # k's visible pixels change only if a changed person is (or was) nearer
-                dk = depth_v[k]
-                for j, (pr, _, _, dp) in items:
-                    dj = depth_v[j]
-                    if present_l[j] and (dj < dk or (dj == dk and j < k)):
-                        break
-                    dj = dp[v]
-                    if pr and (dj < dk or (dj == dk and j < k)):
-                        break
-                else:
-                    continue
-                c_new = self._slot_cost(v, k, boxes_v[k], bbox_v[k], dk, occ)
-                delta += c_new - cc_v[k]
-                colour.append((v, k, c_new))
-        return delta, _Pending(delta, patches, colour, ov)
+                continue
+            a = (self.boxes_a[v, k], self.bbox_a[v, k])
+            out.append((v, k, self._slot_cost(v, k, boxes_v[k], bbox_v[k], dk, occ, a)))
+        return out
 
     def commit(self, pending: _Pending) -> None:
         """Make the proposed configuration current."""
+        ov = {j: _with_lists(val) for j, val in pending.ov.items()}
         for v, signed, d_fg, new_usum in pending.patches:
             for j, u in new_usum.items():
                 self.usum[v][j] = u
+                self.usum_a[v, j] = u
+            if signed is None:  # one changed person: its old boxes out, its new ones in
+                ((j, (pr, bx, *_)),) = ov.items()
+                signed = [(b, -1) for b in self.nz_l[v][j]] if self.present_l[j] else []
+                if pr:
+                    signed += [(b, 1) for b in bx[v] if b[2] > b[0] and b[3] > b[1]]
             cv = self.count[v]
             for (bx0, by0, bx1, by1), sign in signed:
                 cv[by0:by1, bx0:bx1] += sign
             self.fg[v] += d_fg
-        ov = pending.ov
         for v, j, c in pending.colour:
             self.cc[v][j] = c
-        for j, (pr, bx, bb, dp) in ov.items():
+            self.cc_a[v, j] = c
+        for j, (pr, bx, bb, dp, *_) in ov.items():
             self.present_l[j] = pr
             for v in range(self.num_views):
                 self.boxes_l[v][j] = bx[v]
                 self.bbox_l[v][j] = bb[v]
                 self.depth_l[v][j] = dp[v]
                 self.nz_l[v][j] = [b for b in bx[v] if b[2] > b[0] and b[3] > b[1]] if pr else []
+            arrays = ov[j][4:]  # the projection's arrays, when it gave them
+            self.boxes_a[:, j] = arrays[0] if arrays else bx
+            self.bbox_a[:, j] = arrays[1] if arrays else bb
+            self.depth_a[:, j] = arrays[2] if arrays else dp
+            self.present_a[j] = pr
         self.alive = [j for j in range(self.M) if self.present_l[j]]
         self.total += pending.delta

@@ -13,8 +13,8 @@ import motmetrics as mm
 import numpy as np
 
 from dbn.errors import InputError
-from models.rjmcmc3d.scene import FrameTruth
 from models.rjmcmc3d.tracker import FrameResult
+from models.rjmcmc3d.types import FrameTruth
 
 __all__ = ["evaluate"]
 

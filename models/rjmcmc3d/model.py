@@ -18,7 +18,8 @@ import numpy as np
 
 from dbn.errors import InputError
 from models.rjmcmc3d.geometry import ground_homography
-from models.rjmcmc3d.scene import Scene, visible_views
+from models.rjmcmc3d.projection import visible_views
+from models.rjmcmc3d.types import Scene
 
 __all__ = [
     "GroundNoiseMap",

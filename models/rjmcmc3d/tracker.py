@@ -23,7 +23,7 @@ never mutates the state it is given.
 
 from __future__ import annotations
 
-import bisect
+import functools
 import math
 import time
 from collections.abc import Iterable
@@ -34,7 +34,15 @@ from scipy.special import i0e
 from tqdm.auto import tqdm
 
 from dbn.errors import InputError, ShapeError
-from inference.mcmc import log_acceptance_ratio, metropolis_accept, select_move
+from inference.mcmc import Move, MoveKernel, Proposal, sample
+from models.rjmcmc3d import compiled
+from models.rjmcmc3d.compiled import (
+    add_log_q,
+    far_detections,
+    interaction_row,
+    update_log_q_at,
+    update_log_q_pair,
+)
 from models.rjmcmc3d.likelihood import (
     Config,
     IncrementalLikelihood,
@@ -50,9 +58,10 @@ from models.rjmcmc3d.model import (
     ground_noise_map,
     predict,
 )
-from models.rjmcmc3d.scene import BoxProjector, Frame, Scene
+from models.rjmcmc3d.projection import BoxProjector
+from models.rjmcmc3d.types import Frame, Scene
 
-__all__ = ["FrameResult", "RJMCMCTracker", "TrackState", "MOVE_NAMES"]
+__all__ = ["FrameChain", "FrameResult", "MOVES", "MOVE_NAMES", "RJMCMCTracker", "TrackState"]
 
 MOVE_NAMES = ("add", "delete", "stay", "leave", "switch", "update")
 ADD, DELETE, STAY, LEAVE, SWITCH, UPDATE = range(6)
@@ -118,15 +127,17 @@ class FrameResult(NamedTuple):
     log_target: float
 
 
-class _Chain:
-    """Working state of one frame's chain (mutated in place; private)."""
+class FrameChain:
+    """Working state of one frame's chain (updated in place by the accepted moves).
+
+    Built by :meth:`RJMCMCTracker.frame_chain`; :meth:`run` samples it.
+    """
 
     def __init__(self, tracker: RJMCMCTracker, state: TrackState, frame: Frame, likelihood: str):
         p = tracker.params
         self.p = p
         self.t = tracker
-        M = p.max_objects
-        self.M = M
+        self.M = p.max_objects
         self.scene = tracker.scene
         self.proj = tracker.projector
         self.data = prepare_frame(p, frame)
@@ -135,10 +146,23 @@ class _Chain:
         self.floor = fl.tolist()
         self.log_area = math.log((fl[1] - fl[0]) * (fl[3] - fl[2]))
         self.ta = p.tau * p.a
-        # previous-frame summary -> prediction (eq. 7)
+        self._predict(state)
+        self._detections(frame)
+        # colour references
+        self.refs = state.refs
+        self.nref = state.nref
+        self.sref = np.sqrt(state.refs)
+        self._initial_configuration()
+        self.probs = np.asarray(p.move_probs)
+        self._kernel_memo = {}
+        self.lik_time = 0.0  # seconds spent projecting boxes and evaluating the likelihood
+
+    def _predict(self, state: TrackState) -> None:
+        """Previous-frame summary -> prediction (eq. 7), height, orientation, leave terms."""
+        p = self.p
         self.prev = state.alive.copy()
         self.prev_l = self.prev.tolist()
-        m, P = predict(p, tracker.noise, state.mean, state.cov)
+        m, P = predict(p, self.t.noise, state.mean, state.cov)
         self.m = m
         self.P = P
         Puu = P[:, :2, :2] + 1e-9 * np.eye(2)
@@ -159,50 +183,49 @@ class _Chain:
         z = np.clip(inside / (p.leave_ramp / 4.0), -50, 50)
         self.p_leave = p.p_leave_inside + (0.999 - p.p_leave_inside) / (1.0 + np.exp(z))
         self.log_vm = -math.log(2 * math.pi * i0e(p.alpha_kappa))
-        # detections inside the floor, with their single-view covariances
+        self.h_pred_l = self.h_pred.tolist()
+        self.alpha_pred_l = self.alpha_pred.tolist()
+        self.p_leave_l = self.p_leave.tolist()
+
+    def _detections(self, frame: Frame) -> None:
+        """Detections inside the floor, with their single-view covariances (sec. 3.4)."""
+        p = self.p
         sel = self._signed_inside(frame.det_ground) > 0
         self.det = frame.det_ground[sel]
         self.det_l = self.det.tolist()
         dv = frame.det_view[sel]
         if p.ground_noise:
-            i, j = tracker.noise.index(self.det)
-            cov = tracker.noise.view_cov[dv, i, j] + p.min_sd**2 * np.eye(2)
+            i, j = self.t.noise.index(self.det)
+            cov = self.t.noise.view_cov[dv, i, j] + p.min_sd**2 * np.eye(2)
         else:
             cov = np.broadcast_to(p.fixed_sd**2 * np.eye(2), (len(dv), 2, 2)).copy()
         self.det_L = np.linalg.cholesky(cov) if len(dv) else np.zeros((0, 2, 2))
         gate_cov = cov + 0.3**2 * np.eye(2)
         self.det_gate_L = np.linalg.cholesky(gate_cov) if len(dv) else np.zeros((0, 2, 2))
-        # colour references
-        self.refs = state.refs
-        self.nref = state.nref
-        self.sref = np.sqrt(state.refs)
-        # initial configuration: previous people at their predicted means if inside
-        self.present = self.prev & (self._signed_inside(m[:, :2]) > 0)
+
+    def _initial_configuration(self) -> None:
+        """Previous people at their predicted means if inside; priors, boxes, likelihood."""
+        p, M = self.p, self.M
+        self.present = self.prev & (self._signed_inside(self.m[:, :2]) > 0)
         self.S = np.zeros((M, 4))  # x, y, h, alpha
-        self.S[:, :2] = m[:, :2]
+        self.S[:, :2] = self.m[:, :2]
         self.S[:, 2] = np.where(self.prev, self.h_pred, p.h_mean)
         self.S[:, 3] = self.alpha_pred
-        self.h_pred_l = self.h_pred.tolist()
-        self.alpha_pred_l = self.alpha_pred.tolist()
-        self.p_leave_l = self.p_leave.tolist()
         self.lp = [self._slot_prior(i, self.S[i].tolist(), bool(self.present[i])) for i in range(M)]
         self.upr = [self._upr(i, self.S[i, 0], self.S[i, 1]) for i in range(M)]
+        self.upr_a = np.array(self.upr, dtype=np.float64)  # array mirror (compiled loops)
         self.boxdata = [self.proj.one(*self.S[i].tolist()) for i in range(M)]
         self.S_l = self.S.tolist()  # list mirrors of S and present (the per-move code)
         self.present_l = self.present.tolist()
         self.alive = [j for j in range(M) if self.present_l[j]]
         cfg = self._config_from_boxdata(self.boxdata, self.present)
         self.G = self._interaction_matrix()
-        if likelihood == "incremental":
+        if self.likelihood == "incremental":
             self.lik = IncrementalLikelihood(p, self.data, cfg, self.sref, self.nref)
             self.loglik = self.lik.total
         else:
             self.lik = None
             self.loglik = full_loglik(p, self.data, cfg, self.sref, self.nref)
-        self.log_probs = np.log(np.asarray(p.move_probs)).tolist()
-        self.probs = np.asarray(p.move_probs)
-        self._kernel_memo = {}
-        self.lik_time = 0.0  # seconds spent projecting boxes and evaluating the likelihood
 
     # ---- geometry helpers --------------------------------------------------------------
     def _signed_inside(self, u: np.ndarray) -> np.ndarray:
@@ -286,6 +309,8 @@ class _Chain:
     # ---- the move machinery ------------------------------------------------------------
     def _evaluate(self, S_new: np.ndarray, present_new: np.ndarray, changed: list[int]):
         """Log target change of a proposal changing ``changed`` slots, and what to commit."""
+        if len(changed) == 1 and compiled.AVAILABLE:
+            return self._evaluate_one(S_new, present_new, changed[0])
         rows_s = {i: S_new[i].tolist() for i in changed}
         pr_new = present_new.tolist()
         lp_new = {i: self._slot_prior(i, rows_s[i], pr_new[i]) for i in changed}
@@ -302,7 +327,17 @@ class _Chain:
         ]
         for c in changed:
             row = [0.0] * self.M
-            if pr_new[c]:
+            if pr_new[c] and compiled.AVAILABLE and len(changed) == 1:
+                others = np.array([j for j in live if j != c], dtype=np.int64)
+                row = interaction_row(
+                    np.array(rows_s[c]),
+                    np.array(upr_new[c]),
+                    self.S,
+                    self.upr_a,
+                    others,
+                    *self.p.shape_sd,
+                ).tolist()
+            elif pr_new[c]:
                 sc, uc = rows_s[c], upr_new[c]
                 for j in live:
                     if j == c:
@@ -342,6 +377,53 @@ class _Chain:
         commit = (S_new, present_new, changed, lp_new, upr_new, rows, boxdata, pending, d_lik)
         return d_prior + d_int + d_lik, commit
 
+    def _evaluate_one(self, S_new: np.ndarray, present_new: np.ndarray, c: int):
+        """:meth:`_evaluate` for one changed slot ``c`` (the same arithmetic, fewer steps)."""
+        row_s = S_new[c].tolist()
+        pr_c = bool(present_new[c])
+        lp_c = self._slot_prior(c, row_s, pr_c)
+        d_prior = lp_c - self.lp[c]
+        if d_prior == -math.inf:
+            return -math.inf, None
+        upr_c = self._upr(c, row_s[0], row_s[1])
+        old = self.G[c]
+        if pr_c:
+            row = interaction_row(
+                S_new[c], upr_c, self.S, self.upr_a, self.present, c, *self.p.shape_sd
+            ).tolist()
+        else:
+            row = [0.0] * self.M
+        d_e = sum(row) - sum(old) - (row[c] - old[c])
+        d_int = -2.0 * self.p.lambda_g * d_e
+        t0 = time.perf_counter()
+        if self.S_l[c] == row_s:  # delete, leave: the current geometry
+            boxdata = self.boxdata[c]
+        elif self.lik is not None:  # arrays only; lists made if accepted (_commit)
+            boxdata = (None, None, None, *self.proj.arrays(*row_s))
+        else:
+            boxdata = self.proj.one_arrays(*row_s)
+        if self.lik is not None:
+            d_lik, pending = self.lik.propose({c: (pr_c, *boxdata)})
+        else:
+            bd = self.boxdata.copy()
+            bd[c] = boxdata
+            cfg = self._config_from_boxdata(bd, present_new)
+            new_total = full_loglik(self.p, self.data, cfg, self.sref, self.nref)
+            d_lik, pending = new_total - self.loglik, None
+        self.lik_time += time.perf_counter() - t0
+        commit = (
+            S_new,
+            present_new,
+            [c],
+            {c: lp_c},
+            {c: upr_c},
+            {c: row},
+            {c: boxdata},
+            pending,
+            d_lik,
+        )
+        return d_prior + d_int + d_lik, commit
+
     def _commit(self, commit) -> None:
         S_new, present_new, changed, lp_new, upr_new, rows, boxdata, pending, d_lik = commit
         self.S = S_new
@@ -351,7 +433,8 @@ class _Chain:
             self.present_l[i] = bool(present_new[i])
             self.lp[i] = lp_new[i]
             self.upr[i] = upr_new[i]
-            self.boxdata[i] = boxdata[i]
+            self.upr_a[i] = upr_new[i]
+            self.boxdata[i] = _with_lists(boxdata[i])
             row = rows[i]
             self.G[i] = row
             for j in range(self.M):
@@ -370,12 +453,19 @@ class _Chain:
         idx = np.flatnonzero(present)
         if idx.size == 0:
             return np.ones(nd, dtype=bool)
+        if compiled.AVAILABLE:
+            return far_detections(self.det, self.det_gate_L, self.S[idx, :2], self.p.add_gate**2)
         lp = gauss2_logpdf(self.S[None, idx, :2], self.det[:, None, :], self.det_gate_L[:, None])
         L = self.det_gate_L
         maha2 = -2.0 * (lp + np.log(L[:, 0, 0] * L[:, 1, 1])[:, None] + LOG_2PI)
         return np.all(maha2 > self.p.add_gate**2, axis=1)
 
     def _log_q_add(self, u: np.ndarray, h: float, elig: np.ndarray) -> float:
+        if compiled.AVAILABLE:
+            p = self.p
+            return add_log_q(
+                float(u[0]), float(u[1]), h, self.det, self.det_L, elig, p.h_mean, p.h_sd0
+            )
         if not elig.any():
             return -math.inf
         lp = gauss2_logpdf(u[None, :], self.det[elig], self.det_L[elig])
@@ -425,6 +515,11 @@ class _Chain:
 
     def _log_q_update(self, x1: float, y1: float, x0: float, y0: float) -> float:
         """``log q(u1 | u0)`` of the update mixture (random walk + detection-driven)."""
+        if compiled.AVAILABLE:  # one compiled call (kernel lookup, gating and mixture)
+            t = self.t
+            g2 = self.p.det_gate**2
+            w = self.p.p_det_update
+            return update_log_q_at(x1, y1, x0, y0, t._upd_a, t._origin_a, t._step, self.det, g2, w)
         L, near = self._kernel_at(x0, y0)
         l_rw = self._lg(x1, y1, x0, y0, L)
         if not near:
@@ -437,82 +532,104 @@ class _Chain:
 
     # ---- the six moves (seed 003, sec. 3.4) ---------------------------------------------
     def propose(self, rng: np.random.Generator, move: int):
-        """Return ``(S_new, present_new, changed, log_q_fwd, log_q_rev)`` or ``None``."""
+        """Return ``(S_new, present_new, changed, log_q_fwd, log_q_rev)`` or ``None``.
+
+        ``move`` indexes :data:`MOVE_NAMES` (seed 003, sec. 3.4); the proposal densities
+        count only the choices possible from the current state.
+        """
+        return _PROPOSALS[move](self, rng)
+
+    def _add(self, rng: np.random.Generator):
+        """Add: a newborn near a detection far from every present person."""
         p = self.p
         present = self.present
-        if move == ADD:
-            free = np.flatnonzero(~present & ~self.prev)
-            elig = self._eligible(present)
-            if free.size == 0 or not elig.any():
-                return None
-            cand = np.flatnonzero(elig)
-            d = int(cand[int(rng.random() * cand.size)])
-            i = int(free[0])
-            u = self.det[d] + self.det_L[d] @ rng.normal(size=2)
-            h = p.h_mean + p.h_sd0 * rng.normal()
-            a = rng.uniform(-math.pi, math.pi)
-            S = self.S.copy()
-            S[i] = (u[0], u[1], h, a)
-            pr = present.copy()
-            pr[i] = True
-            n_born = int((pr & ~self.prev).sum())
-            return S, pr, [i], self._log_q_add(u, h, elig), -math.log(n_born)
-        if move == DELETE:
-            born = np.flatnonzero(present & ~self.prev)
-            if born.size == 0:
-                return None
-            i = int(born[int(rng.random() * born.size)])
-            pr = present.copy()
-            pr[i] = False
-            lq_rev = self._log_q_add(self.S[i, :2], float(self.S[i, 2]), self._eligible(pr))
-            return self.S.copy(), pr, [i], -math.log(born.size), lq_rev
-        if move == STAY:
-            left = np.flatnonzero(self.prev & ~present)
-            if left.size == 0:
-                return None
-            i = int(left[int(rng.random() * left.size)])
-            u = self.m[i, :2] + self.Luu[i] @ rng.normal(size=2)
-            h = self.h_pred_l[i] + p.h_sd * rng.normal()
-            a = float(rng.vonmises(self.alpha_pred_l[i], p.alpha_kappa))
-            S = self.S.copy()
-            S[i] = (u[0], u[1], h, a)
-            pr = present.copy()
-            pr[i] = True
-            n_stay = int((pr & self.prev).sum())
-            lq = -math.log(left.size) + self._log_pred(i, S[i].tolist())
-            return S, pr, [i], lq, -math.log(n_stay)
-        if move == LEAVE:
-            stay = np.flatnonzero(self.prev & present)
-            if stay.size == 0:
-                return None
-            i = int(stay[int(rng.random() * stay.size)])
-            pr = present.copy()
-            pr[i] = False
-            n_left = int((self.prev & ~pr).sum())
-            lq_rev = -math.log(n_left) + self._log_pred(i, self.S[i].tolist())
-            return self.S.copy(), pr, [i], -math.log(stay.size), lq_rev
-        if move == SWITCH:
-            idx = np.flatnonzero(present)
-            if idx.size < 2:
-                return None
-            U = self.S[idx, :2]
-            dist = np.hypot(U[:, None, 0] - U[None, :, 0], U[:, None, 1] - U[None, :, 1])
-            ii, jj = np.nonzero(np.triu(dist < p.switch_dist, 1))
-            if ii.size == 0:
-                return None
-            k = int(rng.random() * ii.size)
-            a, b = int(idx[ii[k]]), int(idx[jj[k]])
-            S = self.S.copy()
-            S[[a, b]] = S[[b, a]]
-            return S, present.copy(), [a, b], 0.0, 0.0
-        # UPDATE
+        free = np.flatnonzero(~present & ~self.prev)
+        elig = self._eligible(present)
+        if free.size == 0 or not elig.any():
+            return None
+        cand = np.flatnonzero(elig)
+        d = int(cand[int(rng.random() * cand.size)])
+        i = int(free[0])
+        u = self.det[d] + self.det_L[d] @ rng.normal(size=2)
+        h = p.h_mean + p.h_sd0 * rng.normal()
+        a = rng.uniform(-math.pi, math.pi)
+        S = self.S.copy()
+        S[i] = (u[0], u[1], h, a)
+        pr = present.copy()
+        pr[i] = True
+        n_born = int((pr & ~self.prev).sum())
+        return S, pr, [i], self._log_q_add(u, h, elig), -math.log(n_born)
+
+    def _delete(self, rng: np.random.Generator):
+        """Delete: remove a person born in this frame (reverse of add)."""
+        present = self.present
+        born = np.flatnonzero(present & ~self.prev)
+        if born.size == 0:
+            return None
+        i = int(born[int(rng.random() * born.size)])
+        pr = present.copy()
+        pr[i] = False
+        lq_rev = self._log_q_add(self.S[i, :2], float(self.S[i, 2]), self._eligible(pr))
+        return self.S.copy(), pr, [i], -math.log(born.size), lq_rev
+
+    def _stay(self, rng: np.random.Generator):
+        """Stay: bring back a person of the previous frame, drawn from its prediction."""
+        p = self.p
+        present = self.present
+        left = np.flatnonzero(self.prev & ~present)
+        if left.size == 0:
+            return None
+        i = int(left[int(rng.random() * left.size)])
+        u = self.m[i, :2] + self.Luu[i] @ rng.normal(size=2)
+        h = self.h_pred_l[i] + p.h_sd * rng.normal()
+        a = float(rng.vonmises(self.alpha_pred_l[i], p.alpha_kappa))
+        S = self.S.copy()
+        S[i] = (u[0], u[1], h, a)
+        pr = present.copy()
+        pr[i] = True
+        n_stay = int((pr & self.prev).sum())
+        lq = -math.log(left.size) + self._log_pred(i, S[i].tolist())
+        return S, pr, [i], lq, -math.log(n_stay)
+
+    def _leave(self, rng: np.random.Generator):
+        """Leave: a person of the previous frame leaves (reverse of stay)."""
+        present = self.present
+        stay = np.flatnonzero(self.prev & present)
+        if stay.size == 0:
+            return None
+        i = int(stay[int(rng.random() * stay.size)])
+        pr = present.copy()
+        pr[i] = False
+        n_left = int((self.prev & ~pr).sum())
+        lq_rev = -math.log(n_left) + self._log_pred(i, self.S[i].tolist())
+        return self.S.copy(), pr, [i], -math.log(stay.size), lq_rev
+
+    def _switch(self, rng: np.random.Generator):
+        """Switch: exchange the states of two close people (symmetric)."""
+        present = self.present
+        idx = np.flatnonzero(present)
+        if idx.size < 2:
+            return None
+        U = self.S[idx, :2]
+        dist = np.hypot(U[:, None, 0] - U[None, :, 0], U[:, None, 1] - U[None, :, 1])
+        ii, jj = np.nonzero(np.triu(dist < self.p.switch_dist, 1))
+        if ii.size == 0:
+            return None
+        k = int(rng.random() * ii.size)
+        a, b = int(idx[ii[k]]), int(idx[jj[k]])
+        S = self.S.copy()
+        S[[a, b]] = S[[b, a]]
+        return S, present.copy(), [a, b], 0.0, 0.0
+
+    def _update(self, rng: np.random.Generator):
+        """Update: a ``Sigma(u)`` random walk or a jump to a gated detection (mixture)."""
         alive = self.alive
         if not alive:
             return None
         i = alive[int(rng.random() * len(alive))]
         x0, y0, h0, a0 = self.S_l[i]
         L, near = self._kernel_at(x0, y0)
-        if near and rng.random() < p.p_det_update:
+        if near and rng.random() < self.p.p_det_update:
             cx, cy = near[int(rng.random() * len(near))]
         else:
             cx, cy = x0, y0
@@ -522,75 +639,100 @@ class _Chain:
         S = self.S.copy()
         S[i] = (x1, y1, h0 + 0.01 * w3, (a0 + 0.3 * w4 + math.pi) % (2 * math.pi) - math.pi)
         if not self._inside(x1, y1):
-            return S, present.copy(), [i], 0.0, -math.inf  # impossible: rejected
-        lq_f = self._log_q_update(x1, y1, x0, y0)
-        lq_r = self._log_q_update(x0, y0, x1, y1)
-        return S, present.copy(), [i], lq_f, lq_r
+            return S, self.present.copy(), [i], 0.0, -math.inf  # impossible: rejected
+        if compiled.AVAILABLE:  # both densities in one compiled call
+            t, p = self.t, self.p
+            lq_f, lq_r = update_log_q_pair(
+                x1, y1, x0, y0, t._upd_a, t._origin_a, t._step, self.det, p.det_gate**2,
+                p.p_det_update,
+            )  # fmt: skip
+        else:
+            lq_f = self._log_q_update(x1, y1, x0, y0)
+            lq_r = self._log_q_update(x0, y0, x1, y1)
+        return S, self.present.copy(), [i], lq_f, lq_r
+
+    def full_loglik(self) -> float:
+        """Eqs. 8-10 of the current configuration recomputed from scratch (the oracle)."""
+        return full_loglik(
+            self.p, self.data, self._config(self.S, self.present), self.sref, self.nref
+        )
+
+    def record(self, count: int) -> None:
+        """Add the current configuration, held for ``count`` kept samples, to the sums."""
+        pm = self.present.astype(float) * count
+        self.cnt += pm
+        self.su += pm[:, None] * self.S[:, :2]
+        self.suu += pm[:, None, None] * self.S[:, :2, None] * self.S[:, None, :2]
+        self.sh += pm * self.S[:, 2]
+        self.sc[:, 0] += pm * np.cos(self.S[:, 3])
+        self.sc[:, 1] += pm * np.sin(self.S[:, 3])
 
     def run(self, rng: np.random.Generator) -> dict:
+        """Run the frame's chain through :func:`inference.mcmc.sample` (seed 003, eq. 11).
+
+        Returns the moment sums of the kept samples (``presence``, ``cnt``, ``su``,
+        ``suu``, ``sh``, ``sc``) and the acceptance rate of each move.
+        """
         p = self.p
         M = self.M
-        tried = np.zeros(6)
-        acc = np.zeros(6)
-        n_kept = p.num_moves - p.burn_in
-        cnt = np.zeros(M)
-        su = np.zeros((M, 2))
-        suu = np.zeros((M, 2, 2))
-        sh = np.zeros(M)
-        sc = np.zeros((M, 2))
-        last = p.burn_in
-
-        def flush(upto: int) -> None:
-            nonlocal last
-            w = upto - last
-            if w <= 0:
-                return
-            pm = self.present.astype(float) * w
-            cnt[:] += pm
-            su[:] += pm[:, None] * self.S[:, :2]
-            suu[:] += pm[:, None, None] * self.S[:, :2, None] * self.S[:, None, :2]
-            sh[:] += pm * self.S[:, 2]
-            sc[:, 0] += pm * np.cos(self.S[:, 3])
-            sc[:, 1] += pm * np.sin(self.S[:, 3])
-            last = upto
-
-        cum = np.cumsum(self.probs).tolist()
-        for it in range(p.num_moves):
-            m = (
-                select_move(rng, self.probs)
-                if it == 0
-                else min(bisect.bisect_right(cum, rng.random()), 5)
-            )
-            tried[m] += 1
-            prop = self.propose(rng, m)
-            if prop is None:
-                rng.random()
-                continue
-            S_new, pr_new, changed, lq_f, lq_r = prop
-            if lq_r == -math.inf:
-                rng.random()
-                continue
-            delta, commit = self._evaluate(S_new, pr_new, changed)
-            log_a = log_acceptance_ratio(
-                delta, lq_f, lq_r, self.log_probs[m], self.log_probs[REVERSE[m]]
-            )
-            if metropolis_accept(rng, log_a):
-                if it >= p.burn_in:
-                    flush(it)
-                self._commit(commit)
-                acc[m] += 1
-        flush(p.num_moves)
-        with np.errstate(invalid="ignore"):
-            rates = acc / tried
+        self.cnt, self.su, self.suu = np.zeros(M), np.zeros((M, 2)), np.zeros((M, 2, 2))
+        self.sh, self.sc = np.zeros(M), np.zeros((M, 2))
+        kernel = MoveKernel(MOVES, self.probs, commit=_commit)
+        rec = sample(rng, kernel, self, p.num_moves, 0.0, burn_in=p.burn_in, record=_record)
         return {
-            "presence": cnt / n_kept,
-            "cnt": cnt,
-            "su": su,
-            "suu": suu,
-            "sh": sh,
-            "sc": sc,
-            "accept_rate": rates,
+            "presence": self.cnt / (p.num_moves - p.burn_in),
+            "cnt": self.cnt,
+            "su": self.su,
+            "suu": self.suu,
+            "sh": self.sh,
+            "sc": self.sc,
+            "accept_rate": rec.accept_rate,
         }
+
+
+def _with_lists(boxdata: tuple) -> tuple:
+    """A projection ``(boxes, bbox, depth, *arrays)`` with its nested lists filled in."""
+    if boxdata[0] is not None:
+        return boxdata
+    b, bb, d = boxdata[3:6]
+    return (b.tolist(), bb.tolist(), d.tolist(), b, bb, d)
+
+
+def _propose_move(move: int, rng: np.random.Generator, chain: FrameChain) -> Proposal | None:
+    """Declaration of move ``move`` for :class:`inference.mcmc.MoveKernel`: the proposal,
+    its two log densities and the incremental log target change (eqs. 2 and 8-10)."""
+    prop = _PROPOSALS[move](chain, rng)
+    if prop is None:
+        return None
+    S_new, pr_new, changed, lq_f, lq_r = prop
+    if lq_r == -math.inf:  # impossible reverse: rejected without evaluating the target
+        return Proposal(None, lq_f, lq_r, -math.inf)
+    delta, pending = chain._evaluate(S_new, pr_new, changed)
+    return Proposal(pending, lq_f, lq_r, delta)
+
+
+def _commit(chain: FrameChain, pending: tuple) -> FrameChain:
+    chain._commit(pending)
+    return chain
+
+
+def _record(chain: FrameChain, count: int) -> None:
+    chain.record(count)
+
+
+_PROPOSALS = (
+    FrameChain._add,
+    FrameChain._delete,
+    FrameChain._stay,
+    FrameChain._leave,
+    FrameChain._switch,
+    FrameChain._update,
+)
+
+#: the six moves of seed 003, sec. 3.4, in the order of ``TrackerParams.move_probs``
+MOVES = tuple(
+    Move(name, functools.partial(_propose_move, m), REVERSE[m]) for m, name in enumerate(MOVE_NAMES)
+)
 
 
 class RJMCMCTracker:
@@ -634,7 +776,9 @@ class RJMCMCTracker:
         else:
             upd = np.broadcast_to(p.fixed_sd**2 * np.eye(2), self.noise.cov.shape)
         L = np.linalg.cholesky(upd)
-        self._upd = np.stack([L[..., 0, 0], L[..., 1, 0], L[..., 1, 1]], axis=-1).tolist()
+        self._upd_a = np.ascontiguousarray(np.stack([L[..., 0, 0], L[..., 1, 0], L[..., 1, 1]], -1))
+        self._upd = self._upd_a.tolist()
+        self._origin_a = np.asarray(self.noise.origin, dtype=np.float64)
         self._origin = self.noise.origin.tolist()
         self._step = self.noise.step
         self._shape = self.noise.cov.shape[:2]
@@ -664,6 +808,25 @@ class RJMCMCTracker:
             np.zeros((M, 3, K)),
             0,
         )
+
+    def frame_chain(
+        self, state: TrackState, frame: Frame, likelihood: str | None = None
+    ) -> FrameChain:
+        """The chain of one frame before sampling (for benchmarks and diagnostics).
+
+        Parameters
+        ----------
+        state : TrackState
+            Previous posterior summary (not mutated).
+        frame : Frame
+        likelihood : {"incremental", "full"}, optional
+            Default: the tracker's.
+        """
+        self._check_frame(frame)
+        mode = self.likelihood if likelihood is None else likelihood
+        if mode not in ("incremental", "full"):
+            raise InputError(f"likelihood={mode!r} must be 'incremental' or 'full'")
+        return FrameChain(self, state, frame, mode)
 
     def _check_frame(self, frame: Frame) -> None:
         sc = self.scene
@@ -705,12 +868,12 @@ class RJMCMCTracker:
         """
         self._check_frame(frame)
         rng = np.random.default_rng(seed)
-        chain = _Chain(self, state, frame, self.likelihood)
+        chain = FrameChain(self, state, frame, self.likelihood)
         out = chain.run(rng)
         return self._posterior(state, chain, out)
 
     def _posterior(
-        self, state: TrackState, chain: _Chain, out: dict
+        self, state: TrackState, chain: FrameChain, out: dict
     ) -> tuple[TrackState, FrameResult]:
         p = self.params
         exist = out["presence"] > 0.5
@@ -759,7 +922,7 @@ class RJMCMCTracker:
         )
         return new_state, result
 
-    def _update_refs(self, chain: _Chain, state: TrackState, exist, mu, h, alpha):
+    def _update_refs(self, chain: FrameChain, state: TrackState, exist, mu, h, alpha):
         """Reference histogram update from the mean state (seed 003, sec. 3.3)."""
         p = self.params
         refs = np.where(exist[:, None, None, None], state.refs, 0.0)

@@ -54,6 +54,7 @@ from typing import NamedTuple
 import numpy as np
 
 from dbn.errors import InputError
+from inference.mcmc import BatchKernel, BatchMove, BatchProposal, run_batch
 from models.zajdel.data import Observations, validate_observations
 from models.zajdel.learnsearch import (
     LearnSearchConfig,
@@ -74,6 +75,7 @@ __all__ = [
     "MCMCResult",
     "chain_init",
     "chain_step",
+    "partition_kernel",
     "partition_mcmc",
 ]
 
@@ -207,87 +209,164 @@ def _log_splits(n: np.ndarray) -> np.ndarray:
     return k * _LOG2 + np.log1p(-np.exp(-k * _LOG2))
 
 
-def _propose(rng, move: int, lab: np.ndarray, probs):
-    """Proposal of one move type for every chain.
+class _Candidate(NamedTuple):
+    """Proposed labels (n, num_obs) and the two slots whose tracks change (n, 2)."""
 
-    Returns new labels (M, K), the two changed slots (M, 2), a bool 'possible' (M,) and
-    log q(reverse) - log q(forward) (M,)."""
+    labels: np.ndarray
+    slots: np.ndarray
+
+
+def _proposal(lab, new, slots, ok, log_q_forward, log_q_reverse) -> BatchProposal:
+    ok = ok & (slots[:, 0] != slots[:, 1])
+    n = lab.shape[0]
+    return BatchProposal(
+        _Candidate(new, slots),
+        log_q_forward if np.ndim(log_q_forward) else np.full(n, log_q_forward),
+        log_q_reverse if np.ndim(log_q_reverse) else np.full(n, log_q_reverse),
+        ok,
+    )
+
+
+def _swap(rng: np.random.Generator, state: ChainState, rows: np.ndarray) -> BatchProposal:
+    """Exchange the tracks of one of the D(omega) pairs on different tracks (symmetric)."""
+    lab = state.labels[rows]
     M, K = lab.shape
-    rows = np.arange(M)
+    r = np.arange(M)
+    j = np.arange(K)
+    diff = (lab[:, :, None] != lab[:, None, :]) & (j[None, :, None] < j[None, None, :])
+    flat = diff.reshape(M, K * K)
+    ok = flat.any(1)
+    idx = _pick(rng, flat)
+    a, b = idx // K, idx % K
+    sa, sb = lab[r, a], lab[r, b]
+    new = lab.copy()
+    new[r, a] = np.where(ok, sb, sa)
+    new[r, b] = np.where(ok, sa, sb)
+    return _proposal(lab, new, np.stack([sa, sb], 1), ok, 0.0, 0.0)
+
+
+def _move_one(rng: np.random.Generator, state: ChainState, rows: np.ndarray) -> BatchProposal:
+    """Reassign one observation to another track or a new one (symmetric: n_t is kept)."""
+    lab = state.labels[rows]
+    M, K = lab.shape
+    r = np.arange(M)
     n = _sizes(lab)
     m = (n > 0).sum(1)
+    i = rng.integers(K, size=M)
+    own = lab[r, i]
+    alone = n[r, own] == 1
+    others = n > 0
+    others[r, own] = False
+    nt = (m - 1) + (~alone)
+    ok = nt > 0
+    u = np.floor(rng.random(M) * np.maximum(nt, 1)).astype(np.int64)
+    to_new = u >= m - 1
+    cum = np.cumsum(others, axis=1)
+    existing = (cum <= u[:, None]).sum(1).clip(max=K - 1)
+    target = np.where(to_new, _first_free(n), existing)
     new = lab.copy()
-    ratio = np.zeros(M)
-    if move == 0:  # swap
-        j = np.arange(K)
-        diff = (lab[:, :, None] != lab[:, None, :]) & (j[None, :, None] < j[None, None, :])
-        flat = diff.reshape(M, K * K)
-        ok = flat.any(1)
-        idx = _pick(rng, flat)
-        a, b = idx // K, idx % K
-        sa, sb = lab[rows, a], lab[rows, b]
-        new[rows, a] = np.where(ok, sb, sa)
-        new[rows, b] = np.where(ok, sa, sb)
-        return new, np.stack([sa, sb], 1), ok, ratio
-    if move == 1:  # move one observation
-        i = rng.integers(K, size=M)
-        own = lab[rows, i]
-        n_own = n[rows, own]
-        alone = n_own == 1
-        others = (n > 0)
-        others[rows, own] = False
-        nt = (m - 1) + (~alone)
-        ok = nt > 0
-        r = np.floor(rng.random(M) * np.maximum(nt, 1)).astype(np.int64)
-        to_new = r >= m - 1
-        cum = np.cumsum(others, axis=1)
-        existing = (cum <= r[:, None]).sum(1).clip(max=K - 1)
-        target = np.where(to_new, _first_free(n), existing)
-        new[rows, i] = np.where(ok, target, own)
-        # n_t(omega', i) = n_t(omega, i): both count the tracks of the other observations
-        return new, np.stack([own, target], 1), ok, ratio
-    p_split, p_merge = probs[2], probs[3]
-    if move == 2:  # split
-        big = n >= 2
-        s = big.sum(1)
-        ok = s > 0
-        t = _pick(rng, big)
-        mem = lab == t[:, None]  # (M, K)
-        n_t = n[rows, t]
-        first = np.argmax(mem, axis=1)
-        side = np.zeros((M, K), bool)
-        todo = ok.copy()
-        while todo.any():  # uniform over the 2^(n-1) - 1 non-trivial splits, by rejection
-            bits = rng.random((M, K)) < 0.5
-            bits &= mem
-            bits[rows, first] = False
-            side = np.where(todo[:, None], bits, side)
-            todo = todo & ~side.any(1)
-        free = _first_free(n)
-        new = np.where(side & ok[:, None], free[:, None], lab)
-        ratio = (np.log(p_merge) - np.log((m + 1) * m / 2.0)) - (
-            np.log(p_split) - np.log(np.maximum(s, 1)) - _log_splits(n_t)
-        )
-        return new, np.stack([t, free], 1), ok, ratio
-    # merge
+    new[r, i] = np.where(ok, target, own)
+    # n_t(omega', i) = n_t(omega, i): both count the tracks of the other observations
+    return _proposal(lab, new, np.stack([own, target], 1), ok, 0.0, 0.0)
+
+
+def _split(rng: np.random.Generator, state: ChainState, rows: np.ndarray) -> BatchProposal:
+    """Split one of the s(omega) tracks of size n >= 2 uniformly in two; reverse: merge."""
+    lab = state.labels[rows]
+    M, K = lab.shape
+    r = np.arange(M)
+    n = _sizes(lab)
+    m = (n > 0).sum(1)
+    big = n >= 2
+    s = big.sum(1)
+    ok = s > 0
+    t = _pick(rng, big)
+    mem = lab == t[:, None]  # (M, K)
+    first = np.argmax(mem, axis=1)
+    side = np.zeros((M, K), bool)
+    todo = ok.copy()
+    while todo.any():  # uniform over the 2^(n-1) - 1 non-trivial splits, by rejection
+        bits = rng.random((M, K)) < 0.5
+        bits &= mem
+        bits[r, first] = False
+        side = np.where(todo[:, None], bits, side)
+        todo = todo & ~side.any(1)
+    free = _first_free(n)
+    new = np.where(side & ok[:, None], free[:, None], lab)
+    lq_f = -np.log(np.maximum(s, 1)) - _log_splits(n[r, t])
+    lq_r = -np.log((m + 1) * m / 2.0)
+    return _proposal(lab, new, np.stack([t, free], 1), ok, lq_f, lq_r)
+
+
+def _merge(rng: np.random.Generator, state: ChainState, rows: np.ndarray) -> BatchProposal:
+    """Join one of the C(m, 2) pairs of tracks; reverse: the split of the joined track."""
+    lab = state.labels[rows]
+    M = lab.shape[0]
+    r = np.arange(M)
+    n = _sizes(lab)
+    m = (n > 0).sum(1)
     ok = m >= 2
     ne = n > 0
     a = _pick(rng, ne)
     ne_b = ne.copy()
-    ne_b[rows, a] = False
+    ne_b[r, a] = False
     b = _pick(rng, ne_b)
     new = np.where((lab == b[:, None]) & ok[:, None], a[:, None], lab)
-    n_new = n[rows, a] + n[rows, b]
-    s_after = (n >= 2).sum(1) - (n[rows, a] >= 2) - (n[rows, b] >= 2) + 1
-    ratio = (np.log(p_split) - np.log(np.maximum(s_after, 1)) - _log_splits(n_new)) - (
-        np.log(p_merge) - np.log(np.maximum(m * (m - 1) / 2.0, 1))
-    )
-    return new, np.stack([a, b], 1), ok, ratio
+    n_new = n[r, a] + n[r, b]
+    s_after = (n >= 2).sum(1) - (n[r, a] >= 2) - (n[r, b] >= 2) + 1
+    lq_f = -np.log(np.maximum(m * (m - 1) / 2.0, 1))
+    lq_r = -np.log(np.maximum(s_after, 1)) - _log_splits(n_new)
+    return _proposal(lab, new, np.stack([a, b], 1), ok, lq_f, lq_r)
 
 
-def chain_step(rng: np.random.Generator, state: ChainState, t: _Terms, p_new: float | None,
-               move_probs=(0.25, 0.25, 0.25, 0.25), move: int | None = None):
-    """One Metropolis-Hastings step of every chain (seed 000 section 5.4; seed 003 eq. 11).
+#: the move declarations, in the order of :data:`MOVES` (split and merge reverse each other)
+MOVE_SET = (
+    BatchMove("swap", _swap, 0),
+    BatchMove("move", _move_one, 1),
+    BatchMove("split", _split, 3),
+    BatchMove("merge", _merge, 2),
+)
+
+
+def partition_kernel(
+    t: _Terms, p_new: float | None, move_probs=(0.25, 0.25, 0.25, 0.25)
+) -> BatchKernel:
+    """The partition sampler as a :class:`inference.mcmc.BatchKernel`: the four moves,
+    the target of seed 000 eq. 1 (track scores and label prior) scored incrementally on
+    the two changed slots, and the bookkeeping of an accepted move."""
+
+    def log_target_delta(state: ChainState, cand: _Candidate):
+        rows = np.arange(cand.labels.shape[0])[:, None]
+        masks = cand.labels[:, None, :] == cand.slots[:, :, None]  # (M, 2, K)
+        ts_new = _set_scores(t, masks)  # (M, 2)
+        prior_new = _slot_prior(cand.labels, p_new)
+        old = state.track_score[rows, cand.slots]
+        delta = ts_new.sum(1) - old.sum(1) + prior_new - state.prior
+        return delta, (cand, ts_new, prior_new, delta)
+
+    def commit(state: ChainState, scored, keep: np.ndarray) -> ChainState:
+        cand, ts_new, prior_new, delta = scored
+        labels = np.where(keep[:, None], cand.labels, state.labels)
+        track = state.track_score.copy()
+        acc_rows = np.nonzero(keep)[0]
+        track[acc_rows[:, None], cand.slots[acc_rows]] = ts_new[acc_rows]
+        prior = np.where(keep, prior_new, state.prior)
+        score = np.where(keep, state.score + delta, state.score)
+        return ChainState(labels, track, prior, score)
+
+    return BatchKernel(MOVE_SET, move_probs, log_target_delta, commit)
+
+
+def chain_step(
+    rng: np.random.Generator,
+    state: ChainState,
+    t: _Terms,
+    p_new: float | None,
+    move_probs=(0.25, 0.25, 0.25, 0.25),
+    move: int | None = None,
+):
+    """One Metropolis-Hastings step of every chain (seed 000 section 5.4; seed 003 eq. 11),
+    through :func:`partition_kernel`.
 
     Each chain draws its own move type with ``move_probs`` (independent chains: a move
     type shared by all chains would make them dependent, and split or merge alone does
@@ -306,48 +385,58 @@ def chain_step(rng: np.random.Generator, state: ChainState, t: _Terms, p_new: fl
     -------
     (ChainState, moves (num_chains,) int, accepted (num_chains,) bool)
     """
-    probs = np.asarray(move_probs, float)
-    lab = state.labels
-    M, K = lab.shape
-    if move is None:
-        cdf = np.cumsum(probs)
-        moves = np.minimum(np.searchsorted(cdf / cdf[-1], rng.random(M), side="right"), 3)
-    else:
-        moves = np.full(M, int(move))
-    present = np.unique(moves)
-    if present.size == 1:
-        new, slots, ok, ratio = _propose(rng, int(present[0]), lab, probs)
-    else:
-        new = lab.copy()
-        slots = np.zeros((M, 2), np.int64)
-        ok = np.zeros(M, bool)
-        ratio = np.zeros(M)
-        for mv in present:  # the move types drawn, each vectorised over its chains
-            sel = np.nonzero(moves == mv)[0]
-            new[sel], slots[sel], ok[sel], ratio[sel] = _propose(rng, int(mv), lab[sel], probs)
-    rows = np.arange(M)[:, None]
-    ok &= slots[:, 0] != slots[:, 1]
-    masks = new[:, None, :] == slots[:, :, None]  # (M, 2, K)
-    ts_new = _set_scores(t, masks)  # (M, 2)
-    old = state.track_score[rows, slots]
-    prior_new = _slot_prior(new, p_new)
-    delta = ts_new.sum(1) - old.sum(1) + prior_new - state.prior
-    log_alpha = np.where(ok, delta + ratio, -np.inf)
-    accept = np.log(rng.random(M)) < log_alpha
-    labels = np.where(accept[:, None], new, lab)
-    track = state.track_score.copy()
-    acc_rows = np.nonzero(accept)[0]
-    track[acc_rows[:, None], slots[acc_rows]] = ts_new[acc_rows]
-    prior = np.where(accept, prior_new, state.prior)
-    score = np.where(accept, state.score + delta, state.score)
-    return ChainState(labels, track, prior, score), moves, accept
+    kernel = partition_kernel(t, p_new, move_probs)
+    new, info, _ = kernel.step(rng, state, state.labels.shape[0], move)
+    return new, info.move, info.accepted
+
+
+def _check_config(cfg: MCMCConfig, num_samples: int, num_chains: int) -> np.ndarray:
+    """Validated move probabilities (4,); raises InputError naming the bad field."""
+    probs = np.asarray(cfg.move_probs, float)
+    if probs.shape != (4,) or (probs < 0).any() or abs(probs.sum() - 1.0) > 1e-9:
+        raise InputError(f"move_probs = {cfg.move_probs}: need 4 non-negative numbers summing to 1")
+    if (probs[2] > 0) != (probs[3] > 0):
+        raise InputError(
+            f"move_probs = {cfg.move_probs}: split and merge are each other's "
+            "reverse; give both a positive probability or neither"
+        )
+    if cfg.init not in ("greedy", "random"):
+        raise InputError(f"init = {cfg.init!r}: must be 'greedy' or 'random'")
+    if num_samples < 1 or num_chains < 1:
+        raise InputError(f"num_samples = {num_samples}, num_chains = {num_chains}: must be >= 1")
+    return probs
+
+
+def _initial_labels(
+    rng,
+    obs: Observations,
+    params: LSParams,
+    cfg: MCMCConfig,
+    num_chains: int,
+    init_labels: np.ndarray | None,
+) -> np.ndarray:
+    """Starting labels (num_chains, num_obs): given, greedy (T = 1 search) or random."""
+    K = obs.num_obs
+    if init_labels is not None:
+        return np.broadcast_to(np.asarray(init_labels, np.int64), (num_chains, K))
+    if cfg.init == "greedy":
+        g = learn_search(obs, params, LearnSearchConfig(num_hypotheses=1, learn=False, n0=1)).labels
+        return np.broadcast_to(g, (num_chains, K))
+    return rng.integers(K, size=(num_chains, K))
 
 
 # ----------------------------------------------------------------------------- driver
-def partition_mcmc(seed, obs: Observations, params: LSParams, num_samples: int,
-                   config: MCMCConfig | None = None, num_chains: int = 1,
-                   init_labels: np.ndarray | None = None, checkpoints=(),
-                   progress: bool = False) -> MCMCResult:
+def partition_mcmc(
+    seed,
+    obs: Observations,
+    params: LSParams,
+    num_samples: int,
+    config: MCMCConfig | None = None,
+    num_chains: int = 1,
+    init_labels: np.ndarray | None = None,
+    checkpoints=(),
+    progress: bool = False,
+) -> MCMCResult:
     """Metropolis-Hastings sampling of partitions (seed 000, section 5.4, with split,
     merge and move so the number of objects can change).
 
@@ -370,67 +459,55 @@ def partition_mcmc(seed, obs: Observations, params: LSParams, num_samples: int,
     acceptance rate per move, final state, score trace (num_samples, num_chains).
     """
     cfg = MCMCConfig() if config is None else config
-    probs = np.asarray(cfg.move_probs, float)
-    if probs.shape != (4,) or (probs < 0).any() or abs(probs.sum() - 1.0) > 1e-9:
-        raise InputError(f"move_probs = {cfg.move_probs}: need 4 non-negative numbers summing to 1")
-    if (probs[2] > 0) != (probs[3] > 0):
-        raise InputError(f"move_probs = {cfg.move_probs}: split and merge are each other's "
-                         "reverse; give both a positive probability or neither")
-    if cfg.init not in ("greedy", "random"):
-        raise InputError(f"init = {cfg.init!r}: must be 'greedy' or 'random'")
-    if num_samples < 1 or num_chains < 1:
-        raise InputError(f"num_samples = {num_samples}, num_chains = {num_chains}: must be >= 1")
+    probs = _check_config(cfg, num_samples, num_chains)
     _check_params(params)
-    obs = validate_observations(obs, params.obs_dim, params.path.num_cameras, params.path.num_borders)
+    obs = validate_observations(
+        obs, params.obs_dim, params.path.num_cameras, params.path.num_borders
+    )
     K = obs.num_obs
     if K < 1:
         raise InputError("num_obs = 0: nothing to sample")
     start = time.perf_counter()
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
-    if init_labels is not None:
-        lab0 = np.broadcast_to(np.asarray(init_labels, np.int64), (num_chains, K))
-    elif cfg.init == "greedy":
-        g = learn_search(obs, params, LearnSearchConfig(num_hypotheses=1, learn=False, n0=1)).labels
-        lab0 = np.broadcast_to(g, (num_chains, K))
-    else:
-        lab0 = rng.integers(K, size=(num_chains, K))
+    lab0 = _initial_labels(rng, obs, params, cfg, num_chains, init_labels)
     t = _terms(obs, params)
     state = chain_init(lab0, obs, params)
-    best_score = state.score.copy()
-    best = state.labels.copy()
-    co = np.zeros((K, K))
-    co_now = (state.labels[:, :, None] == state.labels[:, None, :]).sum(0)
-    kept = 0
-    tried = np.zeros(4)
-    acc = np.zeros(4)
-    trace = np.empty((num_samples, num_chains))
     marks = {int(n) for n in checkpoints if 1 <= int(n) <= num_samples}
     best_at = {}
-    it = range(num_samples)
-    if progress:
-        from tqdm import tqdm
+    co = np.zeros((K, K))
+    co_now = [(state.labels[:, :, None] == state.labels[:, None, :]).sum(0)]
+    kept = [0]
 
-        it = tqdm(it, desc="partition MCMC", unit="step")
-    for s in it:
-        state, mv, accepted = chain_step(rng, state, t, params.p_new, probs)
-        tried += np.bincount(mv, minlength=4)
-        acc += np.bincount(mv, weights=accepted, minlength=4)
-        trace[s] = state.score
-        better = state.score > best_score
-        if better.any():
-            best_score = np.where(better, state.score, best_score)
-            best[better] = state.labels[better]
+    def on_step(s, st, info, best_score, best):  # recording only: co-assignment, checkpoints
         if s + 1 in marks:
             c = int(np.argmax(best_score))
-            best_at[s + 1] = (_canonical(best[c][None])[0], float(best_score[c]),
-                              time.perf_counter() - start)
-        if accepted.any():
-            co_now = (state.labels[:, :, None] == state.labels[:, None, :]).sum(0)
+            best_at[s + 1] = (
+                _canonical(best.labels[c][None])[0],
+                float(best_score[c]),
+                time.perf_counter() - start,
+            )
+        if info.accepted.any():
+            co_now[0] = (st.labels[:, :, None] == st.labels[:, None, :]).sum(0)
         if s >= cfg.burn_in:
-            co += co_now
-            kept += num_chains
-    c = int(np.argmax(best_score))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        rate = acc / tried
-    return MCMCResult(_canonical(best[c][None])[0], float(best_score[c]),
-                      co / max(kept, 1), rate, state, trace, best_at)
+            co[...] += co_now[0]
+            kept[0] += num_chains
+
+    rec = run_batch(
+        rng,
+        partition_kernel(t, params.p_new, probs),
+        state,
+        num_samples,
+        state.score,
+        on_step=on_step,
+        progress=progress,
+    )
+    c = int(np.argmax(rec.best_log_target))
+    return MCMCResult(
+        _canonical(rec.best_state.labels[c][None])[0],
+        float(rec.best_log_target[c]),
+        co / max(kept[0], 1),
+        rec.accept_rate,
+        rec.state,
+        rec.trace,
+        best_at,
+    )

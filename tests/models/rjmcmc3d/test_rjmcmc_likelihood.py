@@ -16,7 +16,7 @@ from models.rjmcmc3d.likelihood import (
 )
 from models.rjmcmc3d.model import TrackerParams
 from models.rjmcmc3d.scene import Frame, default_scene, render_frame, simulate_walkers
-from models.rjmcmc3d.tracker import RJMCMCTracker, _Chain
+from models.rjmcmc3d.tracker import RJMCMCTracker
 
 
 def _frame(D: np.ndarray, image: np.ndarray) -> Frame:
@@ -81,7 +81,7 @@ def chain_setup():
 def test_incremental_equals_full_over_random_moves(chain_setup) -> None:
     """Every proposal's incremental delta equals the change of the full recompute."""
     tracker, state, frame = chain_setup
-    chain = _Chain(tracker, state, frame, "incremental")
+    chain = tracker.frame_chain(state, frame, "incremental")
     rng = np.random.default_rng(11)
     checked = 0
     for it in range(400):
@@ -110,8 +110,8 @@ def test_incremental_equals_full_over_random_moves(chain_setup) -> None:
 
 def test_full_and_incremental_chains_coincide(chain_setup) -> None:
     tracker, state, frame = chain_setup
-    a = _Chain(tracker, state, frame, "incremental")
-    b = _Chain(tracker, state, frame, "full")
+    a = tracker.frame_chain(state, frame, "incremental")
+    b = tracker.frame_chain(state, frame, "full")
     ra = a.run(np.random.default_rng(5))
     rb = b.run(np.random.default_rng(5))
     assert np.array_equal(a.present, b.present)

@@ -19,7 +19,7 @@ from models.rjmcmc3d.scene import (
     render_frame,
     simulate_walkers,
 )
-from models.rjmcmc3d.tracker import ADD, DELETE, LEAVE, STAY, RJMCMCTracker, _Chain
+from models.rjmcmc3d.tracker import ADD, DELETE, LEAVE, STAY, RJMCMCTracker
 
 SMALL = TrackerParams(num_moves=500, burn_in=150)
 
@@ -93,7 +93,7 @@ def test_track_predicted_outside_is_dropped(scene, tracker) -> None:
         np.zeros((0, 2)),
         np.zeros((0, 2)),
     )
-    chain = _Chain(tracker, state, empty, "incremental")
+    chain = tracker.frame_chain(state, empty, "incremental")
     assert not chain.present[0] and chain.p_leave[0] > 0.5
     new_state, res = tracker.step(0, state, empty)
     assert not new_state.alive[0] and len(res.ids) == 0
@@ -102,7 +102,7 @@ def test_track_predicted_outside_is_dropped(scene, tracker) -> None:
 def test_add_delete_and_leave_stay_are_reverse_moves(scene, tracker) -> None:
     truth = simulate_walkers(5, scene, 3, 5)
     frame = render_frame(6, scene, truth, 0)
-    chain = _Chain(tracker, tracker.init_state(), frame, "incremental")
+    chain = tracker.frame_chain(tracker.init_state(), frame, "incremental")
     rng = np.random.default_rng(0)
     S1, pr1, ch1, lqf_add, lqr_add = chain.propose(rng, ADD)
     assert pr1.sum() == 1
@@ -116,7 +116,7 @@ def test_add_delete_and_leave_stay_are_reverse_moves(scene, tracker) -> None:
     state = tracker.init_state()
     for t in range(3):
         state, _ = tracker.step(t, state, render_frame(6, scene, truth, t))
-    chain = _Chain(tracker, state, render_frame(6, scene, truth, 2), "incremental")
+    chain = tracker.frame_chain(state, render_frame(6, scene, truth, 2), "incremental")
     n_stay = int((chain.prev & chain.present).sum())
     assert n_stay >= 2
     S3, pr3, ch3, lqf_leave, lqr_leave = chain.propose(rng, LEAVE)
@@ -211,7 +211,9 @@ def test_scalar_interaction_matches_vectorised(scene, tracker) -> None:
     from models.rjmcmc3d.model import interaction_penalty
 
     truth = simulate_walkers(5, scene, 3, 5)
-    chain = _Chain(tracker, tracker.init_state(), render_frame(6, scene, truth, 0), "incremental")
+    chain = tracker.frame_chain(
+        tracker.init_state(), render_frame(6, scene, truth, 0), "incremental"
+    )
     rng = np.random.default_rng(1)
     for _ in range(50):
         si = [*rng.uniform(0, 3, 2), 1.7, rng.uniform(-3, 3)]

@@ -1,0 +1,147 @@
+"""Calibrated scenes: the Tsai calibration XML loader (PETS2009 ``View_001.xml``) and
+the default partial-overlap hall of three cameras (seed 003, section 2 and its metro
+scene), images rectified by the vertical-vanishing-point homography.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from dbn.errors import InputError
+from models.rjmcmc3d.geometry import (
+    Camera,
+    camera_center,
+    look_at_camera,
+    rectified_projection,
+)
+from models.rjmcmc3d.types import Scene
+
+__all__ = ["default_scene", "load_tsai_xml", "scene_from_cameras"]
+
+
+def load_tsai_xml(path: str | Path, scale: float = 1.0) -> tuple[Camera, float]:
+    """Read a Tsai calibration (PETS2009 ``View_00k.xml``) as a pinhole camera.
+
+    Tsai's model: ``X_c = R X_w + T`` with ``R = R_z(rz) R_y(ry) R_x(rx)``; undistorted
+    sensor coordinates ``f X_c / Z_c`` (mm); pixels ``x = sx X_d / dpx + cx``,
+    ``y = Y_d / dpy + cy`` with radial distortion ``X_u = X_d (1 + kappa1 r_d^2)``.
+    The returned camera is the undistorted pinhole part (seed 003 rectifies after
+    distortion removal); world units are converted from millimetres to metres.
+
+    Parameters
+    ----------
+    path : str or Path
+        The XML file.
+    scale : float
+        Image rescaling factor (0.5 halves the resolution).
+
+    Returns
+    -------
+    camera : Camera
+    kappa1 : float
+        Tsai's radial distortion coefficient (1/mm^2), for reference.
+    """
+    root = ET.parse(path).getroot()
+    geo, intr, extr = root.find("Geometry"), root.find("Intrinsic"), root.find("Extrinsic")
+    if geo is None or intr is None or extr is None:
+        raise InputError(f"{path}: missing Geometry/Intrinsic/Extrinsic element")
+    g = {k: float(v) for k, v in geo.attrib.items()}
+    i = {k: float(v) for k, v in intr.attrib.items()}
+    e = {k: float(v) for k, v in extr.attrib.items()}
+    ca, sa = math.cos(e["rx"]), math.sin(e["rx"])
+    cb, sb = math.cos(e["ry"]), math.sin(e["ry"])
+    cg, sg = math.cos(e["rz"]), math.sin(e["rz"])
+    R = np.array(
+        [
+            [cb * cg, cg * sa * sb - ca * sg, sa * sg + ca * cg * sb],
+            [cb * sg, sa * sb * sg + ca * cg, ca * sb * sg - cg * sa],
+            [-sb, cb * sa, ca * cb],
+        ]
+    )
+    t = np.array([e["tx"], e["ty"], e["tz"]]) / 1000.0
+    fx = i["sx"] * i["focal"] / g["dpx"]
+    fy = i["focal"] / g["dpy"]
+    K = np.array(
+        [[fx * scale, 0.0, i["cx"] * scale], [0.0, fy * scale, i["cy"] * scale], [0, 0, 1]]
+    )
+    cam = Camera(K, R, t, int(round(g["width"] * scale)), int(round(g["height"] * scale)))
+    return cam, i["kappa1"]
+
+
+def _smooth_texture(rng: np.random.Generator, h: int, w: int, cells: int = 12) -> np.ndarray:
+    coarse = rng.random((cells, cells, 3))
+    yi = np.minimum((np.arange(h) * cells) // h, cells - 1)
+    xi = np.minimum((np.arange(w) * cells) // w, cells - 1)
+    return coarse[yi][:, xi]
+
+
+def scene_from_cameras(
+    seed: int,
+    cameras: list[Camera],
+    floor: np.ndarray,
+    colour_gain: np.ndarray,
+    sigma_px: np.ndarray,
+) -> Scene:
+    """Build a :class:`Scene` (rectified projections, background images) from cameras.
+
+    Parameters
+    ----------
+    seed : int
+        Seed of the background textures.
+    cameras : list of Camera, length num_views
+        All of the same image size.
+    floor : ndarray, shape (4,)
+        ``(x_min, x_max, y_min, y_max)``.
+    colour_gain : ndarray, shape (num_views, 3)
+    sigma_px : ndarray, shape (num_views,)
+    """
+    rng = np.random.default_rng(seed)
+    width, height = cameras[0].width, cameras[0].height
+    if any(c.width != width or c.height != height for c in cameras):
+        raise InputError("cameras: every view must have the same image size")
+    Ps, rects = zip(*(rectified_projection(c) for c in cameras), strict=True)
+    gain = np.asarray(colour_gain, dtype=np.float64)
+    bg = []
+    for v in range(len(cameras)):
+        tex = 0.36 + 0.12 * _smooth_texture(rng, height, width)
+        bg.append(np.clip(tex * gain[v], 0, 1).astype(np.float32))
+    return Scene(
+        tuple(cameras),
+        np.stack(Ps),
+        tuple(rects),
+        np.stack([camera_center(c) for c in cameras]),
+        np.asarray(floor, dtype=np.float64),
+        width,
+        height,
+        gain,
+        np.asarray(sigma_px, dtype=np.float64),
+        np.stack(bg),
+    )
+
+
+def default_scene(seed: int = 0, width: int = 384, height: int = 288) -> Scene:
+    """The default partial-overlap scene: a 20 m x 8 m hall seen by three cameras.
+
+    Camera 0 (high, wide) covers the west part from the south wall, camera 1 (a long
+    lens) the east part from the north wall, camera 2 (low, close) the middle from the
+    south wall, where people appear large. Most of the floor is seen by
+    exactly one camera (see :func:`coverage_fractions`). SIMULATED geometry.
+    """
+    s = width / 384.0
+    cams = [
+        look_at_camera(
+            np.array([4.5, -3.0, 8.7]), np.array([4.5, 3.4, 0.0]), 300 * s, width, height
+        ),
+        look_at_camera(
+            np.array([16.7, 11.0, 6.7]), np.array([16.7, 3.1, 0.0]), 445 * s, width, height
+        ),
+        look_at_camera(
+            np.array([9.9, -1.5, 3.7]), np.array([9.9, 4.2, 0.0]), 360 * s, width, height
+        ),
+    ]
+    gain = np.array([[1.0, 1.0, 1.0], [1.15, 0.97, 0.82], [0.85, 1.0, 1.18]])
+    return scene_from_cameras(seed, cams, np.array([0.0, 20.0, 0.0, 8.0]), gain, np.full(3, 3.0))
