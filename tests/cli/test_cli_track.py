@@ -239,12 +239,14 @@ def test_rjmcmc3d_track_eval(tmp_path, capsys):
     from models.io.rjmcmc3d import read_tracks3d
 
     tracks = read_tracks3d(out / "tracks3d.txt")
-    assert set(tracks) <= {1, 2, 3, 4}
+    assert set(tracks) <= {1, 2, 3, 4, 5, 6}
     capsys.readouterr()
     argv = ["eval", "rjmcmc3d", str(out / "tracks3d.txt"), str(d / "truth3d.txt"), "--json"]
     assert main(argv) == 0
     metrics = json.loads(capsys.readouterr().out)
     assert metrics == json.loads((out / "summary.json").read_text())["metrics"]
+    # the two simulated walkers are found (at 96 x 72 px the tracker found nobody)
+    assert metrics["recall"] >= 0.75 and metrics["precision"] >= 0.75
     # oracle: the truth scored against itself is perfect
     assert main(["eval", "rjmcmc3d", str(d / "truth3d.txt"), str(d / "truth3d.txt"), "--json"]) == 0
     perfect = json.loads(capsys.readouterr().out)
@@ -255,7 +257,7 @@ def test_rjmcmc3d_calibration_round_trip():
     from models.io.rjmcmc3d import read_view
     from models.rjmcmc3d.scene import default_scene
 
-    scene = default_scene(0, width=96, height=72)  # the cameras make_example.py wrote
+    scene = default_scene(0)  # the cameras make_example.py wrote
     for v, cam in enumerate(scene.cameras):
         got = read_view(DATA / "rjmcmc3d" / f"view{v}").camera
         np.testing.assert_allclose(got.K, cam.K, atol=1e-9)

@@ -1,5 +1,5 @@
 """Write the tiny SIMULATED multi-camera example (run from the repository root): the
-default 3-camera hall at 96 x 72 px, 2 walkers, 4 frames (models.rjmcmc3d.scene, seed 1):
+default 3-camera hall at 384 x 288 px (the default size; at 96 x 72 a person is a few pixels and the tracker finds nobody), 2 walkers, 6 frames (models.rjmcmc3d.scene, seed 1):
 per view a Tsai calibration XML and foreground masks in the camera's own image (the
 rendered rectified maps warped back), and the truth as MOTChallenge 3-D rows."""
 
@@ -14,8 +14,8 @@ from models.io.rjmcmc3d import warp
 from models.rjmcmc3d.scene import default_scene, render_frame, simulate_walkers
 
 out = Path("tests/data/rjmcmc3d")
-scene = default_scene(0, width=96, height=72)
-truth = simulate_walkers(1, scene, 4, 2)
+scene = default_scene(0)
+truth = simulate_walkers(1, scene, 6, 2)
 for v, cam in enumerate(scene.cameras):
     d = out / f"view{v}"
     d.mkdir(exist_ok=True)
@@ -34,7 +34,7 @@ for v, cam in enumerate(scene.cameras):
         f'rz="{rz!r}"/>\n</Camera>\n'
     )
 frames = []
-for k in range(4):
+for k in range(6):
     fr = render_frame(2, scene, truth, k)
     for v in range(scene.num_views):
         H = scene.rects[v].H
