@@ -28,7 +28,6 @@ import time
 import jax
 import numpy as np
 
-import inference  # noqa: F401  (jax float64)
 from benchmarks._chains_numpy import numpy_factored_filter
 from benchmarks._common import log
 from dbn.examples import coupled_chains, sample_coupled_chains, sample_switching_lds, switching_lds

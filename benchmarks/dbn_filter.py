@@ -19,7 +19,6 @@ import time
 
 import numpy as np
 
-import inference  # noqa: F401  (jax float64)
 from benchmarks._common import best_time, log
 from dbn import pgmpy_adapter as pa
 from dbn.cpds import TabularCPD

@@ -32,7 +32,6 @@ import time
 
 import numpy as np
 
-import inference  # noqa: F401  (jax float64)
 from benchmarks._common import log
 from models.zajdel.data import take
 from models.zajdel.greedy import greedy_labels

@@ -26,7 +26,6 @@ import os
 import matplotlib.pyplot as plt
 import numpy as np
 
-import inference  # noqa: F401  (jax 64-bit)
 from models.zajdel.greedy import greedy_labels
 from models.zajdel.metrics import num_objects, pairwise_prf, partition_accuracy
 from models.zajdel.model import declare_model

@@ -41,7 +41,6 @@ import time
 import matplotlib.pyplot as plt
 import numpy as np
 
-import inference  # noqa: F401  (float64)
 from models.zajdel.data import take
 from models.zajdel.greedy import greedy_labels
 from models.zajdel.learnsearch import (

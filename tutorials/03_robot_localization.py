@@ -44,7 +44,6 @@ import jax.numpy as jnp
 import matplotlib.pyplot as plt
 import numpy as np
 
-import inference  # noqa: F401  (64-bit mode)
 from models.localization.experiments import mrclam_trials, synthetic_trials
 from models.localization.simulate import (
     build_trained_world,

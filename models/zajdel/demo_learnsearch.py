@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import time
 
-import inference  # noqa: F401  (jax float64)
 from models.zajdel.data import take
 from models.zajdel.greedy import greedy_labels
 from models.zajdel.learnsearch import LearnSearchConfig, initial_params, learn_search

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-import inference  # noqa: F401  (jax in 64-bit mode)
 from dbn.bayesnet import BayesNet, check_evidence
 from dbn.cpds import DeterministicCPD, LinearGaussianCPD, TabularCPD
 from dbn.dbn import TwoSliceDBN, prev, slice_name

@@ -11,7 +11,6 @@ from hypothesis import strategies as st
 from scipy.special import logsumexp
 from scipy.stats import multivariate_normal
 
-import inference  # noqa: F401
 from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 from models.zajdel.data import Observations, take
 from models.zajdel.learnsearch import (

@@ -8,7 +8,6 @@ import pytest
 from scipy import stats
 from scipy.special import logsumexp
 
-import inference  # noqa: F401  (float64 jax, as the library expects)
 from dbn.errors import InputError
 from models.zajdel.data import Observations
 from models.zajdel.learnsearch import LSParams, _canonical, _terms, partition_log_scores

@@ -8,7 +8,6 @@ import itertools
 import numpy as np
 import pytest
 
-import inference  # noqa: F401
 from dbn.bayesnet import BayesNet
 from dbn.variables import DiscreteVariable
 from inference.exact import variable_elimination

@@ -8,7 +8,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import quad
 
-import inference  # noqa: F401  (jax 64-bit)
 from dbn.errors import NotNormalizedError, ShapeError, TimeOrderError
 from inference.adf.niw import niw_log_evidence_np, niw_predictive_logpdf_np, niw_update_np
 from models.zajdel.data import Observations, take, validate_observations
