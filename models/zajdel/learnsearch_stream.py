@@ -226,7 +226,7 @@ def _grow(st: dict, need: int) -> None:
     S = st["col_id"].shape[1]
     if need <= S:
         return
-    extra = max(need - S, S, 4)
+    extra = max(need - S, 4)
     for k in _COL:
         pad = [(0, 0)] * st[k].ndim
         pad[1] = (0, extra)
@@ -236,7 +236,7 @@ def _grow(st: dict, need: int) -> None:
 
 
 def _gather(st: dict, parent: np.ndarray) -> dict:
-    out = {k: st[k][parent].copy() for k in _WIN + _COL + ("ncol", "ntr")}
+    out = {k: st[k][parent] for k in _WIN + _COL + ("ncol", "ntr")}  # fancy index: a copy
     out["win_start"] = st["win_start"]
     return out
 
@@ -335,6 +335,7 @@ def _close(st: dict, te: float, gap: float) -> None:
         return
     st["score"] = st["score"] - st["E"][:, drop].sum(1)
     keep = ~drop
+    keep[int(st["ncol"].max()) :] = False  # trim the spare capacity too
     for k in _COL:
         st[k] = st[k][:, keep]
     st["ncol"] = st["ncol"] - int(drop.sum())
