@@ -316,8 +316,9 @@ def _commit(st: dict, committed: list) -> None:
     drop the hypotheses that disagree (N-scan pruning); its terms leave the scores."""
     keep = st["lab"][:, 0] == st["lab"][0, 0]
     committed.append(int(st["lab"][0, 0]))
-    for k in _WIN + _COL + ("ncol", "ntr", "score"):
-        st[k] = st[k][keep]
+    if not keep.all():
+        for k in _WIN + _COL + ("ncol", "ntr", "score"):
+            st[k] = st[k][keep]
     st["score"] = st["score"] - st["wpath"][:, 0] - st["wprior"][:, 0]
     for k in _WIN:
         st[k] = st[k][:, 1:]
