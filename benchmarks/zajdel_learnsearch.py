@@ -130,8 +130,9 @@ def run(quick: bool, seed: int) -> dict:
     out["num_seeds"] = num_seeds
     out["num_mcmc_seeds"] = num_mcmc_seeds
     out["data"] = "simulated (models.zajdel.simulate.simulate_office, default config)"
-    out["ok"] = bool(ok)
-    out.update(stream_keys(seed))  # issue 17
+    stream = stream_keys(seed)  # issue 17
+    out["ok"] = bool(ok and stream.pop("ok"))
+    out.update(stream)
     return out
 
 
@@ -157,11 +158,12 @@ def stream_keys(seed: int, num_seeds: int = 5) -> dict:
     1,000-observation SIMULATED streams of the default office with people entering and
     leaving (:func:`models.zajdel.simulate_stream.stream_config`), seeds ``seed ..``."""
     from models.zajdel.learnsearch_stream import stream_learn_search
+    from models.zajdel.scores import canonical_labels
     from models.zajdel.simulate_stream import stream_config
 
     cfg = LearnSearchConfig(num_hypotheses=STREAM_T, n0=N0, batch=STREAM_BATCH)
     acc: dict[str, list[float]] = {}
-    n_total, t_total = 0, 0.0
+    n_total, t_total, ok = 0, 0.0, True
     for s in range(seed, seed + num_seeds):
         sc = simulate_office(s, stream_config(STREAM_NUM_OBS))
         p0 = initial_params(take(sc.obs, slice(0, N0)), sc.params.path, sc.params.p_new)
@@ -169,6 +171,8 @@ def stream_keys(seed: int, num_seeds: int = 5) -> dict:
         res = stream_learn_search(sc.obs, p0, cfg, window=STREAM_WINDOW, close_z=STREAM_CLOSE_Z)
         t_total += time.perf_counter() - t0
         n_total += sc.obs.num_obs
+        ok &= bool(np.array_equal(res.labels, canonical_labels(res.labels)))
+        ok &= res.labels.shape == sc.labels.shape and res.max_window <= STREAM_WINDOW + 1
         g = greedy_labels(sc.obs, sc.params)
         for key, lab in (("stream_1000", res.labels), ("stream_1000_greedy", g)):
             acc.setdefault(f"q_{key}", []).append(partition_accuracy(lab, sc.labels))
@@ -181,4 +185,5 @@ def stream_keys(seed: int, num_seeds: int = 5) -> dict:
     out["obs_per_s_stream"] = n_total / t_total
     out["num_stream_seeds"] = num_seeds
     out["stream_window"], out["stream_batch"] = STREAM_WINDOW, STREAM_BATCH
+    out["ok"] = bool(ok)  # every stream partition canonical, full length, window bounded
     return out
