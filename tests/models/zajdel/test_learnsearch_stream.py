@@ -20,6 +20,7 @@ from models.zajdel.learnsearch import (
     partition_log_scores,
 )
 from models.zajdel.learnsearch_stream import stream_learn_search
+from models.zajdel.metrics import partition_accuracy
 from models.zajdel.scores import canonical_labels
 from models.zajdel.simulate import OfficeConfig, simulate_office
 from models.zajdel.simulate_stream import stream_config
@@ -140,3 +141,19 @@ def test_stream_config_people_enter_and_leave():
     assert sc.peak_concurrent < 20  # not everyone is inside at once
     with pytest.raises(ModelError):
         stream_config(5, passes=14)
+
+
+@pytest.mark.slow
+def test_accuracy_does_not_fall_with_stream_length():
+    """Partition accuracy on 1,400-observation streams is not below that on 280-observation
+    streams (same generator, seeds 10-14), up to three standard errors of the difference."""
+    cfg = LearnSearchConfig(num_hypotheses=20, batch=4)
+    q = {280: [], 1400: []}
+    for n in q:
+        for s in range(10, 15):
+            sc = simulate_office(s, stream_config(n))
+            res = stream_learn_search(sc.obs, _start(sc), cfg, window=20)
+            q[n].append(partition_accuracy(res.labels, sc.labels))
+    d = np.asarray(q[1400]) - np.asarray(q[280])
+    se = d.std(ddof=1) / np.sqrt(d.size)
+    assert d.mean() >= -max(3.0 * se, 0.02), q
