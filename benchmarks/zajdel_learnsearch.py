@@ -185,5 +185,7 @@ def stream_keys(seed: int, num_seeds: int = 5) -> dict:
     out["obs_per_s_stream"] = n_total / t_total
     out["num_stream_seeds"] = num_seeds
     out["stream_window"], out["stream_batch"] = STREAM_WINDOW, STREAM_BATCH
+    out["stream_data"] = "simulated (stream_config(1000): people enter and leave); held out"
+    out["stream_train_seeds"] = f"{STREAM_TRAIN_SEEDS[0]}-{STREAM_TRAIN_SEEDS[-1]}"
     out["ok"] = bool(ok)  # every stream partition canonical, full length, window bounded
     return out
