@@ -633,6 +633,20 @@ def _keep_best(beam: _Beam, T: int) -> _Beam:
 
 
 # --------------------------------------------------------------------------- the search
+def _check_config(cfg: LearnSearchConfig) -> None:
+    """Reject a configuration the search cannot run (InputError naming the field)."""
+    if cfg.num_hypotheses < 1:
+        raise InputError(f"num_hypotheses = {cfg.num_hypotheses}: must be >= 1")
+    if cfg.batch < 1:
+        raise InputError(f"batch = {cfg.batch}: must be >= 1")
+    if not 0 <= cfg.n0 <= 8:
+        raise InputError(f"n0 = {cfg.n0}: must be in 0..8 (Bell(n0) partitions are enumerated)")
+    if cfg.shrinkage < 0 or cfg.travel_shrinkage < 0:
+        raise InputError(
+            f"shrinkage = {cfg.shrinkage}, travel_shrinkage = {cfg.travel_shrinkage}: must be >= 0"
+        )
+
+
 def learn_search(obs: Observations, params: LSParams,
                  config: LearnSearchConfig | None = None, progress: bool = False) -> LearnSearchResult:
     r"""The learn-search tracker of seed 000 (Fig. 4): the T most probable partitions of
@@ -660,15 +674,7 @@ def learn_search(obs: Observations, params: LSParams,
     O(T K (C r^2 + r^3)).
     """
     cfg = LearnSearchConfig() if config is None else config
-    if cfg.num_hypotheses < 1:
-        raise InputError(f"num_hypotheses = {cfg.num_hypotheses}: must be >= 1")
-    if cfg.batch < 1:
-        raise InputError(f"batch = {cfg.batch}: must be >= 1")
-    if not 0 <= cfg.n0 <= 8:
-        raise InputError(f"n0 = {cfg.n0}: must be in 0..8 (Bell(n0) partitions are enumerated)")
-    if cfg.shrinkage < 0 or cfg.travel_shrinkage < 0:
-        raise InputError(f"shrinkage = {cfg.shrinkage}, travel_shrinkage = {cfg.travel_shrinkage}:"
-                         " must be >= 0")
+    _check_config(cfg)
     _check_params(params)
     obs = validate_observations(obs, params.obs_dim, params.path.num_cameras, params.path.num_borders)
     K = obs.num_obs

@@ -47,6 +47,7 @@ from models.zajdel.learnsearch import (
     LearnSearchConfig,
     LSParams,
     _canonical,
+    _check_config,
     _check_params,
     _evidence,
     _param_change,
@@ -354,16 +355,7 @@ def _check_stream_args(cfg: LearnSearchConfig, window: int, close_z: float | Non
         raise InputError(f"window = {window!r}: must be an integer >= 1")
     if close_z is not None and not (np.isfinite(close_z) and close_z > 0):
         raise InputError(f"close_z = {close_z}: must be None or a finite number > 0")
-    if cfg.num_hypotheses < 1:
-        raise InputError(f"num_hypotheses = {cfg.num_hypotheses}: must be >= 1")
-    if cfg.batch < 1:
-        raise InputError(f"batch = {cfg.batch}: must be >= 1")
-    if not 0 <= cfg.n0 <= 8:
-        raise InputError(f"n0 = {cfg.n0}: must be in 0..8 (Bell(n0) partitions are enumerated)")
-    if cfg.shrinkage < 0 or cfg.travel_shrinkage < 0:
-        raise InputError(
-            f"shrinkage = {cfg.shrinkage}, travel_shrinkage = {cfg.travel_shrinkage}: must be >= 0"
-        )
+    _check_config(cfg)
 
 
 def _initial_em(pre: Observations, parts: np.ndarray, theta: LSParams, cfg: LearnSearchConfig):
