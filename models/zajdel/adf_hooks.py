@@ -25,7 +25,7 @@ from functools import cache, partial
 
 import jax
 import jax.numpy as jnp
-from jax.scipy.special import logsumexp
+from jax.scipy.special import logsumexp, ndtr
 
 from inference.adf.driver import ADFHooks
 from inference.adf.niw import (
@@ -64,11 +64,71 @@ def _top(x, k):
     return x[i], i
 
 
-def _link_prior(m: ADFParams, uniform: bool, st: ADFState):
-    """Spec step 1: log P(link j) (S,), log P(new) (), and which slots are open (S,)."""
+_CLOSE_EPS = 1e-6  # birth-leave: a track end continued with less probability is closed
+
+
+def _survival(m: ADFParams, st: ADFState, te):
+    r"""Birth-leave model: :math:`S_j(t) = \sum_{c', b'} P(c', b' \mid l_j, b^q_j)\,
+    P(X > t - t^q_j)`, X the truncated-normal travel time to ``c'``: the probability
+    that person j, if they stay in the building, has not yet been seen again, (S,)."""
+    trans = jnp.exp(m.path.log_trans[st.slot_cam, st.slot_bq]).sum(axis=-1)  # (S, C)
+    mu = m.path.travel_mean[st.slot_cam]
+    sd = m.path.travel_std[st.slot_cam]
+    d = (te - st.slot_tq)[:, None]
+    hi = jnp.where(jnp.isfinite(m.path.max_travel), ndtr((mu - m.path.max_travel) / sd), 0.0)
+    sf = jnp.clip((ndtr((mu - d) / sd) - hi) / (ndtr(mu / sd) - hi), 0.0, 1.0)
+    return jnp.sum(trans * jnp.where(d > 0, sf, 1.0), axis=1)
+
+
+def _continuation(m: ADFParams, st: ADFState, te):
+    """Birth-leave model: which slots can no longer be continued at time ``te``, (S,)
+    bool: their probability of being continued, (1 - rho) S_j / (rho + (1 - rho) S_j),
+    decays with the time since they were last seen and fell below ``_CLOSE_EPS``."""
+    rho = m.path.leave_prob
+    alive = (1.0 - rho) * _survival(m, st, te)
+    return st.slot_valid & (alive / (rho + alive) < _CLOSE_EPS)
+
+
+def _close_expired(m: ADFParams, st: ADFState, te) -> ADFState:
+    """Move the pointer mass of the slots that can no longer be continued
+    (:func:`_continuation`) to ``closed`` and free them: every person's pointer row
+    still sums to 1, and the open-track set holds only ends that may be continued."""
+    gone = _continuation(m, st, te)
+    mass = jnp.where(gone[:, None], st.slot_pprob, 0.0)
+    closed = st.closed.at[st.slot_person.reshape(-1)].add(mass.reshape(-1))
+    return st._replace(
+        closed=closed,
+        slot_valid=st.slot_valid & ~gone,
+        slot_pprob=jnp.where(gone[:, None], 0.0, st.slot_pprob),
+    )
+
+
+def _link_prior(m: ADFParams, uniform: bool, st: ADFState, birth_leave: bool = False, te=None):
+    """Spec step 1: log P(link j) (S,), log P(new) (), and which slots are open (S,).
+
+    ``birth_leave``: the prior of partitions of a marked point process in time (seed
+    000's path model with people entering and leaving): new people arrive at rate
+    lambda = ``path.new_rate`` (1/time); after each pass a person leaves the building
+    with probability rho = ``path.leave_prob``, else is seen again after the
+    truncated-normal travel time. A partition with P people and K - P links then has
+    prior weight (lambda rho)^P (1 - rho)^(K - P) times the path and entry
+    terms (every track eventually ends), so log P(new) = log(lambda rho) and log P(link
+    j) = log open_j + log(1 - rho). Both sides are densities in time (rescaling time
+    and lambda together leaves every posterior unchanged). Measured on the large
+    setting (seed 0, 3,000 observations, 512 slots), the filtering form that puts the
+    leave probability into the hazard instead (new: lambda, link:
+    (1 - rho) p_delta / (rho + (1 - rho) S_j)) over-split: counter 415 for 280
+    people, because the factorised belief never lowers the open mass of silent ends
+    as time passes. A track end whose probability of being continued,
+    (1 - rho) S_j / (rho + (1 - rho) S_j), falls below ``_CLOSE_EPS`` is closed
+    (:func:`_close_expired`).
+    """
     open_ = jnp.sum(st.slot_pprob, axis=1)
     valid = st.slot_valid & (open_ > 0)
     safe_open = jnp.where(valid, open_, 1.0)
+    if birth_leave:
+        rho = m.path.leave_prob
+        return jnp.log(safe_open) + jnp.log1p(-rho), jnp.log(m.path.new_rate * rho), valid
     if uniform:
         c = jnp.arange(st.counter.shape[0], dtype=st.counter.dtype)
         e = jnp.sum(st.counter / (c + 1.0))
@@ -78,14 +138,17 @@ def _link_prior(m: ADFParams, uniform: bool, st: ADFState):
     return lp_link, jnp.where(tot > 0, jnp.log(m.p_new), 0.0), valid
 
 
-def predict(m: ADFParams, st: ADFState, x, uniform: bool):
+def predict(m: ADFParams, st: ADFState, x, uniform: bool, birth_leave: bool = False):
     """Unnormalised log link weights ``(logw (S,), logw0 ())`` of observation
     ``x = (o, cam, be, bq, te, tq)`` (spec steps 1-2):
     :math:`\\log P(\\text{link } j) + \\log t(o_k|\\theta_j) + \\log p_\\delta(d_k|d_j)`
-    and :math:`\\log P(\\text{new}) + \\log t(o_k|\\theta_0) + \\log p_{\\delta_0}(d_k)`."""
+    and :math:`\\log P(\\text{new}) + \\log t(o_k|\\theta_0) + \\log p_{\\delta_0}(d_k)`
+    (``birth_leave``: expired track ends closed first, no 1/W: see :func:`_link_prior`)."""
     o, cam, be, bq, te, tq = x
     r = o.shape[0]
-    lp_link, lp_new, valid = _link_prior(m, uniform, st)
+    if birth_leave:
+        st = _close_expired(m, st, te)
+    lp_link, lp_new, valid = _link_prior(m, uniform, st, birth_leave, te)
     u = o - st.slot_a
     qf = jnp.einsum("si,sij,sj->s", u, st.slot_Cinv, u)
     app = niw_predictive_from_quad(qf, st.slot_kappa, st.slot_eta, st.slot_lognorm, r)
@@ -99,7 +162,7 @@ def predict(m: ADFParams, st: ADFState, x, uniform: bool):
         lp_new
         + niw_predictive_from_quad(q0, m.k0, m.e0, m.lognorm0, r)
         + m.path.log_entry[cam, be]
-        - jnp.log(m.path.window)
+        - (0.0 if birth_leave else jnp.log(m.path.window))
     )
     return logw, logw0
 
@@ -243,6 +306,8 @@ def project(m: ADFParams, st: ADFState, x, posterior, cfg: ADFConfig):
     """Spec steps 3-6 and the slot bookkeeping: ``(new state, ADFInfo)``."""
     o, cam, be, bq, te, tq = x
     w, w0, _, _ = posterior
+    if cfg.birth_leave:
+        st = _close_expired(m, st, te)
     S, W = st.slot_pprob.shape
     r = o.shape[0]
     qlab, counter, pprob, never, new_p, new_n = _labels_counter_pointers(st, w, w0, W)
@@ -281,12 +346,14 @@ def project(m: ADFParams, st: ADFState, x, posterior, cfg: ADFConfig):
     return new_state, _report(cfg, st, posterior, qlab, counter, valid, itop, new_n)
 
 
-def window_predict(m: ADFParams, st: ADFState, xs, uniform: bool):
+def window_predict(m: ADFParams, st: ADFState, xs, uniform: bool, birth_leave: bool = False):
     """Single-step link log weights of a window of observations against one belief
     ``(logw (L, S), logw0 (L,))``, and the link prior of a window-internal link (an
     open end of mass 1) for the fixed-lag revision."""
-    logw, logw0 = jax.vmap(lambda x: predict(m, st, x, uniform))(xs)
-    if uniform:
+    logw, logw0 = jax.vmap(lambda x: predict(m, st, x, uniform, birth_leave))(xs)
+    if birth_leave:  # a window-internal end seen just now: S = 1
+        lp_win = jnp.log1p(-m.path.leave_prob)
+    elif uniform:
         c = jnp.arange(st.counter.shape[0], dtype=st.counter.dtype)
         lp_win = jnp.log(jnp.sum(st.counter / (c + 1.0)))
     else:
@@ -304,9 +371,9 @@ def zajdel_hooks(cfg: ADFConfig, uniform: bool) -> ADFHooks:
     """The driver hooks for one configuration (cached: the same object per
     ``(cfg, uniform)``, so the driver's compiled functions are reused)."""
     return ADFHooks(
-        predict=partial(predict, uniform=uniform),
+        predict=partial(predict, uniform=uniform, birth_leave=cfg.birth_leave),
         condition=condition,
         project=partial(project, cfg=cfg),
         record=_record_counter if cfg.record_counter else None,
-        window_predict=partial(window_predict, uniform=uniform),
+        window_predict=partial(window_predict, uniform=uniform, birth_leave=cfg.birth_leave),
     )

@@ -40,6 +40,10 @@ class ADFConfig(NamedTuple):
     init_persons : initial person capacity (grows by doubling, each growth recompiles)
     lag_branch : links per observation enumerated by the fixed-lag revision
     record_counter : also record the full counter distribution of every step
+    birth_leave : False (default, the spec's label prior: uniform or ``p_new``) or True:
+        the birth-leave link prior of :mod:`models.zajdel.adf_hooks` (new people arrive
+        at ``path.new_rate`` per unit time, a pass is a person's last with probability
+        ``path.leave_prob``, a track end that can no longer be continued is closed)
     """
 
     max_open: int = 256
@@ -54,6 +58,7 @@ class ADFConfig(NamedTuple):
     init_persons: int = 512
     lag_branch: int = 5
     record_counter: bool = False
+    birth_leave: bool = False
 
 
 class ADFState(NamedTuple):

@@ -37,6 +37,7 @@ __all__ = [
     "pairwise_path_logprob",
 ]
 
+
 _HALF_LOG_2PI = 0.5 * float(np.log(2.0 * np.pi))
 
 
@@ -52,6 +53,10 @@ class PathModel(NamedTuple):
     travel_std : (C, C)       sigma(l_j, l_k) > 0
     max_travel : ()           upper truncation of the travel time (may be inf)
     window : ()               W, length of the entry-time window of a new person
+    new_rate : ()             lambda, new people entering per unit time (1/time; NaN:
+        not set), used by the ADF's birth-leave link prior (``ADFConfig.birth_leave``)
+    leave_prob : ()           probability that a pass is a person's last (they leave the
+        building; NaN: not set), same use
     """
 
     log_trans: np.ndarray
@@ -60,6 +65,8 @@ class PathModel(NamedTuple):
     travel_std: np.ndarray
     max_travel: np.ndarray
     window: np.ndarray
+    new_rate: np.ndarray = np.float64(np.nan)
+    leave_prob: np.ndarray = np.float64(np.nan)
 
     @property
     def num_cameras(self) -> int:
@@ -76,6 +83,7 @@ class PathModel(NamedTuple):
             travel_std=np.asarray(self.travel_std) * factor,
             max_travel=np.asarray(self.max_travel) * factor,
             window=np.asarray(self.window) * factor,
+            new_rate=np.asarray(self.new_rate) / factor,
         )
 
 
