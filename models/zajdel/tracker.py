@@ -131,6 +131,10 @@ class ZajdelADF:
             raise ModelError(f"old_update = {cfg.old_update!r}: must be 'seed' or 'keep'")
         if cfg.max_open < 1 or cfg.persons_per_slot < 1 or cfg.chunk < 1:
             raise ModelError(f"config: sizes must be >= 1, got {cfg}")
+        if cfg.birth_leave and not (
+            np.isfinite(params.path.new_rate) and np.isfinite(params.path.leave_prob)
+        ):
+            raise ModelError("birth_leave: set path.new_rate and path.leave_prob first")
         self.obs_dim = params.obs_dim
         self._uniform = params.p_new is None
         self._hooks = zajdel_hooks(cfg, self._uniform)
