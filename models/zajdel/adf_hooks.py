@@ -25,7 +25,7 @@ from functools import cache, partial
 
 import jax
 import jax.numpy as jnp
-from jax.scipy.special import logsumexp, ndtr
+from jax.scipy.special import logsumexp
 
 from inference.adf.driver import ADFHooks
 from inference.adf.niw import (
@@ -64,43 +64,37 @@ def _top(x, k):
     return x[i], i
 
 
-_CLOSE_EPS = 1e-6  # birth-leave: a track end continued with less probability is closed
-
-
-def _survival(m: ADFParams, st: ADFState, te):
-    r"""Birth-leave model: :math:`S_j(t) = \sum_{c', b'} P(c', b' \mid l_j, b^q_j)\,
-    P(X > t - t^q_j)`, X the truncated-normal travel time to ``c'``: the probability
-    that person j, if they stay in the building, has not yet been seen again, (S,)."""
-    trans = jnp.exp(m.path.log_trans[st.slot_cam, st.slot_bq]).sum(axis=-1)  # (S, C)
-    mu = m.path.travel_mean[st.slot_cam]
-    sd = m.path.travel_std[st.slot_cam]
-    d = (te - st.slot_tq)[:, None]
-    hi = jnp.where(jnp.isfinite(m.path.max_travel), ndtr((mu - m.path.max_travel) / sd), 0.0)
-    sf = jnp.clip((ndtr((mu - d) / sd) - hi) / (ndtr(mu / sd) - hi), 0.0, 1.0)
-    return jnp.sum(trans * jnp.where(d > 0, sf, 1.0), axis=1)
+CLOSE_EPS = 1e-6  # birth-leave: a track end continued with less probability is closed
 
 
 def _continuation(m: ADFParams, st: ADFState, te):
     """Birth-leave model: which slots can no longer be continued at time ``te``, (S,)
-    bool: their probability of being continued, (1 - rho) S_j / (rho + (1 - rho) S_j),
-    decays with the time since they were last seen and fell below ``_CLOSE_EPS``."""
-    rho = m.path.leave_prob
-    alive = (1.0 - rho) * _survival(m, st, te)
-    return st.slot_valid & (alive / (rho + alive) < _CLOSE_EPS)
+    bool: their probability of being continued, (1 - rho) S_j / (rho + (1 - rho) S_j)
+    with S_j the probability that a staying person has not yet been seen again,
+    decays with the time since they were last seen; below ``CLOSE_EPS`` (past
+    ``m.close_horizon``, :func:`models.zajdel.path.continuation_horizon`) the end is
+    closed."""
+    return st.slot_valid & (te - st.slot_tq > m.close_horizon[st.slot_cam, st.slot_bq])
 
 
-def _close_expired(m: ADFParams, st: ADFState, te) -> ADFState:
+def _close_expired(m: ADFParams, st: ADFState, te, scatter: bool = True) -> ADFState:
     """Move the pointer mass of the slots that can no longer be continued
     (:func:`_continuation`) to ``closed`` and free them: every person's pointer row
-    still sums to 1, and the open-track set holds only ends that may be continued."""
+    still sums to 1, and the open-track set holds only ends that may be continued.
+    The scatter into ``closed`` runs only in steps where a slot closes
+    (``scatter=False``: the slots are freed, ``closed`` is left as it is, enough for
+    scoring)."""
     gone = _continuation(m, st, te)
-    mass = jnp.where(gone[:, None], st.slot_pprob, 0.0)
-    closed = st.closed.at[st.slot_person.reshape(-1)].add(mass.reshape(-1))
-    return st._replace(
-        closed=closed,
-        slot_valid=st.slot_valid & ~gone,
-        slot_pprob=jnp.where(gone[:, None], 0.0, st.slot_pprob),
-    )
+    pprob = jnp.where(gone[:, None], 0.0, st.slot_pprob)
+    st2 = st._replace(slot_valid=st.slot_valid & ~gone, slot_pprob=pprob)
+    if not scatter:
+        return st2
+
+    def add(c):
+        mass = jnp.where(gone[:, None], st.slot_pprob, 0.0).reshape(-1)
+        return c.at[st.slot_person.reshape(-1)].add(mass)
+
+    return st2._replace(closed=jax.lax.cond(jnp.any(gone), add, lambda c: c, st.closed))
 
 
 def _link_prior(m: ADFParams, uniform: bool, st: ADFState, birth_leave: bool = False, te=None):
@@ -120,7 +114,7 @@ def _link_prior(m: ADFParams, uniform: bool, st: ADFState, birth_leave: bool = F
     (1 - rho) p_delta / (rho + (1 - rho) S_j)) over-split: counter 415 for 280
     people, because the factorised belief never lowers the open mass of silent ends
     as time passes. A track end whose probability of being continued,
-    (1 - rho) S_j / (rho + (1 - rho) S_j), falls below ``_CLOSE_EPS`` is closed
+    (1 - rho) S_j / (rho + (1 - rho) S_j), falls below ``CLOSE_EPS`` is closed
     (:func:`_close_expired`).
     """
     open_ = jnp.sum(st.slot_pprob, axis=1)
@@ -147,7 +141,7 @@ def predict(m: ADFParams, st: ADFState, x, uniform: bool, birth_leave: bool = Fa
     o, cam, be, bq, te, tq = x
     r = o.shape[0]
     if birth_leave:
-        st = _close_expired(m, st, te)
+        st = _close_expired(m, st, te, scatter=False)
     lp_link, lp_new, valid = _link_prior(m, uniform, st, birth_leave, te)
     u = o - st.slot_a
     qf = jnp.einsum("si,sij,sj->s", u, st.slot_Cinv, u)

@@ -133,7 +133,10 @@ class ADFParams(NamedTuple):
     cached inverse and log-determinant; lognorm0 (): its predictive's data-free part;
     psi0_next (): the digamma sum of ``e0 + 1``;
     path: PathModel; path_lognorm (C, C): :func:`models.zajdel.path.travel_log_norm`;
-    p_new (): P(new) (0.5 placeholder under the uniform label prior).
+    p_new (): P(new) (0.5 placeholder under the uniform label prior);
+    close_horizon (C, B): birth-leave model, time after a pass at (camera, quit border)
+    beyond which the track end is closed
+    (:func:`models.zajdel.path.continuation_horizon`; inf when unused).
     """
 
     a0: jnp.ndarray
@@ -147,3 +150,4 @@ class ADFParams(NamedTuple):
     path: PathModel
     path_lognorm: jnp.ndarray
     p_new: jnp.ndarray
+    close_horizon: jnp.ndarray | None = None

@@ -120,3 +120,27 @@ def test_concat_keeps_pointer_rows():
     st_all, _ = tr.run(concat_observations([take(obs, slice(0, 12)), take(obs, slice(12, 24))]))
     np.testing.assert_allclose(pointer_rows(st), 1.0, atol=1e-9)
     np.testing.assert_allclose(np.asarray(st.counter), np.asarray(st_all.counter), atol=1e-12)
+
+
+def test_continuation_horizon_solves_the_closing_rule():
+    from scipy.stats import truncnorm
+
+    from models.zajdel.path import continuation_horizon
+
+    params = with_birth_leave(simulate_office(7).params, 0.05, 0.1)
+    path, eps, rho = params.path, 1e-6, 0.1
+    h = continuation_horizon(path, eps)
+    trans = np.exp(np.asarray(path.log_trans)).sum(-1)
+    mu, sd = np.asarray(path.travel_mean), np.asarray(path.travel_std)
+
+    def cont(c, b, d):
+        s = sum(
+            trans[c, b, c2] * truncnorm.sf(d, -mu[c, c2] / sd[c, c2], np.inf, mu[c, c2], sd[c, c2])
+            for c2 in range(mu.shape[0])
+        )
+        return (1 - rho) * s / (rho + (1 - rho) * s)
+
+    for c, b in [(0, 0), (3, 1), (6, 0)]:
+        assert cont(c, b, h[c, b] * (1 - 1e-3)) > eps > cont(c, b, h[c, b] * (1 + 1e-3))
+    unset = continuation_horizon(simulate_office(7).params.path, eps)
+    assert np.isinf(unset).all()
