@@ -12,6 +12,11 @@ r"""The Zajdel tracker's ADF step as the three hooks of :mod:`inference.adf.driv
   bookkeeping (insertion, eviction of the track end seen longest ago, pruning) and the
   step's report.
 
+With ``ADFConfig(birth_leave=True)`` (issue 17) the link prior is that of people
+entering at a rate and leaving the building (:func:`_link_prior`), and a track end
+that can no longer be continued is closed before each step (:func:`_close_expired`);
+the default keeps the spec's label prior, bit for bit.
+
 Each slot caches :math:`C^{-1}`, :math:`\log|C|`, the data-free part of its
 Student-t predictive and the digamma sum of its updated NIW's :math:`E[\log|V|]`
 (they change only when the slot's NIW does), and the path
