@@ -17,6 +17,20 @@ oracle_link_agreement, oracle_posterior_gap : on the first K = 8 observations of
 obs_per_s, compile_s, peak_open_tracks : streaming the large setting (20 cameras,
     about 200 people at once; 10,000 observations, --quick the first 2,000) after
     warm-up; compile time of the first chunk; most open track ends at once
+counter_rel_err_large : |final counter - true people| / true people on the large setting
+    (10,000 observations, 500 people; --quick the same) with the birth-leave link prior
+    (``ADFConfig(birth_leave=True)``: new people at rate lambda, a pass is a person's
+    last with probability rho, track ends that can no longer be continued closed);
+    lambda and rho estimated on the training scenarios ``BIRTH_LEAVE_TRAIN_SEEDS``
+    (held out from every benchmark seed); ``counter_rel_err_curve`` the same after
+    every 1,000 observations (true people = those seen so far);
+    ``counter_rel_err_spec_prior_first_N`` the spec's ``p_new`` prior on the streamed
+    prefix (the collapse); ``birth_leave_new_rate``, ``birth_leave_leave_prob`` the
+    estimates; ``counter_births_on_first_passes`` (sum of P(new) over each person's
+    true first pass: births found) and ``counter_births_on_continuations`` (over the
+    other passes: false births), whose sum is the final counter;
+    ``counter_rel_err_large_seeds`` (full run only) the final error on the large
+    setting of seeds seed, seed + 1, seed + 2
 speedup_vs_numpy_loop : time of the same ADF written as a plain numpy loop over
     candidate links and mixture components (``benchmarks._zajdel_numpy_loop``) / ours, on the
     first 1,000 observations of the large setting (--quick: 300; ours: best of 3); "ok" requires both to
@@ -33,6 +47,10 @@ import numpy as np
 from benchmarks._common import best_time, log
 
 NAME = "zajdel_adf"
+
+#: Large-setting scenarios on which the birth-leave parameters are estimated (held out:
+#: the benchmark's large setting uses ``--seed``, default 0).
+BIRTH_LEAVE_TRAIN_SEEDS = (10_001, 10_002, 10_003)
 
 
 def _mean(x):
@@ -152,6 +170,18 @@ def run(quick: bool, seed: int) -> dict:
     check("large_link_mass_at_most_one", np.all(res.link_prob.sum(1) + res.new_prob <= 1 + 1e-9))
     log(f"large setting: {n_large} obs in {dt:.1f} s ({out['obs_per_s']:.0f} obs/s)")
 
+    # -- 3b. the counter on the large setting: birth-leave prior vs the spec's -------
+    t0 = time.perf_counter()
+    out.update(_counter_large(big, spec_counter=res.counter_mean, n_spec=n_large))
+    if not quick:
+        errs = [out["counter_rel_err_large"]]
+        for s in (seed + 1, seed + 2):
+            errs.append(
+                _counter_large(simulate_office(s, large_config(10_000)))["counter_rel_err_large"]
+            )
+        out["counter_rel_err_large_seeds"] = errs
+    log(f"counter on the large setting: {time.perf_counter() - t0:.1f} s")
+
     # -- 4. against the plain numpy loop (same ADF) ----------------------------------
     n_ref = 300 if quick else 1000
     sub = take(big.obs, slice(0, n_ref))
@@ -182,4 +212,48 @@ def run(quick: bool, seed: int) -> dict:
         "simulated data (models.zajdel.simulate); timings on a shared machine, see "
         "load_average_1min"
     )
+    return out
+
+
+def _counter_rel_err(counter_mean, labels, every: int = 1000):
+    """|counter - people seen so far| / people seen so far, after every ``every``
+    observations and at the end: (curve, final)."""
+    seen = np.maximum.accumulate(np.asarray(labels)) + 1
+    cm = np.asarray(counter_mean)
+    err = np.abs(cm - seen) / seen
+    idx = list(range(every - 1, cm.size, every))
+    if not idx or idx[-1] != cm.size - 1:
+        idx.append(cm.size - 1)
+    return [float(err[i]) for i in idx], float(err[-1])
+
+
+def _counter_large(big, spec_counter=None, n_spec: int = 0) -> dict:
+    """Benchmark keys of the counter on the large setting (see the module docstring)."""
+    from models.zajdel.birth_leave import estimate_birth_leave, with_birth_leave
+    from models.zajdel.simulate import simulate_office
+    from models.zajdel.tracker import ADFConfig, ZajdelADF
+
+    train = [simulate_office(s, big.config) for s in BIRTH_LEAVE_TRAIN_SEEDS]
+    rate, leave = estimate_birth_leave(train)
+    params = with_birth_leave(big.params, rate, leave)
+    cfg = ADFConfig(max_open=256, init_persons=1024, chunk=128, birth_leave=True)
+    _, res = ZajdelADF(params, cfg).run(big.obs)
+    curve, final = _counter_rel_err(res.counter_mean, big.labels)
+    lab = np.asarray(big.labels)
+    first = np.r_[True, lab[1:] > np.maximum.accumulate(lab)[:-1]]
+    out = {
+        "counter_rel_err_large": final,
+        "counter_rel_err_curve": curve,
+        "counter_large_final": float(res.counter_mean[-1]),
+        "counter_large_true_people": int(big.labels.max() + 1),
+        "counter_large_num_obs": int(big.labels.size),
+        "counter_births_on_first_passes": float(res.new_prob[first].sum()),
+        "counter_births_on_continuations": float(res.new_prob[~first].sum()),
+        "birth_leave_new_rate": rate,
+        "birth_leave_leave_prob": leave,
+        "birth_leave_train_seeds": list(BIRTH_LEAVE_TRAIN_SEEDS),
+    }
+    if spec_counter is not None:
+        _, spec_final = _counter_rel_err(spec_counter, lab[:n_spec])
+        out[f"counter_rel_err_spec_prior_first_{n_spec}"] = spec_final
     return out

@@ -12,6 +12,11 @@ r"""The Zajdel tracker's ADF step as the three hooks of :mod:`inference.adf.driv
   bookkeeping (insertion, eviction of the track end seen longest ago, pruning) and the
   step's report.
 
+With ``ADFConfig(birth_leave=True)`` (issue 17) the link prior is that of people
+entering at a rate and leaving the building (:func:`_link_prior`), and a track end
+that can no longer be continued is closed before each step (:func:`_close_expired`);
+the default keeps the spec's label prior, bit for bit.
+
 Each slot caches :math:`C^{-1}`, :math:`\log|C|`, the data-free part of its
 Student-t predictive and the digamma sum of its updated NIW's :math:`E[\log|V|]`
 (they change only when the slot's NIW does), and the path
@@ -64,11 +69,65 @@ def _top(x, k):
     return x[i], i
 
 
-def _link_prior(m: ADFParams, uniform: bool, st: ADFState):
-    """Spec step 1: log P(link j) (S,), log P(new) (), and which slots are open (S,)."""
+CLOSE_EPS = 1e-6  # birth-leave: a track end continued with less probability is closed
+
+
+def _continuation(m: ADFParams, st: ADFState, te):
+    """Birth-leave model: which slots can no longer be continued at time ``te``, (S,)
+    bool: their probability of being continued, (1 - rho) S_j / (rho + (1 - rho) S_j)
+    with S_j the probability that a staying person has not yet been seen again,
+    decays with the time since they were last seen; below ``CLOSE_EPS`` (past
+    ``m.close_horizon``, :func:`models.zajdel.path.continuation_horizon`) the end is
+    closed."""
+    return st.slot_valid & (te - st.slot_tq > m.close_horizon[st.slot_cam, st.slot_bq])
+
+
+def _close_expired(m: ADFParams, st: ADFState, te, scatter: bool = True) -> ADFState:
+    """Move the pointer mass of the slots that can no longer be continued
+    (:func:`_continuation`) to ``closed`` and free them: every person's pointer row
+    still sums to 1, and the open-track set holds only ends that may be continued.
+    The scatter into ``closed`` runs only in steps where a slot closes
+    (``scatter=False``: the slots are freed, ``closed`` is left as it is, enough for
+    scoring)."""
+    gone = _continuation(m, st, te)
+    pprob = jnp.where(gone[:, None], 0.0, st.slot_pprob)
+    st2 = st._replace(slot_valid=st.slot_valid & ~gone, slot_pprob=pprob)
+    if not scatter:
+        return st2
+
+    def add(c):
+        mass = jnp.where(gone[:, None], st.slot_pprob, 0.0).reshape(-1)
+        return c.at[st.slot_person.reshape(-1)].add(mass)
+
+    return st2._replace(closed=jax.lax.cond(jnp.any(gone), add, lambda c: c, st.closed))
+
+
+def _link_prior(m: ADFParams, uniform: bool, st: ADFState, birth_leave: bool = False, te=None):
+    """Spec step 1: log P(link j) (S,), log P(new) (), and which slots are open (S,).
+
+    ``birth_leave``: the prior of partitions of a marked point process in time (seed
+    000's path model with people entering and leaving): new people arrive at rate
+    lambda = ``path.new_rate`` (1/time); after each pass a person leaves the building
+    with probability rho = ``path.leave_prob``, else is seen again after the
+    truncated-normal travel time. A partition with P people and K - P links then has
+    prior weight (lambda rho)^P (1 - rho)^(K - P) times the path and entry
+    terms (every track eventually ends), so log P(new) = log(lambda rho) and log P(link
+    j) = log open_j + log(1 - rho). Both sides are densities in time (rescaling time
+    and lambda together leaves every posterior unchanged). Measured on the large
+    setting (seed 0, 3,000 observations, 512 slots), the filtering form that puts the
+    leave probability into the hazard instead (new: lambda, link:
+    (1 - rho) p_delta / (rho + (1 - rho) S_j)) over-split: counter 415 for 280
+    people, because the factorised belief never lowers the open mass of silent ends
+    as time passes. A track end whose probability of being continued,
+    (1 - rho) S_j / (rho + (1 - rho) S_j), falls below ``CLOSE_EPS`` is closed
+    (:func:`_close_expired`).
+    """
     open_ = jnp.sum(st.slot_pprob, axis=1)
     valid = st.slot_valid & (open_ > 0)
     safe_open = jnp.where(valid, open_, 1.0)
+    if birth_leave:
+        rho = m.path.leave_prob
+        return jnp.log(safe_open) + jnp.log1p(-rho), jnp.log(m.path.new_rate * rho), valid
     if uniform:
         c = jnp.arange(st.counter.shape[0], dtype=st.counter.dtype)
         e = jnp.sum(st.counter / (c + 1.0))
@@ -78,14 +137,17 @@ def _link_prior(m: ADFParams, uniform: bool, st: ADFState):
     return lp_link, jnp.where(tot > 0, jnp.log(m.p_new), 0.0), valid
 
 
-def predict(m: ADFParams, st: ADFState, x, uniform: bool):
+def predict(m: ADFParams, st: ADFState, x, uniform: bool, birth_leave: bool = False):
     """Unnormalised log link weights ``(logw (S,), logw0 ())`` of observation
     ``x = (o, cam, be, bq, te, tq)`` (spec steps 1-2):
     :math:`\\log P(\\text{link } j) + \\log t(o_k|\\theta_j) + \\log p_\\delta(d_k|d_j)`
-    and :math:`\\log P(\\text{new}) + \\log t(o_k|\\theta_0) + \\log p_{\\delta_0}(d_k)`."""
+    and :math:`\\log P(\\text{new}) + \\log t(o_k|\\theta_0) + \\log p_{\\delta_0}(d_k)`
+    (``birth_leave``: expired track ends closed first, no 1/W: see :func:`_link_prior`)."""
     o, cam, be, bq, te, tq = x
     r = o.shape[0]
-    lp_link, lp_new, valid = _link_prior(m, uniform, st)
+    if birth_leave:
+        st = _close_expired(m, st, te, scatter=False)
+    lp_link, lp_new, valid = _link_prior(m, uniform, st, birth_leave, te)
     u = o - st.slot_a
     qf = jnp.einsum("si,sij,sj->s", u, st.slot_Cinv, u)
     app = niw_predictive_from_quad(qf, st.slot_kappa, st.slot_eta, st.slot_lognorm, r)
@@ -99,7 +161,7 @@ def predict(m: ADFParams, st: ADFState, x, uniform: bool):
         lp_new
         + niw_predictive_from_quad(q0, m.k0, m.e0, m.lognorm0, r)
         + m.path.log_entry[cam, be]
-        - jnp.log(m.path.window)
+        - (0.0 if birth_leave else jnp.log(m.path.window))
     )
     return logw, logw0
 
@@ -243,6 +305,8 @@ def project(m: ADFParams, st: ADFState, x, posterior, cfg: ADFConfig):
     """Spec steps 3-6 and the slot bookkeeping: ``(new state, ADFInfo)``."""
     o, cam, be, bq, te, tq = x
     w, w0, _, _ = posterior
+    if cfg.birth_leave:
+        st = _close_expired(m, st, te)
     S, W = st.slot_pprob.shape
     r = o.shape[0]
     qlab, counter, pprob, never, new_p, new_n = _labels_counter_pointers(st, w, w0, W)
@@ -281,12 +345,14 @@ def project(m: ADFParams, st: ADFState, x, posterior, cfg: ADFConfig):
     return new_state, _report(cfg, st, posterior, qlab, counter, valid, itop, new_n)
 
 
-def window_predict(m: ADFParams, st: ADFState, xs, uniform: bool):
+def window_predict(m: ADFParams, st: ADFState, xs, uniform: bool, birth_leave: bool = False):
     """Single-step link log weights of a window of observations against one belief
     ``(logw (L, S), logw0 (L,))``, and the link prior of a window-internal link (an
     open end of mass 1) for the fixed-lag revision."""
-    logw, logw0 = jax.vmap(lambda x: predict(m, st, x, uniform))(xs)
-    if uniform:
+    logw, logw0 = jax.vmap(lambda x: predict(m, st, x, uniform, birth_leave))(xs)
+    if birth_leave:  # a window-internal end seen just now: S = 1
+        lp_win = jnp.log1p(-m.path.leave_prob)
+    elif uniform:
         c = jnp.arange(st.counter.shape[0], dtype=st.counter.dtype)
         lp_win = jnp.log(jnp.sum(st.counter / (c + 1.0)))
     else:
@@ -304,9 +370,9 @@ def zajdel_hooks(cfg: ADFConfig, uniform: bool) -> ADFHooks:
     """The driver hooks for one configuration (cached: the same object per
     ``(cfg, uniform)``, so the driver's compiled functions are reused)."""
     return ADFHooks(
-        predict=partial(predict, uniform=uniform),
+        predict=partial(predict, uniform=uniform, birth_leave=cfg.birth_leave),
         condition=condition,
         project=partial(project, cfg=cfg),
         record=_record_counter if cfg.record_counter else None,
-        window_predict=partial(window_predict, uniform=uniform),
+        window_predict=partial(window_predict, uniform=uniform, birth_leave=cfg.birth_leave),
     )

@@ -40,6 +40,10 @@ class ADFConfig(NamedTuple):
     init_persons : initial person capacity (grows by doubling, each growth recompiles)
     lag_branch : links per observation enumerated by the fixed-lag revision
     record_counter : also record the full counter distribution of every step
+    birth_leave : False (default, the spec's label prior: uniform or ``p_new``) or True:
+        the birth-leave link prior of :mod:`models.zajdel.adf_hooks` (new people arrive
+        at ``path.new_rate`` per unit time, a pass is a person's last with probability
+        ``path.leave_prob``, a track end that can no longer be continued is closed)
     """
 
     max_open: int = 256
@@ -54,6 +58,7 @@ class ADFConfig(NamedTuple):
     init_persons: int = 512
     lag_branch: int = 5
     record_counter: bool = False
+    birth_leave: bool = False
 
 
 class ADFState(NamedTuple):
@@ -128,7 +133,10 @@ class ADFParams(NamedTuple):
     cached inverse and log-determinant; lognorm0 (): its predictive's data-free part;
     psi0_next (): the digamma sum of ``e0 + 1``;
     path: PathModel; path_lognorm (C, C): :func:`models.zajdel.path.travel_log_norm`;
-    p_new (): P(new) (0.5 placeholder under the uniform label prior).
+    p_new (): P(new) (0.5 placeholder under the uniform label prior);
+    close_horizon (C, B): birth-leave model, time after a pass at (camera, quit border)
+    beyond which the track end is closed
+    (:func:`models.zajdel.path.continuation_horizon`; inf when unused).
     """
 
     a0: jnp.ndarray
@@ -142,3 +150,4 @@ class ADFParams(NamedTuple):
     path: PathModel
     path_lognorm: jnp.ndarray
     p_new: jnp.ndarray
+    close_horizon: jnp.ndarray | None = None

@@ -35,7 +35,9 @@ __all__ = [
     "log_p_delta_cached",
     "log_p_delta0",
     "pairwise_path_logprob",
+    "continuation_horizon",
 ]
+
 
 _HALF_LOG_2PI = 0.5 * float(np.log(2.0 * np.pi))
 
@@ -52,6 +54,10 @@ class PathModel(NamedTuple):
     travel_std : (C, C)       sigma(l_j, l_k) > 0
     max_travel : ()           upper truncation of the travel time (may be inf)
     window : ()               W, length of the entry-time window of a new person
+    new_rate : ()             lambda, new people entering per unit time (1/time; NaN:
+        not set), used by the ADF's birth-leave link prior (``ADFConfig.birth_leave``)
+    leave_prob : ()           probability that a pass is a person's last (they leave the
+        building; NaN: not set), same use
     """
 
     log_trans: np.ndarray
@@ -60,6 +66,8 @@ class PathModel(NamedTuple):
     travel_std: np.ndarray
     max_travel: np.ndarray
     window: np.ndarray
+    new_rate: np.ndarray = np.float64(np.nan)
+    leave_prob: np.ndarray = np.float64(np.nan)
 
     @property
     def num_cameras(self) -> int:
@@ -76,6 +84,7 @@ class PathModel(NamedTuple):
             travel_std=np.asarray(self.travel_std) * factor,
             max_travel=np.asarray(self.max_travel) * factor,
             window=np.asarray(self.window) * factor,
+            new_rate=np.asarray(self.new_rate) / factor,
         )
 
 
@@ -204,6 +213,47 @@ def log_p_delta_cached(path: PathModel, log_norm, cam_j, bq_j, tq_j, cam, be, te
     z = (jnp.where(ok, x, mu) - mu) / path.travel_std[cam_j, cam]
     tn = jnp.where(ok, -0.5 * z * z + log_norm[cam_j, cam], -jnp.inf)
     return jnp.where(jnp.isfinite(lt), lt + tn, -jnp.inf)
+
+
+def continuation_horizon(path: PathModel, eps: float) -> np.ndarray:
+    r"""Birth-leave model: per (camera, quit border), shape (C, B), the time since a pass
+    after which the person is continued with probability below ``eps``:
+    :math:`(1-\rho) S(\Delta) / (\rho + (1-\rho) S(\Delta)) < \varepsilon` with
+    :math:`S(\Delta) = \sum_{c', b'} P(c', b' \mid c, b)\, P(X_{c c'} > \Delta)` (the
+    truncated-normal travel time; :math:`\rho` = ``path.leave_prob``). ``inf`` when
+    ``leave_prob`` is not set. Solved once per model by bisection (S is decreasing)."""
+    from scipy.special import ndtr
+
+    rho = float(path.leave_prob)
+    C, B = np.shape(path.log_entry)
+    if not np.isfinite(rho):
+        return np.full((C, B), np.inf)
+    target = eps * rho / ((1.0 - rho) * (1.0 - eps))
+    mu, sd, tmax = (
+        np.asarray(x, float) for x in (path.travel_mean, path.travel_std, path.max_travel)
+    )
+    hi = ndtr((mu - tmax) / sd) if np.isfinite(tmax) else np.zeros_like(mu)
+    norm = ndtr(mu / sd) - hi
+    trans = np.exp(np.asarray(path.log_trans, float)).sum(axis=-1)  # (C, B, C)
+
+    def surv(d):  # d (C, B) -> S (C, B)
+        sf = np.clip(
+            (ndtr((mu[:, None, :] - d[..., None]) / sd[:, None, :]) - hi[:, None, :])
+            / norm[:, None, :],
+            0,
+            1,
+        )
+        return (trans * sf).sum(-1)
+
+    lo = np.zeros((C, B))
+    up = np.full((C, B), float(np.max(mu + 40.0 * sd)))
+    if np.isfinite(tmax):
+        up = np.minimum(up, tmax)
+    for _ in range(100):
+        mid = 0.5 * (lo + up)
+        below = surv(mid) < target
+        up, lo = np.where(below, mid, up), np.where(below, lo, mid)
+    return up
 
 
 def log_p_delta0(path: PathModel, cam, be) -> np.ndarray:

@@ -41,13 +41,13 @@ from dbn.errors import InputError, ModelError
 from inference.adf.checkpoint import load_state, save_state
 from inference.adf.driver import adf_filter, adf_filter_lag, adf_step, x64_context
 from inference.adf.niw import niw_predictive_lognorm, niw_sum_digamma
-from models.zajdel.adf_hooks import zajdel_hooks
+from models.zajdel.adf_hooks import CLOSE_EPS, zajdel_hooks
 from models.zajdel.adf_lag import lag_revision
 from models.zajdel.adf_types import DEFAULT_OLD_UPDATE, ADFConfig, ADFInfo, ADFParams, ADFState
 from models.zajdel.data import Observations, validate_observations
 from models.zajdel.decode import RunResult, chain_decode
 from models.zajdel.params import ZajdelParams, check_params
-from models.zajdel.path import PathModel, travel_log_norm
+from models.zajdel.path import PathModel, continuation_horizon, travel_log_norm
 
 __all__ = [
     "ADFConfig",
@@ -85,6 +85,7 @@ def _adf_params(params: ZajdelParams) -> ADFParams:
         path=path,
         path_lognorm=travel_log_norm(path),
         p_new=jnp.asarray(f64(0.5 if params.p_new is None else params.p_new)),
+        close_horizon=jnp.asarray(continuation_horizon(params.path, CLOSE_EPS)),
     )
 
 
@@ -131,6 +132,10 @@ class ZajdelADF:
             raise ModelError(f"old_update = {cfg.old_update!r}: must be 'seed' or 'keep'")
         if cfg.max_open < 1 or cfg.persons_per_slot < 1 or cfg.chunk < 1:
             raise ModelError(f"config: sizes must be >= 1, got {cfg}")
+        if cfg.birth_leave and not (
+            np.isfinite(params.path.new_rate) and np.isfinite(params.path.leave_prob)
+        ):
+            raise ModelError("birth_leave: set path.new_rate and path.leave_prob first")
         self.obs_dim = params.obs_dim
         self._uniform = params.p_new is None
         self._hooks = zajdel_hooks(cfg, self._uniform)
