@@ -26,6 +26,7 @@ __all__ = [
     "TimeOrderError",
     "FileFormatError",
     "CheckpointError",
+    "in_file",
     "MemoryLimitError",
 ]
 
@@ -111,6 +112,14 @@ class FileFormatError(InputError):
 class CheckpointError(FileFormatError):
     """A saved state (checkpoint) is unreadable, of another format version, saved under
     another configuration, fails its checksum or holds NaN/inf."""
+
+
+def in_file(exc: DBNError, file) -> DBNError:
+    """``exc`` (a library error) as the same class with ``FILE: `` before its message;
+    a :class:`FileFormatError` already names its file and is returned unchanged."""
+    if isinstance(exc, FileFormatError):
+        return exc
+    return type(exc)(f"{file}: {exc}")
 
 
 # --- resources -------------------------------------------------------------------------
