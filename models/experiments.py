@@ -148,8 +148,8 @@ def read_results(path: str | os.PathLike) -> list[dict[str, Any]]:
     ------
     FileFormatError
         Naming the file and the line: unreadable or not UTF-8, a line (other than the
-        last) that is not JSON, a record that is not an object with a string ``id``, a
-        ``status`` of ``ok`` or ``error`` and a ``point`` object.
+        last) that is not JSON, a record that is not an object with a string ``id`` and a
+        ``status`` of ``ok`` or ``error`` (and, if any, a ``point`` object).
     """
     p = Path(path)
     if not p.exists():
@@ -167,14 +167,14 @@ def read_results(path: str | os.PathLike) -> list[dict[str, Any]]:
         except (json.JSONDecodeError, RecursionError):
             if i == len(lines):  # interrupted while writing the last line
                 continue
-            raise FileFormatError(p, "not a JSON record", i) from None
+            raise FileFormatError(p, f"line {i} is not a JSON record", i) from None
         if not (
             isinstance(record, dict)
             and isinstance(record.get("id"), str)
             and record.get("status") in ("ok", "error")
-            and isinstance(record.get("point"), dict)
+            and isinstance(record.get("point", {}), dict)
         ):
-            raise FileFormatError(p, "not a result record (need id, status, point)", i)
+            raise FileFormatError(p, f"line {i} is not a result record (id, status)", i)
         records.append(record)
     return records
 
