@@ -16,6 +16,7 @@ from __future__ import annotations
 import gzip
 import math
 import re
+import warnings
 import zlib
 from pathlib import Path
 from typing import NamedTuple
@@ -65,7 +66,9 @@ def _read(path: Path, num_columns: int) -> np.ndarray:
     or empty file is a :class:`FileFormatError` naming the file (and the line)."""
     try:
         with gzip.open(path, "rt") if path.suffix == ".gz" else open(path) as f:
-            data = np.loadtxt(f, comments="#", ndmin=2)
+            with warnings.catch_warnings():  # an empty file: reported below
+                warnings.simplefilter("ignore", UserWarning)
+                data = np.loadtxt(f, comments="#", ndmin=2)
     except (OSError, EOFError, ValueError, UnicodeDecodeError, zlib.error) as exc:
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         m = re.search(r"at row (\d+)", msg)
