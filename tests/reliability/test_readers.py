@@ -26,7 +26,7 @@ from dbn.errors import CheckpointError, DBNError, FileFormatError
 DATA = Path(__file__).resolve().parents[1] / "data"
 SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "data"
 
-FAST = settings(max_examples=12, deadline=None, suppress_health_check=list(HealthCheck))
+FAST = settings(max_examples=8, deadline=None, suppress_health_check=list(HealthCheck))
 SLOW = settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck))
 
 
@@ -515,3 +515,69 @@ def test_real_caviar_file(data) -> None:
 
         raw = gzip.decompress(raw)
     check_reader(load_caviar, _sane_truth, data.draw(mutations(raw, xml=True)), "real.xml")
+
+
+# --- every tracker's save/load -------------------------------------------------------------
+def _rewrite(src: Path, dst: Path, header_fn=None, arrays_fn=None) -> None:
+    """Copy a checkpoint with its header and/or arrays changed, checksum recomputed (a
+    well-formed file saved under another configuration, or holding NaN)."""
+    import json
+
+    from inference.checkpoint import _checksum
+
+    with np.load(src) as f:
+        header = json.loads(bytes(f["__header__"]).decode())
+        arrays = {n: np.array(f[n]) for n in f.files if n != "__header__"}
+    if header_fn:
+        header_fn(header)
+    if arrays_fn:
+        arrays_fn(arrays)
+    header["checksum"] = _checksum(header, arrays)
+    blob = np.frombuffer(json.dumps(header).encode(), np.uint8)
+    np.savez(dst, __header__=blob, **arrays)
+
+
+@pytest.mark.parametrize("name", ["localization", "pathrecovery", "rjmcmc3d", "zajdel_adf"])
+def test_tracker_checkpoints_reject_bad_files(name, tmp_path) -> None:
+    import jax
+
+    import models
+
+    ex = models.get(name).example(jax.random.key(0))
+    tr = ex.tracker
+    state, _ = tr.step(jax.random.key(2), tr.init(jax.random.key(1)), ex.observations[0])
+    good = tmp_path / "good.npz"
+    tr.save(state, good)
+    tr.load(good)  # the valid file loads
+    raw = good.read_bytes()
+    bad = tmp_path / "bad.npz"
+    for blob in (b"", raw[: len(raw) // 2], raw[:-30], b"PK\x03\x04" + raw[4:100]):
+        bad.write_bytes(blob)
+        with pytest.raises(CheckpointError, match="bad.npz"):
+            tr.load(bad)
+    np.savez(bad, x=np.zeros(3))  # a foreign .npz
+    with pytest.raises(CheckpointError, match="no header"):
+        tr.load(bad)
+
+    def other_config(h):
+        h["config"] = {"saved": "elsewhere"}
+
+    _rewrite(good, bad, header_fn=other_config)
+    with pytest.raises(CheckpointError, match="configuration"):
+        tr.load(bad)
+
+    def old_version(h):
+        h["version"] = 1
+
+    _rewrite(good, bad, header_fn=old_version)
+    with pytest.raises(CheckpointError, match="version"):
+        tr.load(bad)
+
+    def nan_inside(a):
+        k = next(n for n, v in a.items() if v.dtype.kind == "f" and v.size)
+        a[k] = a[k].copy()
+        a[k].flat[0] = np.nan
+
+    _rewrite(good, bad, arrays_fn=nan_inside)
+    with pytest.raises(CheckpointError, match="NaN"):
+        tr.load(bad)
