@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import gzip
+import json
 import math
 import zlib
 from collections.abc import Iterable, Sequence
@@ -21,6 +22,7 @@ __all__ = [
     "as_int",
     "write_rows",
     "require_file",
+    "read_json_config",
 ]
 
 
@@ -164,3 +166,18 @@ def write_rows(path: str | Path, header: Sequence[str], rows: Iterable[Sequence]
         for r in rows:
             w.writerow([repr(float(x)) if isinstance(x, float) else x for x in r])
     return path
+
+
+def read_json_config(path: str | Path) -> dict:
+    """A ``--config`` file: a JSON object; anything else is a
+    :class:`~dbn.errors.FileFormatError` naming the file (and the line)."""
+    text = "".join(read_lines(path, "config file"))
+    try:
+        config = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise fail(path, exc.lineno, f"not valid JSON ({exc.msg})") from None
+    except RecursionError:
+        raise fail(path, 0, "JSON nested too deeply") from None
+    if not isinstance(config, dict):
+        raise fail(path, 1, "the config must be a JSON object")
+    return config

@@ -581,3 +581,14 @@ def test_tracker_checkpoints_reject_bad_files(name, tmp_path) -> None:
     _rewrite(good, bad, arrays_fn=nan_inside)
     with pytest.raises(CheckpointError, match="NaN"):
         tr.load(bad)
+
+
+@FAST
+@given(data=st.data())
+def test_json_config(data) -> None:
+    from models.io.table import read_json_config
+
+    raw = (DATA / "rjmcmc3d" / "config.json").read_bytes()
+    check_reader(
+        read_json_config, lambda c: isinstance(c, dict), data.draw(mutations(raw)), "c.json"
+    )
