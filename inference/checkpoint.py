@@ -71,10 +71,15 @@ def _checksum(header: Mapping[str, Any], arrays: Mapping[str, np.ndarray]) -> st
     return h.hexdigest()
 
 
-def _check_finite(path, arrays: Mapping[str, np.ndarray]) -> None:
+def _check_finite(path, arrays: Mapping[str, np.ndarray], neg_inf: Sequence[str] = ()) -> None:
+    """NaN or inf anywhere is an error, except -inf in the arrays named in ``neg_inf``
+    (log-space values: log 0, or "never" times)."""
     for name, a in arrays.items():
-        if np.issubdtype(a.dtype, np.inexact) and not np.all(np.isfinite(a)):
-            bad = a[~np.isfinite(a)].ravel()[0]
+        if not np.issubdtype(a.dtype, np.inexact):
+            continue
+        ok = np.isfinite(a) | ((a == -np.inf) if name in neg_inf else False)
+        if not np.all(ok):
+            bad = a[~ok].ravel()[0]
             raise CheckpointError(path, f"array {name!r} holds {bad} (NaN or inf is not allowed)")
 
 
@@ -84,6 +89,7 @@ def save_arrays(
     fmt: str,
     config: Any = None,
     extra: Mapping[str, Any] | None = None,
+    neg_inf: Sequence[str] = (),
 ) -> None:
     """Write named arrays and a versioned, checksummed JSON header to ``path`` (.npz).
 
@@ -94,16 +100,18 @@ def save_arrays(
     fmt : format tag, checked by :func:`load_arrays`
     config : the configuration the state belongs to (made :func:`jsonable`)
     extra : further JSON entries (e.g. ``{"t": 5}``), returned by :func:`load_arrays`
+    neg_inf : arrays where -inf is a legal value (log weights: log 0; "no time yet")
 
     Raises
     ------
     CheckpointError
-        An array holds NaN or inf (a state that cannot be resumed), or a name is reserved.
+        An array holds NaN or inf (a state that cannot be resumed; -inf is allowed in
+        ``neg_inf``), or a name is reserved.
     """
     data = {str(k): np.asarray(v) for k, v in arrays.items()}
     if _HEADER in data:
         raise CheckpointError(path, f"array name {_HEADER!r} is reserved")
-    _check_finite(path, data)
+    _check_finite(path, data, neg_inf)
     header = {"format": fmt, "version": VERSION, "config": jsonable(config)}
     header.update(jsonable(dict(extra or {})))
     header["checksum"] = _checksum(header, data)
@@ -142,7 +150,7 @@ def _read(path) -> tuple[dict, dict[str, np.ndarray]]:
 
 
 def load_arrays(
-    path, fmt: str, names: Sequence[str], config: Any = None
+    path, fmt: str, names: Sequence[str], config: Any = None, neg_inf: Sequence[str] = ()
 ) -> tuple[dict[str, np.ndarray], dict]:
     """Read a file written by :func:`save_arrays`, checking everything before returning.
 
@@ -152,6 +160,7 @@ def load_arrays(
     fmt : expected format tag
     names : the arrays the caller needs (others are an error too: not this format)
     config : the configuration of the loader; must equal the saved one (as JSON)
+    neg_inf : arrays where -inf is a legal value (as in :func:`save_arrays`)
 
     Returns
     -------
@@ -162,7 +171,8 @@ def load_arrays(
     ------
     CheckpointError
         Naming the file: unreadable, another format, version or configuration, a checksum
-        mismatch, missing or unexpected arrays, NaN or inf in a float array.
+        mismatch, missing or unexpected arrays, NaN or inf in a float array (-inf is
+        allowed in ``neg_inf``).
     """
     header, arrays = _read(path)
     if header.get("format") != fmt:
@@ -182,5 +192,5 @@ def load_arrays(
         raise CheckpointError(
             path, f"saved under configuration {header.get('config')!r}, this one is {want!r}"
         )
-    _check_finite(path, arrays)
+    _check_finite(path, arrays, neg_inf)
     return arrays, header

@@ -21,7 +21,9 @@ from inference.checkpoint import load_arrays, save_arrays
 __all__ = ["save_state", "load_state"]
 
 
-def save_state(path, state, fmt: str, header: dict | None = None, config: Any = None) -> None:
+def save_state(
+    path, state, fmt: str, header: dict | None = None, config: Any = None, neg_inf=()
+) -> None:
     """Write ``state`` (a NamedTuple of arrays) and a JSON header to ``path`` (.npz).
 
     Parameters
@@ -31,9 +33,10 @@ def save_state(path, state, fmt: str, header: dict | None = None, config: Any = 
     fmt : format tag stored in the header and checked by :func:`load_state`
     header : extra JSON-serialisable entries
     config : the configuration the state belongs to (checked by :func:`load_state`)
+    neg_inf : fields where -inf is a legal value (see :func:`~inference.checkpoint.save_arrays`)
     """
     arrays = {f: getattr(state, f) for f in state._fields}
-    save_arrays(path, arrays, fmt, config=config, extra=header)
+    save_arrays(path, arrays, fmt, config=config, extra=header, neg_inf=neg_inf)
 
 
 def load_state(
@@ -42,6 +45,7 @@ def load_state(
     fmt: str,
     check: Callable[[dict], None] | None = None,
     config: Any = None,
+    neg_inf=(),
 ) -> Any:
     """Read a state written by :func:`save_state`.
 
@@ -53,6 +57,7 @@ def load_state(
     check : called with the header after the file is verified (raise to refuse; any
         non-library exception it raises becomes a :class:`~dbn.errors.CheckpointError`)
     config : this loader's configuration; must equal the one saved
+    neg_inf : fields where -inf is a legal value
 
     Returns
     -------
@@ -63,7 +68,7 @@ def load_state(
     CheckpointError
         Naming the file (see :func:`inference.checkpoint.load_arrays`).
     """
-    arrays, header = load_arrays(path, fmt, state_type._fields, config=config)
+    arrays, header = load_arrays(path, fmt, state_type._fields, config=config, neg_inf=neg_inf)
     if check is not None:
         try:
             check(header)

@@ -104,14 +104,18 @@ class LocalizationTracker(StepTracker):
             "log_weights": state.particles.log_weights,
         }
         cfg = self._checkpoint_config(np.shape(state.particles.log_weights)[0])
-        save_arrays(path, arrays, _FORMAT, cfg, {"timestamp": state.timestamp})
+        save_arrays(
+            path, arrays, _FORMAT, cfg, {"timestamp": state.timestamp}, neg_inf=["log_weights"]
+        )
 
     def load(self, path) -> LocalizationState:
         """Read a state written by :meth:`save`; a damaged or foreign file, one saved under
         another configuration, or NaN/inf inside is a :class:`~dbn.errors.CheckpointError`."""
         shape = jax.eval_shape(self._pf.init, jax.random.key(0)).log_weights.shape
         cfg = self._checkpoint_config(shape[0])
-        arrays, header = load_arrays(path, _FORMAT, ("particles", "log_weights"), cfg)
+        arrays, header = load_arrays(
+            path, _FORMAT, ("particles", "log_weights"), cfg, neg_inf=["log_weights"]
+        )
         ts = header.get("timestamp")
         if ts is not None and not (isinstance(ts, (int, float)) and math.isfinite(ts)):
             raise CheckpointError(path, f"timestamp = {ts!r} is not a finite number or null")

@@ -76,14 +76,17 @@ class PathRecoveryTracker(StepTracker):
         """Write ``state`` to an ``.npz`` file (arrays, config, version, checksum; no pickle)."""
         arrays = {f: getattr(state.particles.particles, f) for f in PathParticles._fields}
         arrays["log_weights"] = state.particles.log_weights
-        save_arrays(path, arrays, _FORMAT, self._checkpoint_config(), {"t": int(state.t)})
+        cfg, extra = self._checkpoint_config(), {"t": int(state.t)}
+        save_arrays(path, arrays, _FORMAT, cfg, extra, neg_inf=["log_weights"])
 
     def load(self, path) -> PathState:
         """Read a state written by :meth:`save`; a damaged or foreign file, one saved under
         another configuration or for other sizes, or NaN/inf inside is a
         :class:`~dbn.errors.CheckpointError`."""
         names = (*PathParticles._fields, "log_weights")
-        arrays, header = load_arrays(path, _FORMAT, names, self._checkpoint_config())
+        arrays, header = load_arrays(
+            path, _FORMAT, names, self._checkpoint_config(), neg_inf=["log_weights"]
+        )
         parts = PathParticles(*(arrays[name] for name in PathParticles._fields))
         lw = arrays["log_weights"]
         n, d = self.model.config.num_particles, self.model.f0.size

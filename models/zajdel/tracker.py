@@ -60,6 +60,7 @@ __all__ = [
 ]
 
 _FORMAT = "zajdel-adf-state-v2"  # v2: slot_lognorm and slot_psi_next cached in the state
+_NEG_INF = ("last_tq",)  # -inf: no observation yet (log-space fields are finite)
 
 
 def _adf_params(params: ZajdelParams) -> ADFParams:
@@ -286,12 +287,14 @@ class ZajdelADF:
     # -- persistence ---------------------------------------------------------------
     def save(self, state: ADFState, path) -> None:
         """Write a state to an ``.npz`` file (arrays, config, version, checksum; no pickle)."""
-        save_state(path, state, _FORMAT, config=self._checkpoint_config())
+        save_state(path, state, _FORMAT, config=self._checkpoint_config(), neg_inf=_NEG_INF)
 
     def load(self, path) -> ADFState:
         """Read a state written by :meth:`save`; a file saved under another configuration
         (or obs_dim), damaged, or holding NaN/inf is a :class:`~dbn.errors.CheckpointError`."""
-        return load_state(path, ADFState, _FORMAT, config=self._checkpoint_config())
+        cfg = self._checkpoint_config()
+        return load_state(path, ADFState, _FORMAT, config=cfg, neg_inf=_NEG_INF)
 
     def _checkpoint_config(self) -> dict:
+        """What a saved state must match (the config and the appearance dimension)."""
         return {"config": self.config._asdict(), "obs_dim": int(self.obs_dim)}

@@ -592,3 +592,18 @@ def test_json_config(data) -> None:
     check_reader(
         read_json_config, lambda c: isinstance(c, dict), data.draw(mutations(raw)), "c.json"
     )
+
+
+def test_checkpoint_allows_minus_inf_only_where_declared(tmp_path) -> None:
+    from inference.checkpoint import load_arrays, save_arrays
+
+    path = tmp_path / "c.npz"
+    lw = np.array([0.0, -np.inf, -1.0])
+    save_arrays(path, {"log_weights": lw}, "t", neg_inf=["log_weights"])
+    arrays, _ = load_arrays(path, "t", ["log_weights"], neg_inf=["log_weights"])
+    np.testing.assert_array_equal(arrays["log_weights"], lw)
+    with pytest.raises(CheckpointError, match="log_weights"):
+        load_arrays(path, "t", ["log_weights"])  # not declared by this loader
+    for bad in (np.inf, np.nan):
+        with pytest.raises(CheckpointError, match="NaN or inf"):
+            save_arrays(path, {"log_weights": np.array([bad])}, "t", neg_inf=["log_weights"])
