@@ -24,6 +24,9 @@ __all__ = [
     "ShapeError",
     "NonFiniteError",
     "TimeOrderError",
+    "FileFormatError",
+    "CheckpointError",
+    "in_file",
     "MemoryLimitError",
 ]
 
@@ -86,6 +89,37 @@ class NonFiniteError(InputError):
 
 class TimeOrderError(InputError):
     """Observations or log timestamps go backwards in time (or quit before enter)."""
+
+
+class FileFormatError(InputError):
+    """A file is empty, truncated, malformed, of the wrong type or inconsistent.
+
+    The message starts with ``FILE:LINE:`` (or ``FILE:`` when no line applies) and names
+    the element; ``file`` and ``line`` (``None`` where it does not apply) are attributes.
+    """
+
+    def __init__(self, file, message: str, line: int | None = None) -> None:
+        self.file = str(file)
+        self.line = line
+        self.message = message
+        where = f"{self.file}:{line}" if line else self.file
+        super().__init__(f"{where}: {message}")
+
+    def __reduce__(self):  # picklable across processes (dask workers)
+        return (self.__class__, (self.file, self.message, self.line))
+
+
+class CheckpointError(FileFormatError):
+    """A saved state (checkpoint) is unreadable, of another format version, saved under
+    another configuration, fails its checksum or holds NaN/inf."""
+
+
+def in_file(exc: DBNError, file) -> DBNError:
+    """``exc`` (a library error) as the same class with ``FILE: `` before its message;
+    a :class:`FileFormatError` already names its file and is returned unchanged."""
+    if isinstance(exc, FileFormatError):
+        return exc
+    return type(exc)(f"{file}: {exc}")
 
 
 # --- resources -------------------------------------------------------------------------

@@ -113,15 +113,9 @@ def track(args: argparse.Namespace) -> dict:
     mod = runner(args.name)
     config: dict = {}
     if args.config:
-        from models.io.table import require_file
+        from models.io.table import read_json_config
 
-        path = require_file(args.config, "config file")
-        try:
-            config = json.loads(path.read_text(encoding="utf-8"))
-        except json.JSONDecodeError as exc:
-            raise InputError(f"{path}:{exc.lineno}: not valid JSON ({exc.msg})") from None
-        if not isinstance(config, dict):
-            raise InputError(f"{path}:1: the config must be a JSON object")
+        config = read_json_config(args.config)
     if args.method:
         if args.name != "dbn":
             raise InputError(f"--method applies to dbn only, not {args.name!r}")

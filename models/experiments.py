@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from dbn.errors import InputError
+from dbn.errors import FileFormatError, InputError
 
 __all__ = [
     "GridPoint",
@@ -142,21 +142,40 @@ def _execute(task: Task, point: GridPoint) -> dict[str, Any]:
 
 
 def read_results(path: str | os.PathLike) -> list[dict[str, Any]]:
-    """Every record of a results file (a truncated last line, from a crash, is skipped)."""
+    """Every record of a results file (a truncated last line, from a crash, is skipped).
+
+    Raises
+    ------
+    FileFormatError
+        Naming the file and the line: unreadable or not UTF-8, a line (other than the
+        last) that is not JSON, a record that is not an object with a string ``id`` and a
+        ``status`` of ``ok`` or ``error`` (and, if any, a ``point`` object).
+    """
     p = Path(path)
     if not p.exists():
         return []
+    try:
+        lines = p.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise FileFormatError(p, f"unreadable results file ({exc})") from None
     records = []
-    lines = p.read_text().splitlines()
     for i, line in enumerate(lines, 1):
         if not line.strip():
             continue
         try:
-            records.append(json.loads(line))
-        except json.JSONDecodeError:
+            record = json.loads(line)
+        except (json.JSONDecodeError, RecursionError):
             if i == len(lines):  # interrupted while writing the last line
                 continue
-            raise InputError(f"{p}: line {i} is not a JSON record") from None
+            raise FileFormatError(p, f"line {i} is not a JSON record", i) from None
+        if not (
+            isinstance(record, dict)
+            and isinstance(record.get("id"), str)
+            and record.get("status") in ("ok", "error")
+            and isinstance(record.get("point", {}), dict)
+        ):
+            raise FileFormatError(p, f"line {i} is not a result record (id, status)", i)
+        records.append(record)
     return records
 
 
@@ -298,6 +317,20 @@ def example_task(point: GridPoint) -> dict[str, Any]:
     return {"steps": len(infos), "score_field": field_name, "total_score": score}
 
 
+def _seeds(seeds: Any) -> list[int]:
+    """The ``seeds`` field: a list of ints or ``{start = a, stop = b}``."""
+    if isinstance(seeds, dict):
+        start, stop = seeds.get("start", 0), seeds.get("stop")
+        if not all(isinstance(v, int) and not isinstance(v, bool) for v in (start, stop)):
+            raise InputError(f"field 'seeds': start/stop must be integers, got {seeds!r}")
+        return list(range(start, stop))
+    if not isinstance(seeds, list) or not all(
+        isinstance(v, int) and not isinstance(v, bool) for v in seeds
+    ):
+        raise InputError("field 'seeds' must be a list of integers or {start, stop}")
+    return seeds
+
+
 def load_sweep(path: str | os.PathLike) -> tuple[Task, list[GridPoint]]:
     """Read a sweep configuration (TOML): the task and its grid.
 
@@ -320,30 +353,32 @@ def load_sweep(path: str | os.PathLike) -> tuple[Task, list[GridPoint]]:
 
     p = Path(path)
     try:
-        cfg = tomllib.loads(p.read_text())
+        cfg = tomllib.loads(p.read_text(encoding="utf-8"))
     except FileNotFoundError:
-        raise InputError(f"{p}: no such sweep configuration") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{p}: not a TOML file: {exc}") from None
+        raise FileFormatError(p, "no such sweep configuration") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError, OSError) as exc:
+        raise FileFormatError(p, f"not a TOML file: {exc}") from None
     spec = cfg.get("task")
     if not isinstance(spec, str) or spec.count(":") != 1:
-        raise InputError(f"{p}: field 'task' must be 'module:function', got {spec!r}")
+        raise FileFormatError(p, f"field 'task' must be 'module:function', got {spec!r}")
     module, name = spec.split(":")
     try:
         task = getattr(importlib.import_module(module), name)
-    except (ImportError, AttributeError) as exc:
-        raise InputError(f"{p}: field 'task': cannot load {spec!r} ({exc})") from None
-    seeds = cfg.get("seeds", [0])
-    if isinstance(seeds, dict):
-        seeds = range(int(seeds.get("start", 0)), int(seeds["stop"]))
+    except Exception as exc:  # noqa: BLE001 - any import failure is a bad field
+        raise FileFormatError(p, f"field 'task': cannot load {spec!r} ({exc})") from None
+    if not callable(task):
+        raise FileFormatError(p, f"field 'task': {spec!r} is not a function")
     for field_name in ("trackers", "data"):
         value = cfg.get(field_name, ["simulated"] if field_name == "data" else None)
         if not isinstance(value, list) or not value:
-            raise InputError(f"{p}: field {field_name!r} must be a non-empty list")
+            raise FileFormatError(p, f"field {field_name!r} must be a non-empty list")
+        if not all(isinstance(v, str) for v in value):
+            raise FileFormatError(p, f"field {field_name!r} must be a list of names")
     try:
+        seeds = _seeds(cfg.get("seeds", [0]))
         grid = make_grid(cfg["trackers"], cfg.get("data", ["simulated"]), seeds, cfg.get("params"))
-    except (InputError, TypeError, ValueError) as exc:
-        raise InputError(f"{p}: {exc}") from None
+    except (InputError, TypeError, ValueError, KeyError, AttributeError) as exc:
+        raise FileFormatError(p, str(exc)) from None
     return task, grid
 
 

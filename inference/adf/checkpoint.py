@@ -1,26 +1,29 @@
 """Saving and loading a filter's belief (a NamedTuple of arrays) without pickle.
 
-The file is an ``.npz`` holding every field of the state plus a JSON header (a
-``format`` tag and whatever the caller adds, e.g. its static configuration), so that
-a run resumed from a loaded state continues bit-identically.
+A thin layer over :mod:`inference.checkpoint`: an ``.npz`` holding every field of the
+state plus a versioned, checksummed JSON header (a ``format`` tag, the configuration the
+state was saved under, and whatever the caller adds), so that a run resumed from a
+loaded state continues bit-identically, and a damaged, foreign or mismatched file is a
+:class:`~dbn.errors.CheckpointError`.
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from typing import Any
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
-from dbn.errors import InputError
+from dbn.errors import CheckpointError, DBNError
+from inference.checkpoint import load_arrays, save_arrays
 
 __all__ = ["save_state", "load_state"]
 
 
-def save_state(path, state, fmt: str, header: dict | None = None) -> None:
+def save_state(
+    path, state, fmt: str, header: dict | None = None, config: Any = None, neg_inf=()
+) -> None:
     """Write ``state`` (a NamedTuple of arrays) and a JSON header to ``path`` (.npz).
 
     Parameters
@@ -29,14 +32,20 @@ def save_state(path, state, fmt: str, header: dict | None = None) -> None:
     state : NamedTuple whose fields are arrays
     fmt : format tag stored in the header and checked by :func:`load_state`
     header : extra JSON-serialisable entries
+    config : the configuration the state belongs to (checked by :func:`load_state`)
+    neg_inf : fields where -inf is a legal value (see :func:`~inference.checkpoint.save_arrays`)
     """
-    arrays = {f: np.asarray(getattr(state, f)) for f in state._fields}
-    head = json.dumps({"format": fmt, **(header or {})})
-    np.savez(path, __header__=np.frombuffer(head.encode(), np.uint8), **arrays)
+    arrays = {f: getattr(state, f) for f in state._fields}
+    save_arrays(path, arrays, fmt, config=config, extra=header, neg_inf=neg_inf)
 
 
 def load_state(
-    path, state_type: type, fmt: str, check: Callable[[dict], None] | None = None
+    path,
+    state_type: type,
+    fmt: str,
+    check: Callable[[dict], None] | None = None,
+    config: Any = None,
+    neg_inf=(),
 ) -> Any:
     """Read a state written by :func:`save_state`.
 
@@ -44,23 +53,28 @@ def load_state(
     ----------
     path : file written by :func:`save_state`
     state_type : the NamedTuple class of the state
-    fmt : expected format tag (an :class:`~dbn.errors.InputError` otherwise)
-    check : called with the header before the arrays are read (raise to refuse)
+    fmt : expected format tag
+    check : called with the header after the file is verified (raise to refuse; any
+        non-library exception it raises becomes a :class:`~dbn.errors.CheckpointError`)
+    config : this loader's configuration; must equal the one saved
+    neg_inf : fields where -inf is a legal value
 
     Returns
     -------
     ``state_type`` with jax arrays of the stored dtypes (float64 kept as float64).
+
+    Raises
+    ------
+    CheckpointError
+        Naming the file (see :func:`inference.checkpoint.load_arrays`).
     """
-    with np.load(path, allow_pickle=False) as f:
-        if "__header__" not in f.files:
-            raise InputError(f"{path}: not a saved filter state (no header)")
-        header = json.loads(bytes(f["__header__"]).decode())
-        if header.get("format") != fmt:
-            raise InputError(f"{path}: format {header.get('format')!r}, expected {fmt!r}")
-        missing = [n for n in state_type._fields if n not in f.files]
-        if missing:
-            raise InputError(f"{path}: missing state fields {missing}")
-        if check is not None:
+    arrays, header = load_arrays(path, fmt, state_type._fields, config=config, neg_inf=neg_inf)
+    if check is not None:
+        try:
             check(header)
-        with jax.enable_x64(True):  # keep the stored precision
-            return state_type(*(jnp.asarray(f[name]) for name in state_type._fields))
+        except DBNError:
+            raise
+        except (KeyError, TypeError, ValueError) as exc:
+            raise CheckpointError(path, f"header does not fit this loader ({exc!r})") from None
+    with jax.enable_x64(True):  # keep the stored precision
+        return state_type(*(jnp.asarray(arrays[name]) for name in state_type._fields))

@@ -23,7 +23,7 @@ import numpy as np
 from dbn.bayesnet import BayesNet
 from dbn.cpds import TabularCPD
 from dbn.dbn import TwoSliceDBN, prev
-from dbn.errors import DBNError, InputError
+from dbn.errors import DBNError, FileFormatError
 from dbn.variables import DiscreteVariable
 from models.io.table import fail, read_rows, require_file, write_rows
 
@@ -47,11 +47,11 @@ def two_slice_from_bn(bn: BayesNet, source: str = "model") -> TwoSliceDBN:
     variables: dict[str, DiscreteVariable] = {}
     initial, transition = [], []
     if not bn.nodes:
-        raise InputError(f"{source}: no variable with a probability block (not a BIF network?)")
+        raise FileFormatError(source, "no variable with a probability block (not a BIF network?)")
     for name in bn.nodes:
         parts = _split(name)
         if parts is None:
-            raise InputError(f"{source}: variable {name!r} does not end in _0 or _1")
+            raise FileFormatError(source, f"variable {name!r} does not end in _0 or _1")
         base, t = parts
         v = bn.variable(name)
         if t == 0:
@@ -59,18 +59,18 @@ def two_slice_from_bn(bn: BayesNet, source: str = "model") -> TwoSliceDBN:
     for name in bn.nodes:
         base, t = _split(name)
         if base not in variables:
-            raise InputError(f"{source}: {name!r} has no slice-0 variable {base + '_0'!r}")
+            raise FileFormatError(source, f"{name!r} has no slice-0 variable {base + '_0'!r}")
         parents = [_split(p) for p in bn.parents(name)]
         if t == 0:
             if any(pt != 0 for _, pt in parents):
-                raise InputError(f"{source}: slice-0 variable {name!r} has a slice-1 parent")
+                raise FileFormatError(source, f"slice-0 variable {name!r} has a slice-1 parent")
             initial.append(TabularCPD(base, [p for p, _ in parents], bn.table(name)))
         else:
             names = [prev(p) if pt == 0 else p for p, pt in parents]
             transition.append(TabularCPD(base, names, bn.table(name)))
     missing = sorted(set(variables) - {c.variable for c in transition})
     if missing:
-        raise InputError(f"{source}: no slice-1 CPD for {[m + '_1' for m in missing]}")
+        raise FileFormatError(source, f"no slice-1 CPD for {[m + '_1' for m in missing]}")
     return TwoSliceDBN(list(variables.values()), initial, transition)
 
 
@@ -80,12 +80,12 @@ def read_two_slice_bif(path: str | Path) -> TwoSliceDBN:
 
     path = require_file(path, "BIF file")
     try:
-        bn = read_bif(path)
-    except DBNError as exc:
-        raise InputError(f"{path}: {exc}") from None
-    except Exception as exc:  # pgmpy's parser raises anything on a malformed file
+        bn = read_bif(path)  # its errors name the file and the line
+    except DBNError:
+        raise
+    except Exception as exc:  # a safety net: never a raw exception from a bad file
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise InputError(f"{path}: not a valid BIF file ({msg})") from None
+        raise FileFormatError(path, f"not a valid BIF file ({msg})") from None
     return two_slice_from_bn(bn, str(path))
 
 

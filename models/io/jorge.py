@@ -14,14 +14,12 @@ stroke is labelled with, separated by spaces; ``truth``: the people in the regio
 
 from __future__ import annotations
 
-import gzip
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
-from dbn.errors import DBNError, InputError
-from models.io.table import as_float, as_int, fail, require_file, write_rows
+from dbn.errors import DBNError, in_file
+from models.io.table import as_float, as_int, fail, read_lines, require_file, write_rows
 
 __all__ = ["read_boxes", "read_mot", "write_strokes", "read_strokes", "write_mot_tracks"]
 
@@ -31,34 +29,35 @@ def read_mot(path: str | Path):
     from models.jorge.strokes import _assemble
 
     path = Path(path)
-    opener = gzip.open if path.suffix == ".gz" else open
     frames: dict[int, dict[int, tuple]] = {}
-    with opener(path, "rt", encoding="utf-8") as f:
-        for line_no, line in enumerate(f, start=1):
-            fields = [x.strip() for x in line.replace(" ", ",").split(",") if x.strip()]
-            if not fields or fields[0].startswith("#"):
-                continue
-            if len(fields) < 6:
-                raise fail(path, line_no, f"{len(fields)} fields, need frame,id,x,y,w,h")
-            fr, oid = (
-                as_int(fields[0], path, line_no, "frame"),
-                as_int(fields[1], path, line_no, "id"),
-            )
-            x, y, w, h = (as_float(v, path, line_no, n) for v, n in zip(fields[2:6], "xywh"))
-            if len(fields) > 6 and as_float(fields[6], path, line_no, "conf") == 0:
-                continue
-            if oid < 0:
-                raise fail(path, line_no, f"id = {oid}: detections without ids cannot make "
-                           "strokes (give tracks with ids, e.g. gt.txt)")  # fmt: skip
-            if w <= 0 or h <= 0:
-                raise fail(path, line_no, f"box width/height must be > 0, got {w}, {h}")
-            objs = frames.setdefault(fr, {})
-            if oid in objs:
-                raise fail(path, line_no, f"id {oid} appears twice in frame {fr}")
-            objs[oid] = (x + w / 2, y + h / 2, w, h)
+    for line_no, line in enumerate(read_lines(path, "MOTChallenge file"), start=1):
+        fields = [x.strip() for x in line.replace(" ", ",").split(",") if x.strip()]
+        if not fields or fields[0].startswith("#"):
+            continue
+        if len(fields) < 6:
+            raise fail(path, line_no, f"{len(fields)} fields, need frame,id,x,y,w,h")
+        fr, oid = (
+            as_int(fields[0], path, line_no, "frame"),
+            as_int(fields[1], path, line_no, "id"),
+        )
+        x, y, w, h = (as_float(v, path, line_no, n) for v, n in zip(fields[2:6], "xywh"))
+        if len(fields) > 6 and as_float(fields[6], path, line_no, "conf") == 0:
+            continue
+        if oid < 0:
+            raise fail(path, line_no, f"id = {oid}: detections without ids cannot make "
+                       "strokes (give tracks with ids, e.g. gt.txt)")  # fmt: skip
+        if w <= 0 or h <= 0:
+            raise fail(path, line_no, f"box width/height must be > 0, got {w}, {h}")
+        objs = frames.setdefault(fr, {})
+        if oid in objs:
+            raise fail(path, line_no, f"id {oid} appears twice in frame {fr}")
+        objs[oid] = (x + w / 2, y + h / 2, w, h)
     if not frames:
         raise fail(path, 0, "no boxes")
-    return _assemble(path.name, sorted(frames.items()), [])
+    try:
+        return _assemble(path.name, sorted(frames.items()), [])
+    except DBNError as exc:
+        raise in_file(exc, path) from None
 
 
 def read_boxes(path: str | Path):
@@ -69,13 +68,7 @@ def read_boxes(path: str | Path):
     name = path.name.lower().removesuffix(".gz")
     if not name.endswith(".xml"):
         return read_mot(path)
-    try:
-        return load_ground_truth(path)
-    except ET.ParseError as exc:
-        line = exc.position[0] if getattr(exc, "position", None) else 0
-        raise fail(path, line, f"not well-formed XML ({exc})") from None
-    except DBNError as exc:
-        raise InputError(f"{path}: {exc}") from None
+    return load_ground_truth(path)  # its errors name the file (and line or element)
 
 
 def _ids(label) -> str:

@@ -16,13 +16,12 @@ Pose track (output, and truth for ``dbntrack eval``): ``t,x,y,theta``.
 
 from __future__ import annotations
 
-import gzip
 from pathlib import Path
 
 import numpy as np
 
 from dbn.errors import InputError
-from models.io.table import as_float, fail, read_rows, write_rows
+from models.io.table import as_float, fail, read_lines, read_rows, write_rows
 from models.localization.mrclam import MRCLAMRobot
 
 __all__ = ["read_dat", "read_mrclam_folder", "read_generic", "write_poses", "read_poses"]
@@ -32,17 +31,15 @@ def read_dat(path: str | Path, num_columns: int) -> np.ndarray:
     """A whitespace-separated numeric file (``#`` comments, optionally gzipped) as an
     array ``(rows, num_columns)`` (extra columns ignored); errors name file and line."""
     path = Path(path)
-    opener = gzip.open if path.suffix == ".gz" else open
     rows = []
-    with opener(path, "rt", encoding="utf-8") as f:
-        for line_no, line in enumerate(f, start=1):
-            fields = line.split("#", 1)[0].split()
-            if not fields:
-                continue
-            if len(fields) < num_columns:
-                raise fail(path, line_no, f"{len(fields)} fields, expected {num_columns}")
-            rows.append([as_float(x, path, line_no, f"column {k + 1}")
-                         for k, x in enumerate(fields[:num_columns])])  # fmt: skip
+    for line_no, line in enumerate(read_lines(path, "MRCLAM .dat file"), start=1):
+        fields = line.split("#", 1)[0].split()
+        if not fields:
+            continue
+        if len(fields) < num_columns:
+            raise fail(path, line_no, f"{len(fields)} fields, expected {num_columns}")
+        rows.append([as_float(x, path, line_no, f"column {k + 1}")
+                     for k, x in enumerate(fields[:num_columns])])  # fmt: skip
     if not rows:
         raise fail(path, 0, "no data rows")
     return np.asarray(rows, dtype=np.float64)

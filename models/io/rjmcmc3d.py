@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from dbn.errors import DBNError, InputError
-from models.io.table import as_float, as_int, fail, write_rows
+from models.io.table import as_float, as_int, fail, read_lines, write_rows
 
 __all__ = ["ViewFolder", "read_view", "warp", "detections", "write_tracks3d", "read_tracks3d"]
 
@@ -119,28 +119,24 @@ def write_tracks3d(path, frames: list[int], ids: list, X: list, presence: list) 
 def read_tracks3d(path: str | Path) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """``frame -> (ids (n,), ground positions (n, 2))`` of a MOT 3-D file."""
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: tracks file not found (no such file)")
     out: dict[int, tuple[list, list]] = {}
-    with open(path, encoding="utf-8") as f:
-        for line_no, line in enumerate(f, start=1):
-            fields = [x.strip() for x in line.split(",")]
-            if not line.strip() or fields[0].startswith("#"):
-                continue
-            if len(fields) < 10:
-                raise fail(
-                    path, line_no, f"{len(fields)} fields, need frame,id,-1,-1,-1,-1,conf,x,y,z"
-                )
-            fr, i = (
-                as_int(fields[0], path, line_no, "frame"),
-                as_int(fields[1], path, line_no, "id"),
-            )
-            xy = [as_float(fields[k], path, line_no, "xyz"[k - 7]) for k in (7, 8)]
-            ids, pos = out.setdefault(fr, ([], []))
-            if i in ids:
-                raise fail(path, line_no, f"id {i} appears twice in frame {fr}")
-            ids.append(i)
-            pos.append(xy)
+    for line_no, line in enumerate(read_lines(path, "tracks file"), start=1):
+        fields = [x.strip() for x in line.split(",")]
+        if not line.strip() or fields[0].startswith("#"):
+            continue
+        if len(fields) < 10:
+            msg = f"{len(fields)} fields, need frame,id,-1,-1,-1,-1,conf,x,y,z"
+            raise fail(path, line_no, msg)
+        fr, i = (
+            as_int(fields[0], path, line_no, "frame"),
+            as_int(fields[1], path, line_no, "id"),
+        )
+        xy = [as_float(fields[k], path, line_no, "xyz"[k - 7]) for k in (7, 8)]
+        ids, pos = out.setdefault(fr, ([], []))
+        if i in ids:
+            raise fail(path, line_no, f"id {i} appears twice in frame {fr}")
+        ids.append(i)
+        pos.append(xy)
     return {fr: (np.array(i, np.int64), np.array(p).reshape(-1, 2)) for fr, (i, p) in out.items()}
 
 

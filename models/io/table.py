@@ -4,13 +4,26 @@ errors that name the file and the line (``FILE:LINE: message``)."""
 from __future__ import annotations
 
 import csv
+import gzip
+import json
 import math
+import zlib
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
-from dbn.errors import InputError
+from dbn.errors import FileFormatError, InputError
 
-__all__ = ["Row", "read_rows", "fail", "as_float", "as_int", "write_rows", "require_file"]
+__all__ = [
+    "Row",
+    "read_rows",
+    "read_lines",
+    "fail",
+    "as_float",
+    "as_int",
+    "write_rows",
+    "require_file",
+    "read_json_config",
+]
 
 
 class Row(dict):
@@ -32,10 +45,34 @@ class Row(dict):
         return as_int(self.get(name, ""), self.path, self.line, name)
 
 
-def fail(path: str | Path, line: int, message: str) -> InputError:
-    """``InputError("FILE:LINE: message")`` (line 0: the file as a whole)."""
-    where = f"{path}:{line}" if line else f"{path}"
-    return InputError(f"{where}: {message}")
+def fail(path: str | Path, line: int, message: str) -> FileFormatError:
+    """``FileFormatError("FILE:LINE: message")`` (line 0: the file as a whole); an
+    :class:`~dbn.errors.InputError`, with ``file`` and ``line`` attributes."""
+    return FileFormatError(path, message, line or None)
+
+
+def read_lines(path: str | Path, what: str = "file") -> list[str]:
+    """The lines of a UTF-8 text file (``.gz`` decompressed), newlines kept.
+
+    Raises :class:`~dbn.errors.FileFormatError` naming the file for a missing,
+    unreadable, truncated (gzip), binary (NUL byte) or non-UTF-8 file, with the line
+    where it applies.
+    """
+    path = require_file(path, what)
+    opener = gzip.open if path.name.endswith(".gz") else open
+    try:
+        with opener(path, "rb") as f:
+            data = f.read()
+    except (OSError, EOFError, zlib.error) as exc:
+        raise fail(path, 0, f"unreadable {what} ({exc})") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise fail(path, line, f"not UTF-8 text ({exc.reason})") from None
+    if "\x00" in text:
+        raise fail(path, text.count("\n", 0, text.index("\x00")) + 1, "binary data (NUL byte)")
+    return text.splitlines(keepends=True)
 
 
 def require_file(path: str | Path, what: str) -> Path:
@@ -89,26 +126,32 @@ def read_rows(
     (``FILE:LINE: ...``) for a missing file, a missing required column or a row with
     more fields than the header.
     """
-    path = require_file(path, what)
+    lines = read_lines(path, what)
+    path = Path(path)
     rows: list[Row] = []
     header: list[str] | None = None
-    with open(path, newline="", encoding="utf-8") as f:
-        for line_no, fields in enumerate(csv.reader(f), start=1):
-            blank = not fields or all(not x.strip() for x in fields)
-            if (blank and not (keep_blank and header)) or (fields and fields[0].startswith("#")):
-                continue
-            fields = [x.strip() for x in fields]
-            if header is None:
-                header = fields
-                missing = [c for c in required if c not in header]
-                if missing:
-                    raise fail(path, line_no, f"missing column(s) {missing}; header is {header}")
-                continue
-            if len(fields) > len(header):
-                raise fail(path, line_no, f"{len(fields)} fields, header has {len(header)}")
-            row = Row(zip(header, fields + [""] * (len(header) - len(fields))))
-            row.path, row.line = str(path), line_no
-            rows.append(row)
+    try:
+        records = list(csv.reader(lines))
+    except csv.Error as exc:
+        raise fail(path, 0, f"not a CSV file ({exc})") from None
+    if len(records) != len(lines):  # a quoted field spans lines: line numbers would shift
+        raise fail(path, 0, "a quoted field spans several lines (unbalanced quote?)")
+    for line_no, fields in enumerate(records, start=1):
+        blank = not fields or all(not x.strip() for x in fields)
+        if (blank and not (keep_blank and header)) or (fields and fields[0].startswith("#")):
+            continue
+        fields = [x.strip() for x in fields]
+        if header is None:
+            header = fields
+            missing = [c for c in required if c not in header]
+            if missing:
+                raise fail(path, line_no, f"missing column(s) {missing}; header is {header}")
+            continue
+        if len(fields) > len(header):
+            raise fail(path, line_no, f"{len(fields)} fields, header has {len(header)}")
+        row = Row(zip(header, fields + [""] * (len(header) - len(fields))))
+        row.path, row.line = str(path), line_no
+        rows.append(row)
     if header is None:
         raise fail(path, 0, "empty file (no header line)")
     return header, rows
@@ -123,3 +166,18 @@ def write_rows(path: str | Path, header: Sequence[str], rows: Iterable[Sequence]
         for r in rows:
             w.writerow([repr(float(x)) if isinstance(x, float) else x for x in r])
     return path
+
+
+def read_json_config(path: str | Path) -> dict:
+    """A ``--config`` file: a JSON object; anything else is a
+    :class:`~dbn.errors.FileFormatError` naming the file (and the line)."""
+    text = "".join(read_lines(path, "config file"))
+    try:
+        config = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise fail(path, exc.lineno, f"not valid JSON ({exc.msg})") from None
+    except RecursionError:
+        raise fail(path, 0, "JSON nested too deeply") from None
+    if not isinstance(config, dict):
+        raise fail(path, 1, "the config must be a JSON object")
+    return config

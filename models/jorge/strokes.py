@@ -40,12 +40,21 @@ from __future__ import annotations
 
 import gzip
 import xml.etree.ElementTree as ET
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from dbn.errors import InputError, NonFiniteError, ShapeError, TimeOrderError
+from dbn.errors import (
+    DBNError,
+    FileFormatError,
+    InputError,
+    NonFiniteError,
+    ShapeError,
+    TimeOrderError,
+    in_file,
+)
 
 __all__ = [
     "GroundTruth",
@@ -136,10 +145,31 @@ class GroundTruth:
 
 
 def _open_xml(path: str | Path) -> ET.Element:
+    """The root element of an XML file (``.gz`` accepted); a missing, unreadable or
+    malformed (e.g. truncated) file is a :class:`FileFormatError` naming file and line."""
     path = Path(path)
     opener = gzip.open if path.suffix == ".gz" else open
-    with opener(path, "rb") as fh:
-        return ET.parse(fh).getroot()
+    try:
+        with opener(path, "rb") as fh:
+            return ET.parse(fh).getroot()
+    except FileNotFoundError:
+        raise FileFormatError(path, "no such XML file") from None
+    except ET.ParseError as exc:
+        line = exc.position[0] if getattr(exc, "position", None) else None
+        raise FileFormatError(path, f"not well-formed XML ({exc})", line) from None
+    except (OSError, EOFError, zlib.error) as exc:
+        raise FileFormatError(path, f"unreadable XML file ({exc})") from None
+
+
+def _int_attr(elem: ET.Element, key: str, path, where: str) -> int:
+    """An integer attribute; missing or malformed is a FileFormatError naming the element."""
+    text = elem.get(key)
+    try:
+        return int(text)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise FileFormatError(
+            path, f"{where}: <{elem.tag} {key}={text!r}> is not an integer"
+        ) from None
 
 
 PETS2009_FPS = 7.0
@@ -177,18 +207,18 @@ def _parse_box(elem: ET.Element | None, where: str) -> tuple[float, float, float
     return b  # type: ignore[return-value]
 
 
-def _parse_frames(root: ET.Element, name: str, with_groups: bool):
+def _parse_frames(root: ET.Element, path, with_groups: bool):
     per_frame = []
     groups = []
     for fr in root.iter("frame"):
-        number = int(fr.get("number", "-1"))
+        number = _int_attr(fr, "number", path, "frame")
         objs: dict[int, tuple[float, ...]] = {}
         ol = fr.find("objectlist")
         for o in ol.findall("object") if ol is not None else []:
-            oid = int(o.get("id", "-1"))
-            where = f"{name} frame {number} object {oid}"
+            oid = _int_attr(o, "id", path, f"frame {number}: object")
+            where = f"frame {number} object {oid}"
             if oid in objs:
-                raise InputError(f"{where}: id appears twice in the frame")
+                raise FileFormatError(path, f"{where}: id appears twice in the frame")
             objs[oid] = _parse_box(o.find("box"), where)
         per_frame.append((number, objs))
         if with_groups:
@@ -196,11 +226,28 @@ def _parse_frames(root: ET.Element, name: str, with_groups: bool):
             gs = []
             for g in gl.findall("group") if gl is not None else []:
                 members = g.findtext("members", "")
-                gs.append(frozenset(int(m) for m in members.split(",") if m.strip()))
+                try:
+                    gs.append(frozenset(int(m) for m in members.split(",") if m.strip()))
+                except ValueError:
+                    raise FileFormatError(
+                        path, f"frame {number}: group members {members!r} are not integer ids"
+                    ) from None
             groups.append(tuple(gs))
     if not per_frame:
-        raise InputError(f"{name}: no <frame> elements")
+        raise FileFormatError(path, f"no <frame> elements under <{root.tag}>")
     return per_frame, groups
+
+
+def _load_xml(path, with_groups: bool, fps: float) -> GroundTruth:
+    """Parse, check and assemble; every library error names ``path``."""
+    root = _open_xml(path)
+    stem = Path(path).name if with_groups else Path(path).name.split(".")[0]
+    name = root.get("name") or stem
+    try:
+        per_frame, groups = _parse_frames(root, path, with_groups)
+        return _assemble(name, per_frame, groups, fps=fps)
+    except DBNError as exc:
+        raise in_file(exc, path) from None
 
 
 def load_caviar(path: str | Path) -> GroundTruth:
@@ -218,15 +265,15 @@ def load_caviar(path: str | Path) -> GroundTruth:
 
     Raises
     ------
-    TimeOrderError
-        Frames out of order.
-    InputError
-        A duplicated id in a frame, a malformed or empty box.
+    FileFormatError
+        Naming the file (and the line or element): missing, empty, truncated or
+        malformed XML, no ``<frame>``, a non-integer frame number, id or group member, a
+        duplicated id in a frame.
+    TimeOrderError, InputError, NonFiniteError
+        (message prefixed by the file) frames out of order, a malformed, empty or
+        non-finite box.
     """
-    root = _open_xml(path)
-    name = root.get("name") or Path(path).name
-    per_frame, groups = _parse_frames(root, name, with_groups=True)
-    return _assemble(name, per_frame, groups)
+    return _load_xml(path, with_groups=True, fps=25.0)
 
 
 def load_pets2009(path: str | Path) -> GroundTruth:
@@ -235,10 +282,7 @@ def load_pets2009(path: str | Path) -> GroundTruth:
     Same return value and errors as :func:`load_caviar`; ``groups`` is empty and ``fps``
     is :data:`PETS2009_FPS` (7: the PETS2009 cameras' frame rate).
     """
-    root = _open_xml(path)
-    name = root.get("name") or Path(path).name.split(".")[0]
-    per_frame, _ = _parse_frames(root, name, with_groups=False)
-    return _assemble(name, per_frame, [], fps=PETS2009_FPS)
+    return _load_xml(path, with_groups=False, fps=PETS2009_FPS)
 
 
 def load_ground_truth(path: str | Path) -> GroundTruth:

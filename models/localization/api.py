@@ -12,7 +12,6 @@ Info is :class:`inference.particle.ParticleInfo`; its ``log_likelihood`` is the 
 
 from __future__ import annotations
 
-import json
 import math
 from typing import Any, NamedTuple
 
@@ -20,7 +19,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from dbn.errors import InputError, NonFiniteError, ShapeError, TimeOrderError
+from dbn.errors import CheckpointError, InputError, NonFiniteError, ShapeError, TimeOrderError
+from inference.checkpoint import load_arrays, save_arrays
 from inference.particle import ParticleInfo, ParticleState
 from inference.precision import precision_scope
 from models.localization.model import (
@@ -98,21 +98,36 @@ class LocalizationTracker(StepTracker):
         return LocalizationState(particles, ts if ts is not None else state.timestamp), info
 
     def save(self, state: LocalizationState, path) -> None:
-        """Write ``state`` to ``.npz`` (arrays and a JSON header; no pickle)."""
-        header = json.dumps({"format": _FORMAT, "timestamp": state.timestamp})
-        np.savez(path, __header__=np.frombuffer(header.encode(), np.uint8),
-                 particles=np.asarray(state.particles.particles),
-                 log_weights=np.asarray(state.particles.log_weights))  # fmt: skip
+        """Write ``state`` to ``.npz`` (arrays, config, version, checksum; no pickle)."""
+        arrays = {
+            "particles": state.particles.particles,
+            "log_weights": state.particles.log_weights,
+        }
+        cfg = self._checkpoint_config(np.shape(state.particles.log_weights)[0])
+        save_arrays(
+            path, arrays, _FORMAT, cfg, {"timestamp": state.timestamp}, neg_inf=["log_weights"]
+        )
 
     def load(self, path) -> LocalizationState:
-        """Read a state written by :meth:`save`."""
-        with np.load(path, allow_pickle=False) as f:
-            header = json.loads(bytes(f["__header__"]).decode())
-            if header.get("format") != _FORMAT:
-                raise InputError(f"{path}: not a saved localization state")
-            with precision_scope(self.dtype):
-                cloud = ParticleState(jnp.asarray(f["particles"]), jnp.asarray(f["log_weights"]))
-        return LocalizationState(cloud, header["timestamp"])
+        """Read a state written by :meth:`save`; a damaged or foreign file, one saved under
+        another configuration, or NaN/inf inside is a :class:`~dbn.errors.CheckpointError`."""
+        shape = jax.eval_shape(self._pf.init, jax.random.key(0)).log_weights.shape
+        cfg = self._checkpoint_config(shape[0])
+        arrays, header = load_arrays(
+            path, _FORMAT, ("particles", "log_weights"), cfg, neg_inf=["log_weights"]
+        )
+        ts = header.get("timestamp")
+        if ts is not None and not (isinstance(ts, (int, float)) and math.isfinite(ts)):
+            raise CheckpointError(path, f"timestamp = {ts!r} is not a finite number or null")
+        with precision_scope(self.dtype):
+            cloud = ParticleState(
+                jnp.asarray(arrays["particles"]), jnp.asarray(arrays["log_weights"])
+            )
+        return LocalizationState(cloud, ts)
+
+    def _checkpoint_config(self, num_particles: int) -> dict:
+        return {"model": type(self.model).__name__, "num_particles": int(num_particles),
+                "filter": self._pf.step.__qualname__, "dtype": np.dtype(self.dtype).name}  # fmt: skip
 
 
 def make(

@@ -15,12 +15,15 @@ from __future__ import annotations
 
 import gzip
 import math
+import re
+import warnings
+import zlib
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
-from dbn.errors import InputError, TimeOrderError
+from dbn.errors import FileFormatError, InputError, TimeOrderError
 from models import datasets
 from models.localization.model import RangeBearingObservation, relative_pose, wrap_angle
 
@@ -57,9 +60,27 @@ class MRCLAMRobot(NamedTuple):
     barcode_to_subject: dict
 
 
-def _read(path: Path) -> np.ndarray:
-    with gzip.open(path, "rt") if path.suffix == ".gz" else open(path) as f:
-        return np.loadtxt(f, comments="#", ndmin=2)
+def _read(path: Path, num_columns: int) -> np.ndarray:
+    """A whitespace-separated numeric file as ``(rows, num_columns)`` float64 (extra
+    columns dropped); a missing, unreadable, truncated, ragged, non-numeric, non-finite
+    or empty file is a :class:`FileFormatError` naming the file (and the line)."""
+    try:
+        with gzip.open(path, "rt") if path.suffix == ".gz" else open(path) as f:
+            with warnings.catch_warnings():  # an empty file: reported below
+                warnings.simplefilter("ignore", UserWarning)
+                data = np.loadtxt(f, comments="#", ndmin=2)
+    except (OSError, EOFError, ValueError, UnicodeDecodeError, zlib.error) as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        m = re.search(r"at row (\d+)", msg)
+        raise FileFormatError(path, f"not a numeric table ({msg})", m and int(m[1]) + 1) from None
+    if data.shape[0] == 0:
+        raise FileFormatError(path, "no data rows")
+    if data.shape[1] < num_columns:
+        raise FileFormatError(path, f"{data.shape[1]} columns, expected {num_columns}")
+    bad = np.flatnonzero(~np.all(np.isfinite(data[:, :num_columns]), axis=1))
+    if bad.size:
+        raise FileFormatError(path, f"data row {int(bad[0]) + 1} is not finite")
+    return data[:, :num_columns] if data.shape[1] > num_columns else data
 
 
 def _check_time(t: np.ndarray, name: str) -> None:
@@ -82,14 +103,14 @@ def load_robot(robot: int = 1) -> MRCLAMRobot:
     if robot not in (1, 2):
         raise InputError(f"robot = {robot!r}: only robots 1 and 2 are in the shared data")
     files = {}
-    for key, name in (
-        ("odometry", f"Robot{robot}_Odometry.dat.gz"),
-        ("measurements", f"Robot{robot}_Measurement.dat.gz"),
-        ("groundtruth", f"Robot{robot}_Groundtruth.dat.gz"),
-        ("landmarks", "Landmark_Groundtruth.dat.gz"),
-        ("barcodes", "Barcodes.dat.gz"),
+    for key, name, cols in (
+        ("odometry", f"Robot{robot}_Odometry.dat.gz", 3),
+        ("measurements", f"Robot{robot}_Measurement.dat.gz", 4),
+        ("groundtruth", f"Robot{robot}_Groundtruth.dat.gz", 4),
+        ("landmarks", "Landmark_Groundtruth.dat.gz", 3),
+        ("barcodes", "Barcodes.dat.gz", 2),
     ):
-        files[key] = _read(datasets.require("mrclam6", name))
+        files[key] = _read(datasets.require("mrclam6", name), cols)
     for key in ("odometry", "measurements", "groundtruth"):
         _check_time(files[key][:, 0], f"Robot{robot} {key}")
     barcodes = {int(b): int(s) for s, b in files["barcodes"][:, :2]}

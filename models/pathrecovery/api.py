@@ -10,13 +10,13 @@ the step's log mean unnormalised particle weight.
 
 from __future__ import annotations
 
-import json
 from typing import NamedTuple
 
 import jax
 import numpy as np
 
-from dbn.errors import InputError
+from dbn.errors import CheckpointError, InputError
+from inference.checkpoint import load_arrays, save_arrays
 from inference.particle import ParticleState
 from models.pathrecovery.filter import (
     FilterConfig,
@@ -73,32 +73,32 @@ class PathRecoveryTracker(StepTracker):
         return PathState(particles, state.t + 1), info
 
     def save(self, state: PathState, path) -> None:
-        """Write ``state`` to an ``.npz`` file (arrays and a JSON header; no pickle)."""
-        header = json.dumps({"format": _FORMAT, "t": int(state.t)})
-        arrays = {
-            f: np.asarray(getattr(state.particles.particles, f)) for f in PathParticles._fields
-        }
-        np.savez(
-            path,
-            __header__=np.frombuffer(header.encode(), np.uint8),
-            log_weights=np.asarray(state.particles.log_weights),
-            **arrays,
-        )
+        """Write ``state`` to an ``.npz`` file (arrays, config, version, checksum; no pickle)."""
+        arrays = {f: getattr(state.particles.particles, f) for f in PathParticles._fields}
+        arrays["log_weights"] = state.particles.log_weights
+        cfg, extra = self._checkpoint_config(), {"t": int(state.t)}
+        save_arrays(path, arrays, _FORMAT, cfg, extra, neg_inf=["log_weights"])
 
     def load(self, path) -> PathState:
-        """Read a state written by :meth:`save` (checked against this model's sizes)."""
-        with np.load(path, allow_pickle=False) as f:
-            header = json.loads(bytes(f["__header__"]).decode())
-            if header.get("format") != _FORMAT:
-                raise InputError(f"{path}: not a saved path-recovery state")
-            parts = PathParticles(*(np.array(f[name]) for name in PathParticles._fields))
-            lw = np.array(f["log_weights"])
+        """Read a state written by :meth:`save`; a damaged or foreign file, one saved under
+        another configuration or for other sizes, or NaN/inf inside is a
+        :class:`~dbn.errors.CheckpointError`."""
+        names = (*PathParticles._fields, "log_weights")
+        arrays, header = load_arrays(
+            path, _FORMAT, names, self._checkpoint_config(), neg_inf=["log_weights"]
+        )
+        parts = PathParticles(*(arrays[name] for name in PathParticles._fields))
+        lw = arrays["log_weights"]
         n, d = self.model.config.num_particles, self.model.f0.size
         if parts.cam.shape != (n,) or parts.feat.shape != (n, d) or lw.shape != (n,):
-            raise InputError(
-                f"{path}: saved for other sizes than num_particles={n}, feature_dim={d}"
-            )
-        return PathState(ParticleState(parts, lw), int(header["t"]))
+            raise CheckpointError(path, f"arrays do not fit num_particles={n}, feature_dim={d}")
+        t = header.get("t")
+        if not isinstance(t, int) or isinstance(t, bool) or t < 0:
+            raise CheckpointError(path, f"t = {t!r} is not a step count >= 0")
+        return PathState(ParticleState(parts, lw), t)
+
+    def _checkpoint_config(self) -> dict:
+        return {"config": self.model.config, "feature_dim": int(self.model.f0.size)}
 
 
 def make(model: PathFilterModel) -> PathRecoveryTracker:

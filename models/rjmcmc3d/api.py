@@ -9,12 +9,11 @@ of the chain's last state (seed 003, eq. 11, up to a constant).
 
 from __future__ import annotations
 
-import json
-
 import jax
 import numpy as np
 
-from dbn.errors import InputError
+from dbn.errors import CheckpointError, InputError
+from inference.checkpoint import load_arrays, save_arrays
 from models.protocol import Example, StepTracker, seed_from_key
 from models.rjmcmc3d.model import TrackerParams
 from models.rjmcmc3d.scene import Frame, Scene
@@ -46,23 +45,19 @@ class RJMCMC3DTracker(StepTracker):
         return self.tracker.step(seed_from_key(key), state, obs)
 
     def save(self, state: TrackState, path) -> None:
-        """Write ``state`` to an ``.npz`` file (arrays and a JSON header)."""
-        header = json.dumps({"format": _FORMAT, "max_objects": int(state.alive.shape[0])})
-        arrays = {f: np.asarray(getattr(state, f)) for f in TrackState._fields}
-        np.savez(path, __header__=np.frombuffer(header.encode(), np.uint8), **arrays)
+        """Write ``state`` to an ``.npz`` file (arrays, config, version, checksum)."""
+        arrays = {f: getattr(state, f) for f in TrackState._fields}
+        save_arrays(path, arrays, _FORMAT, self.tracker.params)
 
     def load(self, path) -> TrackState:
-        """Read a state written by :meth:`save`."""
-        with np.load(path, allow_pickle=False) as f:
-            header = json.loads(bytes(f["__header__"]).decode())
-            if header.get("format") != _FORMAT:
-                raise InputError(f"{path}: not a saved rjmcmc3d state")
-            if header["max_objects"] != self.tracker.params.max_objects:
-                raise InputError(
-                    f"{path}: saved with max_objects = {header['max_objects']}, this tracker "
-                    f"has {self.tracker.params.max_objects}"
-                )
-            values = [np.array(f[name]) for name in TrackState._fields]
+        """Read a state written by :meth:`save`; a damaged or foreign file, one saved under
+        other :class:`TrackerParams`, or NaN/inf inside is a
+        :class:`~dbn.errors.CheckpointError`."""
+        arrays, _ = load_arrays(path, _FORMAT, TrackState._fields, self.tracker.params)
+        values = [arrays[name] for name in TrackState._fields]
+        m = self.tracker.params.max_objects
+        if np.shape(arrays["alive"]) != (m,) or np.ndim(values[-1]) != 0:
+            raise CheckpointError(path, f"arrays do not fit max_objects = {m}")
         values[-1] = int(values[-1])  # next_label
         return TrackState(*values)
 

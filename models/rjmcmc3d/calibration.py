@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dbn.errors import InputError
+from dbn.errors import FileFormatError, InputError
 from models.rjmcmc3d.geometry import (
     Camera,
     camera_center,
@@ -21,6 +21,47 @@ from models.rjmcmc3d.geometry import (
 from models.rjmcmc3d.types import Scene
 
 __all__ = ["default_scene", "load_tsai_xml", "scene_from_cameras"]
+
+
+_TSAI = {
+    "Geometry": ("width", "height", "dpx", "dpy"),
+    "Intrinsic": ("focal", "kappa1", "cx", "cy", "sx"),
+    "Extrinsic": ("tx", "ty", "tz", "rx", "ry", "rz"),
+}
+_POSITIVE = ("width", "height", "dpx", "dpy", "focal", "sx")
+
+
+def _read_tsai(path) -> tuple[dict, dict, dict]:
+    """The Geometry, Intrinsic and Extrinsic attributes as finite floats; a missing,
+    malformed or truncated file, a missing element or attribute, a value that is not a
+    finite number (or not > 0 where it must be) is a :class:`FileFormatError`."""
+    try:
+        root = ET.parse(path).getroot()
+    except FileNotFoundError:
+        raise FileFormatError(path, "no such calibration file") from None
+    except ET.ParseError as exc:
+        line = exc.position[0] if getattr(exc, "position", None) else None
+        raise FileFormatError(path, f"not well-formed XML ({exc})", line) from None
+    except OSError as exc:
+        raise FileFormatError(path, f"unreadable calibration file ({exc})") from None
+    out = []
+    for tag, keys in _TSAI.items():
+        elem = root.find(tag)
+        if elem is None:
+            raise FileFormatError(path, f"no <{tag}> element (not a Tsai calibration?)")
+        values = {}
+        for k in keys:
+            text = elem.get(k)
+            try:
+                v = float(text)  # type: ignore[arg-type]
+            except (TypeError, ValueError):
+                raise FileFormatError(path, f"<{tag} {k}={text!r}>: not a number") from None
+            if not math.isfinite(v) or (k in _POSITIVE and v <= 0):
+                need = "a finite number > 0" if k in _POSITIVE else "a finite number"
+                raise FileFormatError(path, f"<{tag} {k}={text!r}>: must be {need}")
+            values[k] = v
+        out.append(values)
+    return out[0], out[1], out[2]
 
 
 def load_tsai_xml(path: str | Path, scale: float = 1.0) -> tuple[Camera, float]:
@@ -45,13 +86,7 @@ def load_tsai_xml(path: str | Path, scale: float = 1.0) -> tuple[Camera, float]:
     kappa1 : float
         Tsai's radial distortion coefficient (1/mm^2), for reference.
     """
-    root = ET.parse(path).getroot()
-    geo, intr, extr = root.find("Geometry"), root.find("Intrinsic"), root.find("Extrinsic")
-    if geo is None or intr is None or extr is None:
-        raise InputError(f"{path}: missing Geometry/Intrinsic/Extrinsic element")
-    g = {k: float(v) for k, v in geo.attrib.items()}
-    i = {k: float(v) for k, v in intr.attrib.items()}
-    e = {k: float(v) for k, v in extr.attrib.items()}
+    g, i, e = _read_tsai(path)
     ca, sa = math.cos(e["rx"]), math.sin(e["rx"])
     cb, sb = math.cos(e["ry"]), math.sin(e["ry"])
     cg, sg = math.cos(e["rz"]), math.sin(e["rz"])

@@ -60,6 +60,7 @@ __all__ = [
 ]
 
 _FORMAT = "zajdel-adf-state-v2"  # v2: slot_lognorm and slot_psi_next cached in the state
+_NEG_INF = ("last_tq",)  # -inf: no observation yet (log-space fields are finite)
 
 
 def _adf_params(params: ZajdelParams) -> ADFParams:
@@ -290,21 +291,15 @@ class ZajdelADF:
 
     # -- persistence ---------------------------------------------------------------
     def save(self, state: ADFState, path) -> None:
-        """Write a state to an ``.npz`` file (arrays plus a JSON header; no pickle)."""
-        save_state(path, state, _FORMAT, {"config": self.config._asdict(), "obs_dim": self.obs_dim})
+        """Write a state to an ``.npz`` file (arrays, config, version, checksum; no pickle)."""
+        save_state(path, state, _FORMAT, config=self._checkpoint_config(), neg_inf=_NEG_INF)
 
     def load(self, path) -> ADFState:
-        """Read a state written by :meth:`save` (checked against this tracker's config)."""
+        """Read a state written by :meth:`save`; a file saved under another configuration
+        (or obs_dim), damaged, or holding NaN/inf is a :class:`~dbn.errors.CheckpointError`."""
+        cfg = self._checkpoint_config()
+        return load_state(path, ADFState, _FORMAT, config=cfg, neg_inf=_NEG_INF)
 
-        def check(header: dict) -> None:
-            if (
-                header["obs_dim"] != self.obs_dim
-                or header["config"]["max_open"] != self.config.max_open
-            ):
-                raise InputError(
-                    f"{path}: saved with obs_dim/max_open {header['obs_dim']}/"
-                    f"{header['config']['max_open']}, this tracker has "
-                    f"{self.obs_dim}/{self.config.max_open}"
-                )
-
-        return load_state(path, ADFState, _FORMAT, check)
+    def _checkpoint_config(self) -> dict:
+        """What a saved state must match (the config and the appearance dimension)."""
+        return {"config": self.config._asdict(), "obs_dim": int(self.obs_dim)}
