@@ -37,7 +37,9 @@ def _check_unit(name: str, a: np.ndarray, shape: tuple[int, ...]) -> None:
     if a.shape != shape:
         raise ShapeError(f"frame.{name} has shape {a.shape}, expected {shape}")
     if not np.issubdtype(a.dtype, np.floating):
-        hint = " (convert 8-bit images with models.rjmcmc3d.unit_image)" if a.dtype == np.uint8 else ""
+        hint = (
+            " (convert 8-bit images with models.rjmcmc3d.unit_image)" if a.dtype == np.uint8 else ""
+        )
         raise InputError(f"frame.{name} must be float in [0, 1], got dtype {a.dtype}{hint}")
     if not np.all(np.isfinite(a)):
         raise NonFiniteError(f"frame.{name} holds NaN or infinity")

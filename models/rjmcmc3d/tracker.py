@@ -33,8 +33,7 @@ import numpy as np
 from scipy.special import i0e
 from tqdm.auto import tqdm
 
-from dbn.errors import InputError, ShapeError
-from models.rjmcmc3d.frames import check_frame
+from dbn.errors import InputError
 from inference.mcmc import Move, MoveKernel, Proposal, sample
 from models.rjmcmc3d import compiled
 from models.rjmcmc3d.compiled import (
@@ -44,6 +43,7 @@ from models.rjmcmc3d.compiled import (
     update_log_q_at,
     update_log_q_pair,
 )
+from models.rjmcmc3d.frames import check_frame
 from models.rjmcmc3d.likelihood import (
     Config,
     IncrementalLikelihood,
