@@ -61,7 +61,8 @@ def _bad_leaves(v: Any) -> Iterator[tuple[str, Any]]:
     scalar = a.ndim == 0 and not _is_array(v)
     wrap = (lambda b: b.item()) if scalar else (lambda b: b)
     if isfloat and a.size:
-        for kind, val in (("nan", np.nan), ("inf", np.inf), ("huge", 1e50)):
+        huge = min(1e50, float(np.finfo(a.dtype).max) / 10)  # huge, still finite in dtype
+        for kind, val in (("nan", np.nan), ("inf", np.inf), ("huge", huge)):
             b = a.copy()
             b.flat[0] = val
             yield kind, wrap(b)
