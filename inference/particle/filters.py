@@ -28,6 +28,7 @@ from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 from jax.scipy.special import logsumexp
 
@@ -177,6 +178,14 @@ def _check_threshold(ess_threshold: float) -> None:
         raise InputError(f"ess_threshold must be >= 0, got {ess_threshold!r}")
 
 
+def check_num_particles(num_particles: Any) -> int:
+    """``num_particles`` as an int >= 1 (an int, not a bool or a fractional float)."""
+    ok = isinstance(num_particles, (int, np.integer)) and not isinstance(num_particles, bool)
+    if not ok or num_particles < 1:
+        raise InputError(f"num_particles must be an int >= 1, got {num_particles!r}")
+    return int(num_particles)
+
+
 def bootstrap_filter(
     model: StateSpaceModel,
     num_particles: int,
@@ -210,7 +219,7 @@ def bootstrap_filter(
         ``init(key)`` and ``step(key, state, observation, action=None)``.
     """
     _check_threshold(ess_threshold)
-    n = int(num_particles)
+    n = check_num_particles(num_particles)
     log_n = math.log(n)
 
     @scoped(dtype)
@@ -266,7 +275,7 @@ def auxiliary_filter(
     look-ahead (``transition_mean``, ``lookahead`` or ``log_eta``).
     """
     _check_threshold(ess_threshold)
-    n = int(num_particles)
+    n = check_num_particles(num_particles)
     log_n = math.log(n)
 
     @scoped(dtype)

@@ -277,6 +277,10 @@ class LabelGraph:
             Ends before it starts, or starts before the previous stroke.
         """
         k = len(self.nodes)
+        for name in ("index", "start", "end"):
+            v = getattr(stroke, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+                raise InputError(f"stroke {k}: {name} must be an int, got {v!r}")
         if stroke.index != k:
             raise InputError(f"stroke index {stroke.index}: the next stroke must have index {k}")
         if stroke.end < stroke.start:
@@ -287,18 +291,26 @@ class LabelGraph:
                 f"(frame {self.nodes[-1].stroke.start}): strokes must come in start order"
             )
         _check_colours(k, stroke.colours, self.config.pool_size)
+        _check_palette(k, stroke.palette, self.config.pool_size)
         pos = np.asarray(stroke.positions)
         if pos.ndim != 2 or pos.shape[1] != 2 or pos.shape[0] < 1:
             raise InputError(f"stroke {k}: positions must have shape (num_points, 2), got {pos.shape}")
-        if not np.all(np.isfinite(pos)):
-            raise InputError(f"stroke {k}: non-finite position")
+        if not np.issubdtype(pos.dtype, np.number) or np.iscomplexobj(pos):
+            raise InputError(f"stroke {k}: positions must be real numbers, got dtype {pos.dtype}")
+        if not np.all(np.isfinite(pos)) or np.any(np.abs(pos) > _MAX_PIXELS):
+            raise InputError(f"stroke {k}: positions must be finite pixels, |x| <= {_MAX_PIXELS:g}")
+        _check_frames(k, stroke, pos.shape[0])
         ext = getattr(stroke, "extent", None)
         if ext is not None:
+            if np.iscomplexobj(ext):
+                raise InputError(f"stroke {k}: extent must be real numbers")
             ext = np.asarray(ext, dtype=np.float64)
             if ext.shape != pos.shape:
                 raise ShapeError(f"stroke {k}: extent must have shape {pos.shape}, got {ext.shape}")
-            if not np.all(np.isfinite(ext)) or np.any(ext <= 0):
-                raise InputError(f"stroke {k}: region extent (width, height) must be finite and > 0")
+            if not np.all(np.isfinite(ext)) or np.any(ext <= 0) or np.any(ext > _MAX_PIXELS):
+                raise InputError(
+                    f"stroke {k}: region extent (width, height) must be in (0, {_MAX_PIXELS:g}] pixels"
+                )
 
     def candidate_parents(self, stroke: Stroke) -> np.ndarray:
         r"""Parents of a new stroke: ended before it starts, reachable, with a free child
@@ -703,3 +715,30 @@ def solve(win: WindowNet, marginals: bool = True) -> Inference:
         marg = {k: cal.marginals[node_name(k)] for k in win.active}
         log_ev = cal.log_evidence
     return Inference(labels, log_prob, marg, log_ev)
+
+
+# pixel coordinates / sizes beyond this are not an image (a unit or scale mistake)
+_MAX_PIXELS = 1e6
+
+
+def _check_palette(k: int, palette, pool_size: int) -> None:
+    """A stroke's palette: 1-D integer colour ids in ``0..pool_size-1`` (no wrap of -1)."""
+    pal = np.asarray(palette)
+    if pal.ndim != 1 or not np.issubdtype(pal.dtype, np.integer):
+        raise InputError(f"stroke {k}: palette must be 1-D integer colour ids, got {palette!r}")
+    if np.any(pal < 0) or np.any(pal >= pool_size):
+        raise InputError(f"stroke {k}: palette ids must be in 0..{pool_size - 1}, got {pal.tolist()}")
+
+
+def _check_frames(k: int, stroke: Stroke, num_points: int) -> None:
+    """A stroke's frames: ``num_points`` increasing integers from ``start`` to ``end``."""
+    fr = np.asarray(stroke.frames)
+    if fr.shape != (num_points,) or not np.issubdtype(fr.dtype, np.integer):
+        raise InputError(
+            f"stroke {k}: frames must be {num_points} integers (one per position), "
+            f"got shape {fr.shape} dtype {fr.dtype}"
+        )
+    if fr[0] != stroke.start or fr[-1] != stroke.end or np.any(np.diff(fr) <= 0):
+        raise TimeOrderError(
+            f"stroke {k}: frames must increase from start {stroke.start} to end {stroke.end}"
+        )

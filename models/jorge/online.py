@@ -110,6 +110,10 @@ class OnlineConfig:
     def __post_init__(self) -> None:
         if not self.period_s > 0:
             raise ModelError(f"OnlineConfig.period_s must be > 0, got {self.period_s}")
+        for name in ("max_active", "max_labels"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int | np.integer):
+                raise ModelError(f"OnlineConfig.{name} must be an int, got {v!r}")
         if self.max_active < 1:
             raise ModelError(f"OnlineConfig.max_active must be >= 1, got {self.max_active}")
         if not 0.0 <= self.prune_threshold < 1.0:

@@ -173,6 +173,8 @@ class RobotModel(StateSpaceModel):
         ------
         ShapeError, NonFiniteError, InputError (negative ``dt``)
         """
+        if np.iscomplexobj(odometry):
+            raise InputError("odometry must hold real numbers, got complex")
         u = np.asarray(odometry, dtype=np.float64)
         if u.shape[-1:] != (4,) or u.ndim not in (1, 2):
             raise ShapeError(
@@ -330,6 +332,8 @@ class KNNSensor:
 
     def check(self, observations: np.ndarray, name: str = "observations") -> np.ndarray:
         """Validate raw observations ``(num_timesteps, obs_dim)`` or ``(obs_dim,)``; raise before any use."""
+        if np.iscomplexobj(observations):
+            raise InputError(f"{name} must hold real numbers, got complex")
         y = np.asarray(observations, dtype=np.float64)
         if y.shape[-1:] != (self.obs_dim,) or y.ndim not in (1, 2):
             raise ShapeError(f"{name} has shape {y.shape}, expected (..., {self.obs_dim})")

@@ -27,6 +27,7 @@ from inference.particle import (
 from inference.precision import honours_dtype, precision_scope
 from models.localization.model import (
     KNNLocalizationModel,
+    KNNObservation,
     RangeBearingLocalizationModel,
     RangeBearingObservation,
     RobotModel,
@@ -37,6 +38,7 @@ __all__ = [
     "Localizer",
     "LocalizationResult",
     "check_observation",
+    "check_sequence",
     "localize",
     "make_filter",
     "position_errors",
@@ -94,8 +96,11 @@ def localize(
     key : PRNG key
     model : RobotModel (k-NN or range-bearing)
     odometry : (num_timesteps, 4) ``(dx, dy, dtheta, dt)``
-    observations : pre-processed, leaves with leading axis num_timesteps
-        (:meth:`KNNSensor.preprocess` output or a stacked :class:`RangeBearingObservation`)
+    observations : leaves with leading axis num_timesteps: for the k-NN model raw scans
+        ``(num_timesteps, obs_dim)`` (pre-processed here) or the
+        :meth:`KNNSensor.preprocess` output; for the range-bearing model a stacked
+        :class:`RangeBearingObservation` of ``(num_timesteps, max_meas)`` arrays. Checked
+        on the host before tracing (:func:`check_sequence`).
     num_particles : int
     algorithm : 'apf' (seed 002, eqs. 1.11-1.13) or 'sir'
 
@@ -103,12 +108,59 @@ def localize(
     -------
     LocalizationResult
     """
-    steps = jnp.asarray(model.prepare_actions(odometry), dtype)
+    actions = model.prepare_actions(odometry)
+    if actions.ndim != 3:
+        raise ShapeError(f"odometry has shape {np.shape(odometry)}, expected (num_timesteps, 4)")
     pf = make_filter(model, num_particles, algorithm, dtype=dtype, ess_threshold=ess_threshold)
+    observations = check_sequence(model, observations, actions.shape[0], dtype)
+    steps = jnp.asarray(actions, dtype)
     final, infos, means = run(
         key, pf, observations, steps, initial_state=initial_state, summary=_pose_summary
     )
     return LocalizationResult(np.asarray(means), infos, final)
+
+
+def check_sequence(model: RobotModel, observations: Any, num_steps: int, dtype: Any = jnp.float64):
+    """Validate a whole sequence for :func:`localize` on the host, before any tracing.
+
+    Raw k-NN scans ``(num_steps, obs_dim)`` are checked and pre-processed; a
+    :class:`KNNObservation` or stacked :class:`RangeBearingObservation` must have leading
+    axis ``num_steps`` and pass the checks of :func:`check_observation` at every step.
+
+    Raises
+    ------
+    ShapeError, NonFiniteError, InputError
+    """
+    if isinstance(model, KNNLocalizationModel):
+        if isinstance(observations, KNNObservation):
+            leaves = [np.asarray(a) for a in observations]
+            if any(a.ndim == 0 or a.shape[0] != num_steps for a in leaves):
+                raise ShapeError(f"observations: every field needs leading axis {num_steps}")
+            if not all(np.all(np.isfinite(a)) for a in leaves if a.dtype.kind == "f"):
+                raise NonFiniteError("observations hold NaN or infinity")
+            return observations
+        y = model.sensor.check(observations, "observations")
+        if y.ndim != 2 or y.shape[0] != num_steps:
+            raise ShapeError(f"observations have shape {y.shape}, expected ({num_steps}, obs_dim)")
+        return model.sensor.preprocess(y, dtype=dtype)
+    if isinstance(model, RangeBearingLocalizationModel):
+        if not isinstance(observations, RangeBearingObservation):
+            raise InputError(
+                "observations must be a stacked RangeBearingObservation, "
+                f"got {type(observations).__name__}"
+            )
+        lm = np.asarray(observations.landmark)
+        if lm.ndim != 2 or lm.shape[0] != num_steps:
+            raise ShapeError(
+                f"observations.landmark has shape {lm.shape}, expected ({num_steps}, m)"
+            )
+        # the per-step checks of check_observation, on the whole (num_steps, m) block
+        flat = RangeBearingObservation(*(np.asarray(a).reshape(-1) for a in observations))
+        if any(np.shape(a) != lm.shape for a in observations):
+            raise ShapeError("observations: landmark, range, bearing, mask must share one shape")
+        clean = check_observation(model, flat, dtype)
+        return RangeBearingObservation(*(jnp.reshape(a, lm.shape) for a in clean))
+    return observations
 
 
 def position_errors(means: np.ndarray, truth: np.ndarray) -> np.ndarray:
@@ -131,7 +183,12 @@ def check_observation(model: RobotModel, observation: Any, dtype: Any = jnp.floa
             raise InputError(
                 f"observation must be a RangeBearingObservation, got {type(observation).__name__}"
             )
+        for name in RangeBearingObservation._fields:
+            if np.iscomplexobj(getattr(observation, name)):
+                raise InputError(f"observation.{name} must hold real numbers, got complex")
         lm = np.asarray(observation.landmark)
+        if not np.issubdtype(lm.dtype, np.integer):
+            raise InputError(f"observation.landmark must hold integer ids, got dtype {lm.dtype}")
         fields = {
             "range": np.asarray(observation.range, dtype=np.float64),
             "bearing": np.asarray(observation.bearing, dtype=np.float64),
@@ -139,18 +196,17 @@ def check_observation(model: RobotModel, observation: Any, dtype: Any = jnp.floa
         }
         for name, arr in fields.items():
             if arr.shape != lm.shape or lm.ndim != 1:
-                raise ShapeError(
-                    f"observation.{name} has shape {arr.shape}, landmark {lm.shape}"
-                )
+                raise ShapeError(f"observation.{name} has shape {arr.shape}, landmark {lm.shape}")
         for name in ("range", "bearing"):
             arr = fields[name]
             if not np.all(np.isfinite(arr)):
                 i = int(np.flatnonzero(~np.isfinite(arr))[0])
                 raise NonFiniteError(f"observation.{name}[{i}] = {arr[i]} is not finite")
+        if np.any(fields["range"] < 0):
+            i = int(np.flatnonzero(fields["range"] < 0)[0])
+            raise InputError(f"observation.range[{i}] = {fields['range'][i]} is negative")
         if np.any((lm < 0) | (lm >= len(m.landmarks))):
-            raise InputError(
-                f"observation.landmark {lm.tolist()} out of [0, {len(m.landmarks)})"
-            )
+            raise InputError(f"observation.landmark {lm.tolist()} out of [0, {len(m.landmarks)})")
         return RangeBearingObservation(
             jnp.asarray(lm, jnp.int32),
             jnp.asarray(fields["range"], dtype),

@@ -69,7 +69,7 @@ class PathRecoveryTracker(StepTracker):
             raise InputError(f"obs must be (cam, feat[, offset]), got {type(obs).__name__}")
         obs = PathObservation(*obs)
         rng = np.random.default_rng(seed_from_key(key))
-        particles, info = step(rng, self.model, state.particles, obs.cam, obs.feat, int(obs.offset))
+        particles, info = step(rng, self.model, state.particles, obs.cam, obs.feat, obs.offset)
         return PathState(particles, state.t + 1), info
 
     def save(self, state: PathState, path) -> None:

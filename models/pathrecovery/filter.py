@@ -91,6 +91,8 @@ from models.pathrecovery.model import CameraNetwork, check_cameras, propagate, w
 __all__ = [
     "FilterConfig",
     "KBestLists",
+    "MAX_FEATURE",
+    "check_features",
     "ParticleState",
     "PathParticles",
     "StepInfo",
@@ -319,8 +321,27 @@ def _check_observations(model: PathFilterModel, obs_cam: np.ndarray, obs_feat: n
     if obs_cam.size > 1 and np.any(obs_cam[1:] < obs_cam[:-1]):
         i = int(np.flatnonzero(obs_cam[1:] < obs_cam[:-1])[0])
         raise InputError(f"obs_cam must be sorted by camera; obs_cam[{i}:{i + 2}] = {obs_cam[i:i + 2]}")
-    if not np.all(np.isfinite(obs_feat)):
-        raise NonFiniteError("obs_feat holds NaN or infinite values")
+    check_features("obs_feat", obs_feat)
+
+
+#: Largest accepted ``|feature|`` entry. Appearance features are expected of order 1-1000
+#: (they are whitened by the model's ``sigma``); beyond 1e6 they are a unit or scale
+#: mistake and are rejected (issue 14).
+MAX_FEATURE = 1e6
+
+
+def check_features(name: str, feat) -> None:
+    """Raise unless ``feat`` holds real, finite numbers with ``|x| <= MAX_FEATURE``."""
+    a = np.asarray(feat)
+    if not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)):
+        raise InputError(f"{name} must hold real numbers, got dtype {a.dtype}")
+    if not np.all(np.isfinite(a)):
+        raise NonFiniteError(f"{name} holds NaN or infinite values")
+    if a.size and np.abs(a).max() > MAX_FEATURE:
+        raise InputError(
+            f"{name} holds |value| = {np.abs(a).max():g} > {MAX_FEATURE:g} (features are "
+            "expected of order 1-1000; rescale them)"
+        )
 
 
 # ------------------------------------------------------------------------------ helpers
@@ -422,6 +443,10 @@ def step(
         On bad observations, before anything is computed; ``state`` is never modified.
     """
     obs_cam = np.asarray(obs_cam)
+    if check:
+        check_features("obs_feat", obs_feat)
+        if isinstance(obs_offset, bool) or not isinstance(obs_offset, int | np.integer) or obs_offset < 0:
+            raise InputError(f"obs_offset must be an int >= 0, got {obs_offset!r}")
     obs_feat = np.asarray(obs_feat, dtype=np.float64)
     if check:
         _check_observations(model, obs_cam, obs_feat)
@@ -563,6 +588,14 @@ def run_filter(
     time_ptr = np.asarray(odb.time_ptr)
     if time_ptr.ndim != 1 or time_ptr.size < 3 or np.any(np.diff(time_ptr) < 0):
         raise InputError("odb.time_ptr must be 1-D, non-decreasing, with at least 2 steps")
+    if not np.issubdtype(time_ptr.dtype, np.integer):
+        raise InputError(f"odb.time_ptr must hold integers, got dtype {time_ptr.dtype}")
+    num_obs = len(odb.cam)
+    if len(odb.feat) != num_obs or time_ptr[0] != 0 or time_ptr[-1] != num_obs:
+        raise InputError(
+            f"odb.time_ptr must run from 0 to the number of observations ({num_obs}, "
+            f"feat rows {len(odb.feat)}), got {int(time_ptr[0])}..{int(time_ptr[-1])}"
+        )
     T = time_ptr.size - 1
     # validate every step up front: a bad step raises before any filtering is done
     for t in range(1, T):

@@ -36,7 +36,14 @@ import numpy as np
 
 from dbn.errors import InputError, ShapeError
 from inference.exact.layered_dp import layered_shortest_path
-from models.pathrecovery.filter import HIDDEN, NONE, VISIBLE, KBestLists, PathFilterModel
+from models.pathrecovery.filter import (
+    HIDDEN,
+    NONE,
+    VISIBLE,
+    KBestLists,
+    PathFilterModel,
+    check_features,
+)
 from models.pathrecovery.model import CameraNetwork, whiten
 
 __all__ = ["RecoveredPath", "legal_transitions", "recover_path"]
@@ -161,6 +168,7 @@ def recover_path(
             raise ShapeError(f"lists.{name} has shape {np.shape(getattr(lists, name))}, expected {kind.shape}")
     if not isinstance(k, int | np.integer) or not 1 <= k <= kind.shape[1]:
         raise InputError(f"k must be an int in [1, {kind.shape[1]}], got {k!r}")
+    check_features("obs_feat", obs_feat)  # NaN would silently lower the score
     obs_feat = np.asarray(obs_feat, dtype=np.float64)
     if obs_feat.ndim != 2 or obs_feat.shape[1] != model.f0.size:
         raise ShapeError(f"obs_feat must be (num_obs, {model.f0.size}), got {obs_feat.shape}")

@@ -15,6 +15,7 @@
 """
 
 from models.rjmcmc3d.calibration import default_scene
+from models.rjmcmc3d.frames import check_frame, unit_image
 from models.rjmcmc3d.model import TrackerParams
 from models.rjmcmc3d.rendering import render_frame
 from models.rjmcmc3d.tracker import FrameResult, RJMCMCTracker, TrackState
@@ -25,7 +26,9 @@ __all__ = [
     "RJMCMCTracker",
     "TrackState",
     "TrackerParams",
+    "check_frame",
     "default_scene",
     "render_frame",
     "simulate_walkers",
+    "unit_image",
 ]

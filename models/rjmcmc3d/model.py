@@ -92,6 +92,24 @@ class TrackerParams(NamedTuple):
 
     def validate(self) -> TrackerParams:
         """Raise :class:`~dbn.errors.InputError` naming a bad field; return ``self``."""
+        for name in ("num_moves", "max_objects", "num_refs", "colour_levels", "burn_in"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int | np.integer):
+                raise InputError(f"TrackerParams.{name}={v!r} must be an int")
+        for name in ("h_mean", "d_min", "leave_ramp", "add_gate", "det_gate"):
+            if not getattr(self, name) > 0:
+                raise InputError(f"TrackerParams.{name}={getattr(self, name)} must be > 0")
+        for name in ("alpha_kappa", "lambda_g", "lambda_im", "lambda_f", "switch_dist", "min_sd"):
+            if not getattr(self, name) >= 0:  # 0 switches a term off (ablations)
+                raise InputError(f"TrackerParams.{name}={getattr(self, name)} must be >= 0")
+        for name in ("h_rho", "p_leave_inside", "ref_rate", "ref_match", "p_det_update"):
+            if not 0 <= getattr(self, name) <= 1:
+                raise InputError(f"TrackerParams.{name}={getattr(self, name)} must be in [0, 1]")
+        if not (self.log_p_birth <= 0):
+            raise InputError(f"TrackerParams.log_p_birth={self.log_p_birth} must be <= 0")
+        sd = np.asarray(self.shape_sd, dtype=float)
+        if sd.shape != (2,) or not np.all(sd > 0):
+            raise InputError(f"TrackerParams.shape_sd={self.shape_sd} must be 2 values > 0")
         for name in ("tau", "beta", "vbar", "h_sd0", "h_sd", "c1", "unseen_sd", "fixed_sd"):
             if not getattr(self, name) > 0:
                 raise InputError(f"TrackerParams.{name}={getattr(self, name)} must be > 0")
@@ -104,8 +122,8 @@ class TrackerParams(NamedTuple):
             raise InputError(
                 f"TrackerParams.burn_in={self.burn_in} must be in [0, num_moves={self.num_moves})"
             )
-        if self.max_objects < 1 or self.num_refs < 1:
-            raise InputError("TrackerParams.max_objects and num_refs must be >= 1")
+        if self.max_objects < 1 or self.num_refs < 1 or self.colour_levels < 1:
+            raise InputError("TrackerParams.max_objects, num_refs and colour_levels must be >= 1")
         return self
 
     @property

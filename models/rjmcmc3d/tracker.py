@@ -33,7 +33,7 @@ import numpy as np
 from scipy.special import i0e
 from tqdm.auto import tqdm
 
-from dbn.errors import InputError, ShapeError
+from dbn.errors import InputError
 from inference.mcmc import Move, MoveKernel, Proposal, sample
 from models.rjmcmc3d import compiled
 from models.rjmcmc3d.compiled import (
@@ -43,6 +43,7 @@ from models.rjmcmc3d.compiled import (
     update_log_q_at,
     update_log_q_pair,
 )
+from models.rjmcmc3d.frames import check_frame
 from models.rjmcmc3d.likelihood import (
     Config,
     IncrementalLikelihood,
@@ -829,25 +830,7 @@ class RJMCMCTracker:
         return FrameChain(self, state, frame, mode)
 
     def _check_frame(self, frame: Frame) -> None:
-        sc = self.scene
-        shape = (sc.num_views, sc.height, sc.width)
-        if frame.D.shape != shape:
-            raise ShapeError(f"frame.D has shape {frame.D.shape}, expected {shape}")
-        if frame.image.shape != (*shape, 3):
-            raise ShapeError(f"frame.image has shape {frame.image.shape}, expected {(*shape, 3)}")
-        if not (np.all(np.isfinite(frame.D)) and np.all(np.isfinite(frame.det_ground))):
-            from dbn.errors import NonFiniteError
-
-            raise NonFiniteError("frame.D or frame.det_ground holds NaN or infinity")
-        if frame.det_ground.shape != (frame.det_view.shape[0], 2):
-            raise ShapeError(
-                f"frame.det_ground has shape {frame.det_ground.shape}, "
-                f"expected ({frame.det_view.shape[0]}, 2)"
-            )
-        if frame.det_view.size and (
-            frame.det_view.min() < 0 or frame.det_view.max() >= sc.num_views
-        ):
-            raise InputError(f"frame.det_view holds a view outside 0..{sc.num_views - 1}")
+        check_frame(self.scene, frame)
 
     def step(self, seed: int, state: TrackState, frame: Frame) -> tuple[TrackState, FrameResult]:
         """Filter one frame: run the RJ-MCMC chain (seed 003, eqs. 2 and 11).

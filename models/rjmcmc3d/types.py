@@ -80,9 +80,11 @@ class Frame(NamedTuple):
     Attributes
     ----------
     D : ndarray, shape (num_views, height, width), float32
-        Foreground (background-distance) maps in [0, 1].
+        Foreground (background-distance) maps, float in [0, 1].
     image : ndarray, shape (num_views, height, width, 3), float32
-        Colour images in [0, 1].
+        Colour images, float in [0, 1]. 8-bit images (uint8, 0..255) are rejected: convert
+        them explicitly with :func:`models.rjmcmc3d.unit_image` (checks:
+        :func:`models.rjmcmc3d.check_frame`).
     det_view : ndarray, shape (num_dets,), int
         View of each detection.
     det_px : ndarray, shape (num_dets, 2)

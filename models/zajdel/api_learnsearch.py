@@ -19,7 +19,7 @@ import jax
 import numpy as np
 
 from models.protocol import Example, StepTracker, seed_from_key
-from models.zajdel.data import Observations, concat_observations, take
+from models.zajdel.data import Observations, concat_observations, take, validate_observations
 from models.zajdel.learnsearch import LearnSearchConfig, LSParams, learn_search
 
 __all__ = ["LearnSearchState", "LearnSearchInfo", "LearnSearchTracker", "make", "example"]
@@ -68,6 +68,12 @@ class LearnSearchTracker(StepTracker):
 
     def step(self, key: jax.Array, state: LearnSearchState, obs: Observations):
         """Append ``obs`` (one or more observations) and search again over all of them."""
+        p = self.params
+        tq = np.asarray(state.observations.t_quit)
+        last = float(tq[-1]) if tq.size else -np.inf
+        obs = validate_observations(  # before concatenating: a library error, state intact
+            obs, p.obs_dim, p.path.num_cameras, p.path.num_borders, last_t_quit=last
+        )
         allobs = concat_observations([state.observations, obs])
         res = learn_search(allobs, self.params, self.config)  # validates before searching
         new = LearnSearchState(allobs, res.labels, res.hypotheses, res.log_scores, res.params)

@@ -13,9 +13,21 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.errors import NonFiniteError, ShapeError, TimeOrderError
+from dbn.errors import InputError, NonFiniteError, ShapeError, TimeOrderError
 
-__all__ = ["Observations", "validate_observations", "concat_observations", "take"]
+__all__ = [
+    "Observations",
+    "validate_observations",
+    "concat_observations",
+    "take",
+    "MAX_APPEARANCE",
+]
+
+#: Largest accepted ``|appearance|`` entry. Appearance features (colour descriptors,
+#: histograms) are expected of order 1-1000; beyond 1e6 their squares in the Gaussian /
+#: Normal-inverse-Wishart updates lose all precision (an appearance of 1e50 put NaN into
+#: the ADF state, issue 14), so they are rejected and must be rescaled.
+MAX_APPEARANCE = 1e6
 
 
 class Observations(NamedTuple):
@@ -23,7 +35,7 @@ class Observations(NamedTuple):
 
     Attributes
     ----------
-    appearance : float (num_obs, obs_dim)
+    appearance : float (num_obs, obs_dim)   finite, |value| <= MAX_APPEARANCE (1e6)
     camera : int (num_obs,)          camera index l_k in [0, num_cameras)
     t_enter : float (num_obs,)       te_k
     t_quit : float (num_obs,)        tq_k >= te_k, nondecreasing in k
@@ -71,6 +83,9 @@ def validate_observations(
     :class:`TimeOrderError` for quit before enter or quit times going backwards
     (also against ``last_t_quit``, the last quit time a tracker has seen).
     """
+    for name in Observations._fields:
+        if np.iscomplexobj(getattr(obs, name)):
+            raise InputError(f"{name}: expected real numbers, got a complex array")
     try:
         app = np.asarray(obs.appearance, dtype=np.float64)
         fields = {
@@ -98,6 +113,13 @@ def validate_observations(
     if bad.any():
         k, i = np.argwhere(bad)[0]
         raise NonFiniteError(f"appearance[{k}, {i}] = {app[k, i]} is not finite")
+    big = np.abs(app) > MAX_APPEARANCE
+    if big.any():
+        k, i = np.argwhere(big)[0]
+        raise InputError(
+            f"appearance[{k}, {i}] = {app[k, i]:g}: |appearance| must be <= {MAX_APPEARANCE:g}"
+            " (features are expected of order 1-1000; rescale them)"
+        )
     for name, v in fields.items():
         if not np.isfinite(v).all():
             k = int(np.argmax(~np.isfinite(v)))
