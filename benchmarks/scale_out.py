@@ -64,7 +64,7 @@ def _sweeps(quick: bool, seed: int, tmp: Path) -> dict:
 
     num = 8 if quick else 16
     grid = make_grid(
-        ["chains"], seeds=range(seed, seed + num), params={"n": [11 if quick else 12]}
+        ["chains"], seeds=range(seed, seed + num), params={"n": [11 if quick else 12], "T": [1000]}
     )
     t0 = time.perf_counter()
     serial = run_grid(chain_task, grid, serial=True, progress=False)

@@ -27,6 +27,7 @@ import os
 import sys
 import time
 import traceback
+import uuid
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -282,8 +283,11 @@ def _records(task: Task, todo: list[GridPoint], client: Any, serial: bool, n_wor
         client = own_client = Client(own_cluster)
     elif isinstance(client, str):
         client = own_client = Client(client)
+    run = uuid.uuid4().hex[:8]  # fresh task keys: a re-run is run again, not fetched
     try:
-        futures = [client.submit(_execute, task, p, key=f"point-{p.id}", pure=False) for p in todo]
+        futures = [
+            client.submit(_execute, task, p, key=f"point-{p.id}-{run}", pure=False) for p in todo
+        ]
         for fut in as_completed(futures):
             yield fut.result()
     finally:
