@@ -62,7 +62,7 @@ def _adf_lag3(scenarios) -> tuple[list[float] | None, str | None]:
         return None, f"{type(exc).__name__}: {exc}"
 
 
-def run(quick: bool, seed: int) -> dict:
+def run(quick: bool, seed: int, mapper=map) -> dict:
     num_seeds = 5 if quick else 10
     num_mcmc_seeds = 2 if quick else 10
     seeds = list(range(seed, seed + num_seeds))
@@ -129,7 +129,7 @@ def run(quick: bool, seed: int) -> dict:
     out["num_seeds"] = num_seeds
     out["num_mcmc_seeds"] = num_mcmc_seeds
     out["data"] = "simulated (models.zajdel.simulate.simulate_office, default config)"
-    stream = stream_keys(seed)  # issue 17
+    stream = stream_keys(seed, mapper=mapper)  # issue 17
     out["ok"] = bool(ok and stream.pop("ok"))
     out.update(stream)
     return out
@@ -149,37 +149,51 @@ STREAM_WINDOW, STREAM_BATCH, STREAM_T, STREAM_CLOSE_Z = 20, 4, 20, 5.0
 STREAM_NUM_OBS = 1000
 
 
-def stream_keys(seed: int, num_seeds: int = 5) -> dict:
-    """Keys ``q_stream_1000``, ``f1_stream_1000`` (fixed-lag learn-search, parameters
-    learned on-line from the initial-params start, no truth), ``q_stream_1000_greedy``,
-    ``f1_stream_1000_greedy`` (greedy baseline with the simulator's parameters) and
-    ``obs_per_s_stream`` (observations / wall second of the learn-search runs) on
-    1,000-observation SIMULATED streams of the default office with people entering and
-    leaving (:func:`models.zajdel.simulate_stream.stream_config`), seeds ``seed ..``."""
+def _stream_point(s: int) -> dict:
+    """One stream seed (module level, so a Dask worker can run it): accuracies of the
+    fixed-lag learn-search and the greedy baseline, observations, seconds, sanity flag."""
     from models.zajdel.learnsearch_stream import stream_learn_search
     from models.zajdel.scores import canonical_labels
     from models.zajdel.simulate_stream import stream_config
 
     cfg = LearnSearchConfig(num_hypotheses=STREAM_T, n0=N0, batch=STREAM_BATCH)
+    sc = simulate_office(s, stream_config(STREAM_NUM_OBS))
+    p0 = initial_params(take(sc.obs, slice(0, N0)), sc.params.path, sc.params.p_new)
+    t0 = time.perf_counter()
+    res = stream_learn_search(sc.obs, p0, cfg, window=STREAM_WINDOW, close_z=STREAM_CLOSE_Z)
+    seconds = time.perf_counter() - t0
+    ok = bool(np.array_equal(res.labels, canonical_labels(res.labels)))
+    ok &= res.labels.shape == sc.labels.shape and res.max_window <= STREAM_WINDOW + 1
+    out = {"seed": s, "num_obs": sc.obs.num_obs, "seconds": seconds, "ok": bool(ok)}
+    out["max_open_tracks"] = int(res.max_open_tracks)
+    g = greedy_labels(sc.obs, sc.params)
+    for key, lab in (("stream_1000", res.labels), ("stream_1000_greedy", g)):
+        out[f"q_{key}"] = partition_accuracy(lab, sc.labels)
+        out[f"f1_{key}"] = pairwise_prf(lab, sc.labels)[2]
+    return out
+
+
+def stream_keys(seed: int, num_seeds: int = 5, mapper=map) -> dict:
+    """Keys ``q_stream_1000``, ``f1_stream_1000`` (fixed-lag learn-search, parameters
+    learned on-line from the initial-params start, no truth), ``q_stream_1000_greedy``,
+    ``f1_stream_1000_greedy`` (greedy baseline with the simulator's parameters) and
+    ``obs_per_s_stream`` (observations / second of the learn-search runs, each timed where
+    it ran) on 1,000-observation SIMULATED streams of the default office with people
+    entering and leaving (:func:`models.zajdel.simulate_stream.stream_config`), seeds
+    ``seed ..``; ``mapper`` runs the seeds (``--dask``: one Dask task per seed)."""
+    points = list(mapper(_stream_point, range(seed, seed + num_seeds)))
     acc: dict[str, list[float]] = {}
-    n_total, t_total, ok = 0, 0.0, True
-    for s in range(seed, seed + num_seeds):
-        sc = simulate_office(s, stream_config(STREAM_NUM_OBS))
-        p0 = initial_params(take(sc.obs, slice(0, N0)), sc.params.path, sc.params.p_new)
-        t0 = time.perf_counter()
-        res = stream_learn_search(sc.obs, p0, cfg, window=STREAM_WINDOW, close_z=STREAM_CLOSE_Z)
-        t_total += time.perf_counter() - t0
-        n_total += sc.obs.num_obs
-        ok &= bool(np.array_equal(res.labels, canonical_labels(res.labels)))
-        ok &= res.labels.shape == sc.labels.shape and res.max_window <= STREAM_WINDOW + 1
-        g = greedy_labels(sc.obs, sc.params)
-        for key, lab in (("stream_1000", res.labels), ("stream_1000_greedy", g)):
-            acc.setdefault(f"q_{key}", []).append(partition_accuracy(lab, sc.labels))
-            acc.setdefault(f"f1_{key}", []).append(pairwise_prf(lab, sc.labels)[2])
+    for p in points:
+        for key in ("q_stream_1000", "f1_stream_1000", "q_stream_1000_greedy",
+                    "f1_stream_1000_greedy"):  # fmt: skip
+            acc.setdefault(key, []).append(p[key])
         log(
-            f"stream seed {s}: q {acc['q_stream_1000'][-1]:.3f} f1 {acc['f1_stream_1000'][-1]:.3f} "
-            f"greedy f1 {acc['f1_stream_1000_greedy'][-1]:.3f} open<= {res.max_open_tracks}"
+            f"stream seed {p['seed']}: q {p['q_stream_1000']:.3f} f1 {p['f1_stream_1000']:.3f} "
+            f"greedy f1 {p['f1_stream_1000_greedy']:.3f} open<= {p['max_open_tracks']}"
         )
+    ok = all(p["ok"] for p in points)
+    n_total = sum(p["num_obs"] for p in points)
+    t_total = sum(p["seconds"] for p in points)
     out = {k: float(np.mean(v)) for k, v in acc.items()}
     out["obs_per_s_stream"] = n_total / t_total
     out["num_stream_seeds"] = num_seeds

@@ -197,7 +197,7 @@ def local_cluster(n_workers: int | None = None):
 
 
 def _progress(total: int, enabled: bool):
-    from tqdm.auto import tqdm
+    from tqdm import tqdm
 
     return tqdm(total=total, desc="sweep", unit="task", disable=not enabled or None)
 
@@ -317,7 +317,7 @@ def example_task(point: GridPoint) -> dict[str, Any]:
     field_name = ex.tracker.score_field
     score = None
     if field_name is not None:
-        score = float(np.sum([np.sum(getattr(info, field_name)) for info in infos]))
+        score = float(sum(np.sum(np.asarray(getattr(info, field_name))) for info in infos))
     return {"steps": len(infos), "score_field": field_name, "total_score": score}
 
 

@@ -102,3 +102,22 @@ def test_a_failing_task_on_the_cluster_is_recorded(client) -> None:
     grid = [GridPoint("chains", seed=0, params=(("n", 3),))]
     grid.append(GridPoint("chains", seed=1, params=(("fail", True),)))
     assert [r["status"] for r in run_grid(chain_task, grid, client=client)] == ["ok", "error"]
+
+
+def test_benchmark_dask_flag_needs_a_mapper_and_runs_the_seed_loop_on_it(client) -> None:
+    from benchmarks.__main__ import main
+    from benchmarks.zajdel_learnsearch import _stream_point
+
+    with pytest.raises(SystemExit) as exc:
+        main(["scale_out", "--dask"])  # scale_out has no multi-seed loop to distribute
+    assert exc.value.code == 2
+
+    def mapper(fn, items):
+        return client.gather(client.map(fn, list(items), pure=False))
+
+    # the seed loop's function runs on workers and returns what it returns serially
+    remote = mapper(_stream_point, [0])[0]
+    local = _stream_point(0)
+    assert {k: v for k, v in remote.items() if k != "seconds"} == {
+        k: v for k, v in local.items() if k != "seconds"
+    }
