@@ -248,11 +248,11 @@ def run_grid(
         raise InputError("grid has duplicate points (same tracker, data, seed and params)")
     if resume and out is None:
         raise InputError("resume=True needs the results file (out=...)")
-    done = {}
+    # the points already done (resume) are returned as recorded; the rest are run
+    records = {}
     if resume:
-        done = {r["id"]: r for r in read_results(out) if r.get("status") == "ok"}
-    todo = [p for p in grid if p.id not in done]
-    records = dict(done)
+        records = {r["id"]: r for r in read_results(out) if r.get("status") == "ok"}
+    todo = [p for p in grid if p.id not in records]
     sink = open(out, "a") if out is not None else None  # noqa: SIM115 - closed below
     bar = _progress(len(todo), progress and sys.stderr.isatty())
     try:

@@ -105,6 +105,18 @@ class SmoothedResult(NamedTuple):
     log_likelihood: float
 
 
+def _normalised_into(b: np.ndarray, out: np.ndarray, norms: np.ndarray, k: int, start: int):
+    """``b / sum(b)`` written into ``out``, the sum into ``norms[k]``; a zero sum means the
+    evidence of slice ``start + k`` is impossible given the past (EvidenceError)."""
+    z = b.sum()
+    if not z > 0.0:
+        raise EvidenceError(
+            f"the evidence of slice {start + k} has probability zero given the past"
+        )
+    norms[k] = z
+    return np.multiply(b, 1.0 / z, out=out)
+
+
 class StructuredFilter:
     """Exact structured (frontier) inference for a discrete :class:`~dbn.dbn.TwoSliceDBN`.
 
@@ -315,13 +327,7 @@ class StructuredFilter:
             for subs, ins, o in ops:
                 vals[o] = _apply(subs, [vals[i][r] if st else vals[i] for i, st in ins])
             res = vals[out][r] if static_out else vals[out]
-            z = res.sum()
-            if not z > 0.0:
-                raise EvidenceError(
-                    f"the evidence of slice {start + k} has probability zero given the past"
-                )
-            norms[k] = z
-            np.multiply(res, 1.0 / z, out=buf[k])
+            _normalised_into(res, buf[k], norms, k, start)
             msg = (
                 buf[k]
                 if not self.extras
@@ -352,13 +358,7 @@ class StructuredFilter:
         flat = buf.reshape(buf.shape[0], S)
         for k in range(buf.shape[0]):
             b = (a @ mat) * L[inverse[k]]
-            z = b.sum()
-            if not z > 0.0:
-                raise EvidenceError(
-                    f"the evidence of slice {start + k} has probability zero given the past"
-                )
-            norms[k] = z
-            a = np.multiply(b, 1.0 / z, out=flat[k])
+            a = _normalised_into(b, flat[k], norms, k, start)
         return a.reshape(self.iface_shape)
 
     def _run_dense(self, plan, rows, inverse, R, msg, buf, norms, start):
@@ -369,13 +369,7 @@ class StructuredFilter:
         flat = buf.reshape(buf.shape[0], S)
         for k in range(buf.shape[0]):
             b = a @ mats[inverse[k]]
-            z = b.sum()
-            if not z > 0.0:
-                raise EvidenceError(
-                    f"the evidence of slice {start + k} has probability zero given the past"
-                )
-            norms[k] = z
-            a = np.multiply(b, 1.0 / z, out=flat[k])
+            a = _normalised_into(b, flat[k], norms, k, start)
         return a.reshape(self.iface_shape)
 
     def _forward(self, T: int, lam: dict[str, np.ndarray], store: np.ndarray | None = None):
