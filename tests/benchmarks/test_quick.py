@@ -1,5 +1,8 @@
 """CI smoke test of every benchmark: ``python -m benchmarks NAME --quick`` finishes, its
-last stdout line is one JSON object with the contract's keys, and its ``ok`` is true."""
+last stdout line is one JSON object with the contract's keys, and its ``ok`` is true.
+
+Marked ``bench`` (about three minutes in all on two cores): not in the default ``pytest``;
+``.ci/run`` runs them with ``pytest -m bench``."""
 
 from __future__ import annotations
 
@@ -15,6 +18,7 @@ from benchmarks import available
 ROOT = Path(__file__).resolve().parents[2]
 
 
+@pytest.mark.bench
 @pytest.mark.parametrize("name", available())
 def test_quick_benchmark_contract(name: str) -> None:
     proc = subprocess.run(
