@@ -10,8 +10,9 @@ and within a person, travel times are broad guesses from the gaps between passes
 Config keys: ``num_cameras``, ``num_borders`` (default: the largest index + 1), ``trans``
 ``(C, B, C, B)``, ``entry`` ``(C, B)``, ``travel_mean``, ``travel_std``, ``window``,
 ``p_new``, ``within_std``, ``between_std`` (ADF), ``decode`` ('chain' or 'online', ADF),
-and the fields of :class:`~models.zajdel.tracker.ADFConfig` /
-:class:`~models.zajdel.learnsearch.LearnSearchConfig`.
+``stream_window`` and ``close_z`` (learn-search: the streaming form with that lag, one
+protocol step per pass; without it one search over all passes), and the fields of
+:class:`~models.zajdel.tracker.ADFConfig` / :class:`~models.zajdel.learnsearch.LearnSearchConfig`.
 """
 
 from __future__ import annotations
@@ -21,12 +22,14 @@ import numpy as np
 
 from dbn.errors import InputError
 from models.io.zajdel import read_labels, read_observations, write_labels, write_partition
+from models.protocol import split_run_keys
 from models.track.context import RunContext
 
 INPUTS = ("OBSERVATIONS.csv: one row per camera pass (or enter/leave events), "
           "appearance columns a0..",)  # fmt: skip
 _MODEL_KEYS = {"num_cameras", "num_borders", "trans", "entry", "travel_mean", "travel_std",
-               "window", "p_new", "within_std", "between_std", "decode"}  # fmt: skip
+               "window", "p_new", "within_std", "between_std", "decode", "stream_window",
+               "close_z"}  # fmt: skip
 
 
 def _path_and_start(table, config: dict):
@@ -94,6 +97,8 @@ def _run_learnsearch(ctx: RunContext, table, start, config: dict):
     from models.zajdel.learnsearch import LearnSearchConfig
 
     fields, cfg = _split_config(config, LearnSearchConfig)
+    if "stream_window" in config:
+        return _run_learnsearch_stream(ctx, table, start, config, fields, cfg)
     tracker = models.get("zajdel_learnsearch").make(params=start, config=cfg)
     k_init, k_step = jax.random.split(ctx.key())
     # one protocol step with every pass: one search over all of them (the adapter's
@@ -102,6 +107,26 @@ def _run_learnsearch(ctx: RunContext, table, start, config: dict):
     labels = np.asarray(state.labels)
     onehot = np.eye(int(labels.max()) + 1)[labels]
     return labels, onehot, {**fields, "best_log_score": float(info.log_score)}
+
+
+def _run_learnsearch_stream(ctx: RunContext, table, start, config: dict, fields, cfg):
+    """One protocol step per pass of the fixed-lag search; labels = committed + window."""
+    import models
+    from models.zajdel.data import take
+    from models.zajdel.scores import canonical_labels
+
+    window, close_z = config["stream_window"], config.get("close_z", 5.0)
+    tracker = models.get("zajdel_learnsearch").make(start, cfg, window=window, close_z=close_z)
+    o = table.obs
+    k_init, keys = split_run_keys(ctx.key(), o.num_obs)
+    state, parts = tracker.init(k_init), []
+    for i in ctx.progress(range(o.num_obs), total=o.num_obs, desc="passes"):
+        state, info = tracker.step(keys[i], state, take(o, slice(i, i + 1)))
+        parts.append(info.committed)
+    labels = canonical_labels(np.concatenate(parts + [info.window_labels]))
+    onehot = np.eye(int(labels.max()) + 1)[labels]
+    extra = {**fields, "stream_window": window, "close_z": close_z}
+    return labels, onehot, {**extra, "best_window_log_score": float(info.log_score)}
 
 
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:

@@ -9,6 +9,12 @@ re-runs :func:`learn_search` on the whole prefix. Cost: one full search per step
 ``O(K)`` per step and ``O(K^2)`` over a run of ``K`` observations -- the protocol's
 reference semantics; call :func:`learn_search` once for a batch. Deterministic (the key is
 not used). Info's ``log_score`` is the unnormalised log posterior of the MAP partition.
+
+``make(..., window=W)`` gives the streaming form instead (:class:`StreamLearnSearchTracker`,
+:class:`models.zajdel.learnsearch_stream.StreamSearch`): hypotheses over the last ``W``
+observations only, older ones committed, so time and memory per step are bounded whatever
+the stream's length; each Info hands out the labels committed by that step and the
+window's current labels.
 """
 
 from __future__ import annotations
@@ -21,8 +27,17 @@ import numpy as np
 from models.protocol import Example, StepTracker, seed_from_key
 from models.zajdel.data import Observations, concat_observations, take, validate_observations
 from models.zajdel.learnsearch import LearnSearchConfig, LSParams, learn_search
+from models.zajdel.learnsearch_stream import StreamSearch
 
-__all__ = ["LearnSearchState", "LearnSearchInfo", "LearnSearchTracker", "make", "example"]
+__all__ = [
+    "LearnSearchState",
+    "LearnSearchInfo",
+    "LearnSearchTracker",
+    "StreamLearnSearchInfo",
+    "StreamLearnSearchTracker",
+    "make",
+    "example",
+]
 
 
 class LearnSearchState(NamedTuple):
@@ -80,9 +95,77 @@ class LearnSearchTracker(StepTracker):
         return new, LearnSearchInfo(res.labels, float(res.log_scores[0]))
 
 
-def make(params: LSParams, config: LearnSearchConfig | None = None) -> LearnSearchTracker:
-    """The adapter for EM starting point / fixed ``params`` and a search ``config``."""
-    return LearnSearchTracker(params, config)
+class StreamLearnSearchInfo(NamedTuple):
+    """What a streaming step settles and what it still revises.
+
+    committed : (m,) labels of the observations committed by this step (stream order;
+        the ``num_committed_before`` observations before them were handed out earlier)
+    window_labels : (W,) labels of the observations still in the window, best hypothesis
+        (before the first ``n0`` observations: the plain search's labels of those seen)
+    log_score : the window part of the best hypothesis' log posterior (differences
+        between hypotheses are those of the full posterior)
+    """
+
+    committed: np.ndarray
+    window_labels: np.ndarray
+    log_score: float
+
+
+class StreamLearnSearchTracker(StepTracker):
+    """Protocol adapter over the fixed-lag search: state is a :class:`StreamSearch`
+    (the window, its hypotheses and the parameters), copied by each pure ``step``."""
+
+    name = "zajdel_learnsearch"
+    score_field = "log_score"
+    can_save = False
+
+    def __init__(self, params, config, window: int, close_z: float | None = 5.0) -> None:
+        self.params = params
+        self.config = LearnSearchConfig() if config is None else config
+        self.window, self.close_z = window, close_z
+        StreamSearch(params, self.config, window, close_z)  # check the arguments now
+
+    def init(self, key: jax.Array) -> StreamSearch:
+        """No observation yet (deterministic: the key is not used)."""
+        return StreamSearch(self.params, self.config, self.window, self.close_z)
+
+    def step(self, key: jax.Array, state: StreamSearch, obs: Observations):
+        """Push ``obs`` (one or more observations, validated first) into a copy of ``state``."""
+        p = self.params
+        tq = np.asarray(state.buf.t_quit)
+        last = float(tq[-1]) if tq.size else -np.inf
+        obs = validate_observations(
+            obs, p.obs_dim, p.path.num_cameras, p.path.num_borders, last_t_quit=last
+        )
+        new = state.copy()
+        for i in range(obs.num_obs):
+            new.push(take(obs, slice(i, i + 1)))
+        if new.st is None:  # fewer than n0 seen: the plain search over them
+            res = learn_search(new.buf, new.theta, self.config)
+            info = StreamLearnSearchInfo(np.zeros(0, np.int64), res.labels, 0.0)
+        else:
+            score = float(new.log_scores()[0])
+            info = StreamLearnSearchInfo(new.pop_committed(), new.window_labels(), score)
+        return new, info
+
+    def fingerprint(self, state: StreamSearch):
+        """The arrays that determine the state (its window, hypotheses and parameters)."""
+        st = {} if state.st is None else state.st
+        return (tuple(state.buf), st, tuple(state.theta), state.num_seen, state.committed)
+
+
+def make(
+    params: LSParams,
+    config: LearnSearchConfig | None = None,
+    window: int | None = None,
+    close_z: float | None = 5.0,
+) -> LearnSearchTracker | StreamLearnSearchTracker:
+    """The adapter for EM starting point / fixed ``params`` and a search ``config``;
+    ``window``: the streaming form with that lag (``close_z`` as
+    :func:`models.zajdel.learnsearch_stream.stream_learn_search`), None: the plain search."""
+    if window is None:
+        return LearnSearchTracker(params, config)
+    return StreamLearnSearchTracker(params, config, window, close_z)
 
 
 def example(key: jax.Array) -> Example:

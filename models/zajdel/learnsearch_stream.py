@@ -36,12 +36,13 @@ Data in this library's tests and benchmarks are SIMULATED (:mod:`models.zajdel.s
 
 from __future__ import annotations
 
+import copy
 from typing import NamedTuple
 
 import numpy as np
 
 from dbn.errors import InputError
-from models.zajdel.data import Observations, take, validate_observations
+from models.zajdel.data import Observations, concat_observations, take, validate_observations
 from models.zajdel.learnsearch import (
     IMPOSSIBLE_LOG_PROB,
     LearnSearchConfig,
@@ -59,7 +60,7 @@ from models.zajdel.oracle import enumerate_partitions
 from models.zajdel.path import log_p_delta, log_p_delta0
 from models.zajdel.scores import canonical_labels
 
-__all__ = ["StreamResult", "stream_learn_search"]
+__all__ = ["StreamResult", "StreamSearch", "stream_learn_search"]
 
 _LOG2PI = float(np.log(2.0 * np.pi))
 
@@ -176,7 +177,7 @@ def _init_state(labels: np.ndarray, obs: Observations, theta: LSParams, par: _Pa
         if theta.p_new is not None and i > 0:
             old = np.log1p(-theta.p_new) - np.log(np.maximum(ntr, 1))
             st["wprior"][:, i] = np.where(new, np.log(theta.p_new), old)
-        _add_obs(st, rows, s, obs, i)
+        _add_obs(st, rows, s, obs, i, i)
         ntr = np.maximum(ntr, s + 1)
     st["ncol"] = ntr.copy()
     st["ntr"] = ntr
@@ -185,29 +186,30 @@ def _init_state(labels: np.ndarray, obs: Observations, theta: LSParams, par: _Pa
     return st
 
 
-def _add_obs(st: dict, rows, s, obs: Observations, i: int) -> None:
-    """Add observation i to column s[h] of every hypothesis rows[h] (statistics, last)."""
-    l = int(obs.camera[i])
-    a = np.asarray(obs.appearance[i], float)
+def _add_obs(st: dict, rows, s, obs: Observations, j: int, i: int) -> None:
+    """Add observation ``obs[j]`` (stream index i) to column s[h] of every hypothesis rows[h]
+    (statistics, last observation)."""
+    l = int(obs.camera[j])
+    a = np.asarray(obs.appearance[j], float)
     st["cnt"][rows, s, l] += 1.0
     st["A"][rows, s, l] += a
     st["Q"][rows, s, l] += np.outer(a, a)
     st["lcam"][rows, s] = l
-    st["lbq"][rows, s] = int(obs.border_quit[i])
-    st["ltq"][rows, s] = float(obs.t_quit[i])
+    st["lbq"][rows, s] = int(obs.border_quit[j])
+    st["ltq"][rows, s] = float(obs.t_quit[j])
     st["lidx"][rows, s] = i
 
 
-def _rebuild(st: dict, obs: Observations, theta: LSParams, par: _Par) -> None:
-    """Recompute (P, h, c, E), the window's path terms and the scores under ``theta``."""
+def _rebuild(st: dict, win: Observations, theta: LSParams, par: _Par) -> None:
+    """Recompute (P, h, c, E), the window's path terms and the scores under ``theta``
+    (``win``: the window's observations, as many as ``st["lab"]`` has columns)."""
     P, h, c = _sums(par, st["cnt"], st["A"], st["Q"])
     S = P.shape[1]
     active = np.arange(S)[None, :] < st["ncol"][:, None]
     E = np.zeros(active.shape)
     E[active] = _evidence(P[active], h[active], c[active], par.c0)
     st["P"], st["h"], st["c"], st["E"] = P, h, c, E
-    w = np.arange(st["win_start"], st["win_start"] + st["lab"].shape[1])
-    cam, be, te = obs.camera[w], obs.border_enter[w], obs.t_enter[w]
+    cam, be, te = (np.asarray(x) for x in (win.camera, win.border_enter, win.t_enter))
     start = st["wpc"] < 0
     lpd = log_p_delta(
         theta.path,
@@ -242,14 +244,14 @@ def _gather(st: dict, parent: np.ndarray) -> dict:
     return out
 
 
-def _extend(st: dict, i: int, obs: Observations, theta: LSParams, par: _Par, T: int) -> int:
-    """Extend every kept hypothesis by observation i in K_open + 1 ways and keep the T
-    best (seed 000, Fig. 4); returns the number of children scored."""
+def _extend(st: dict, obs: Observations, j: int, i: int, theta: LSParams, par: _Par, T: int) -> int:
+    """Extend every kept hypothesis by observation ``obs[j]`` (stream index i) in K_open + 1
+    ways and keep the T best (seed 000, Fig. 4); returns the number of children scored."""
     _grow(st, int(st["ncol"].max()) + 1)
     H = st["score"].shape[0]
     smax = int(st["ncol"].max())
-    u, ci, single, l = _obs_terms(par, obs, i)
-    be, te = int(obs.border_enter[i]), float(obs.t_enter[i])
+    u, ci, single, l = _obs_terms(par, obs, j)
+    be, te = int(obs.border_enter[j]), float(obs.t_enter[j])
     Pc = st["P"][:, :smax] + par.Sinv[l]
     hc = st["h"][:, :smax] + u
     cc = st["c"][:, :smax] + ci
@@ -303,7 +305,7 @@ def _extend(st: dict, i: int, obs: Observations, theta: LSParams, par: _Par, T: 
         out["P"][rows, col], out["h"][rows, col] = par.Rinv + par.Sinv[l], par.h0 + u
         out["c"][rows, col], out["E"][rows, col] = ci, single
     out["col_id"][rows, col] = label
-    _add_obs(out, rows, col, obs, i)
+    _add_obs(out, rows, col, obs, j, i)
     out["ncol"] = out["ncol"] + is_new
     out["ntr"] = out["ntr"] + is_new
     out["score"] = flat[order]
@@ -371,6 +373,119 @@ def _initial_em(pre: Observations, parts: np.ndarray, theta: LSParams, cfg: Lear
     return theta, iters
 
 
+class StreamSearch:
+    """The fixed-lag search fed one observation at a time (the working state of
+    :func:`stream_learn_search` and of the streaming protocol adapter).
+
+    Holds only the window: the kept hypotheses over the last ``window`` observations
+    (``buf``, the window's observations), the open track columns and the parameters, so
+    memory is independent of the stream length; labels of committed observations are
+    handed out by :meth:`pop_committed`. Mutable; :meth:`copy` is cheap (no array is ever
+    written in place: every update builds new arrays, so a copy of the dict suffices).
+    """
+
+    def __init__(
+        self,
+        params: LSParams,
+        config: LearnSearchConfig | None,
+        window: int,
+        close_z: float | None = 5.0,
+    ) -> None:
+        self.cfg = LearnSearchConfig() if config is None else config
+        _check_stream_args(self.cfg, window, close_z)
+        _check_params(params)
+        self.start_params, self.theta, self.par = params, params, None
+        self.window, self.close_z = int(window), close_z
+        self.n0 = max(min(self.cfg.n0, self.window), 1)
+        r = params.obs_dim
+        self.buf = Observations(np.zeros((0, r)), np.zeros(0, np.int64), np.zeros(0),
+                                np.zeros(0), np.zeros(0, np.int64), np.zeros(0, np.int64))  # fmt: skip
+        self.st: dict | None = None
+        self.committed: list = []
+        self.num_seen = self.since = self.em_iterations = 0
+        self.max_candidates = self.max_open_tracks = self.max_window = 0
+
+    def copy(self) -> StreamSearch:
+        """An independent copy (the protocol adapter's steps are pure)."""
+        new = copy.copy(self)
+        new.st = None if self.st is None else dict(self.st)
+        new.committed = list(self.committed)
+        return new
+
+    def push(self, one: Observations) -> None:
+        """Add one (validated) observation: extend, commit past the lag, close, learn."""
+        self.buf = concat_observations([self.buf, one])
+        self.num_seen += 1
+        if self.st is None:
+            if self.buf.num_obs >= self.n0:
+                self._start()
+            return
+        st, T = self.st, int(self.cfg.num_hypotheses)
+        j, i = self.buf.num_obs - 1, self.num_seen - 1
+        cand = _extend(st, self.buf, j, i, self.theta, self.par, T)
+        self.max_candidates = max(self.max_candidates, cand)
+        self.max_open_tracks = max(self.max_open_tracks, int(st["ncol"].max()))
+        self.max_window = max(self.max_window, st["lab"].shape[1])
+        before = len(self.committed)
+        while st["lab"].shape[1] > self.window:
+            _commit(st, self.committed)
+        self.buf = take(self.buf, slice(len(self.committed) - before, None))
+        _close(st, float(self.buf.t_enter[-1]), _close_gap(self.theta, self.close_z))
+        self.since += 1
+        if self.since == self.cfg.batch:
+            self._learn()
+
+    def finish(self) -> None:
+        """End of a batch stream: start on fewer than n0 observations, or run the last
+        batch's EM iteration (as the plain search does after its last observation)."""
+        if self.st is None:
+            if self.buf.num_obs:
+                self._start()
+        elif self.since:
+            self._learn()
+
+    def _start(self) -> None:
+        parts = enumerate_partitions(self.buf.num_obs)
+        self.theta, self.em_iterations = _initial_em(self.buf, parts, self.theta, self.cfg)
+        self.par = _par(self.theta)
+        st = _init_state(parts, self.buf, self.theta, self.par)
+        self.st = st
+        self._keep_best()
+        self.max_window = self.buf.num_obs
+
+    def _learn(self) -> None:
+        """One on-line EM iteration over the window's kept hypotheses (seed 000, eqs. 4-6)."""
+        self.since = 0
+        if not self.cfg.learn:
+            return
+        st = self.st
+        self.theta = em_step(
+            self.buf, _canonical(st["lab"]), st["score"], self.theta, self.cfg, self.start_params
+        )
+        self.par = _par(self.theta)
+        _rebuild(st, self.buf, self.theta, self.par)
+        self._keep_best()
+
+    def _keep_best(self) -> None:
+        st = self.st
+        order = np.argsort(-st["score"], kind="stable")[: int(self.cfg.num_hypotheses)]
+        self.st = {**_gather(st, order), "score": st["score"][order]}
+
+    def pop_committed(self) -> np.ndarray:
+        """Labels of the observations committed since the last call (in stream order)."""
+        out, self.committed = np.asarray(self.committed, np.int64), []
+        return out
+
+    def window_labels(self) -> np.ndarray:
+        """(W,) labels of the window's observations in the best hypothesis (the labels of
+        the observations not yet started on when fewer than n0 have been seen: none)."""
+        return np.zeros(0, np.int64) if self.st is None else self.st["lab"][0].copy()
+
+    def log_scores(self) -> np.ndarray:
+        """(T',) scores of the kept hypotheses (window part; see :class:`StreamResult`)."""
+        return np.zeros(1) if self.st is None else self.st["score"].copy()
+
+
 def stream_learn_search(
     obs: Observations,
     params: LSParams,
@@ -395,44 +510,22 @@ def stream_learn_search(
     StreamResult; memory and work per observation are independent of num_obs (see the
     module docstring), ``max_candidates`` / ``max_open_tracks`` / ``max_window`` count them.
     """
-    cfg = LearnSearchConfig() if config is None else config
-    _check_stream_args(cfg, window, close_z)
-    _check_params(params)
+    search = StreamSearch(params, config, window, close_z)
     obs = validate_observations(
         obs, params.obs_dim, params.path.num_cameras, params.path.num_borders
     )
-    K, T = obs.num_obs, int(cfg.num_hypotheses)
-    if K == 0:
+    for i in range(obs.num_obs):
+        search.push(take(obs, slice(i, i + 1)))
+    search.finish()
+    if search.st is None:
         return StreamResult(np.zeros(0, np.int64), params, np.zeros(1), 0, 0, 0, 0)
-    n0 = max(min(cfg.n0, K, window), 1)
-    parts = enumerate_partitions(n0)
-    theta, em_iters = _initial_em(take(obs, slice(0, n0)), parts, params, cfg)
-    par = _par(theta)
-    st = _init_state(parts, obs, theta, par)
-    order = np.argsort(-st["score"], kind="stable")[:T]
-    st = {**_gather(st, order), "score": st["score"][order]}
-    committed: list = []
-    max_cand = max_open = 0
-    max_win = n0
-    since = 0
-    for i in range(n0, K):
-        max_cand = max(max_cand, _extend(st, i, obs, theta, par, T))
-        max_open = max(max_open, int(st["ncol"].max()))
-        max_win = max(max_win, st["lab"].shape[1])
-        while st["lab"].shape[1] > window:
-            _commit(st, committed)
-        _close(st, float(obs.t_enter[i]), _close_gap(theta, close_z))
-        since += 1
-        if since == cfg.batch or i == K - 1:
-            since = 0
-            if cfg.learn:
-                w = slice(st["win_start"], i + 1)
-                theta = em_step(
-                    take(obs, w), _canonical(st["lab"]), st["score"], theta, cfg, params
-                )
-                par = _par(theta)
-                _rebuild(st, obs, theta, par)
-                order = np.argsort(-st["score"], kind="stable")[:T]
-                st = {**_gather(st, order), "score": st["score"][order]}
-    labels = canonical_labels(np.concatenate([np.asarray(committed, np.int64), st["lab"][0]]))
-    return StreamResult(labels, theta, st["score"].copy(), max_cand, max_open, max_win, em_iters)
+    labels = canonical_labels(np.concatenate([search.pop_committed(), search.window_labels()]))
+    return StreamResult(
+        labels,
+        search.theta,
+        search.log_scores(),
+        search.max_candidates,
+        search.max_open_tracks,
+        search.max_window,
+        search.em_iterations,
+    )

@@ -146,6 +146,32 @@ def test_zajdel_track_eval(tmp_path, capsys, name):
     assert sum(int(row.split(",")[1]) for row in partition) == len(labels)
 
 
+def test_zajdel_learnsearch_streaming_window(tmp_path, capsys):
+    """``stream_window``: one step per pass of the fixed-lag search; equal to the batch
+    stream search on the same passes and starting point (no learning: no final EM)."""
+    from models.io.zajdel import read_labels, read_observations
+    from models.track.zajdel import _path_and_start
+    from models.zajdel.learnsearch import LearnSearchConfig
+    from models.zajdel.learnsearch_stream import stream_learn_search
+
+    d = DATA / "zajdel"
+    conf = {"num_hypotheses": 5, "learn": False, "stream_window": 6, "close_z": 3.0}
+    cfg = tmp_path / "cfg.json"
+    cfg.write_text(json.dumps(conf))
+    out = _track(tmp_path, "zajdel_learnsearch", [d / "observations.csv"], "--config", str(cfg))
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["parameters"]["stream_window"] == 6
+    table = read_observations(d / "observations.csv")
+    labels = read_labels(out / "labels.csv")
+    ref = stream_learn_search(table.obs, _path_and_start(table, conf),
+                              LearnSearchConfig(num_hypotheses=5, learn=False), 6, 3.0)  # fmt: skip
+    np.testing.assert_array_equal([labels[i] for i in table.ids], ref.labels)
+    cfg.write_text(json.dumps({**conf, "stream_window": 0}))
+    argv = ["track", "zajdel_learnsearch", str(d / "observations.csv"), "-o", str(tmp_path / "x"),
+            "--config", str(cfg)]  # fmt: skip
+    _bad(capsys, argv, "window")
+
+
 def test_zajdel_events_layout_equals_passes(tmp_path):
     from models.io.zajdel import read_observations
 
