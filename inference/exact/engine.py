@@ -32,7 +32,6 @@ observation d-separated from all of them goes unnoticed (as with pgmpy's pruning
 from __future__ import annotations
 
 import os
-import weakref
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
@@ -43,6 +42,7 @@ from dbn.errors import EvidenceError, MemoryLimitError, UnknownVariableError
 from inference.exact.cliquetree import CliqueTree, compile_tree
 from inference.exact.pruning import NetIndex, requisite
 from inference.exact.triangulation import Triangulation, triangulate
+from inference.model_cache import ModelCache
 
 __all__ = ["ExactInference", "Marginals", "default_table_limit", "posterior_marginals"]
 
@@ -311,7 +311,8 @@ class ExactInference:
         return {v: tree.marginal(pots, v) for v in tree.home}
 
 
-_ENGINES: weakref.WeakKeyDictionary[BayesNet, ExactInference] = weakref.WeakKeyDictionary()
+#: bounded: an engine refers to its net (a weak-key cache would keep every net alive)
+_ENGINES: ModelCache[ExactInference] = ModelCache(maxsize=8)
 
 
 def posterior_marginals(
@@ -320,9 +321,8 @@ def posterior_marginals(
     nodes: Iterable[str] | None = None,
     engine: str = "auto",
 ) -> Marginals:
-    """:meth:`ExactInference.marginals` on a per-net engine kept while ``bn`` lives, so
-    that repeated calls on one net reuse its compiled trees."""
-    inf = _ENGINES.get(bn)
-    if inf is None:
-        inf = _ENGINES[bn] = ExactInference(bn)
+    """:meth:`ExactInference.marginals` on a per-net engine kept for the last few nets
+    used (:class:`inference.model_cache.ModelCache`), so that repeated calls on one net
+    reuse its compiled trees."""
+    inf = _ENGINES.get(bn, lambda: ExactInference(bn))
     return inf.marginals(evidence, nodes, engine)

@@ -35,7 +35,6 @@ dim)``); the filter then runs step by step without ``jit`` so numpy-based CPDs w
 from __future__ import annotations
 
 import math
-import weakref
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -56,6 +55,7 @@ from dbn.dbn import TwoSliceDBN, is_prev, prev, unprev
 from dbn.errors import CPDShapeError, InputError, ModelError
 from dbn.variables import DiscreteVariable
 from inference.evidence_columns import check_columns, check_query
+from inference.model_cache import ModelCache
 from inference.particle.filters import auxiliary_filter, bootstrap_filter, ess, run
 from inference.particle.model import StateSpaceModel
 from inference.precision import scoped
@@ -369,13 +369,15 @@ class DBNStateSpaceModel(StateSpaceModel):
         return summarise
 
 
-_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: per DBN: its state-space model and its compiled filters (bounded: the values refer to
+#: the DBN, a weak-key cache would keep every DBN alive)
+_CACHE: ModelCache[dict] = ModelCache(maxsize=8)
 
 
 def _filters(dbn, model, num_particles: int, method: str, query: tuple[str, ...]):
     """(slice-0 filter, later-slice filter, summary), cached per DBN so that ``run``'s
     compiled code is reused by later calls with the same sizes."""
-    per = _CACHE.setdefault(dbn, {})
+    per = _CACHE.get(dbn, dict)
     per["model"] = model
     key = (num_particles, method, query)
     if key not in per:
@@ -428,7 +430,7 @@ def particle_filter_dbn(
         raise InputError(f"method must be 'bootstrap' or 'auxiliary', got {method!r}")
     if isinstance(num_particles, bool) or not isinstance(num_particles, int) or num_particles < 1:
         raise InputError(f"num_particles must be an integer >= 1, got {num_particles!r}")
-    model = _CACHE.setdefault(dbn, {}).get("model") or DBNStateSpaceModel(dbn)
+    model = _CACHE.get(dbn, dict).get("model") or DBNStateSpaceModel(dbn)
     inp = model.inputs(evidence, soft_evidence)
     hidden = tuple(n for n in dbn.names if n not in inp["discrete"] and n not in inp["continuous"])
     query = check_query(dbn, query, hidden)

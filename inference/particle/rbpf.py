@@ -31,7 +31,6 @@ ones, in an :class:`~inference.results.DBNFilterResult` (``method="rbpf"``).
 from __future__ import annotations
 
 import math
-import weakref
 from collections.abc import Mapping, Sequence
 from functools import partial
 from typing import Any, NamedTuple
@@ -49,6 +48,7 @@ from dbn.dbn import TwoSliceDBN, is_prev, prev, unprev
 from dbn.errors import CPDShapeError, InputError, ModelError
 from dbn.variables import DiscreteVariable
 from inference.evidence_columns import check_columns, check_query
+from inference.model_cache import ModelCache
 from inference.particle.dbn_adapter import _Node
 from inference.particle.resampling import systematic
 from inference.precision import scoped
@@ -223,12 +223,12 @@ class _Model:
         return m, P, ll
 
 
-_MODELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_MODELS: ModelCache[dict] = ModelCache(maxsize=8)  # bounded: the layouts refer to the DBN
 
 
 def _model(dbn: TwoSliceDBN, observed: tuple[str, ...]) -> _Model:
     """The compiled layout, cached per DBN and observed set (so jit reuses its code)."""
-    per = _MODELS.setdefault(dbn, {})
+    per = _MODELS.get(dbn, dict)
     if observed not in per:
         per[observed] = _Model(dbn, observed)
     return per[observed]
