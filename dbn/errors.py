@@ -75,6 +75,11 @@ class EvidenceError(DBNError):
     likelihood vector of the wrong length, negative or all zero."""
 
 
+class UnknownEvidenceError(UnknownVariableError, EvidenceError):
+    """Evidence (hard or soft) names a variable the model does not have: both an unknown
+    variable and invalid evidence, so ``except`` of either class catches it."""
+
+
 class InputError(DBNError):
     """Data handed to a filter or a tracker is invalid."""
 

@@ -31,6 +31,7 @@ from dbn.errors import (
     ModelError,
     NonFiniteError,
     ShapeError,
+    UnknownEvidenceError,
 )
 from dbn.variables import DiscreteVariable
 from inference.exact.frontier import MAX_FRONTIER_SIZE
@@ -78,7 +79,7 @@ def _check_evidence(
     lengths: dict[str, int] = {}
     for name, col in {**(evidence or {}), **(soft or {})}.items():
         if name not in variables:
-            raise EvidenceError(
+            raise UnknownEvidenceError(
                 f"evidence on unknown variable {name!r} (known: {sorted(variables)})"
             )
         v = variables[name]

@@ -21,7 +21,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from dbn.dbn import TwoSliceDBN
-from dbn.errors import EvidenceError, NonFiniteError, ShapeError, UnknownVariableError
+from dbn.errors import (
+    EvidenceError,
+    NonFiniteError,
+    ShapeError,
+    UnknownEvidenceError,
+    UnknownVariableError,
+)
 from dbn.variables import DiscreteVariable
 
 __all__ = ["Columns", "check_columns", "check_query"]
@@ -70,7 +76,7 @@ def check_columns(
     cont: dict[str, np.ndarray] = {}
     for name, col in (evidence or {}).items():
         if name not in variables:
-            raise UnknownVariableError(f"evidence on unknown variable {name!r}")
+            raise UnknownEvidenceError(f"evidence on unknown variable {name!r}")
         v = variables[name]
         arr = np.asarray(col)
         if isinstance(v, DiscreteVariable):
@@ -112,7 +118,7 @@ def check_columns(
     for name, col in (soft_evidence or {}).items():
         v = variables.get(name)
         if v is None:
-            raise UnknownVariableError(f"soft evidence on unknown variable {name!r}")
+            raise UnknownEvidenceError(f"soft evidence on unknown variable {name!r}")
         if not isinstance(v, DiscreteVariable):
             raise EvidenceError(f"soft evidence on continuous variable {name!r}")
         arr = np.asarray(col, dtype=np.float64)

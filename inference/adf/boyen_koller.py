@@ -46,7 +46,7 @@ from numpy.typing import ArrayLike
 
 from dbn.bayesnet import BayesNet, check_likelihood
 from dbn.dbn import TwoSliceDBN, prev, unprev
-from dbn.errors import EvidenceError, ModelError, UnknownVariableError
+from dbn.errors import EvidenceError, ModelError, UnknownEvidenceError, UnknownVariableError
 from dbn.variables import DiscreteVariable
 from inference.adf.slice_plan import SlicePlan
 from inference.evidence_columns import check_columns, check_query
@@ -211,7 +211,7 @@ class BoyenKoller:
         variables = {v.name: v for v in self.dbn.variables}
         for name, state in (evidence or {}).items():
             if name not in variables:
-                raise EvidenceError(f"evidence on unknown variable {name!r}")
+                raise UnknownEvidenceError(f"evidence on unknown variable {name!r}")
             if isinstance(state, int | np.integer) and not isinstance(state, bool) and state == -1:
                 continue
             vec = np.zeros(self.cards[name])
@@ -219,7 +219,7 @@ class BoyenKoller:
             lam[name] = vec
         for name, vec in (soft or {}).items():
             if name not in variables:
-                raise EvidenceError(f"soft evidence on unknown variable {name!r}")
+                raise UnknownEvidenceError(f"soft evidence on unknown variable {name!r}")
             v = check_likelihood(name, self.cards[name], vec)
             lam[name] = lam[name] * v if name in lam else v
         return lam

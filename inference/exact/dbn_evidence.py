@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from dbn.bayesnet import check_likelihood
-from dbn.errors import EvidenceError, ShapeError
+from dbn.errors import EvidenceError, ShapeError, UnknownEvidenceError
 from dbn.variables import DiscreteVariable
 
 __all__ = ["sequence_likelihoods", "slice_likelihoods", "distinct_rows"]
@@ -22,7 +22,9 @@ __all__ = ["sequence_likelihoods", "slice_likelihoods", "distinct_rows"]
 
 def _variable(variables: Mapping[str, DiscreteVariable], name: str, what: str):
     if name not in variables:
-        raise EvidenceError(f"{what} on unknown variable {name!r} (known: {sorted(variables)})")
+        raise UnknownEvidenceError(
+            f"{what} on unknown variable {name!r} (known: {sorted(variables)})"
+        )
     return variables[name]
 
 

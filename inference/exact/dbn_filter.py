@@ -39,8 +39,9 @@ from numpy.typing import ArrayLike
 
 from dbn.bayesnet import check_likelihood
 from dbn.dbn import TwoSliceDBN, prev
-from dbn.errors import EvidenceError, ModelError, ShapeError
+from dbn.errors import EvidenceError, ModelError, UnknownEvidenceError
 from dbn.variables import DiscreteVariable
+from inference.evidence_columns import check_columns
 from inference.exact.factor import Factor, product
 
 
@@ -193,12 +194,12 @@ class DBNFilter:
         hard: dict[str, int] = {}
         for name, state in (evidence or {}).items():
             if name not in self._vars:
-                raise EvidenceError(f"evidence on unknown variable {name!r}")
+                raise UnknownEvidenceError(f"evidence on unknown variable {name!r}")
             hard[name] = self._vars[name].index(state)
         lik: dict[str, np.ndarray] = {}
         for name, vec in (soft or {}).items():
             if name not in self._vars:
-                raise EvidenceError(f"soft evidence on unknown variable {name!r}")
+                raise UnknownEvidenceError(f"soft evidence on unknown variable {name!r}")
             lik[name] = check_likelihood(name, self.cards[name], vec)
         return hard, lik
 
@@ -329,37 +330,9 @@ class DBNFilter:
     def _columns(
         self, evidence: Mapping[str, ArrayLike], num_timesteps: int | None
     ) -> tuple[int, dict[str, np.ndarray]]:
-        cols: dict[str, np.ndarray] = {}
-        T = num_timesteps
-        for name, col in evidence.items():
-            if name not in self._vars:
-                raise EvidenceError(f"evidence on unknown variable {name!r}")
-            arr = np.asarray(col)
-            if arr.ndim != 1:
-                raise ShapeError(
-                    f"evidence column {name!r} must be 1-D (num_timesteps,), got shape {arr.shape}"
-                )
-            if not np.issubdtype(arr.dtype, np.integer):
-                raise EvidenceError(
-                    f"evidence column {name!r} must hold integer states (-1 = unobserved)"
-                )
-            if T is None:
-                T = arr.shape[0]
-            if arr.shape[0] != T:
-                raise ShapeError(
-                    f"evidence column {name!r} has length {arr.shape[0]}, expected {T}"
-                )
-            bad = (arr < -1) | (arr >= self.cards[name])
-            if bad.any():
-                t = int(np.argmax(bad))
-                raise EvidenceError(
-                    f"evidence column {name!r}: state {int(arr[t])} at slice {t} out of range "
-                    f"-1..{self.cards[name] - 1}"
-                )
-            cols[name] = arr.astype(np.int64)
-        if T is None or T < 1:
-            raise ShapeError("filter needs num_timesteps >= 1 (give it or an evidence column)")
-        return int(T), cols
+        """Validated columnar hard evidence (:func:`inference.evidence_columns.check_columns`)."""
+        cols = check_columns(self.dbn, evidence, None, num_timesteps)
+        return cols.num_timesteps, cols.discrete
 
     def _matrices(self, T: int, cols: dict[str, np.ndarray], mode: str = "sum"):
         """Per-slice matrices: (unique matrices, index of each slice's matrix)."""

@@ -6,6 +6,7 @@ from __future__ import annotations
 import sys
 import types
 
+import jax
 import numpy as np
 import pytest
 
@@ -20,6 +21,8 @@ from dbn.errors import (
     ModelError,
     NonFiniteError,
     ShapeError,
+    UnknownEvidenceError,
+    UnknownVariableError,
 )
 from dbn.examples import coupled_chains, sample_coupled_chains
 from dbn.variables import ContinuousVariable
@@ -174,3 +177,26 @@ def test_online_filter_steps_equal_the_batch_run() -> None:
         state = flt.init(row) if state is None else flt.step(state, row)
     assert abs(state.log_likelihood - res.log_likelihood) < 1e-12
     np.testing.assert_allclose(flt.marginals(state)["x2"], res.marginals["x2"][-1], atol=1e-12)
+
+
+def test_evidence_on_an_unknown_variable_is_one_error_everywhere() -> None:
+    """Every engine's own entry point raises UnknownEvidenceError (an EvidenceError and an
+    UnknownVariableError at once) for a column the DBN does not have."""
+    from inference.adf.boyen_koller import bk_filter
+    from inference.exact.dbn_filter import DBNFilter
+    from inference.exact.structured_filter import StructuredFilter
+    from inference.particle.dbn_adapter import particle_filter_dbn
+
+    dbn, ev = _chains(2, 4)
+    bad = {**ev, "zz": np.zeros(4, int)}
+    calls = [
+        lambda: DBNFilter(dbn).filter(bad),
+        lambda: StructuredFilter(dbn).filter(bad),
+        lambda: bk_filter(dbn, bad),
+        lambda: particle_filter_dbn(jax.random.key(0), dbn, bad, num_particles=4),
+        lambda: inference.filter(dbn, bad, method="exact"),
+    ]
+    for call in calls:
+        with pytest.raises(UnknownEvidenceError, match="'zz'") as exc:
+            call()
+        assert isinstance(exc.value, EvidenceError) and isinstance(exc.value, UnknownVariableError)
