@@ -38,9 +38,7 @@ Rules of the simulated tracker (defaults of issue 4)
 
 from __future__ import annotations
 
-import gzip
 import xml.etree.ElementTree as ET
-import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -55,6 +53,7 @@ from dbn.errors import (
     TimeOrderError,
     in_file,
 )
+from models.io.xmlfile import read_xml_root
 
 __all__ = [
     "GroundTruth",
@@ -144,23 +143,6 @@ class GroundTruth:
         return self.num_frames / self.fps
 
 
-def _open_xml(path: str | Path) -> ET.Element:
-    """The root element of an XML file (``.gz`` accepted); a missing, unreadable or
-    malformed (e.g. truncated) file is a :class:`FileFormatError` naming file and line."""
-    path = Path(path)
-    opener = gzip.open if path.suffix == ".gz" else open
-    try:
-        with opener(path, "rb") as fh:
-            return ET.parse(fh).getroot()
-    except FileNotFoundError:
-        raise FileFormatError(path, "no such XML file") from None
-    except ET.ParseError as exc:
-        line = exc.position[0] if getattr(exc, "position", None) else None
-        raise FileFormatError(path, f"not well-formed XML ({exc})", line) from None
-    except (OSError, EOFError, zlib.error) as exc:
-        raise FileFormatError(path, f"unreadable XML file ({exc})") from None
-
-
 def _int_attr(elem: ET.Element, key: str, path, where: str) -> int:
     """An integer attribute; missing or malformed is a FileFormatError naming the element."""
     text = elem.get(key)
@@ -240,7 +222,7 @@ def _parse_frames(root: ET.Element, path, with_groups: bool):
 
 def _load_xml(path, with_groups: bool, fps: float) -> GroundTruth:
     """Parse, check and assemble; every library error names ``path``."""
-    root = _open_xml(path)
+    root = read_xml_root(path)
     stem = Path(path).name if with_groups else Path(path).name.split(".")[0]
     name = root.get("name") or stem
     try:
@@ -287,7 +269,7 @@ def load_pets2009(path: str | Path) -> GroundTruth:
 
 def load_ground_truth(path: str | Path) -> GroundTruth:
     """Load either format: CAVIAR if the file has grouplists, else PETS2009."""
-    root = _open_xml(path)
+    root = read_xml_root(path)
     if root.find(".//grouplist") is not None:
         return load_caviar(path)
     return load_pets2009(path)

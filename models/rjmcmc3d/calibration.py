@@ -6,12 +6,12 @@ scene), images rectified by the vertical-vanishing-point homography.
 from __future__ import annotations
 
 import math
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
 from dbn.errors import FileFormatError, InputError
+from models.io.xmlfile import read_xml_root
 from models.rjmcmc3d.geometry import (
     Camera,
     camera_center,
@@ -35,15 +35,7 @@ def _read_tsai(path) -> tuple[dict, dict, dict]:
     """The Geometry, Intrinsic and Extrinsic attributes as finite floats; a missing,
     malformed or truncated file, a missing element or attribute, a value that is not a
     finite number (or not > 0 where it must be) is a :class:`FileFormatError`."""
-    try:
-        root = ET.parse(path).getroot()
-    except FileNotFoundError:
-        raise FileFormatError(path, "no such calibration file") from None
-    except ET.ParseError as exc:
-        line = exc.position[0] if getattr(exc, "position", None) else None
-        raise FileFormatError(path, f"not well-formed XML ({exc})", line) from None
-    except OSError as exc:
-        raise FileFormatError(path, f"unreadable calibration file ({exc})") from None
+    root = read_xml_root(path, "calibration file")
     out = []
     for tag, keys in _TSAI.items():
         elem = root.find(tag)
