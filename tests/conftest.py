@@ -8,7 +8,15 @@ import pytest
 
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
 
+from hypothesis import settings  # noqa: E402
+
 from models import datasets  # noqa: E402
+
+# CI draws the same examples every run (a failure there is reproducible, not luck);
+# developers' runs keep exploring (hypothesis's default random draws): HYPOTHESIS_PROFILE=ci
+settings.register_profile("ci", derandomize=True, print_blob=True)
+if os.environ.get("HYPOTHESIS_PROFILE"):
+    settings.load_profile(os.environ["HYPOTHESIS_PROFILE"])
 
 
 @pytest.fixture(scope="session")
