@@ -62,7 +62,11 @@ BIRTH_LEAVE_TRAIN_SEEDS = (10_001, 10_002, 10_003)
 ARRIVAL_BIN = 300.0
 #: Open track ends of the counter run (at 256, about the number of people in the
 #: building, ends still in play were evicted and their continuations counted as new:
-#: 468 for 324 people after 4,000 observations, seed 0; 346 at 512).
+#: 468 for 324 people after 4,000 observations, seed 0; 346 at 512). 1,024 counts
+#: closer still (final error 0.047 / 0.042 / 0.047 on seeds 0 / 1 / 2, 0.141 / 0.089 /
+#: 0.034 on the training seeds, against 0.080 / 0.093 / 0.077 and 0.159 / 0.159 /
+#: 0.060 at 512) but took 2.6 x as long; mass pruning of ends (issue 17, deliverable 4)
+#: should make it affordable.
 COUNTER_MAX_OPEN = 512
 
 
