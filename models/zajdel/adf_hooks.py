@@ -127,9 +127,11 @@ def _link_prior(m: ADFParams, uniform: bool, st: ADFState, birth_leave: bool = F
     setting (seed 0, 3,000 observations, 512 slots), the filtering form that puts the
     leave probability into the hazard instead (new: lambda, link:
     (1 - rho) p_delta / (rho + (1 - rho) S_j)) over-split: counter 415 for 280
-    people, because the factorised belief never lowers the open mass of silent ends
-    as time passes (that run also lost most pointer mass to 'closed', see
-    :mod:`models.zajdel.birth_leave`). ``birth_leave="filter"``: that filtering form,
+    people; the causes were the new end's pointer mass lost to 'closed', too few open
+    ends, the constant rate and the appearance prior, not the form (lowering the open
+    mass of silent ends as time passes, coupled to the counter, under-counted badly:
+    54 for 100 after 500 observations; see :mod:`models.zajdel.birth_leave`).
+    ``birth_leave="filter"``: that filtering form,
     log P(new) = log lambda(t) (:func:`models.zajdel.path.log_new_rate`) and log
     P(link j) = log open_j + log(1 - rho) - log g_j(t) (:func:`_log_stay`), the
     path term p_delta added by :func:`predict`. A track end whose probability of being continued,
