@@ -39,6 +39,7 @@ __all__ = [
     "niw_update_np",
     "niw_log_evidence_np",
     "niw_log_evidence_masked_np",
+    "niw_log_evidence_stats_np",
     "student_t_logpdf",
     "student_t_logpdf_np",
     "niw_predictive_logpdf",
@@ -152,14 +153,22 @@ def niw_log_evidence_masked_np(X: np.ndarray, masks: np.ndarray, prior: NIW) -> 
     """
     X = np.asarray(X, float)
     M = np.asarray(masks, float)
-    r = X.shape[1]
+    return niw_log_evidence_stats_np(
+        M.sum(axis=1), M @ X, np.einsum("sk,ki,kj->sij", M, X, X), prior
+    )
+
+
+def niw_log_evidence_stats_np(n, S1, S2, prior: NIW) -> np.ndarray:
+    r""":func:`niw_log_evidence_masked_np` from each set's sufficient statistics: its
+    size ``n (num_sets,)``, sum ``S1 (num_sets, r)`` and sum of outer products
+    ``S2 (num_sets, r, r)`` (the same formula; evaluating many priors on the same
+    sets costs no pass over the data)."""
+    n, S1, S2 = (np.asarray(v, float) for v in (n, S1, S2))
+    r = S1.shape[1]
     a0 = np.asarray(prior.a, float)
     k0 = float(prior.kappa)
     e0 = float(prior.eta)
     C0 = np.asarray(prior.C, float)
-    n = M.sum(axis=1)
-    S1 = M @ X
-    S2 = np.einsum("sk,ki,kj->sij", M, X, X)
     kn = k0 + n
     en = e0 + n
     an = (k0 * a0 + S1) / kn[:, None]

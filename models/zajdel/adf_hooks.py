@@ -12,10 +12,13 @@ r"""The Zajdel tracker's ADF step as the three hooks of :mod:`inference.adf.driv
   bookkeeping (insertion, eviction of the track end seen longest ago, pruning) and the
   step's report.
 
-With ``ADFConfig(birth_leave=True)`` (issue 17) the link prior is that of people
-entering at a rate and leaving the building (:func:`_link_prior`), and a track end
-that can no longer be continued is closed before each step (:func:`_close_expired`);
-the default keeps the spec's label prior, bit for bit.
+With ``ADFConfig(birth_leave=True)`` or ``"filter"`` (issue 17) the link prior is
+that of people entering at a rate and leaving the building (:func:`_link_prior`;
+:mod:`models.zajdel.birth_leave` has both forms and their measurements), and a track
+end that can no longer be continued is closed before each step
+(:func:`_close_expired`); ``"filter"`` also keeps all of the new end's mass and
+evicts the end least likely to be continued (:func:`project`). The default keeps the
+spec's label prior, bit for bit.
 
 Each slot caches :math:`C^{-1}`, :math:`\log|C|`, the data-free part of its
 Student-t predictive and the digamma sum of its updated NIW's :math:`E[\log|V|]`
@@ -41,7 +44,7 @@ from inference.adf.niw import (
     niw_update_cached,
 )
 from models.zajdel.adf_types import ADFConfig, ADFInfo, ADFParams, ADFState
-from models.zajdel.path import log_p_delta_cached
+from models.zajdel.path import log_new_rate, log_p_delta_cached, log_stay_lookup
 
 __all__ = ["predict", "condition", "project", "window_predict", "zajdel_hooks"]
 
@@ -69,6 +72,7 @@ def _top(x, k):
     return x[i], i
 
 
+FILTER = "filter"  # ADFConfig.birth_leave: the filtering form (see _link_prior)
 CLOSE_EPS = 1e-6  # birth-leave: a track end continued with less probability is closed
 
 
@@ -102,6 +106,12 @@ def _close_expired(m: ADFParams, st: ADFState, te, scatter: bool = True) -> ADFS
     return st2._replace(closed=jax.lax.cond(jnp.any(gone), add, lambda c: c, st.closed))
 
 
+def _log_stay(m: ADFParams, st: ADFState, t):
+    """log g_j(t - t_j) of every slot (S,): the probability that slot j's person makes
+    no further pass by time t (:func:`models.zajdel.path.log_stay_prob`, tabulated)."""
+    return log_stay_lookup(m.stay_table, m.stay_step, st.slot_cam, st.slot_bq, t - st.slot_tq)
+
+
 def _link_prior(m: ADFParams, uniform: bool, st: ADFState, birth_leave: bool = False, te=None):
     """Spec step 1: log P(link j) (S,), log P(new) (), and which slots are open (S,).
 
@@ -117,17 +127,27 @@ def _link_prior(m: ADFParams, uniform: bool, st: ADFState, birth_leave: bool = F
     setting (seed 0, 3,000 observations, 512 slots), the filtering form that puts the
     leave probability into the hazard instead (new: lambda, link:
     (1 - rho) p_delta / (rho + (1 - rho) S_j)) over-split: counter 415 for 280
-    people, because the factorised belief never lowers the open mass of silent ends
-    as time passes. A track end whose probability of being continued,
+    people; the causes were the new end's pointer mass lost to 'closed', too few open
+    ends, the constant rate and the appearance prior, not the form (lowering the open
+    mass of silent ends as time passes, coupled to the counter, under-counted badly:
+    54 for 100 after 500 observations; see :mod:`models.zajdel.birth_leave`).
+    ``birth_leave="filter"``: that filtering form,
+    log P(new) = log lambda(t) (:func:`models.zajdel.path.log_new_rate`) and log
+    P(link j) = log open_j + log(1 - rho) - log g_j(t) (:func:`_log_stay`), the
+    path term p_delta added by :func:`predict`. A track end whose probability of being continued,
     (1 - rho) S_j / (rho + (1 - rho) S_j), falls below ``CLOSE_EPS`` is closed
     (:func:`_close_expired`).
     """
     open_ = jnp.sum(st.slot_pprob, axis=1)
     valid = st.slot_valid & (open_ > 0)
     safe_open = jnp.where(valid, open_, 1.0)
+    if birth_leave == FILTER:
+        rho = m.path.leave_prob
+        lg = _log_stay(m, st, te)
+        return jnp.log(safe_open) + jnp.log1p(-rho) - lg, log_new_rate(m.path, te), valid
     if birth_leave:
         rho = m.path.leave_prob
-        return jnp.log(safe_open) + jnp.log1p(-rho), jnp.log(m.path.new_rate * rho), valid
+        return jnp.log(safe_open) + jnp.log1p(-rho), log_new_rate(m.path, te) + jnp.log(rho), valid
     if uniform:
         c = jnp.arange(st.counter.shape[0], dtype=st.counter.dtype)
         e = jnp.sum(st.counter / (c + 1.0))
@@ -250,7 +270,7 @@ def _old_slices_seed(st: ADFState, w, comps, itop, M: int):
     return tuple(sel(n, c) for n, c in zip(projected, old, strict=True))
 
 
-def _insert_slot(cfg: ADFConfig, st: ADFState, qlab, pprob, new_p, new_n):
+def _insert_slot(cfg: ADFConfig, st: ADFState, qlab, pprob, new_p, new_n, evict_key=None):
     """Slot bookkeeping: the new slot takes a free slot, else the track end seen
     longest ago is closed; pointer mass of persons left out of the new slot's top
     entries, of an evicted slot, and below ``prune_eps`` becomes a closed end (every
@@ -263,9 +283,8 @@ def _insert_slot(cfg: ADFConfig, st: ADFState, qlab, pprob, new_p, new_n):
     closed = closed + qlab - jnp.zeros(N, qlab.dtype).at[new_n].add(new_p)
     valid = st.slot_valid & (jnp.sum(pprob, axis=1) > 0)
     free = ~valid
-    idx = jnp.where(
-        jnp.any(free), jnp.argmax(free), jnp.argmin(jnp.where(valid, st.slot_tq, jnp.inf))
-    )
+    key = st.slot_tq if evict_key is None else evict_key
+    idx = jnp.where(jnp.any(free), jnp.argmax(free), jnp.argmin(jnp.where(valid, key, jnp.inf)))
     closed = closed.at[st.slot_person[idx]].add(jnp.where(valid[idx], pprob[idx], 0.0))
     pprob = pprob.at[idx].set(0.0)
     small_old = (pprob < cfg.prune_eps) & (pprob > 0)
@@ -301,6 +320,18 @@ def _report(cfg: ADFConfig, st: ADFState, post, qlab, counter, valid, itop, qtop
     return ADFInfo(link_obs, lp, w0, bn, bp, cm, cs, lz, jnp.sum(valid), impossible)
 
 
+def _filter_insert(m: ADFParams, st: ADFState, pprob, qlab, new_p, new_n, tq):
+    """Birth-leave filtering form, the slot bookkeeping's inputs: the eviction key
+    (S,), each old end's open mass times the probability that its person is still in
+    the building, open_j (1 - rho / g_j), lowest evicted first; the new end's top-W
+    persons rescaled to carry all of its mass (it is surely someone's latest end; the
+    persons left out do not move it to 'closed', so person rows may exceed 1 there),
+    and the label mass that ``_insert_slot`` takes out of 'closed' accordingly (N,)."""
+    key = jnp.sum(pprob, axis=1) * (1.0 - m.path.leave_prob / jnp.exp(_log_stay(m, st, tq)))
+    new_p = new_p * (jnp.sum(qlab) / jnp.maximum(jnp.sum(new_p), 1e-300))
+    return key, jnp.zeros_like(qlab).at[new_n].add(new_p), new_p
+
+
 def project(m: ADFParams, st: ADFState, x, posterior, cfg: ADFConfig):
     """Spec steps 3-6 and the slot bookkeeping: ``(new state, ADFInfo)``."""
     o, cam, be, bq, te, tq = x
@@ -319,7 +350,10 @@ def project(m: ADFParams, st: ADFState, x, posterior, cfg: ADFConfig):
         sa, sk, se, sC, sCinv, sld = _old_slices_seed(st, w, comps, itop, M)
         sln = niw_predictive_lognorm(sk, se, sld, r)
         spsi = niw_sum_digamma(se + 1.0, r)
-    idx, valid, person, pprob, closed = _insert_slot(cfg, st, qlab, pprob, new_p, new_n)
+    key, qclose = None, qlab
+    if cfg.birth_leave == FILTER:
+        key, qclose, new_p = _filter_insert(m, st, pprob, qlab, new_p, new_n, tq)
+    idx, valid, person, pprob, closed = _insert_slot(cfg, st, qclose, pprob, new_p, new_n, key)
     new_state = ADFState(
         k=st.k + 1,
         last_tq=tq,

@@ -36,6 +36,10 @@ __all__ = [
     "log_p_delta0",
     "pairwise_path_logprob",
     "continuation_horizon",
+    "log_stay_prob",
+    "stay_table",
+    "log_stay_lookup",
+    "log_new_rate",
 ]
 
 
@@ -58,6 +62,9 @@ class PathModel(NamedTuple):
         not set), used by the ADF's birth-leave link prior (``ADFConfig.birth_leave``)
     leave_prob : ()           probability that a pass is a person's last (they leave the
         building; NaN: not set), same use
+    rate_bin : ()             birth-leave model: ``new_rate`` may be an arrival-rate
+        profile, shape (num_bins,), piecewise constant over bins of this length from
+        time 0 (the last bin extends to infinity); inf (default): one constant rate
     """
 
     log_trans: np.ndarray
@@ -68,6 +75,7 @@ class PathModel(NamedTuple):
     window: np.ndarray
     new_rate: np.ndarray = np.float64(np.nan)
     leave_prob: np.ndarray = np.float64(np.nan)
+    rate_bin: np.ndarray = np.float64(np.inf)
 
     @property
     def num_cameras(self) -> int:
@@ -85,6 +93,7 @@ class PathModel(NamedTuple):
             max_travel=np.asarray(self.max_travel) * factor,
             window=np.asarray(self.window) * factor,
             new_rate=np.asarray(self.new_rate) / factor,
+            rate_bin=np.asarray(self.rate_bin) * factor,
         )
 
 
@@ -254,6 +263,60 @@ def continuation_horizon(path: PathModel, eps: float) -> np.ndarray:
         below = surv(mid) < target
         up, lo = np.where(below, mid, up), np.where(below, lo, mid)
     return up
+
+
+def log_stay_prob(path: PathModel, cam_j, bq_j, delta) -> np.ndarray:
+    r"""Birth-leave model (numpy): :math:`\log g_j(\Delta) = \log(\rho + (1-\rho)
+    S_j(\Delta))`, the probability that a person last seen leaving camera ``cam_j``
+    through border ``bq_j`` makes no further pass within ``delta`` (>= 0) time: they
+    left the building (:math:`\rho` = ``path.leave_prob``), or their travel time, a
+    truncated normal after a move drawn from the transition table, is longer
+    (:math:`S_j(\Delta) = \sum_{c'} P(c' \mid c_j, b_j)\, P(X_{c_j c'} > \Delta)`).
+    Decreases from 1 at ``delta = 0`` to :math:`\log\rho`. ``cam_j, bq_j, delta``
+    broadcast together; the result has their shape."""
+    from scipy.special import ndtr
+
+    rho = float(path.leave_prob)
+    trans = np.exp(np.asarray(path.log_trans, float)).sum(axis=-1)[cam_j, bq_j]  # (..., C)
+    mu = np.asarray(path.travel_mean, float)[cam_j]
+    sd = np.asarray(path.travel_std, float)[cam_j]
+    tmax = float(path.max_travel)
+    hi = ndtr((mu - tmax) / sd) if np.isfinite(tmax) else np.zeros_like(mu)
+    d = np.maximum(np.asarray(delta, float), 0.0)[..., None]
+    sf = np.clip((ndtr((mu - d) / sd) - hi) / (ndtr(mu / sd) - hi), 0.0, 1.0)
+    return np.log(rho + (1.0 - rho) * (trans * sf).sum(-1))
+
+
+def stay_table(path: PathModel, horizon: float, num: int = 512) -> tuple[np.ndarray, float]:
+    """:func:`log_stay_prob` tabulated per (camera, quit border) on ``num`` equally
+    spaced times over ``[0, horizon]``: ``(table (C, B, num), step)``, for
+    :func:`log_stay_lookup` (the filter's per-step work needs no special function)."""
+    C, B = np.shape(path.log_entry)
+    step = float(horizon) / (num - 1)
+    d = np.arange(num) * step
+    c, b = np.meshgrid(np.arange(C), np.arange(B), indexing="ij")
+    return log_stay_prob(path, c[..., None], b[..., None], d), step
+
+
+def log_new_rate(path: PathModel, te):
+    """log lambda(te) (jax): the birth-leave arrival rate at time ``te``, constant or
+    the profile of ``path.rate_bin``-long bins (``te`` before 0 in the first bin)."""
+    rate = jnp.atleast_1d(path.new_rate)
+    i = jnp.clip(jnp.floor(te / path.rate_bin), 0, rate.shape[0] - 1).astype(jnp.int32)
+    return jnp.log(rate[i])
+
+
+def log_stay_lookup(table, step, cam_j, bq_j, delta):
+    """:func:`log_stay_prob` (jax) by linear interpolation in the table of
+    :func:`stay_table`; past the table's horizon its last value (about log rho)."""
+    num = table.shape[-1]
+    u = jnp.clip(jnp.maximum(delta, 0.0) / step, 0.0, num - 1.0)
+    i = jnp.minimum(jnp.floor(u).astype(jnp.int32), num - 2)
+    f = u - i
+    row = table[cam_j, bq_j]
+    lo = jnp.take_along_axis(row, i[..., None], axis=-1)[..., 0]
+    hi = jnp.take_along_axis(row, (i + 1)[..., None], axis=-1)[..., 0]
+    return lo + f * (hi - lo)
 
 
 def log_p_delta0(path: PathModel, cam, be) -> np.ndarray:

@@ -47,7 +47,7 @@ from models.zajdel.adf_types import DEFAULT_OLD_UPDATE, ADFConfig, ADFInfo, ADFP
 from models.zajdel.data import Observations, validate_observations
 from models.zajdel.decode import RunResult, chain_decode
 from models.zajdel.params import ZajdelParams, check_params
-from models.zajdel.path import PathModel, continuation_horizon, travel_log_norm
+from models.zajdel.path import PathModel, continuation_horizon, stay_table, travel_log_norm
 
 __all__ = [
     "ADFConfig",
@@ -60,6 +60,7 @@ __all__ = [
 ]
 
 _FORMAT = "zajdel-adf-state-v2"  # v2: slot_lognorm and slot_psi_next cached in the state
+STAY_TABLE_SIZE = 1024  # birth-leave filtering form: log g tabulated at this many times
 _NEG_INF = ("last_tq",)  # -inf: no observation yet (log-space fields are finite)
 
 
@@ -74,6 +75,11 @@ def _adf_params(params: ZajdelParams) -> ADFParams:
     path = PathModel(*(jnp.asarray(np.asarray(v, float)) for v in params.path))
     k0, e0 = jnp.asarray(f64(pr.kappa)), jnp.asarray(f64(pr.eta))
     logdet0 = jnp.asarray(f64(2.0 * np.log(np.diag(L)).sum()))
+    horizon = continuation_horizon(params.path, CLOSE_EPS)
+    if np.isfinite(params.path.leave_prob):
+        table, step = stay_table(params.path, float(np.max(horizon)), STAY_TABLE_SIZE)
+    else:
+        table, step = np.zeros((1, 1, 2)), 1.0
     return ADFParams(
         a0=jnp.asarray(np.asarray(pr.a, f64)),
         k0=k0,
@@ -86,7 +92,9 @@ def _adf_params(params: ZajdelParams) -> ADFParams:
         path=path,
         path_lognorm=travel_log_norm(path),
         p_new=jnp.asarray(f64(0.5 if params.p_new is None else params.p_new)),
-        close_horizon=jnp.asarray(continuation_horizon(params.path, CLOSE_EPS)),
+        close_horizon=jnp.asarray(horizon),
+        stay_table=jnp.asarray(table),
+        stay_step=jnp.asarray(f64(step)),
     )
 
 
@@ -133,8 +141,10 @@ class ZajdelADF:
             raise ModelError(f"old_update = {cfg.old_update!r}: must be 'seed' or 'keep'")
         if cfg.max_open < 1 or cfg.persons_per_slot < 1 or cfg.chunk < 1:
             raise ModelError(f"config: sizes must be >= 1, got {cfg}")
+        if cfg.birth_leave not in (False, True, "filter"):
+            raise ModelError(f"birth_leave = {cfg.birth_leave!r}: must be False, True or 'filter'")
         if cfg.birth_leave and not (
-            np.isfinite(params.path.new_rate) and np.isfinite(params.path.leave_prob)
+            np.all(np.isfinite(params.path.new_rate)) and np.isfinite(params.path.leave_prob)
         ):
             raise ModelError("birth_leave: set path.new_rate and path.leave_prob first")
         self.obs_dim = params.obs_dim
