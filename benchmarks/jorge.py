@@ -24,6 +24,21 @@ domain pruning that bounds it costs: the largest, and the mean per inference of 
 largest, posterior mass of the labels a node's pruning removed, i.e. the probability
 under the window posterior that the true labelling was among them).
 
+Why groups of three and more are still wrong (issue 16 diagnosis, seed 0 / training seed
+100): nearly all such strokes are in the PETS2009 S1 crowds, where a "region" is a chain
+of overlapping boxes (IoU > 0.05, closed transitively) of up to 30 people whose member set
+changes every few frames (median stroke 4-5 frames at 7 fps, 16-18% one frame long).
+There (a) the on-line link rule recovers the true predecessors of only about half the
+strokes (``link_accuracy``; 0.72-0.94 on CAVIAR): true links are missed because the
+simulated occlusion gaps are counted in frames (5-15, i.e. up to 2 s at 7 fps) and
+spurious links take their place; (b) a quarter of the 3+ strokes hold someone never seen
+before (people enter the view inside the crowd), which needs new groups or joins; (c) once
+one stroke is wrong the error is carried along the links (``first_error_share`` ~0.1-0.2).
+Only 26 of 56 (S1L1-2) and 31 of 48 (S1L2-2) strokes of 3+ people have all their people
+in their linked parents, so most are unrepresentable whatever the domain cap. Not the
+cause: more than two true predecessors or successors (2 of 167 strokes in S1L1-2). Gap limits in frames instead of seconds and other link orderings (relative
+distance, box overlap) were tried on the training split and linked worse or the same.
+
 Summary keys: ``error_rate_validation`` (pooled LE / NT over the validation sequences),
 ``error_rate_train``, ``error_rate_group_3plus`` (strokes whose true group has three or
 more people, pooled over the sequences that have such strokes) and its colour-only
