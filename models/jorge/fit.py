@@ -267,7 +267,7 @@ def labelling_error(config: NetworkConfig, stroke_sets: Sequence[StrokeSet]) -> 
 
 
 SEARCH_GRID = {
-    "gate": ("pixels", "scaled"),
+    "gate": ("pixels", "scaled", "boxes"),
     "parameters": ("previous", "ml"),
     "new_groups": (False, True),
 }
@@ -277,7 +277,8 @@ table) or the previous defaults (``"previous"``, no palette evidence: chosen in 
 ms3ggt and mws1gt, both in the training split), and whether a stroke seen first may be
 a new group (``q_m`` fitted, or only ``m = 1``; ``p_join`` likewise), and the link
 gate (pixels and frames as tuned on CAVIAR, or scaled by the region's size and the frame
-rate, ``NetworkConfig.gate``). Each point is scored by :func:`labelling_error` on the training split (never validation data); the
+rate, or the box gate of issue 16 with ``v_box`` 0.5 (0.25 scored worse),
+``NetworkConfig.gate``). Each point is scored by :func:`labelling_error` on the training split (never validation data); the
 lowest error wins."""
 
 

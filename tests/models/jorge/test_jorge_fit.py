@@ -79,7 +79,7 @@ def test_default_parameters_are_the_fit_on_the_training_split():
     sets = training_strokes(seeds=TRAIN_SEEDS)
     if len(sets) < len(TRAIN_SEQUENCES) * len(TRAIN_SEEDS):
         pytest.skip("training sequences absent (set DBNTRACK_DATA to the shared data folder)")
-    base = NetworkConfig(labels=LabelParams(max_group_size=5), gate="scaled")
+    base = NetworkConfig(labels=LabelParams(max_group_size=5), gate="boxes")
     cfg = fit_parameters(sets, base)
     fitted = cfg.labels
     for name in ("p_new", "p_merge", "p_merge_one_split", "p_merge_both_split", "p_split", "p_part"):
