@@ -25,7 +25,10 @@ hand-offs of groups, :math:`\hat P_{join}` = joins / non-new children and
 smoothing, so no event seen zero times gets probability 0). The region-size likelihood
 :math:`\mathcal{N}(a; \mu_1 + \beta \log k, \sigma^2)` is fitted by least squares of the
 relative log area :math:`a` (as the labeller sees it when the stroke starts) on
-:math:`\log |T_k|`, :math:`\sigma` the residual standard deviation.
+:math:`\log |T_k|`, :math:`\sigma` the residual standard deviation. The palette
+colour-count table :math:`p(c \mid k)` (``NetworkConfig.palette_count_table``, issue 16)
+is the add-one smoothed frequency of :math:`c` distinct colours in the palettes of
+training strokes of :math:`k = |T_k|` people (larger groups counted as the largest).
 
 The split (declared here and in tutorial 04)
 --------------------------------------------
