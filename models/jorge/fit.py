@@ -25,7 +25,10 @@ hand-offs of groups, :math:`\hat P_{join}` = joins / non-new children and
 smoothing, so no event seen zero times gets probability 0). The region-size likelihood
 :math:`\mathcal{N}(a; \mu_1 + \beta \log k, \sigma^2)` is fitted by least squares of the
 relative log area :math:`a` (as the labeller sees it when the stroke starts) on
-:math:`\log |T_k|`, :math:`\sigma` the residual standard deviation.
+:math:`\log |T_k|`, :math:`\sigma` the residual standard deviation. The palette
+colour-count table :math:`p(c \mid k)` (``NetworkConfig.palette_count_table``, issue 16)
+is the add-one smoothed frequency of :math:`c` distinct colours in the palettes of
+training strokes of :math:`k = |T_k|` people (larger groups counted as the largest).
 
 The split (declared here and in tutorial 04)
 --------------------------------------------
@@ -107,12 +110,14 @@ class EventCounts:
     part_total: int = 0
     new_sizes: np.ndarray = None  # type: ignore[assignment]  # (max_group_size,)
     sizes: list = None  # type: ignore[assignment]  # (k, rel_log_area) pairs
+    palette_counts: list = None  # type: ignore[assignment]  # (k, distinct palette colours) pairs
 
     def __post_init__(self) -> None:
         self.merge = np.zeros(3, np.int64) if self.merge is None else self.merge
         self.two_parent = np.zeros(3, np.int64) if self.two_parent is None else self.two_parent
         self.new_sizes = np.zeros(0, np.int64) if self.new_sizes is None else self.new_sizes
         self.sizes = [] if self.sizes is None else self.sizes
+        self.palette_counts = [] if self.palette_counts is None else self.palette_counts
 
     def add_new(self, m: int) -> None:
         if m > self.new_sizes.size:
@@ -158,6 +163,7 @@ def count_events(strokes: StrokeSet, config: NetworkConfig | None = None, counts
         rel = g.rel_log_area(k)
         if np.isfinite(rel):
             c.sizes.append((len(s.truth), rel))
+        c.palette_counts.append((len(s.truth), int(np.unique(s.palette).size)))
     gmax = g.config.labels.max_group_size
     for k, node in enumerate(g.nodes):
         truth = node.stroke.truth
@@ -221,7 +227,19 @@ def fit_parameters(stroke_sets: Iterable[StrokeSet], config: NetworkConfig | Non
     coef, *_ = np.linalg.lstsq(design, a, rcond=None)
     sigma = float(np.std(a - design @ coef)) if a.size > 2 else config.size_sigma
     return replace(config, labels=labels, size_mu_single=float(coef[0]), size_slope=float(coef[1]),
-                   size_sigma=max(sigma, 1e-3))
+                   size_sigma=max(sigma, 1e-3),
+                   palette_count_table=_palette_count_table(c.palette_counts, gmax, config.pool_size))
+
+
+def _palette_count_table(pairs: list, gmax: int, pool_size: int) -> tuple:
+    r""":math:`\log p(c \mid k)`, add-one smoothed frequencies of the palette's distinct
+    colour count ``c = 0..pool_size`` per group size ``k = 1..gmax`` (larger groups
+    counted as ``gmax``), as nested tuples for :class:`NetworkConfig`."""
+    counts = np.ones((gmax, pool_size + 1))
+    for k, cnt in pairs:
+        counts[min(k, gmax) - 1, min(cnt, pool_size)] += 1.0
+    table = np.log(counts / counts.sum(axis=1, keepdims=True))
+    return tuple(tuple(float(v) for v in row) for row in table)
 
 
 def training_strokes(sequences: Sequence[tuple[str, str]] = TRAIN_SEQUENCES,
@@ -252,17 +270,18 @@ def labelling_error(config: NetworkConfig, stroke_sets: Sequence[StrokeSet]) -> 
 
 
 SEARCH_GRID = {
-    "gate": ("pixels", "scaled"),
+    "gate": ("pixels", "scaled", "boxes"),
     "parameters": ("previous", "ml"),
     "new_groups": (False, True),
 }
 """The documented search over what the likelihood alone does not settle: the CPD
-parameters as fitted by :func:`fit_parameters` (``"ml"``) or the previous defaults
-(``"previous"``: chosen in issues 4-5 by labelling error with simulation seeds 20-39 on
+parameters as fitted by :func:`fit_parameters` (``"ml"``, with the palette colour-count
+table) or the previous defaults (``"previous"``, no palette evidence: chosen in issues 4-5 by labelling error with simulation seeds 20-39 on
 ms3ggt and mws1gt, both in the training split), and whether a stroke seen first may be
 a new group (``q_m`` fitted, or only ``m = 1``; ``p_join`` likewise), and the link
 gate (pixels and frames as tuned on CAVIAR, or scaled by the region's size and the frame
-rate, ``NetworkConfig.gate``). Each point is scored by :func:`labelling_error` on the training split (never validation data); the
+rate, or the box gate of issue 16 with ``v_box`` 0.5 (0.25 scored worse),
+``NetworkConfig.gate``). Each point is scored by :func:`labelling_error` on the training split (never validation data); the
 lowest error wins."""
 
 
@@ -292,7 +311,8 @@ def search_settings(fit_sets: Sequence[StrokeSet], score_sets: Sequence[StrokeSe
 
 
 def _grid_point(base: NetworkConfig, fitted: NetworkConfig, params: str, new_groups: bool) -> NetworkConfig:
-    cfg = fitted if params == "ml" else base
+    # "previous": the parameters before issue 16's fit, without palette evidence
+    cfg = fitted if params == "ml" else replace(base, palette_count_table=())
     if new_groups:
         labels = replace(cfg.labels, new_group_probs=fitted.labels.new_group_probs, p_join=fitted.labels.p_join)
     else:

@@ -100,6 +100,7 @@ __all__ = [
     "restriction_table",
     "colour_log_likelihood",
     "size_log_likelihood",
+    "palette_count_log_likelihood",
     "prune_labels",
     "NEW_STRIDE",
     "new_objects",
@@ -582,6 +583,46 @@ def size_log_likelihood(
         return np.zeros_like(sizes)
     z = (rel_log_area - (mu_single + slope * np.log(sizes))) / sigma
     return -0.5 * z * z - np.log(sigma) - 0.5 * np.log(2.0 * np.pi)
+
+
+def palette_count_log_likelihood(count: int, sizes: np.ndarray, table: np.ndarray) -> np.ndarray:
+    r"""Soft evidence of the number of distinct colours in a stroke's palette on the number
+    of people of each label (issue 16, our addition; not in seed 004).
+
+    A region holding more people shows more distinct dominant colours: the union of its
+    people's palettes. :math:`p(c \mid k)` is a table over counts :math:`c` per group size
+    :math:`k`, fitted by :func:`models.jorge.fit.fit_parameters` (add-one smoothed
+    frequencies on the training split). It tells a new group from a new person, which the
+    region size alone does poorly (issue 16). Caveat: with the benchmark's simulated
+    colours a palette is a clean union of its people's palettes, so this evidence is
+    strong there; on real images the count of colour clusters in a blob is noisier and the
+    table would have to be fitted on such data.
+
+    Parameters
+    ----------
+    count : int
+        :math:`c`, distinct colours of the stroke's palette (``Stroke.palette``).
+    sizes : ndarray of int, shape (num_labels,)
+        :math:`k = |x|` of each candidate label (>= 1).
+    table : ndarray, shape (max_k, max_count + 1)
+        :math:`\log p(c \mid k)`; sizes above ``max_k`` use its last row, counts above
+        ``max_count`` its last column. An empty table: no evidence.
+
+    Returns
+    -------
+    ndarray, shape (num_labels,)
+        :math:`\log p(c \mid k)` per label (zeros without a table).
+    """
+    sizes = np.asarray(sizes, dtype=np.int64)
+    table = np.asarray(table, dtype=np.float64)
+    if table.size == 0:
+        return np.zeros(sizes.shape, dtype=np.float64)
+    if table.ndim != 2:
+        raise ModelError(f"palette_count_log_likelihood: table must be 2-D, got shape {table.shape}")
+    if sizes.ndim != 1 or np.any(sizes < 1):
+        raise InputError(f"palette_count_log_likelihood: sizes must be ints >= 1, got {sizes}")
+    rows = np.minimum(sizes, table.shape[0]) - 1
+    return table[rows, min(max(int(count), 0), table.shape[1] - 1)].copy()
 
 
 def colour_log_likelihood(

@@ -17,7 +17,7 @@ from models.jorge.fit import (
     training_strokes,
 )
 from models.jorge.labels import LabelParams
-from models.jorge.network import FITTED_LABELS, NetworkConfig
+from models.jorge.network import FITTED_LABELS, FITTED_PALETTE_COUNTS, NetworkConfig
 from models.jorge.strokes import StrokeSet, make_stroke
 
 
@@ -79,7 +79,9 @@ def test_default_parameters_are_the_fit_on_the_training_split():
     sets = training_strokes(seeds=TRAIN_SEEDS)
     if len(sets) < len(TRAIN_SEQUENCES) * len(TRAIN_SEEDS):
         pytest.skip("training sequences absent (set DBNTRACK_DATA to the shared data folder)")
-    base = NetworkConfig(labels=LabelParams(max_group_size=5), gate="scaled")
-    fitted = fit_parameters(sets, base).labels
+    base = NetworkConfig(labels=LabelParams(max_group_size=5), gate="boxes")
+    cfg = fit_parameters(sets, base)
+    fitted = cfg.labels
     for name in ("p_new", "p_merge", "p_merge_one_split", "p_merge_both_split", "p_split", "p_part"):
         assert getattr(fitted, name) == pytest.approx(getattr(FITTED_LABELS, name), rel=1e-9), name
+    np.testing.assert_allclose(cfg.palette_count_table, FITTED_PALETTE_COUNTS, rtol=1e-9)

@@ -12,10 +12,12 @@ from models.jorge.online import (
     colour_only_labels,
     first_errors,
     label_online,
+    link_accuracy,
     object_people,
     optimal_people,
     reidentify,
     score,
+    true_predecessors,
 )
 from models.jorge.simulate import simulate_ground_truth
 from models.jorge.strokes import build_strokes, load_caviar, make_stroke
@@ -143,3 +145,13 @@ def test_first_errors_by_hand():
     assert first_errors(s, []) == ()
     with pytest.raises(InputError):
         first_errors(s, [6])
+
+
+def test_link_accuracy_by_hand():
+    s = _strokes() + [make_stroke(4, 30, 40, (20, 0), (30, 0), [0, 1], {0, 1})]
+    # true predecessors: none, none, 0, 1, and 4's people were last in 2 and 3
+    assert true_predecessors(s) == [F(), F(), F({0}), F({1}), F({2, 3})]
+    assert link_accuracy(s, [(), (), (0,), (1,), (2, 3)]) == 1.0
+    assert link_accuracy(s, [(), (), (1,), (1,), (2,)]) == pytest.approx(3 / 5)
+    with pytest.raises(InputError):
+        link_accuracy(s, [()])

@@ -179,11 +179,11 @@ def test_relative_log_area_is_against_a_quantile_of_the_strokes_seen():
     np.testing.assert_array_equal(g2.size_loglik(0), np.zeros(len(g2.nodes[0].domain)))
 
 
-def test_window_soft_evidence_is_colour_times_size():
+def test_window_soft_evidence_is_colour_times_size_times_palette_count():
     g = _graph()
     win = g.window(range(6))
     for k in range(6):
-        ll = g.colour_loglik(k) + g.size_loglik(k)
+        ll = g.colour_loglik(k) + g.size_loglik(k) + g.palette_count_loglik(k)
         np.testing.assert_allclose(win.soft_evidence[node_name(k)], np.exp(ll - ll.max()), rtol=1e-12)
         sizes = np.array([len(lab) for lab in g.nodes[k].domain])
         want = size_log_likelihood(g.rel_log_area(k), sizes, CFG.size_mu_single,
