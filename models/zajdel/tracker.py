@@ -21,7 +21,11 @@ for the ``old_update_top`` most probable links) or stay unchanged
 Memory and time per observation are bounded: pointer entries below ``prune_eps`` are
 dropped, and when all ``max_open`` slots are taken the track end seen longest ago is
 closed. Dropped pointer mass is kept per person as a "closed end" entry, so every
-person's pointer row (never seen + closed + open slots) still sums to 1.
+person's pointer row (never seen + closed + open slots) still sums to 1. With
+``ADFConfig(slot_mass_eps=..., min_open=...)`` slots whose open mass is below the
+threshold are closed too and the table is sized by the open slots, ``max_open`` only
+a cap (:mod:`models.zajdel.adf_prune`): the cost per observation then follows the
+number of track ends that carry mass, not the cap.
 
 Decodings (:mod:`models.zajdel.decode`): on-line MAP labels and chain decoding.
 Fixed-lag revision (``lag = L``, :mod:`models.zajdel.adf_lag`); ``lag = 0`` is the
