@@ -32,7 +32,7 @@ and, optionally, host-side helpers:
   ``revise(state, start, num_valid, scores) -> posterior`` (host: the posterior of the
   window's first observation once the window has been seen).
 
-What the driver does: one step is ``project(condition(predict))``; :func:`adf_filter`
+What the driver does: one step is ``project(condition(predict))`` (then ``prune``); :func:`adf_filter`
 runs the step over observations in fixed-size chunks (one compiled ``lax.scan`` per
 chunk shape, padded steps skipped, so that a run split anywhere and resumed from the
 returned state gives bit-identical results), growing capacities between chunks;
