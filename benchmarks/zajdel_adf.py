@@ -35,8 +35,7 @@ obs_per_s_cap64, obs_per_s_cap256, obs_per_s_cap1024 : streaming the same observ
     as ``obs_per_s`` with the pointer table pruned by mass (``slot_mass_eps`` =
     ``mass_prune_eps``, chosen on ``mass_prune_train_seeds``) and sized by its open
     slots (``min_open`` = 64, the cap 64 / 256 / 1024 only a safety net), best of 3
-    runs (--quick: 1) after a warm-up run over the whole stream (every table size
-    compiled);
+    runs after a warm-up run over the whole stream (every table size compiled);
     ``throughput_ratio_cap1024_vs_cap64`` and ``_vs_cap256`` their ratios;
     ``speedup_pruned_vs_unpruned_cap1024`` against the fixed 1,024-slot table
     (``obs_per_s_cap1024_unpruned``); ``pruned_mass_max`` the most open-track mass
@@ -187,7 +186,7 @@ def run(quick: bool, seed: int) -> dict:
 
     # -- 3a. throughput against the cap, the table pruned by mass (issue 17) ---------
     t0 = time.perf_counter()
-    out.update(_mass_pruning(big, stream, out["f1_adf"], seed, check, 1 if quick else 3))
+    out.update(_mass_pruning(big, stream, out["f1_adf"], seed, check, 3))
     log(f"mass pruning: {time.perf_counter() - t0:.1f} s")
 
     # -- 3b. the counter on the large setting: birth-leave prior vs the spec's -------
