@@ -36,6 +36,21 @@ counter_rel_err_large : |final counter - true people| / true people on the large
     ``_curve_joint_prior``) the joint form (``birth_leave=True``, constant rate, the
     simulator's prior, 256 open ends), ``counter_rel_err_large_seeds`` the final error
     of seeds seed, seed + 1, seed + 2
+obs_per_s_cap64, obs_per_s_cap256, obs_per_s_cap1024 : streaming the same observations
+    as ``obs_per_s`` with the pointer table pruned by mass (``slot_mass_eps`` =
+    ``mass_prune_eps``, chosen on ``mass_prune_train_seeds``) and sized by its open
+    slots (``min_open`` = 64, the cap 64 / 256 / 1024 only a safety net), best of 3
+    interleaved rounds after a warm-up run over the whole stream (every table size
+    compiled);
+    ``throughput_ratio_cap1024_vs_cap64`` and ``_vs_cap256`` their ratios;
+    ``speedup_pruned_vs_unpruned_cap1024`` against the fixed 1,024-slot table
+    (``obs_per_s_cap1024_unpruned``); ``pruned_mass_max`` the most open-track mass
+    closed by the threshold in one step (cap 1024; bound ``pruned_mass_bound`` =
+    eps x slots closed per step), ``pruned_mass_total`` its sum over the stream;
+    ``large_map_link_agreement_pruned_vs_unpruned`` the fraction of observations whose
+    most probable link (or new) is the same with and without pruning (cap 1024);
+    ``f1_adf_pruned`` and ``f1_adf_pruned_diff`` (minus ``f1_adf``),
+    ``objects_abs_err_pruned``: the office accuracy with pruning (64 slots)
 speedup_vs_numpy_loop : time of the same ADF written as a plain numpy loop over
     candidate links and mixture components (``benchmarks._zajdel_numpy_loop``) / ours, on the
     first 1,000 observations of the large setting (--quick: 300; ours: best of 3); "ok" requires both to
@@ -189,6 +204,11 @@ def run(quick: bool, seed: int) -> dict:
     check("large_link_mass_at_most_one", np.all(res.link_prob.sum(1) + res.new_prob <= 1 + 1e-9))
     log(f"large setting: {n_large} obs in {dt:.1f} s ({out['obs_per_s']:.0f} obs/s)")
 
+    # -- 3a. throughput against the cap, the table pruned by mass (issue 17) ---------
+    t0 = time.perf_counter()
+    out.update(_mass_pruning(big, stream, out["f1_adf"], seed, check, 3))
+    log(f"mass pruning: {time.perf_counter() - t0:.1f} s")
+
     # -- 3b. the counter on the large setting: birth-leave prior vs the spec's -------
     t0 = time.perf_counter()
     out.update(_counter_large(big, res.counter_mean, n_large, joint=not quick))
@@ -309,3 +329,75 @@ def _counter_joint(big, rate: float, leave: float) -> dict:
         "counter_rel_err_large_joint_prior": jfinal,
         "counter_rel_err_curve_joint_prior": jcurve,
     }
+
+
+def _timed_runs(trackers: dict, obs, repeat: int):
+    """Observations per second of ``tr.run(obs)`` for each tracker, best of ``repeat``
+    rounds (the trackers interleaved in each round, so that a busy spell of a shared
+    machine slows all of them), and each tracker's last output."""
+    best = dict.fromkeys(trackers, np.inf)
+    last = {}
+    for _ in range(repeat):
+        for name, tr in trackers.items():
+            t0 = time.perf_counter()
+            last[name] = tr.run(obs)
+            best[name] = min(best[name], time.perf_counter() - t0)
+    return {k: obs.num_obs / v for k, v in best.items()}, last
+
+
+def _mass_pruning(big, stream, f1_adf: float, seed: int, check, repeat: int) -> dict:
+    """Benchmark keys of the mass-pruned pointer table (see the module docstring)."""
+    from models.zajdel.adf_prune import PRUNE_ROWS, SLOT_MASS_EPS, TRAIN_SEEDS
+    from models.zajdel.metrics import num_objects, pairwise_prf
+    from models.zajdel.simulate import simulate_office
+    from models.zajdel.tracker import ADFConfig, ZajdelADF
+
+    eps = SLOT_MASS_EPS
+    base = ADFConfig(max_open=1024, init_persons=1024, chunk=128)
+    pruned = base._replace(slot_mass_eps=eps, min_open=64)
+    out: dict = {"mass_prune_eps": eps, "mass_prune_train_seeds": list(TRAIN_SEEDS)}
+    trackers = {c: ZajdelADF(big.params, pruned._replace(max_open=c)) for c in (64, 256, 1024)}
+    for tr in trackers.values():
+        tr.run(stream)  # warm-up over the whole stream: every table size it visits
+    rates, last = _timed_runs(trackers, stream, repeat)
+    for cap, rate in rates.items():
+        out[f"obs_per_s_cap{cap}"] = rate
+    st, res_p = last[1024]
+    r64, r256, r1024 = (out[f"obs_per_s_cap{c}"] for c in (64, 256, 1024))
+    out["throughput_ratio_cap1024_vs_cap64"] = r1024 / r64
+    out["throughput_ratio_cap1024_vs_cap256"] = r1024 / r256
+    tr = ZajdelADF(big.params, base)
+    tr.run(_take_first(stream, base.chunk))  # warm-up: one fixed shape
+    rates, last = _timed_runs({"u": tr}, stream, 1)
+    out["obs_per_s_cap1024_unpruned"], (_, res_u) = rates["u"], last["u"]
+    out["speedup_pruned_vs_unpruned_cap1024"] = r1024 / out["obs_per_s_cap1024_unpruned"]
+    out["pruned_mass_max"] = float(res_p.pruned_mass.max())
+    out["pruned_mass_bound"] = eps * PRUNE_ROWS
+    out["pruned_mass_total"] = float(res_p.pruned_mass.sum())
+    out["peak_open_tracks_pruned_cap1024"] = int(res_p.num_open.max())
+    out["peak_open_tracks_unpruned_cap1024"] = int(res_u.num_open.max())
+    out["table_size_final_cap1024"] = int(st.slot_valid.shape[0])
+    agree = res_p.link_matrix().argmax(1) == res_u.link_matrix().argmax(1)
+    out["large_map_link_agreement_pruned_vs_unpruned"] = float(agree.mean())
+    check("pruned_mass_within_bound", out["pruned_mass_max"] <= out["pruned_mass_bound"])
+    rows = np.asarray(st.never) + np.asarray(st.closed)
+    np.add.at(rows, np.asarray(st.slot_person).ravel(), np.asarray(st.slot_pprob).ravel())
+    check("pruned_pointer_rows_sum_to_one", np.allclose(rows, 1.0, atol=1e-9))
+    # office accuracy (the 10 seeds of f1_adf; 64 slots, fixed table: same compiled shape)
+    f1, obj = [], []
+    for s in range(10):
+        sc = simulate_office(seed + s)
+        tr = ZajdelADF(sc.params, pruned._replace(max_open=64, min_open=0))
+        lab = tr.run(sc.obs)[1].labels_chain()
+        f1.append(pairwise_prf(lab, sc.labels)[2])
+        obj.append(abs(num_objects(lab) - num_objects(sc.labels)))
+    out["f1_adf_pruned"] = _mean(f1)
+    out["f1_adf_pruned_diff"] = out["f1_adf_pruned"] - f1_adf
+    out["objects_abs_err_pruned"] = _mean(obj)
+    return out
+
+
+def _take_first(obs, n: int):
+    from models.zajdel.data import take
+
+    return take(obs, slice(0, n))

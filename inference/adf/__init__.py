@@ -1,10 +1,12 @@
 """Assumed-density filtering pieces (seed 002, section 1.2.2): categorical marginals,
 Gaussian moment matching, the Normal-Inverse-Wishart KL projection (jax, vmap, jit,
 float64) and the Student-t predictive; the generic ADF driver (``driver``: hooks
-predict / condition / project, chunked scan, capacity growth, fixed-lag revision) and
-state checkpoints (``checkpoint``)."""
+predict / condition / project, chunked scan, capacity growth, fixed-lag revision),
+compacting a hypothesis table by posterior mass (``compact``) and state checkpoints
+(``checkpoint``)."""
 
 from inference.adf.categorical import categorical_marginals, mix_categoricals, normalize_log
+from inference.adf.compact import compact_rows, prune_rows_by_mass, row_capacity
 from inference.adf.gaussian import gaussian_moment_match
 from inference.adf.niw import (
     NIW,
@@ -23,6 +25,9 @@ from inference.adf.niw import (
 )
 
 __all__ = [
+    "compact_rows",
+    "prune_rows_by_mass",
+    "row_capacity",
     "categorical_marginals",
     "mix_categoricals",
     "normalize_log",

@@ -18,12 +18,21 @@ and, optionally, host-side helpers:
 * ``grow(state, margin) -> state``: enlarge array capacities so that ``margin`` more
   steps fit (called before every chunk; each growth recompiles once);
 * ``record(state) -> pytree``: extra per-step output taken from the new state;
+* ``prune(params, state) -> (state, report)`` (jit-able): run after every ``project``,
+  e.g. dropping hypotheses below a posterior-mass threshold
+  (:mod:`inference.adf.compact`); its per-step ``report`` is returned
+  (``ADFOutput.reports``);
+* ``overflow(state_before, state_after, reports) -> state | None`` (an argument of
+  :func:`adf_filter` / :func:`adf_filter_lag`, host): after each chunk (each
+  observation with fixed lag), a state to run the chunk again from (e.g.
+  ``state_before`` with a larger capacity, when the table filled up during the chunk)
+  or ``None`` to keep the result;
 * for fixed-lag revision, ``window_predict(params, state, xs) -> scores`` (jit-able:
   the scores of a window of observations against one belief) and
   ``revise(state, start, num_valid, scores) -> posterior`` (host: the posterior of the
   window's first observation once the window has been seen).
 
-What the driver does: one step is ``project(condition(predict))``; :func:`adf_filter`
+What the driver does: one step is ``project(condition(predict))`` (then ``prune``); :func:`adf_filter`
 runs the step over observations in fixed-size chunks (one compiled ``lax.scan`` per
 chunk shape, padded steps skipped, so that a run split anywhere and resumed from the
 returned state gives bit-identical results), growing capacities between chunks;
@@ -71,6 +80,7 @@ class ADFHooks(NamedTuple):
     project: Callable[..., Any]
     record: Callable[..., Any] | None = None
     window_predict: Callable[..., Any] | None = None
+    prune: Callable[..., Any] | None = None
 
 
 class ADFOutput(NamedTuple):
@@ -81,11 +91,14 @@ class ADFOutput(NamedTuple):
     records : per-chunk list of the stacked ``record(state)`` outputs (numpy; leading
         axis the chunk's valid steps; shapes may change between chunks when the
         capacity grows), empty without a ``record`` hook
+    reports : the stacked per-step ``prune`` reports (numpy), ``None`` without a
+        ``prune`` hook
     """
 
     state: Any
     infos: Any
     records: list
+    reports: Any = None
 
 
 def x64_context(x64: bool = True):
@@ -93,10 +106,19 @@ def x64_context(x64: bool = True):
     return jax.enable_x64(x64)
 
 
+def _pruned(hooks: ADFHooks, params, out):
+    """``(state, info)`` of ``project``, then ``prune``: ``(state, (info, report))``
+    with a ``prune`` hook, unchanged without."""
+    if hooks.prune is None:
+        return out
+    state, report = hooks.prune(params, out[0])
+    return state, (out[1], report)
+
+
 def _step(hooks: ADFHooks, params, state, x):
     prior = hooks.predict(params, state, x)
     posterior = hooks.condition(params, state, x, prior)
-    return hooks.project(params, state, x, posterior)
+    return _pruned(hooks, params, hooks.project(params, state, x, posterior))
 
 
 @partial(jax.jit, static_argnames=("hooks",))
@@ -106,7 +128,7 @@ def _step_jit(hooks: ADFHooks, params, state, x):
 
 @partial(jax.jit, static_argnames=("hooks",))
 def _project_jit(hooks: ADFHooks, params, state, x, posterior):
-    return hooks.project(params, state, x, posterior)
+    return _pruned(hooks, params, hooks.project(params, state, x, posterior))
 
 
 @partial(jax.jit, static_argnames=("hooks",))
@@ -138,7 +160,8 @@ def _scan_chunk(hooks: ADFHooks, params, state, xs, num_valid):
 
 
 def adf_step(hooks: ADFHooks, params, state, x, x64: bool = True):
-    """One compiled ADF step ``project(condition(predict(x)))``: ``(state, info)``.
+    """One compiled ADF step ``project(condition(predict(x)))``: ``(state, info)``
+    (with a ``prune`` hook, pruned after: ``(state, (info, report))``).
 
     ``x`` is one observation (a pytree of arrays without the time axis)."""
     with x64_context(x64):
@@ -170,6 +193,15 @@ def _stack_infos(parts: list, empty_info) -> Any:
     return jax.tree_util.tree_map(lambda *a: np.concatenate(a), *parts)
 
 
+def _split(hooks: ADFHooks, out):
+    """Per-step outputs ``info`` or ``(info, report)`` -> ``(info, report or None)``."""
+    return out if hooks.prune is not None else (out, None)
+
+
+def _first(tree, n: int):
+    return jax.tree_util.tree_map(lambda a: np.asarray(a)[:n], tree)
+
+
 def adf_filter(
     hooks: ADFHooks,
     params,
@@ -180,6 +212,7 @@ def adf_filter(
     empty_info=None,
     progress: bool = False,
     x64: bool = True,
+    overflow: Callable[[Any, Any, Any], Any] | None = None,
 ) -> ADFOutput:
     """Run the ADF over observations ``xs`` in compiled chunks of ``chunk`` steps.
 
@@ -195,6 +228,9 @@ def adf_filter(
     empty_info : what ``infos`` is when ``num_obs == 0``
     progress : tqdm bar over chunks
     x64 : run in float64 (``jax.enable_x64``)
+    overflow : ``overflow(state_before, state_after, reports)`` after each chunk (the
+        chunk's valid steps' ``prune`` reports, or ``None``): a state to run the chunk
+        again from, or ``None`` to keep it (see the module docstring)
 
     Returns
     -------
@@ -203,18 +239,35 @@ def adf_filter(
     if chunk < 1:
         raise InputError(f"chunk = {chunk}: must be >= 1")
     K = _num_obs(xs)
-    infos, records = [], []
+    infos, records, reports = [], [], []
     with x64_context(x64):
         for s in _progress(range(0, K, chunk), progress, "ADF", "chunk"):
             n = min(chunk, K - s)
             if grow is not None:
                 state = grow(state, chunk)
             pad = np.minimum(np.arange(s, s + chunk), K - 1)  # fixed chunk shape
-            state, (info, rec) = _scan_chunk(hooks, params, state, _take(xs, pad), np.int64(n))
-            infos.append(jax.tree_util.tree_map(lambda a, n=n: np.asarray(a)[:n], info))
+            xc = _take(xs, pad)
+            while True:
+                new, (out, rec) = _scan_chunk(hooks, params, state, xc, np.int64(n))
+                info, rep = _split(hooks, out)
+                rep = None if rep is None else _first(rep, n)
+                again = None if overflow is None else overflow(state, new, rep)
+                if again is None:
+                    break
+                state = again
+            state = new
+            infos.append(_first(info, n))
+            if rep is not None:
+                reports.append(rep)
             if hooks.record is not None:
-                records.append(jax.tree_util.tree_map(lambda a, n=n: np.asarray(a)[:n], rec))
-    return ADFOutput(state, _stack_infos(infos, empty_info), records)
+                records.append(_first(rec, n))
+    return ADFOutput(state, _stack_infos(infos, empty_info), records, _reports(hooks, reports))
+
+
+def _reports(hooks: ADFHooks, parts: list):
+    if hooks.prune is None:
+        return None
+    return _stack_infos(parts, None)
 
 
 def adf_filter_lag(
@@ -229,6 +282,7 @@ def adf_filter_lag(
     empty_info=None,
     progress: bool = False,
     x64: bool = True,
+    overflow: Callable[[Any, Any, Any], Any] | None = None,
 ) -> ADFOutput:
     """ADF with fixed-lag revision: observation k is conditioned on after the window
     ``x_k .. x_{k+lag}`` has been seen.
@@ -237,8 +291,9 @@ def adf_filter_lag(
     window has the fixed length ``lag + 1``, padded past the end by repeating the last
     observation), ``posterior = revise(state, k, num_valid, scores)`` on the host
     (``num_valid`` real window entries), then ``project(params, state, x_k,
-    posterior)``. The revision only changes how observation k is weighed; the belief
-    stays in the assumed family. ``grow`` is called every ``chunk`` observations.
+    posterior)`` (and ``prune``). The revision only changes how observation k is
+    weighed; the belief stays in the assumed family. ``grow`` is called every ``chunk``
+    observations, ``overflow`` after every observation (its ``reports`` of length 1).
 
     Returns
     -------
@@ -249,19 +304,30 @@ def adf_filter_lag(
     if hooks.window_predict is None:
         raise InputError("fixed-lag revision needs a window_predict hook")
     K = _num_obs(xs)
-    infos, records = [], []
+    infos, records, reports = [], [], []
     with x64_context(x64):
         for k in _progress(range(K), progress, f"ADF lag {lag}", "obs"):
             if grow is not None and k % chunk == 0:
                 state = grow(state, chunk)
             n = min(K, k + lag + 1) - k
             win = np.minimum(np.arange(k, k + lag + 1), K - 1)
-            scores = jax.device_get(_window_jit(hooks, params, state, _take(xs, win)))
-            posterior = revise(state, k, n, scores)
-            state, info = _project_jit(hooks, params, state, _take(xs, k), posterior)
+            while True:
+                scores = jax.device_get(_window_jit(hooks, params, state, _take(xs, win)))
+                posterior = revise(state, k, n, scores)
+                new, out = _project_jit(hooks, params, state, _take(xs, k), posterior)
+                info, rep = _split(hooks, out)
+                if rep is not None:
+                    rep = jax.tree_util.tree_map(lambda a: np.asarray(a)[None], rep)
+                again = None if overflow is None else overflow(state, new, rep)
+                if again is None:
+                    break
+                state = again
+            state = new
             infos.append(jax.tree_util.tree_map(lambda a: np.asarray(a)[None], info))
+            if rep is not None:
+                reports.append(rep)
             if hooks.record is not None:
                 records.append(
                     jax.tree_util.tree_map(lambda a: np.asarray(a)[None], hooks.record(state))
                 )
-    return ADFOutput(state, _stack_infos(infos, empty_info), records)
+    return ADFOutput(state, _stack_infos(infos, empty_info), records, _reports(hooks, reports))

@@ -44,6 +44,11 @@ class ADFConfig(NamedTuple):
     max_open : number of slots of the pointer table (cap on open track ends)
     persons_per_slot : persons kept per slot (sparse pointer row width)
     prune_eps : pointer entries below this are dropped
+    slot_mass_eps : slots whose open mass (sum of their pointer entries) is below this
+        are closed after each step (0: off); see :mod:`models.zajdel.adf_prune`
+    min_open : 0 (the table always has ``max_open`` slots) or the smallest table size:
+        the table then follows the number of open slots, ``max_open`` only a cap
+        (:mod:`models.zajdel.adf_prune`)
     old_update : "seed" or "keep" (see :data:`DEFAULT_OLD_UPDATE`)
     old_update_top : number of most probable links whose slices get the seed update
     mix_top : links (most probable first) whose components enter the new slice's NIW
@@ -65,6 +70,8 @@ class ADFConfig(NamedTuple):
     max_open: int = 256
     persons_per_slot: int = 16
     prune_eps: float = 1e-10
+    slot_mass_eps: float = 0.0
+    min_open: int = 0
     old_update: str = DEFAULT_OLD_UPDATE
     old_update_top: int = 8
     mix_top: int = 32

@@ -20,7 +20,8 @@ class RunResult(NamedTuple):
     link_obs (K, link_out), link_prob (K, link_out), new_prob (K,), label_person
     (K, label_out), label_prob (K, label_out), counter_mean (K,), counter_std (K,),
     loglik (K,), num_open (K,), impossible (K,), counter (K, N + 1) or None,
-    first_index: global index of the first observation of this run.
+    first_index: global index of the first observation of this run, pruned_mass (K,)
+    or None: open-track mass closed by ``ADFConfig.slot_mass_eps`` at each step.
     """
 
     link_obs: np.ndarray
@@ -35,6 +36,7 @@ class RunResult(NamedTuple):
     impossible: np.ndarray
     counter: np.ndarray | None
     first_index: int
+    pruned_mass: np.ndarray | None = None
 
     @property
     def num_obs(self) -> int:

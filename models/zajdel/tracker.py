@@ -21,7 +21,11 @@ for the ``old_update_top`` most probable links) or stay unchanged
 Memory and time per observation are bounded: pointer entries below ``prune_eps`` are
 dropped, and when all ``max_open`` slots are taken the track end seen longest ago is
 closed. Dropped pointer mass is kept per person as a "closed end" entry, so every
-person's pointer row (never seen + closed + open slots) still sums to 1.
+person's pointer row (never seen + closed + open slots) still sums to 1. With
+``ADFConfig(slot_mass_eps=..., min_open=...)`` slots whose open mass is below the
+threshold are closed too and the table is sized by the open slots, ``max_open`` only
+a cap (:mod:`models.zajdel.adf_prune`): the cost per observation then follows the
+number of track ends that carry mass, not the cap.
 
 Decodings (:mod:`models.zajdel.decode`): on-line MAP labels and chain decoding.
 Fixed-lag revision (``lag = L``, :mod:`models.zajdel.adf_lag`); ``lag = 0`` is the
@@ -41,8 +45,9 @@ from dbn.errors import InputError, ModelError
 from inference.adf.checkpoint import load_state, save_state
 from inference.adf.driver import adf_filter, adf_filter_lag, adf_step, x64_context
 from inference.adf.niw import niw_predictive_lognorm, niw_sum_digamma
-from models.zajdel.adf_hooks import CLOSE_EPS, zajdel_hooks
+from models.zajdel.adf_hooks import CLOSE_EPS
 from models.zajdel.adf_lag import lag_revision
+from models.zajdel.adf_prune import grow_slots, overflow_slots, tracker_hooks
 from models.zajdel.adf_types import DEFAULT_OLD_UPDATE, ADFConfig, ADFInfo, ADFParams, ADFState
 from models.zajdel.data import Observations, validate_observations
 from models.zajdel.decode import RunResult, chain_decode
@@ -143,22 +148,28 @@ class ZajdelADF:
             raise ModelError(f"config: sizes must be >= 1, got {cfg}")
         if cfg.birth_leave not in (False, True, "filter"):
             raise ModelError(f"birth_leave = {cfg.birth_leave!r}: must be False, True or 'filter'")
+        if cfg.min_open < 0 or not (np.isfinite(cfg.slot_mass_eps) and cfg.slot_mass_eps >= 0):
+            raise ModelError(f"config: min_open and slot_mass_eps must be >= 0, got {cfg}")
         if cfg.birth_leave and not (
             np.all(np.isfinite(params.path.new_rate)) and np.isfinite(params.path.leave_prob)
         ):
             raise ModelError("birth_leave: set path.new_rate and path.leave_prob first")
         self.obs_dim = params.obs_dim
         self._uniform = params.p_new is None
-        self._hooks = zajdel_hooks(cfg, self._uniform)
+        self._hooks = tracker_hooks(cfg, self._uniform)
         with x64_context():
             self._model = _adf_params(params)
+        empty = self.init(1, 1)._asdict()
+        self._blank = {f: v[0] for f, v in empty.items() if f.startswith("slot_")}
 
     # -- state ---------------------------------------------------------------------
-    def init(self, num_persons: int | None = None) -> ADFState:
-        """Empty belief (no observation yet): q_0(c = 0) = 1, no open track."""
+    def init(self, num_persons: int | None = None, num_slots: int | None = None) -> ADFState:
+        """Empty belief (no observation yet): q_0(c = 0) = 1, no open track; a table of
+        ``num_slots`` slots (default ``max_open``, or ``min_open`` when set)."""
         cfg = self.config
         N = int(num_persons or cfg.init_persons)
-        S, W, r = cfg.max_open, cfg.persons_per_slot, self.obs_dim
+        S = cfg.max_open if cfg.min_open <= 0 else min(cfg.min_open, cfg.max_open)
+        S, W, r = int(num_slots or S), cfg.persons_per_slot, self.obs_dim
         m = self._model
         counter = np.zeros(N + 1)
         counter[0] = 1.0
@@ -188,7 +199,10 @@ class ZajdelADF:
 
     def _grow(self, st: ADFState, margin: int) -> ADFState:
         """Double the person capacity while the counter could reach it within ``margin``
-        steps (the counter grows by at most one per observation)."""
+        steps (the counter grows by at most one per observation); with ``min_open``,
+        resize the pointer table to its open slots
+        (:func:`models.zajdel.adf_prune.grow_slots`)."""
+        st = grow_slots(self.config, st, self._blank)
         N = st.never.shape[0]
         top = np.flatnonzero(np.asarray(st.counter) > 0)
         cmax = int(top[-1]) if top.size else 0
@@ -232,7 +246,11 @@ class ZajdelADF:
             raise InputError(f"step: expected one observation, got {o.num_obs}")
         state = self._grow(state, 1)
         x = tuple(np.asarray(v)[0] for v in self._xs(o))
-        return adf_step(self._hooks, self._model, state, x)
+        state, info = adf_step(self._hooks, self._model, state, x)
+        if self._hooks.prune is not None:
+            info, rep = info
+            info = info._replace(num_open=rep.num_open)
+        return state, info
 
     def run(
         self,
@@ -261,7 +279,11 @@ class ZajdelADF:
         first = int(state.k)
         cfg = self.config
         common = dict(
-            chunk=cfg.chunk, grow=self._grow, empty_info=_empty_info(cfg), progress=progress
+            chunk=cfg.chunk,
+            grow=self._grow,
+            empty_info=_empty_info(cfg),
+            progress=progress,
+            overflow=self._overflow,
         )
         if lag > 0:
             out = adf_filter_lag(
@@ -269,7 +291,11 @@ class ZajdelADF:
             )
         else:
             out = adf_filter(self._hooks, self._model, state, self._xs(o), **common)
-        return out.state, self._result(out.infos, out.records, first)
+        return out.state, self._result(out.infos, out.records, first, out.reports)
+
+    def _overflow(self, before: ADFState, after: ADFState, reports):
+        """The driver's ``overflow`` hook (:func:`models.zajdel.adf_prune.overflow_slots`)."""
+        return overflow_slots(self.config, self._blank, before, reports)
 
     def _reviser(self, o: Observations):
         """The fixed-lag ``revise`` hook over the run's observations ``o``."""
@@ -290,14 +316,18 @@ class ZajdelADF:
 
         return revise
 
-    def _result(self, infos: ADFInfo, records: list, first: int) -> RunResult:
+    def _result(self, infos: ADFInfo, records: list, first: int, reports=None) -> RunResult:
         counter = None
         if records:
             width = max(np.shape(c)[1] for c in records)
             counter = np.concatenate(
                 [np.pad(c, ((0, 0), (0, width - np.shape(c)[1]))) for c in records]
             )
-        return RunResult(*(np.asarray(v) for v in infos), counter, first)
+        pruned = None
+        if reports is not None:
+            infos = infos._replace(num_open=np.asarray(reports.num_open, int))
+            pruned = np.asarray(reports.pruned_mass)
+        return RunResult(*(np.asarray(v) for v in infos), counter, first, pruned)
 
     # -- persistence ---------------------------------------------------------------
     def save(self, state: ADFState, path) -> None:

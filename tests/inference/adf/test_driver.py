@@ -213,3 +213,36 @@ def test_runs_in_float64_with_x64_switched_off():
         out = adf_filter(hooks(), params, state, ys, chunk=4, grow=grow)
     assert out.infos.loglik.dtype == np.float64 and out.state.b.dtype == np.float64
     np.testing.assert_array_equal(out.infos.loglik, ref.infos.loglik)
+
+
+def _identity_prune(p, s):
+    return s, s.b.sum()
+
+
+@pytest.mark.parametrize("lag", [None, 1])
+def test_prune_hook_reports_and_overflow_reruns_the_chunk(lag):
+    params, state, ys, (T, E, pi) = toy(5, K=7)
+    base = hooks()
+    pruned = base._replace(prune=_identity_prune)
+    retried = []
+
+    def overflow(before, after, reports):
+        assert reports.shape[0] in ((1,) if lag else (3, len(ys) % 3))  # the unit's steps
+        if retried:
+            return None
+        retried.append(before.b.shape[1])
+        return before._replace(b=jnp.pad(before.b, ((0, 0), (0, 2))))
+
+    def go(h, **kw):
+        if lag is None:
+            return adf_filter(h, params, state, ys, chunk=3, grow=grow, **kw)
+        rev = lambda s, k, n, scores: condition(params, s, None, scores[0])  # noqa: E731
+        return adf_filter_lag(h, params, state, ys, lag, rev, chunk=3, grow=grow, **kw)
+
+    plain = go(base)
+    out = go(pruned, overflow=overflow)
+    assert plain.reports is None and len(retried) == 1
+    np.testing.assert_allclose(out.reports, 1.0, atol=1e-12)  # one report per step
+    assert out.reports.shape == (len(ys),)
+    for f in ToyInfo._fields:  # the re-run chunk (larger capacity) gives the same answer
+        np.testing.assert_allclose(getattr(out.infos, f), getattr(plain.infos, f), atol=1e-12)
