@@ -34,7 +34,7 @@ from conftest_steps import KINDS, mutants, nan_leaves, same, snapshot  # noqa: E
 
 TRACKERS = models.available()
 #: trackers whose observations carry a time (a replayed earlier one must be rejected)
-TIMED = {"zajdel_adf", "zajdel_learnsearch", "jorge", "localization"}
+TIMED = {"zajdel_adf", "zajdel_learnsearch", "jorge", "localization", "pathrecovery", "rjmcmc3d"}
 
 
 @functools.cache
