@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.errors import DBNError, InputError
+from dbn.errors import DBNError, InputError, TimeOrderError
 from models.io.table import fail, read_rows, write_rows
 
 __all__ = ["Observations", "read_network", "read_observations", "write_path", "read_path"]
@@ -110,15 +110,20 @@ def write_path(path, t: np.ndarray, kind, cam, ta, obs_ids) -> Path:
 
 
 def read_path(path: str | Path) -> dict[int, tuple[int, int, int, int]]:
-    """``t -> (kind, camera, ta, obs)`` of a path CSV (kind 0 visible, 1 hidden)."""
+    """``t -> (kind, camera, ta, obs)`` of a path CSV (kind 0 visible, 1 hidden); rows in
+    increasing ``t >= 0`` (a repeated, earlier or negative step is a TimeOrderError
+    naming file and line: it would silently replace a step)."""
     _, rows = read_rows(path, ("t", "state", "obs"), "path CSV")
-    out = {}
+    out, last = {}, -1
     for r in rows:
+        t = r.int("t")
+        if t <= last:
+            raise TimeOrderError(f"{r.path}:{r.line}: t = {t} (steps must increase from 0)")
         if r["state"] not in _KIND:
             raise r.fail(f"state = {r['state']!r}, expected visible or hidden")
         cam = r.int("camera") if r.get("camera", "") != "" else -1
         ta = r.int("ta") if r.get("ta", "") != "" else 0
-        out[r.int("t")] = (_KIND[r["state"]], cam, ta, r.int("obs"))
+        out[t], last = (_KIND[r["state"]], cam, ta, r.int("obs")), t
     if not out:
         raise fail(path, 0, "no steps")
     return out
