@@ -26,7 +26,7 @@ from models.cli import main
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 FAST = settings(max_examples=6, deadline=None, suppress_health_check=list(HealthCheck))
-SLOW = settings(max_examples=60, deadline=None, suppress_health_check=list(HealthCheck))
+SLOW = settings(max_examples=25, deadline=None, suppress_health_check=list(HealthCheck))
 
 
 class Case:
@@ -74,16 +74,20 @@ def _in_folder(folder: str, name: str, track_name: str) -> Callable:
 
 
 LOC = "localization"
+GT = f"{LOC}/groundtruth.csv"
 CASES = [
     Case("bif", "dbn/umbrella.bif", _track("dbn", "{}", "dbn/evidence.csv")),
     Case("dbn evidence", "dbn/evidence.csv", _track("dbn", "dbn/umbrella.bif", "{}"),
          header=True),
     Case("odometry.csv", f"{LOC}/odometry.csv", _track(LOC, "{}", f"{LOC}/measurements.csv",
-         f"{LOC}/landmarks.csv"), numeric=1, header=True, timed=0),
+         f"{LOC}/landmarks.csv", GT), numeric=1, header=True, timed=0),
     Case("measurements.csv", f"{LOC}/measurements.csv", _track(LOC, f"{LOC}/odometry.csv",
-         "{}", f"{LOC}/landmarks.csv"), numeric=2, header=True, timed=0),
+         "{}", f"{LOC}/landmarks.csv", GT), numeric=2, header=True, timed=0),
     Case("landmarks.csv", f"{LOC}/landmarks.csv", _track(LOC, f"{LOC}/odometry.csv",
-         f"{LOC}/measurements.csv", "{}"), numeric=1, header=True),
+         f"{LOC}/measurements.csv", "{}", GT), numeric=1, header=True),
+    Case("groundtruth.csv", f"{LOC}/groundtruth.csv", _track(LOC, f"{LOC}/odometry.csv",
+         f"{LOC}/measurements.csv", f"{LOC}/landmarks.csv", "{}"), numeric=1, header=True,
+         timed=0),
     Case("pose truth csv", f"{LOC}/groundtruth.csv", _eval(LOC, f"{LOC}/groundtruth.csv"),
          numeric=1, header=True, timed=0, cheap=True),
     Case("mrclam odometry.dat", f"{LOC}/mrclam/Robot1_Odometry.dat",
