@@ -66,6 +66,16 @@ def _check_sorted(t: np.ndarray, path, lines: list[int]) -> None:
         raise TimeOrderError(f"{path}:{lines[i]}: time goes back ({t[i]} after {t[i - 1]})")
 
 
+def _check_unique(ids: np.ndarray, path, lines: list[int], what: str) -> None:
+    """A :class:`FileFormatError` at the line of the first repeated (or non-integer) id:
+    a repeated landmark or barcode would silently shadow the other."""
+    seen: set[int] = set()
+    for v, line in zip(ids, lines):
+        if v != int(v) or int(v) in seen:
+            raise fail(path, line, f"{what} {v:g} is repeated or not an integer")
+        seen.add(int(v))
+
+
 def read_mrclam_folder(folder: str | Path, robot: int = 1) -> MRCLAMRobot:
     """One robot of an MRCLAM dataset folder (see the module docstring)."""
     folder = Path(folder)
@@ -79,8 +89,11 @@ def read_mrclam_folder(folder: str | Path, robot: int = 1) -> MRCLAMRobot:
         _check_sorted(arr[:, 0], p, lines)
     odo, meas = timed[0][1], timed[1][1]
     gt = timed[2][1] if gt_p else None
-    lm = read_dat(_find(folder, "Landmark_Groundtruth"), 3)
-    codes = read_dat(_find(folder, "Barcodes"), 2)
+    lm_p, codes_p = _find(folder, "Landmark_Groundtruth"), _find(folder, "Barcodes")
+    lm, lm_lines = _read_dat(lm_p, 3)
+    codes, code_lines = _read_dat(codes_p, 2)
+    _check_unique(lm[:, 0], lm_p, lm_lines, "landmark subject")
+    _check_unique(codes[:, 1], codes_p, code_lines, "barcode")
     barcodes = {int(b): int(s) for s, b in codes}
     return MRCLAMRobot(odo, meas, gt, lm[:, 1:3].copy(), lm[:, 0].astype(int), barcodes)
 
@@ -117,7 +130,8 @@ def read_generic(
         _check_sorted(arr[:, 0], p, lines)
     odo, meas = timed[0][1], timed[1][1]
     gt = timed[2][1] if groundtruth else None
-    lm = _csv(landmarks, ("id", "x", "y"), "landmarks CSV")
+    lm, lm_lines = _csv_lines(landmarks, ("id", "x", "y"), "landmarks CSV")
+    _check_unique(lm[:, 0], landmarks, lm_lines, "landmark id")
     ids = lm[:, 0].astype(int)
     return MRCLAMRobot(odo, meas, gt, lm[:, 1:3].copy(), ids, {int(i): int(i) for i in ids})
 

@@ -47,8 +47,10 @@ def read_network(edges: str | Path, cameras: str | Path | None = None):
     gap = np.nan_to_num(e[:, 3])
     n = int(max(src.max(), dst.max())) + 1
     order = np.lexsort((dst, src))
-    if np.any((np.diff(src[order]) == 0) & (np.diff(dst[order]) == 0)):
-        raise fail(edges, 0, "an edge is listed twice")
+    dup = np.flatnonzero((np.diff(src[order]) == 0) & (np.diff(dst[order]) == 0))
+    if dup.size:
+        i = int(max(order[dup[0]], order[dup[0] + 1]))  # the second listing
+        raise fail(edges, rows[i].line, f"edge {src[i]} -> {dst[i]} is listed twice")
     coords = np.column_stack([np.cos(2 * np.pi * np.arange(n) / n),
                               np.sin(2 * np.pi * np.arange(n) / n)])  # fmt: skip
     if cameras is not None:

@@ -239,3 +239,28 @@ def test_random_damage_cheap_formats(capsys, tmp_path, case, data):
 @given(data=st.data())
 def test_random_damage_every_format(capsys, tmp_path, case, data):
     _random_damage(capsys, tmp_path, case, data)
+
+
+#: formats whose rows are keyed by an id (the column): a repeated key would silently
+#: shadow the other row
+KEYED = {
+    "landmarks.csv": (0,),
+    "mrclam barcodes.dat": (1,),
+    "edges.csv": (0, 1),
+    "MOT boxes": (0, 1),
+    "tracks3d truth": (0, 1),
+}
+
+
+@pytest.mark.parametrize("case", [c for c in CASES if c.name in KEYED], ids=repr)
+def test_repeated_key(capsys, tmp_path, case):
+    """A data row repeated with its other fields changed: rejected at the second one."""
+    lines = (DATA / case.src).read_text().splitlines(keepends=True)
+    row = _data_lines(case, lines)[0]
+    fields, sep = _fields(lines[row])
+    key = KEYED[case.name]
+    other = next(i for i in range(len(fields)) if i not in key and fields[i] != "-1")
+    fields[other] = "0.25" if fields[other] != "0.25" else "0.5"
+    lines.append(sep.join(fields) + "\n")
+    rc, err, path = _run(capsys, case, tmp_path, "".join(lines).encode())
+    _rejected(case, rc, err, path, len(lines))
