@@ -67,12 +67,12 @@ def test_rjmcmc3d_checkpoint_keeps_the_frame_index(tmp_path) -> None:
 
 # --- pixels ------------------------------------------------------------------------------
 def test_read_png_8bit_divided_by_255(tmp_path) -> None:
-    from PIL import Image
+    import matplotlib.image as mpimg
 
     from models.io.rjmcmc3d import read_png
 
     grey = (np.arange(288 * 384) % 256).astype(np.uint8).reshape(288, 384)
-    Image.fromarray(grey).save(tmp_path / "g.png")
+    mpimg.imsave(tmp_path / "g.png", np.repeat(grey[..., None], 3, axis=2))  # 8-bit RGB
     np.testing.assert_allclose(read_png(tmp_path / "g.png", (288, 384)), grey / 255.0, atol=1e-6)
 
 
