@@ -39,7 +39,16 @@ from typing import Any, NamedTuple, Protocol, runtime_checkable
 import jax
 import numpy as np
 
-__all__ = ["Example", "Tracker", "StepTracker", "seed_from_key", "split_run_keys"]
+from dbn.errors import InputError, TimeOrderError
+
+__all__ = [
+    "Example",
+    "Tracker",
+    "StepTracker",
+    "seed_from_key",
+    "split_run_keys",
+    "next_frame_index",
+]
 
 
 class Example(NamedTuple):
@@ -83,6 +92,31 @@ def seed_from_key(key: jax.Array) -> int:
     words = np.asarray(jax.random.key_data(key), dtype=np.uint32).ravel().tolist()
     # hash the key's words on the host (no jax computation: ~60 us, a third of a randint)
     return int(np.random.SeedSequence(words).generate_state(1)[0] >> 1)
+
+
+def next_frame_index(last: int, t: Any, field: str) -> int:
+    """The frame index of the next observation after frame ``last`` (-1: none yet).
+
+    ``t`` is the index the observation carries (``None``: it carries none, the next
+    frame ``last + 1`` is assumed). A carried index must be an integer; after the first
+    frame it must be exactly ``last + 1``: an earlier (replayed) or equal index, or a
+    skipped frame (the one-step dynamics would silently span several), is a
+    :class:`~dbn.errors.TimeOrderError` naming ``field``. Nothing is changed.
+    """
+    if t is None:
+        return last + 1
+    if isinstance(t, (bool, np.bool_)) or not isinstance(t, (int, np.integer)):
+        raise InputError(f"{field} = {t!r} must be an integer frame index (or None)")
+    t = int(t)
+    if t < 0:
+        raise TimeOrderError(f"{field} = {t} is negative")
+    if last >= 0 and t != last + 1:
+        what = "does not advance past" if t <= last else "skips frames after"
+        raise TimeOrderError(
+            f"{field} = {t} {what} the last frame {last} (expected {last + 1}; a frame "
+            "without detections is an empty observation, not a gap)"
+        )
+    return t
 
 
 def split_run_keys(key: jax.Array, num_steps: int) -> tuple[jax.Array, jax.Array]:

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dbn.errors import InputError
+from dbn.errors import InputError, TimeOrderError
 from models.io.table import as_float, fail, read_lines, read_rows, write_rows
 from models.localization.mrclam import MRCLAMRobot
 
@@ -30,8 +30,12 @@ __all__ = ["read_dat", "read_mrclam_folder", "read_generic", "write_poses", "rea
 def read_dat(path: str | Path, num_columns: int) -> np.ndarray:
     """A whitespace-separated numeric file (``#`` comments, optionally gzipped) as an
     array ``(rows, num_columns)`` (extra columns ignored); errors name file and line."""
-    path = Path(path)
-    rows = []
+    return _read_dat(Path(path), num_columns)[0]
+
+
+def _read_dat(path: Path, num_columns: int) -> tuple[np.ndarray, list[int]]:
+    """:func:`read_dat` and the file line number of each row."""
+    rows, lines = [], []
     for line_no, line in enumerate(read_lines(path, "MRCLAM .dat file"), start=1):
         fields = line.split("#", 1)[0].split()
         if not fields:
@@ -40,9 +44,10 @@ def read_dat(path: str | Path, num_columns: int) -> np.ndarray:
             raise fail(path, line_no, f"{len(fields)} fields, expected {num_columns}")
         rows.append([as_float(x, path, line_no, f"column {k + 1}")
                      for k, x in enumerate(fields[:num_columns])])  # fmt: skip
+        lines.append(line_no)
     if not rows:
         raise fail(path, 0, "no data rows")
-    return np.asarray(rows, dtype=np.float64)
+    return np.asarray(rows, dtype=np.float64), lines
 
 
 def _find(folder: Path, stem: str, required: bool = True) -> Path | None:
@@ -54,10 +59,21 @@ def _find(folder: Path, stem: str, required: bool = True) -> Path | None:
     return None
 
 
-def _check_sorted(t: np.ndarray, path) -> None:
+def _check_sorted(t: np.ndarray, path, lines: list[int]) -> None:
     back = np.flatnonzero(np.diff(t) < 0)
     if back.size:
-        raise InputError(f"{path}: row {int(back[0]) + 2}: time goes back ({t[back[0] + 1]})")
+        i = int(back[0]) + 1
+        raise TimeOrderError(f"{path}:{lines[i]}: time goes back ({t[i]} after {t[i - 1]})")
+
+
+def _check_unique(ids: np.ndarray, path, lines: list[int], what: str) -> None:
+    """A :class:`FileFormatError` at the line of the first repeated (or non-integer) id:
+    a repeated landmark or barcode would silently shadow the other."""
+    seen: set[int] = set()
+    for v, line in zip(ids, lines):
+        if v != int(v) or int(v) in seen:
+            raise fail(path, line, f"{what} {v:g} is repeated or not an integer")
+        seen.add(int(v))
 
 
 def read_mrclam_folder(folder: str | Path, robot: int = 1) -> MRCLAMRobot:
@@ -68,22 +84,30 @@ def read_mrclam_folder(folder: str | Path, robot: int = 1) -> MRCLAMRobot:
     odo_p = _find(folder, f"Robot{robot}_Odometry")
     meas_p = _find(folder, f"Robot{robot}_Measurement")
     gt_p = _find(folder, f"Robot{robot}_Groundtruth", required=False)
-    odo, meas = read_dat(odo_p, 3), read_dat(meas_p, 4)
-    gt = read_dat(gt_p, 4) if gt_p else None
-    for arr, p in ((odo, odo_p), (meas, meas_p), (gt, gt_p)):
-        if arr is not None:
-            _check_sorted(arr[:, 0], p)
-    lm = read_dat(_find(folder, "Landmark_Groundtruth"), 3)
-    codes = read_dat(_find(folder, "Barcodes"), 2)
+    timed = [(p, *_read_dat(p, n)) for p, n in ((odo_p, 3), (meas_p, 4), (gt_p, 4)) if p]
+    for p, arr, lines in timed:
+        _check_sorted(arr[:, 0], p, lines)
+    odo, meas = timed[0][1], timed[1][1]
+    gt = timed[2][1] if gt_p else None
+    lm_p, codes_p = _find(folder, "Landmark_Groundtruth"), _find(folder, "Barcodes")
+    lm, lm_lines = _read_dat(lm_p, 3)
+    codes, code_lines = _read_dat(codes_p, 2)
+    _check_unique(lm[:, 0], lm_p, lm_lines, "landmark subject")
+    _check_unique(codes[:, 1], codes_p, code_lines, "barcode")
     barcodes = {int(b): int(s) for s, b in codes}
     return MRCLAMRobot(odo, meas, gt, lm[:, 1:3].copy(), lm[:, 0].astype(int), barcodes)
 
 
 def _csv(path, columns: tuple[str, ...], what: str) -> np.ndarray:
+    return _csv_lines(path, columns, what)[0]
+
+
+def _csv_lines(path, columns: tuple[str, ...], what: str) -> tuple[np.ndarray, list[int]]:
+    """The columns of a CSV file ``(rows, len(columns))`` and each row's line number."""
     _, rows = read_rows(path, columns, what)
     if not rows:
         raise fail(path, 0, f"{what} has no data rows")
-    return np.array([[r.float(c) for c in columns] for r in rows])
+    return np.array([[r.float(c) for c in columns] for r in rows]), [r.line for r in rows]
 
 
 def read_generic(
@@ -93,13 +117,21 @@ def read_generic(
     groundtruth: str | Path | None = None,
 ) -> MRCLAMRobot:
     """The generic CSVs as an :class:`MRCLAMRobot` (landmark ids are their own barcodes)."""
-    odo = _csv(odometry, ("t", "v", "w"), "odometry CSV")
-    meas = _csv(measurements, ("t", "landmark", "range", "bearing"), "measurements CSV")
-    lm = _csv(landmarks, ("id", "x", "y"), "landmarks CSV")
-    gt = _csv(groundtruth, ("t", "x", "y", "theta"), "ground-truth CSV") if groundtruth else None
-    for arr, p in ((odo, odometry), (meas, measurements), (gt, groundtruth)):
-        if arr is not None:
-            _check_sorted(arr[:, 0], p)
+    timed = [
+        (p, *_csv_lines(p, cols, what))
+        for p, cols, what in (
+            (odometry, ("t", "v", "w"), "odometry CSV"),
+            (measurements, ("t", "landmark", "range", "bearing"), "measurements CSV"),
+            (groundtruth, ("t", "x", "y", "theta"), "ground-truth CSV"),
+        )
+        if p
+    ]
+    for p, arr, lines in timed:
+        _check_sorted(arr[:, 0], p, lines)
+    odo, meas = timed[0][1], timed[1][1]
+    gt = timed[2][1] if groundtruth else None
+    lm, lm_lines = _csv_lines(landmarks, ("id", "x", "y"), "landmarks CSV")
+    _check_unique(lm[:, 0], landmarks, lm_lines, "landmark id")
     ids = lm[:, 0].astype(int)
     return MRCLAMRobot(odo, meas, gt, lm[:, 1:3].copy(), ids, {int(i): int(i) for i in ids})
 
@@ -117,8 +149,8 @@ def read_poses(path: str | Path, robot: int = 1) -> tuple[np.ndarray, np.ndarray
     if path.is_dir():
         path = _find(path, f"Robot{robot}_Groundtruth")
     if path.name.endswith((".dat", ".dat.gz")):
-        arr = read_dat(path, 4)
+        arr, lines = _read_dat(path, 4)
     else:
-        arr = _csv(path, ("t", "x", "y", "theta"), "pose CSV")
-    _check_sorted(arr[:, 0], path)
+        arr, lines = _csv_lines(path, ("t", "x", "y", "theta"), "pose CSV")
+    _check_sorted(arr[:, 0], path, lines)
     return arr[:, 0], arr[:, 1:4]

@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.errors import DBNError, InputError
+from dbn.errors import DBNError, InputError, TimeOrderError
 from models.io.table import fail, read_rows, write_rows
 
 __all__ = ["Observations", "read_network", "read_observations", "write_path", "read_path"]
@@ -47,8 +47,10 @@ def read_network(edges: str | Path, cameras: str | Path | None = None):
     gap = np.nan_to_num(e[:, 3])
     n = int(max(src.max(), dst.max())) + 1
     order = np.lexsort((dst, src))
-    if np.any((np.diff(src[order]) == 0) & (np.diff(dst[order]) == 0)):
-        raise fail(edges, 0, "an edge is listed twice")
+    dup = np.flatnonzero((np.diff(src[order]) == 0) & (np.diff(dst[order]) == 0))
+    if dup.size:
+        i = int(max(order[dup[0]], order[dup[0] + 1]))  # the second listing
+        raise fail(edges, rows[i].line, f"edge {src[i]} -> {dst[i]} is listed twice")
     coords = np.column_stack([np.cos(2 * np.pi * np.arange(n) / n),
                               np.sin(2 * np.pi * np.arange(n) / n)])  # fmt: skip
     if cameras is not None:
@@ -110,15 +112,20 @@ def write_path(path, t: np.ndarray, kind, cam, ta, obs_ids) -> Path:
 
 
 def read_path(path: str | Path) -> dict[int, tuple[int, int, int, int]]:
-    """``t -> (kind, camera, ta, obs)`` of a path CSV (kind 0 visible, 1 hidden)."""
+    """``t -> (kind, camera, ta, obs)`` of a path CSV (kind 0 visible, 1 hidden); rows in
+    increasing ``t >= 0`` (a repeated, earlier or negative step is a TimeOrderError
+    naming file and line: it would silently replace a step)."""
     _, rows = read_rows(path, ("t", "state", "obs"), "path CSV")
-    out = {}
+    out, last = {}, -1
     for r in rows:
+        t = r.int("t")
+        if t <= last:
+            raise TimeOrderError(f"{r.path}:{r.line}: t = {t} (steps must increase from 0)")
         if r["state"] not in _KIND:
             raise r.fail(f"state = {r['state']!r}, expected visible or hidden")
         cam = r.int("camera") if r.get("camera", "") != "" else -1
         ta = r.int("ta") if r.get("ta", "") != "" else 0
-        out[r.int("t")] = (_KIND[r["state"]], cam, ta, r.int("obs"))
+        out[t], last = (_KIND[r["state"]], cam, ta, r.int("obs")), t
     if not out:
         raise fail(path, 0, "no steps")
     return out

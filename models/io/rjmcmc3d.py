@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dbn.errors import DBNError, InputError
+from dbn.errors import DBNError, FileFormatError, InputError
 from models.io.table import as_float, as_int, fail, read_lines, write_rows
 
 __all__ = ["ViewFolder", "read_view", "warp", "detections", "write_tracks3d", "read_tracks3d"]
@@ -59,21 +59,41 @@ def read_view(folder: str | Path, scale: float = 1.0) -> ViewFolder:
 
 
 def read_png(path: Path, shape: tuple[int, int], channels: int | None = None) -> np.ndarray:
-    """A PNG as float32 in [0, 1], grey ``(h, w)`` or RGB ``(h, w, 3)``; size checked."""
+    """A PNG as float32 in [0, 1], grey ``(h, w)`` or RGB ``(h, w, 3)``; size checked.
+
+    The conversion is explicit: an 8-bit (16-bit) integer image is divided by 255
+    (65535); a float image (matplotlib reads PNGs as float in [0, 1]) must already lie
+    in [0, 1]. A float value outside [0, 1], NaN or inf is a :class:`FileFormatError`
+    naming the file: it is never rescaled by guess (a 0-255 mask read as 0-1 would
+    count every blob several times).
+    """
     import matplotlib.image as mpimg
 
     try:
-        img = np.asarray(mpimg.imread(path), dtype=np.float32)
+        raw = np.asarray(mpimg.imread(path))
     except Exception as exc:
-        raise InputError(f"{path}: not a readable PNG ({exc})") from None
-    if img.max() > 1.0:
-        img = img / 255.0
-    if img.shape[:2] != shape:
-        raise InputError(f"{path}: image is {img.shape[1]}x{img.shape[0]}, calibration says "
-                         f"{shape[1]}x{shape[0]}")  # fmt: skip
+        raise FileFormatError(path, f"not a readable PNG ({exc})") from None
+    img = _unit_float(raw, path)
+    if img.ndim not in (2, 3) or img.shape[:2] != shape:
+        raise FileFormatError(path, f"image is {'x'.join(map(str, img.shape[1::-1]))}, "
+                              f"calibration says {shape[1]}x{shape[0]}")  # fmt: skip
     if channels == 3:
         return img[..., :3] if img.ndim == 3 else np.repeat(img[..., None], 3, axis=2)
     return img[..., :3].mean(-1) if img.ndim == 3 else img
+
+
+def _unit_float(raw: np.ndarray, path: Path) -> np.ndarray:
+    """``raw`` as float32 in [0, 1]: uint8 / 255, uint16 / 65535, floats checked."""
+    if raw.dtype == np.uint8 or raw.dtype == np.uint16:
+        return raw.astype(np.float32) / np.float32(np.iinfo(raw.dtype).max)
+    if raw.dtype.kind != "f":
+        raise FileFormatError(path, f"pixel type {raw.dtype}, expected uint8, uint16 or float")
+    bad = ~((raw >= 0.0) & (raw <= 1.0))  # NaN is bad too
+    if bad.any():
+        i = np.unravel_index(int(np.argmax(bad)), raw.shape)
+        raise FileFormatError(path, f"pixel {tuple(map(int, i))} = {raw[i]!r} is outside "
+                              "[0, 1] (float images must be in [0, 1])")  # fmt: skip
+    return raw.astype(np.float32)
 
 
 def warp(image: np.ndarray, H: np.ndarray, shape: tuple[int, int], fill: float = 0.0):

@@ -60,34 +60,43 @@ class MRCLAMRobot(NamedTuple):
     barcode_to_subject: dict
 
 
-def _read(path: Path, num_columns: int) -> np.ndarray:
+def _read(path: Path, num_columns: int) -> tuple[np.ndarray, np.ndarray]:
     """A whitespace-separated numeric file as ``(rows, num_columns)`` float64 (extra
-    columns dropped); a missing, unreadable, truncated, ragged, non-numeric, non-finite
-    or empty file is a :class:`FileFormatError` naming the file (and the line)."""
+    columns dropped) and the file line number of each row ``(rows,)``; a missing,
+    unreadable, truncated, ragged, non-numeric, non-finite or empty file is a
+    :class:`FileFormatError` naming the file (and the line)."""
+    line_no = np.zeros(0, dtype=int)
     try:
         with gzip.open(path, "rt") if path.suffix == ".gz" else open(path) as f:
-            with warnings.catch_warnings():  # an empty file: reported below
-                warnings.simplefilter("ignore", UserWarning)
-                data = np.loadtxt(f, comments="#", ndmin=2)
+            text = f.read().splitlines()
+        line_no = np.array([i for i, ln in enumerate(text, 1) if ln.split("#", 1)[0].strip()])
+        with warnings.catch_warnings():  # an empty file: reported below
+            warnings.simplefilter("ignore", UserWarning)
+            data = np.loadtxt([text[i - 1] for i in line_no], comments="#", ndmin=2)
     except (OSError, EOFError, ValueError, UnicodeDecodeError, zlib.error) as exc:
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        m = re.search(r"at row (\d+)", msg)
-        raise FileFormatError(path, f"not a numeric table ({msg})", m and int(m[1]) + 1) from None
+        m = re.search(r"at row (\d+)", msg)  # numpy counts data rows from 0 (or 1)
+        line = int(line_no[min(int(m[1]), line_no.size - 1)]) if m and line_no.size else None
+        raise FileFormatError(path, f"not a numeric table ({msg})", line) from None
     if data.shape[0] == 0:
         raise FileFormatError(path, "no data rows")
     if data.shape[1] < num_columns:
-        raise FileFormatError(path, f"{data.shape[1]} columns, expected {num_columns}")
+        raise FileFormatError(path, f"{data.shape[1]} columns, expected {num_columns}",
+                              int(line_no[0]))  # fmt: skip
     bad = np.flatnonzero(~np.all(np.isfinite(data[:, :num_columns]), axis=1))
     if bad.size:
-        raise FileFormatError(path, f"data row {int(bad[0]) + 1} is not finite")
-    return data[:, :num_columns] if data.shape[1] > num_columns else data
+        raise FileFormatError(path, "value is not finite", int(line_no[bad[0]]))
+    return (data[:, :num_columns] if data.shape[1] > num_columns else data), line_no
 
 
-def _check_time(t: np.ndarray, name: str) -> None:
+def _check_time(t: np.ndarray, name: str, line_no: np.ndarray | None = None) -> None:
+    """A :class:`TimeOrderError` ``NAME:LINE: ...`` (file and line, when ``line_no``
+    gives the line of each entry) where ``t`` goes back."""
     back = np.flatnonzero(np.diff(t) < 0)
     if back.size:
         i = int(back[0])
-        raise TimeOrderError(f"{name}: timestamp[{i + 1}] = {t[i + 1]} goes back from {t[i]}")
+        where = f"{name}:{int(line_no[i + 1])}" if line_no is not None else name
+        raise TimeOrderError(f"{where}: timestamp[{i + 1}] = {t[i + 1]} goes back from {t[i]}")
 
 
 def load_robot(robot: int = 1) -> MRCLAMRobot:
@@ -110,9 +119,10 @@ def load_robot(robot: int = 1) -> MRCLAMRobot:
         ("landmarks", "Landmark_Groundtruth.dat.gz", 3),
         ("barcodes", "Barcodes.dat.gz", 2),
     ):
-        files[key] = _read(datasets.require("mrclam6", name), cols)
-    for key in ("odometry", "measurements", "groundtruth"):
-        _check_time(files[key][:, 0], f"Robot{robot} {key}")
+        path = datasets.require("mrclam6", name)
+        files[key], line_no = _read(path, cols)
+        if key in ("odometry", "measurements", "groundtruth"):
+            _check_time(files[key][:, 0], str(path), line_no)
     barcodes = {int(b): int(s) for s, b in files["barcodes"][:, :2]}
     lm = files["landmarks"]
     return MRCLAMRobot(

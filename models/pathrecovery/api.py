@@ -27,7 +27,7 @@ from models.pathrecovery.filter import (
     make_model,
     step,
 )
-from models.protocol import Example, StepTracker, seed_from_key
+from models.protocol import Example, StepTracker, next_frame_index, seed_from_key
 
 _FORMAT = "dbntrack-pathrecovery-state-1"
 
@@ -35,11 +35,15 @@ __all__ = ["PathObservation", "PathState", "PathRecoveryTracker", "make", "examp
 
 
 class PathObservation(NamedTuple):
-    """One time step's observations: ``cam`` (n,) sorted, ``feat`` (n, d), index offset."""
+    """One time step's observations: ``cam`` (n,) sorted, ``feat`` (n, d), index offset
+    and time step ``t`` (``None``: the step after the state's; given, it must be exactly
+    ``state.t + 1``: a replayed, repeated or skipped step is a
+    :class:`~dbn.errors.TimeOrderError` naming ``obs.t``)."""
 
     cam: np.ndarray
     feat: np.ndarray
     offset: int = 0
+    t: int | None = None
 
 
 class PathState(NamedTuple):
@@ -65,12 +69,13 @@ class PathRecoveryTracker(StepTracker):
 
     def step(self, key: jax.Array, state: PathState, obs) -> tuple[PathState, StepInfo]:
         """One filter step on ``obs`` (a :class:`PathObservation` or ``(cam, feat)``)."""
-        if not isinstance(obs, tuple) or len(obs) not in (2, 3):
-            raise InputError(f"obs must be (cam, feat[, offset]), got {type(obs).__name__}")
+        if not isinstance(obs, tuple) or len(obs) not in (2, 3, 4):
+            raise InputError(f"obs must be (cam, feat[, offset[, t]]), got {type(obs).__name__}")
         obs = PathObservation(*obs)
+        t = next_frame_index(state.t, obs.t, "obs.t")
         rng = np.random.default_rng(seed_from_key(key))
         particles, info = step(rng, self.model, state.particles, obs.cam, obs.feat, obs.offset)
-        return PathState(particles, state.t + 1), info
+        return PathState(particles, t), info
 
     def save(self, state: PathState, path) -> None:
         """Write ``state`` to an ``.npz`` file (arrays, config, version, checksum; no pickle)."""
@@ -120,6 +125,7 @@ def example(key: jax.Array) -> Example:
             np.asarray(sc.odb.cam[ptr[t] : ptr[t + 1]]),
             np.asarray(sc.odb.feat[ptr[t] : ptr[t + 1]]),
             int(ptr[t]),
+            t,
         )
         for t in range(1, ptr.size - 1)
     ]

@@ -21,7 +21,7 @@ from models.rjmcmc3d.tracker import FrameResult, RJMCMCTracker, TrackState
 
 __all__ = ["RJMCMC3DTracker", "make", "example"]
 
-_FORMAT = "dbntrack-rjmcmc3d-state-1"
+_FORMAT = "dbntrack-rjmcmc3d-state-2"  # 2: TrackState.frame (the last frame index)
 
 
 class RJMCMC3DTracker(StepTracker):
@@ -56,9 +56,11 @@ class RJMCMC3DTracker(StepTracker):
         arrays, _ = load_arrays(path, _FORMAT, TrackState._fields, self.tracker.params)
         values = [arrays[name] for name in TrackState._fields]
         m = self.tracker.params.max_objects
-        if np.shape(arrays["alive"]) != (m,) or np.ndim(values[-1]) != 0:
+        if np.shape(arrays["alive"]) != (m,) or np.ndim(values[-1]) or np.ndim(values[-2]):
             raise CheckpointError(path, f"arrays do not fit max_objects = {m}")
-        values[-1] = int(values[-1])  # next_label
+        values[-2], values[-1] = int(values[-2]), int(values[-1])  # next_label, frame
+        if values[-1] < -1:
+            raise CheckpointError(path, f"frame = {values[-1]} is not a frame index >= -1")
         return TrackState(*values)
 
 
@@ -69,14 +71,15 @@ def make(scene: Scene, params: TrackerParams | None = None, **options) -> RJMCMC
 
 def example(key: jax.Array) -> Example:
     """A small SIMULATED 3-camera hall (192 x 144 px), 2 walkers, 3 frames, 200 moves/frame;
-    bad: a frame with NaN in its foreground maps. (At 96 x 72 px a walker covers a few
-    pixels and the chain found nobody on half the seeds: a log target of 0 every frame.)"""
+    bad: a frame with NaN in its foreground maps. The frames carry their index ``t``. (At
+    96 x 72 px a walker covers a few pixels and the chain found nobody on most seeds: a log
+    target of 0 every frame.)"""
     from models.rjmcmc3d.scene import default_scene, render_frame, simulate_walkers
 
     seed = seed_from_key(key)
     scene = default_scene(0, width=192, height=144)
     truth = simulate_walkers(seed, scene, 3, 2)
-    frames = [render_frame(seed + 1, scene, truth, t) for t in range(3)]
+    frames = [render_frame(seed + 1, scene, truth, t)._replace(t=t) for t in range(3)]
     bad = frames[1]._replace(D=np.where(np.ones_like(frames[1].D, bool), np.nan, frames[1].D))
     tracker = make(scene, TrackerParams(num_moves=200, burn_in=60))
     return Example(tracker, frames, bad)

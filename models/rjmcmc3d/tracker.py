@@ -35,6 +35,7 @@ from tqdm.auto import tqdm
 
 from dbn.errors import InputError
 from inference.mcmc import Move, MoveKernel, Proposal, sample
+from models.protocol import next_frame_index
 from models.rjmcmc3d import compiled
 from models.rjmcmc3d.compiled import (
     add_log_q,
@@ -90,6 +91,8 @@ class TrackState(NamedTuple):
     ref_weight : ndarray, shape (M, 3, K)
         Usage weights of the references.
     next_label : int
+    frame : int
+        Index of the last frame filtered (-1: none yet).
     """
 
     alive: np.ndarray
@@ -102,6 +105,7 @@ class TrackState(NamedTuple):
     nref: np.ndarray
     ref_weight: np.ndarray
     next_label: int
+    frame: int = -1
 
 
 class FrameResult(NamedTuple):
@@ -850,10 +854,12 @@ class RJMCMCTracker:
         result : FrameResult
         """
         self._check_frame(frame)
+        index = next_frame_index(int(state.frame), frame.t, "frame.t")
         rng = np.random.default_rng(seed)
         chain = FrameChain(self, state, frame, self.likelihood)
         out = chain.run(rng)
-        return self._posterior(state, chain, out)
+        new_state, result = self._posterior(state, chain, out)
+        return new_state._replace(frame=index), result
 
     def _posterior(
         self, state: TrackState, chain: FrameChain, out: dict
@@ -893,7 +899,9 @@ class RJMCMCTracker:
             label[i] = next_label
             next_label += 1
         refs, nref, rw = self._update_refs(chain, state, exist, mu, h, alpha)
-        new_state = TrackState(exist, label, mean, cov, h, alpha, refs, nref, rw, next_label)
+        new_state = TrackState(
+            exist, label, mean, cov, h, alpha, refs, nref, rw, next_label, state.frame
+        )
         idx = np.flatnonzero(exist)
         X = np.concatenate([mean[idx], h[idx, None], alpha[idx, None]], axis=1)
         result = FrameResult(

@@ -91,6 +91,10 @@ class Frame(NamedTuple):
         Detected foot position in the rectified image (pixels).
     det_ground : ndarray, shape (num_dets, 2)
         That foot position mapped to the ground plane (metres).
+    t : int or None
+        Frame index (``None``: the frame after the tracker's last one). After the first
+        frame it must advance by exactly one: a replayed, repeated or skipped frame is a
+        :class:`~dbn.errors.TimeOrderError` naming ``frame.t``.
     """
 
     D: np.ndarray
@@ -98,3 +102,4 @@ class Frame(NamedTuple):
     det_view: np.ndarray
     det_px: np.ndarray
     det_ground: np.ndarray
+    t: int | None = None

@@ -69,7 +69,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
         for t in ctx.progress(range(1, T), T - 1, "steps"):
             lo, hi = int(odb.time_ptr[t]), int(odb.time_ptr[t + 1])
             state, info = tracker.step(keys[t - 1], state,
-                                       PathObservation(odb.cam[lo:hi], odb.feat[lo:hi], lo))  # fmt: skip
+                                       PathObservation(odb.cam[lo:hi], odb.feat[lo:hi], lo, t))  # fmt: skip
             infos.append(info)
     lists = KBestLists(*(np.stack([getattr(i, f) for i in infos])
                          for f in ("kind", "cam", "ta", "obs", "mass", "num_tracked_cameras")),

@@ -57,7 +57,7 @@ def _frames(views, scene, min_blob: int):
                 Hg = ground_homography(scene.P[v])
                 ground[dv == v] = apply_homography(np.linalg.inv(Hg), dpx[dv == v])
         yield Frame(np.stack(D).astype(np.float32), np.stack(img).astype(np.float32), dv, dpx,
-                    ground)  # fmt: skip
+                    ground, t)  # fmt: skip
 
 
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:

@@ -260,7 +260,7 @@ def test_mrclam_dat(name, cols, data) -> None:
     raw = (DATA / "localization" / "mrclam" / name).read_bytes()
     mutated = data.draw(mutations(raw))
     check_reader(lambda p: read_dat(p, cols), finite, mutated, name)
-    check_reader(lambda p: _read(p, cols), finite, mutated, name)
+    check_reader(lambda p: _read(p, cols)[0], finite, mutated, name)
 
 
 @FAST
