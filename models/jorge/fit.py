@@ -307,14 +307,18 @@ SEARCH_GRID = {
     "size_once": (False, True),
 }
 """The documented search over what the likelihood alone does not settle: the CPD
-parameters as fitted by :func:`fit_parameters` (``"ml"``, with the palette colour-count
-table) or the previous defaults (``"previous"``, no palette evidence: chosen in issues 4-5 by labelling error with simulation seeds 20-39 on
-ms3ggt and mws1gt, both in the training split), and whether a stroke seen first may be
-a new group (``q_m`` fitted, or only ``m = 1``; ``p_join`` likewise), and the link
-gate (pixels and frames as tuned on CAVIAR, or scaled by the region's size and the frame
-rate, or the box gate of issue 16 with ``v_box`` 0.5 (0.25 scored worse),
-``NetworkConfig.gate``). Each point is scored by :func:`labelling_error` on the training split (never validation data); the
-lowest error wins."""
+parameters as fitted by :func:`fit_parameters` (``"ml"``, with the marginal palette
+colour-count table; ``"ml_gain"``, with the count given the label's known palettes instead,
+:func:`models.jorge.labels.palette_gain_log_likelihood`; ``"ml_both"``, both) or the
+previous defaults (``"previous"``, no palette evidence: chosen in issues 4-5 by labelling
+error with simulation seeds 20-39 on ms3ggt and mws1gt, both in the training split);
+whether a stroke seen first may be a new group (``q_m`` fitted, or only ``m = 1``;
+``p_join`` likewise); whether the region size is counted once per occlusion chain
+(``NetworkConfig.size_once``); and the link gate (pixels and frames as tuned on CAVIAR,
+or scaled by the region's size and the frame rate, or the box gate of issue 16 with
+``v_box`` 0.5 (0.25 scored worse), ``NetworkConfig.gate``). Each point is scored by
+:func:`labelling_error` on the training split (never validation data); the lowest error
+wins."""
 
 
 def search_settings(fit_sets: Sequence[StrokeSet], score_sets: Sequence[StrokeSet],

@@ -98,6 +98,12 @@ palette evidence (issue-16 first round): pixel gate 0.322 / scaled 0.292, and ne
 0.37-0.43. So: the box gate, the maximum-likelihood CPD parameters, no new groups or joins
 (the evidence tells a new group from a new person now, but in the training crowds a
 stroke's newcomers are rarely a whole new group and the error rises).
+Second round (issue 16, with the gain table, ``size_once`` and the instant-cap fix; seed 100):
+box gate, ML, no new groups, size once 0.2751, without 0.2755 (kept: the 0.0004 is far below the
+seed-to-seed noise, about 0.005, and counting the size once loses the size evidence that lets a
+group of 4-5 seen first as a group be recovered, tests/models/jorge/test_jorge_groups.py); the gain
+table instead 0.2823-0.2852; new groups at best 0.2951 (gain table, size once), 0.3092 with the
+marginal count table. New groups still lose on training.
 ``tests/models/jorge/test_jorge_fit.py`` re-runs the fit and checks these numbers."""
 
 
