@@ -42,6 +42,18 @@ the box gate (``NetworkConfig.gate="boxes"``, default since) drops most spurious
 link accuracy 0.61-0.70 in the S1 crowds, 0.88-0.99 on CAVIAR (seed 0), yet the 3+
 strokes stay wrong (the newcomers and carried errors remain).
 
+Why new groups and joins raise the training error (issue 16, second diagnosis, seed 100):
+0.2762 -> 0.3115, 0.024 of it on CAVIAR. (1) Two people with disjoint palettes merge (10
+colours) and the marginal palette-count table (p(10 | 2) = 0.023, p(10 | 3) = 0.357) makes
+the pair plus a newcomer (a join) beat the true merge (lb1gt, fcgt); the count given the
+label's known palettes (``palette_gain_table``) removes it. (2) Then the region size,
+counted as independent evidence at every stroke of one region, labels a single person near
+the camera a new group of 3-4 (mws1gt, fcgt); ``size_once`` removes it. (3) The instant
+domain cap dropped a split part's right label once joins widened domains past 12 (ms3ggt
+swaps; fixed in ``OnlineLabeller._relabel``). With all three, new groups still lose on
+training: best 0.2951 against 0.2751-0.2755 without (search in ``models.jorge.fit``); the
+rest is single-seed churn in the PETS S1 crowds and a few CAVIAR strokes.
+
 Summary keys: ``error_rate_validation`` (pooled LE / NT over the validation sequences),
 ``error_rate_train``, ``error_rate_group_3plus`` (strokes whose true group has three or
 more people, pooled over the sequences that have such strokes) and its colour-only

@@ -41,6 +41,7 @@ not fitted.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 
@@ -111,6 +112,7 @@ class EventCounts:
     new_sizes: np.ndarray = None  # type: ignore[assignment]  # (max_group_size,)
     sizes: list = None  # type: ignore[assignment]  # (k, rel_log_area) pairs
     palette_counts: list = None  # type: ignore[assignment]  # (k, distinct palette colours) pairs
+    palette_gains: list = None  # type: ignore[assignment]  # (newcomers m, colour gain e) pairs
 
     def __post_init__(self) -> None:
         self.merge = np.zeros(3, np.int64) if self.merge is None else self.merge
@@ -118,6 +120,7 @@ class EventCounts:
         self.new_sizes = np.zeros(0, np.int64) if self.new_sizes is None else self.new_sizes
         self.sizes = [] if self.sizes is None else self.sizes
         self.palette_counts = [] if self.palette_counts is None else self.palette_counts
+        self.palette_gains = [] if self.palette_gains is None else self.palette_gains
 
     def add_new(self, m: int) -> None:
         if m > self.new_sizes.size:
@@ -165,6 +168,7 @@ def count_events(strokes: StrokeSet, config: NetworkConfig | None = None, counts
             c.sizes.append((len(s.truth), rel))
         c.palette_counts.append((len(s.truth), int(np.unique(s.palette).size)))
     gmax = g.config.labels.max_group_size
+    _count_palette_gains(c, g)
     for k, node in enumerate(g.nodes):
         truth = node.stroke.truth
         if max([len(truth)] + [len(g.nodes[p].stroke.truth) for p in node.parents]) > gmax:
@@ -174,6 +178,21 @@ def count_events(strokes: StrokeSet, config: NetworkConfig | None = None, counts
             continue
         _count_child(c, truth, [g.nodes[p].stroke.truth for p in node.parents], g.shared(k))
     return c
+
+
+def _count_palette_gains(c: EventCounts, g: LabelGraph) -> None:
+    """(m, e) per stroke: its people not in its linked parents (newcomers, ``m``) and the
+    colours its palette has beyond the birth palettes (the palette of the first stroke
+    holding each) of its inherited people (``e``), as the network sees a label of them."""
+    birth: dict = {}
+    for node in g.nodes:
+        s = node.stroke
+        for person in s.truth:
+            birth.setdefault(person, frozenset(int(x) for x in s.palette))
+        parents = frozenset().union(*[g.nodes[p].stroke.truth for p in node.parents])
+        inherited = s.truth & parents
+        known = frozenset().union(*[birth[p] for p in inherited])
+        c.palette_gains.append((len(s.truth) - len(inherited), int(np.unique(s.palette).size) - len(known)))
 
 
 def _rate(num: float, den: float) -> float:
@@ -228,7 +247,19 @@ def fit_parameters(stroke_sets: Iterable[StrokeSet], config: NetworkConfig | Non
     sigma = float(np.std(a - design @ coef)) if a.size > 2 else config.size_sigma
     return replace(config, labels=labels, size_mu_single=float(coef[0]), size_slope=float(coef[1]),
                    size_sigma=max(sigma, 1e-3),
-                   palette_count_table=_palette_count_table(c.palette_counts, gmax, config.pool_size))
+                   palette_count_table=_palette_count_table(c.palette_counts, gmax, config.pool_size),
+                   palette_gain_table=_palette_gain_table(c.palette_gains, gmax, config.pool_size))
+
+
+def _palette_gain_table(pairs: list, gmax: int, pool_size: int) -> tuple:
+    r""":math:`\log p(e \mid m)`, add-one smoothed frequencies of the colour gain
+    ``e = -pool_size..pool_size`` (column ``e + pool_size``) per number of newcomers
+    ``m = 0..gmax`` (more counted as ``gmax``)."""
+    counts = np.ones((gmax + 1, 2 * pool_size + 1))
+    for m, e in pairs:
+        counts[min(m, gmax), int(np.clip(e, -pool_size, pool_size)) + pool_size] += 1.0
+    table = np.log(counts / counts.sum(axis=1, keepdims=True))
+    return tuple(tuple(float(v) for v in row) for row in table)
 
 
 def _palette_count_table(pairs: list, gmax: int, pool_size: int) -> tuple:
@@ -271,18 +302,23 @@ def labelling_error(config: NetworkConfig, stroke_sets: Sequence[StrokeSet]) -> 
 
 SEARCH_GRID = {
     "gate": ("pixels", "scaled", "boxes"),
-    "parameters": ("previous", "ml"),
+    "parameters": ("previous", "ml", "ml_gain", "ml_both"),
     "new_groups": (False, True),
+    "size_once": (False, True),
 }
 """The documented search over what the likelihood alone does not settle: the CPD
-parameters as fitted by :func:`fit_parameters` (``"ml"``, with the palette colour-count
-table) or the previous defaults (``"previous"``, no palette evidence: chosen in issues 4-5 by labelling error with simulation seeds 20-39 on
-ms3ggt and mws1gt, both in the training split), and whether a stroke seen first may be
-a new group (``q_m`` fitted, or only ``m = 1``; ``p_join`` likewise), and the link
-gate (pixels and frames as tuned on CAVIAR, or scaled by the region's size and the frame
-rate, or the box gate of issue 16 with ``v_box`` 0.5 (0.25 scored worse),
-``NetworkConfig.gate``). Each point is scored by :func:`labelling_error` on the training split (never validation data); the
-lowest error wins."""
+parameters as fitted by :func:`fit_parameters` (``"ml"``, with the marginal palette
+colour-count table; ``"ml_gain"``, with the count given the label's known palettes instead,
+:func:`models.jorge.labels.palette_gain_log_likelihood`; ``"ml_both"``, both) or the
+previous defaults (``"previous"``, no palette evidence: chosen in issues 4-5 by labelling
+error with simulation seeds 20-39 on ms3ggt and mws1gt, both in the training split);
+whether a stroke seen first may be a new group (``q_m`` fitted, or only ``m = 1``;
+``p_join`` likewise); whether the region size is counted once per occlusion chain
+(``NetworkConfig.size_once``); and the link gate (pixels and frames as tuned on CAVIAR,
+or scaled by the region's size and the frame rate, or the box gate of issue 16 with
+``v_box`` 0.5 (0.25 scored worse), ``NetworkConfig.gate``). Each point is scored by
+:func:`labelling_error` on the training split (never validation data); the lowest error
+wins."""
 
 
 def search_settings(fit_sets: Sequence[StrokeSet], score_sets: Sequence[StrokeSet],
@@ -300,19 +336,25 @@ def search_settings(fit_sets: Sequence[StrokeSet], score_sets: Sequence[StrokeSe
     for gate in SEARCH_GRID["gate"]:
         gated = replace(base, gate=gate)
         fitted = fit_parameters(fit_sets, gated)
-        for params in SEARCH_GRID["parameters"]:
-            for new_groups in SEARCH_GRID["new_groups"]:
-                cfg = _grid_point(gated, fitted, params, new_groups)
-                err = labelling_error(cfg, score_sets)
-                table.append(({"gate": gate, "parameters": params, "new_groups": new_groups}, err))
-                if err < best_err:
-                    best, best_err = cfg, err
+        for params, new_groups, once in itertools.product(
+                SEARCH_GRID["parameters"], SEARCH_GRID["new_groups"], SEARCH_GRID["size_once"]):
+            cfg = replace(_grid_point(gated, fitted, params, new_groups), size_once=once)
+            err = labelling_error(cfg, score_sets)
+            table.append(({"gate": gate, "parameters": params, "new_groups": new_groups, "size_once": once}, err))
+            if err < best_err:
+                best, best_err = cfg, err
     return best, table
 
 
 def _grid_point(base: NetworkConfig, fitted: NetworkConfig, params: str, new_groups: bool) -> NetworkConfig:
     # "previous": the parameters before issue 16's fit, without palette evidence
-    cfg = fitted if params == "ml" else replace(base, palette_count_table=())
+    # "ml": the marginal palette count table; "ml_gain": the gain table given the known
+    # objects' palettes (labels.palette_gain_log_likelihood)
+    if params == "previous":
+        cfg = replace(base, palette_count_table=(), palette_gain_table=())
+    else:
+        cfg = {"ml": replace(fitted, palette_gain_table=()), "ml_both": fitted,
+               "ml_gain": replace(fitted, palette_count_table=())}[params]
     if new_groups:
         labels = replace(cfg.labels, new_group_probs=fitted.labels.new_group_probs, p_join=fitted.labels.p_join)
     else:

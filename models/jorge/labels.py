@@ -101,6 +101,7 @@ __all__ = [
     "colour_log_likelihood",
     "size_log_likelihood",
     "palette_count_log_likelihood",
+    "palette_gain_log_likelihood",
     "prune_labels",
     "NEW_STRIDE",
     "new_objects",
@@ -623,6 +624,56 @@ def palette_count_log_likelihood(count: int, sizes: np.ndarray, table: np.ndarra
         raise InputError(f"palette_count_log_likelihood: sizes must be ints >= 1, got {sizes}")
     rows = np.minimum(sizes, table.shape[0]) - 1
     return table[rows, min(max(int(count), 0), table.shape[1] - 1)].copy()
+
+
+def palette_gain_log_likelihood(count: int, known: np.ndarray, new: np.ndarray, table: np.ndarray) -> np.ndarray:
+    r"""Soft evidence of a stroke's palette colour count on each label, given the palettes
+    its objects already have (issue 16, our addition; replaces the marginal
+    :func:`palette_count_log_likelihood` when a gain table is set).
+
+    A label :math:`x` of inherited objects :math:`A` (not born at this stroke) and
+    :math:`m` objects born here explains a palette of :math:`c` distinct colours when
+    :math:`c = u + e`: :math:`u = |igcup_{o \in A} \pi_o|` the colours its known objects'
+    palettes already hold, :math:`e` the gain the newcomers bring (0 for :math:`m = 0`
+    with clean palettes; negative when an object's birth palette was a group's). The
+    likelihood is the table :math:`p(e \mid m)`, fitted on the training split
+    (:func:`models.jorge.fit.fit_parameters`). A new group (:math:`A = \emptyset`) reads
+    :math:`p(c \mid m)`, as the marginal table does; but a merge of two people whose
+    palettes happen to be disjoint (10 colours) is no longer taken for three people: the
+    marginal :math:`p(c \mid k)` of a random pair makes 10 colours rare and favoured a
+    join (the pair plus a newcomer) over the true merge (issue 16 diagnosis,
+    ``models.jorge.fit``).
+
+    Parameters
+    ----------
+    count : int
+        :math:`c`, distinct colours of the stroke's palette.
+    known : ndarray of int, shape (num_labels,)
+        :math:`u` per label (0 for a label of new objects only).
+    new : ndarray of int, shape (num_labels,)
+        :math:`m` per label (objects born at this stroke).
+    table : ndarray, shape (max_m + 1, 2 * pool_size + 1)
+        :math:`\log p(e \mid m)`, column ``e + pool_size``; ``m`` above ``max_m`` uses
+        the last row, gains outside the table its edge columns. Empty: no evidence.
+
+    Returns
+    -------
+    ndarray, shape (num_labels,)
+    """
+    known = np.asarray(known, dtype=np.int64)
+    new = np.asarray(new, dtype=np.int64)
+    table = np.asarray(table, dtype=np.float64)
+    if table.size == 0:
+        return np.zeros(known.shape, dtype=np.float64)
+    if table.ndim != 2 or table.shape[1] % 2 != 1:
+        raise ModelError(f"palette_gain_log_likelihood: table must be 2-D with an odd number of columns, "
+                         f"got shape {table.shape}")
+    if known.shape != new.shape or known.ndim != 1 or np.any(known < 0) or np.any(new < 0):
+        raise InputError(f"palette_gain_log_likelihood: known {known} and new {new} must be 1-D "
+                         f"non-negative ints of one length")
+    off = table.shape[1] // 2
+    cols = np.clip(int(count) - known + off, 0, table.shape[1] - 1)
+    return table[np.minimum(new, table.shape[0] - 1), cols].copy()
 
 
 def colour_log_likelihood(

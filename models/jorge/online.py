@@ -204,7 +204,7 @@ class OnlineLabeller:
             return np.ones(1)
         return self.beliefs[k]
 
-    def instant_posterior(self, k: int) -> np.ndarray:
+    def instant_posterior(self, k: int, siblings: bool = True) -> np.ndarray:
         r"""Eq. 12 posterior of node ``k`` over its domain.
 
         .. math::
@@ -231,7 +231,7 @@ class OnlineLabeller:
                 np.einsum("i,j,ijk->k", beliefs[0], beliefs[1], table)
             with np.errstate(divide="ignore"):
                 score = score + np.log(prior)
-        for sib in g.siblings(k):
+        for sib in g.siblings(k) if siblings else ():
             if sib in self.labels:
                 clash = np.array([bool(lab & self.labels[sib]) for lab in domain])
                 if not clash.all():
@@ -246,7 +246,13 @@ class OnlineLabeller:
         post = self.instant_posterior(k)
         domain = g.nodes[k].domain
         keep = [frozenset({k})] + ([self.labels[k]] if k in self.labels else [])
-        kept = prune_labels(domain, post, 0.0, keep=keep, max_labels=self.config.max_labels)
+        # ranked without the clash with the siblings' instant labels: those are point
+        # guesses the next inference may revise, and a label they exclude (posterior 0)
+        # would otherwise be the first the cap drops, for good (issue 16: the two parts of
+        # a split swapped once new groups and joins widened the domains past the cap)
+        rank = self.instant_posterior(k, siblings=False) if len(domain) > self.config.max_labels else post
+        kept = prune_labels(domain, rank, 0.0, keep=keep + [domain[int(np.argmax(post))]],
+                            max_labels=self.config.max_labels)
         if len(kept) < len(domain):
             idx = [domain.index(lab) for lab in kept]
             g.set_domain(k, kept)

@@ -1,0 +1,117 @@
+"""Palette colour count given the palettes a label's objects already have (issue 16):
+``palette_gain_log_likelihood`` reads ``log p(e | m)``, the fit's gain table is add-one
+smoothed frequencies, and a merge of two people with disjoint palettes is not taken for
+the pair plus a newcomer (a join), as the marginal count table took it; ``size_once``
+counts a region's size once along an occlusion chain."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from dbn.errors import InputError, ModelError
+from models.jorge.fit import fit_parameters
+from models.jorge.labels import LabelParams, palette_gain_log_likelihood
+from models.jorge.network import LabelGraph, NetworkConfig
+from models.jorge.online import OnlineConfig, OnlineLabeller
+from models.jorge.strokes import StrokeSet, make_stroke
+
+
+def test_gain_likelihood_reads_gain_columns_by_newcomers_and_clips():
+    rng = np.random.default_rng(1)
+    table = np.log(rng.dirichlet(np.ones(9), size=3))  # m = 0..2, e = -4..4
+    out = palette_gain_log_likelihood(
+        6, np.array([6, 4, 0, 3, 0]), np.array([0, 1, 2, 5, 0]), table
+    )
+    np.testing.assert_array_equal(
+        out, table[[0, 1, 2, 2, 0], [4, 6, 8, 7, 8]]
+    )  # e = 0, 2, 6 -> 4, 3, 6 -> 4
+    np.testing.assert_array_equal(
+        palette_gain_log_likelihood(0, np.array([9]), np.array([0]), table), table[[0], 0]
+    )
+    np.testing.assert_array_equal(
+        palette_gain_log_likelihood(3, np.array([1, 2]), np.array([0, 0]), np.zeros((0, 0))), 0.0
+    )
+    with pytest.raises(InputError):
+        palette_gain_log_likelihood(3, np.array([-1]), np.array([0]), table)
+    with pytest.raises(InputError):
+        palette_gain_log_likelihood(3, np.array([1, 2]), np.array([0]), table)
+    with pytest.raises(ModelError):  # an even number of gain columns has no zero in the middle
+        palette_gain_log_likelihood(3, np.array([1]), np.array([0]), table[:, :8])
+    with pytest.raises(ModelError):  # not log probabilities
+        NetworkConfig(palette_gain_table=tuple(map(tuple, -table)))
+
+
+def _merge(palettes=((0, 1, 2, 3, 4), (5, 6, 7, 8, 9))) -> StrokeSet:
+    """Two people seen alone, then together (their palettes' union), then one again."""
+    a, b = palettes
+    strokes = [
+        make_stroke(0, 0, 10, (0, 0), (10, 0), list(a), {0}, size=(20, 50)),
+        make_stroke(1, 0, 10, (40, 0), (30, 0), list(b), {1}, size=(20, 50)),
+        make_stroke(
+            2, 12, 20, (20, 0), (20, 0), sorted(set(a) | set(b))[:5], {0, 1}, size=(40, 50)
+        ),
+    ]
+    strokes[2] = replace(strokes[2], palette=np.array(sorted(set(a) | set(b))))
+    return StrokeSet.from_strokes(strokes)
+
+
+def test_fitted_gain_table_is_smoothed_frequencies():
+    cfg = fit_parameters(
+        [_merge()], NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels")
+    )
+    p = np.exp(np.array(cfg.palette_gain_table))
+    assert p.shape == (4, 25)
+    np.testing.assert_allclose(p.sum(axis=1), 1.0)
+    # the merge inherits both people (10 known colours, 10 seen: gain 0); the two roots
+    # bring one newcomer each with 5 colours
+    assert p[0, 12] == pytest.approx((1 + 1) / (1 + 25))
+    assert p[1, 17] == pytest.approx((2 + 1) / (2 + 25))
+    np.testing.assert_allclose(p[2], 1 / 25)
+
+
+def _merge_label(gain: bool) -> frozenset:
+    # marginal count table: 10 colours are rare for a random pair, common for three people
+    count = np.full((3, 13), 1e-3)
+    count[0, 5], count[1, 8], count[2, 10] = 1.0, 1.0, 1.0
+    count = np.log(count / count.sum(axis=1, keepdims=True))
+    gains = np.full((4, 25), 1e-3)
+    gains[0, 12], gains[1, 17], gains[2, 20], gains[3, 22] = 1.0, 1.0, 1.0, 1.0
+    gains = np.log(gains / gains.sum(axis=1, keepdims=True))
+    labels = LabelParams(max_group_size=3, new_group_probs=(0.8, 0.2), p_join=0.1, p_new=0.05)
+    cfg = NetworkConfig(
+        labels=labels,
+        size_evidence=False,
+        gate="pixels",
+        palette_count_table=() if gain else tuple(map(tuple, count)),
+        palette_gain_table=tuple(map(tuple, gains)) if gain else (),
+    )
+    lab = OnlineLabeller(OnlineConfig(network=cfg, reid_prior=0.0))
+    for s in _merge():
+        out = lab.add_stroke(s)
+    return out
+
+
+def test_a_merge_of_disjoint_palettes_is_not_a_join_given_the_known_palettes():
+    assert _merge_label(gain=False) == frozenset({0, 1, 2})  # the marginal count: a join
+    assert _merge_label(gain=True) == frozenset({0, 1})
+
+
+def test_size_once_drops_the_size_evidence_of_an_occlusion_child_only():
+    strokes = [
+        make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2], {0}, size=(20, 50)),
+        make_stroke(1, 0, 10, (100, 0), (110, 0), [3, 4, 5], {1}, size=(20, 50)),
+        make_stroke(2, 12, 20, (12, 0), (20, 0), [0, 1, 2], {0}, size=(40, 60)),
+    ]
+    for once in (False, True):
+        g = LabelGraph(
+            NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels", size_once=once)
+        )
+        for s in strokes:
+            g.add_stroke(s)
+        assert g.structure(2) == "OCCLUSION"
+        two = [frozenset({0}), frozenset({0, 1})]  # a person and a pair
+        assert np.ptp(g.size_loglik(1, two)) > 0  # a root keeps its size evidence
+        assert (np.ptp(g.size_loglik(2, two)) == 0) == once
