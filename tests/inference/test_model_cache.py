@@ -31,8 +31,9 @@ def test_value_is_built_once_per_model_and_reused() -> None:
 def test_least_recently_used_model_is_dropped_and_freed() -> None:
     cache: ModelCache[_Derived] = ModelCache(maxsize=2)
     a, b, c = _Model(), _Model(), _Model()
-    cache.get(a, lambda: _Derived(a))
-    cache.get(b, lambda: _Derived(b))
+    for m in (a, b):
+        cache.get(m, lambda m=m: _Derived(m))
+    del m  # the loop variable refers to b
     cache.get(a, lambda: pytest.fail("a is cached"))  # a is now the most recent
     cache.get(c, lambda: _Derived(c))
     assert a in cache and c in cache and b not in cache and len(cache) == 2
