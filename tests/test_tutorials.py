@@ -21,6 +21,7 @@ def test_notebook_is_paired(path: Path) -> None:
     assert source == paired, f"{ipynb.name} is out of sync with {path.name}: run jupytext --sync"
 
 
+@pytest.mark.heavy  # 10-25 s each: CI runs them (pytest -m heavy)
 @pytest.mark.parametrize("path", TUTORIALS, ids=[p.stem for p in TUTORIALS])
 def test_tutorial_executes(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     jupytext = pytest.importorskip("jupytext")

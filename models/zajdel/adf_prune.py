@@ -86,14 +86,23 @@ def _jit_config(cfg: ADFConfig) -> ADFConfig:
     )
 
 
-@cache
 def tracker_hooks(cfg: ADFConfig, uniform: bool) -> ADFHooks:
     """The tracker's driver hooks: :func:`models.zajdel.adf_hooks.zajdel_hooks` and,
-    when ``slot_mass_eps`` or ``min_open`` is set, :func:`prune_slots` as ``prune``
-    (cached: one object per configuration)."""
-    hooks = zajdel_hooks(_jit_config(cfg), uniform)
-    if cfg.slot_mass_eps > 0 or cfg.min_open > 0:
-        hooks = hooks._replace(prune=partial(prune_slots, eps=float(cfg.slot_mass_eps)))
+    when ``slot_mass_eps`` or ``min_open`` is set, :func:`prune_slots` as ``prune``.
+
+    Cached on what the compiled functions read (:func:`_jit_config`): trackers that
+    differ only in host-side sizes (``max_open``, ``min_open`` > 0, ``chunk``,
+    ``init_persons``) get the same object, so they share compiled chunks (the driver's
+    jit keys on the hooks, and a ``partial`` compares by identity)."""
+    pruned = cfg.slot_mass_eps > 0 or cfg.min_open > 0
+    return _hooks(_jit_config(cfg), uniform, pruned)
+
+
+@cache
+def _hooks(jit_cfg: ADFConfig, uniform: bool, pruned: bool) -> ADFHooks:
+    hooks = zajdel_hooks(jit_cfg, uniform)
+    if pruned:
+        hooks = hooks._replace(prune=partial(prune_slots, eps=float(jit_cfg.slot_mass_eps)))
     return hooks
 
 

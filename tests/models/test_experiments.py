@@ -104,6 +104,7 @@ def test_a_failing_task_on_the_cluster_is_recorded(client) -> None:
     assert [r["status"] for r in run_grid(chain_task, grid, client=client)] == ["ok", "error"]
 
 
+@pytest.mark.heavy  # ~11 s: a learn-search stream point twice; CI runs it (pytest -m heavy)
 def test_benchmark_dask_flag_needs_a_mapper_and_runs_the_seed_loop_on_it(client) -> None:
     from benchmarks.__main__ import main
     from benchmarks.zajdel_learnsearch import _stream_point

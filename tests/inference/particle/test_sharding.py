@@ -63,6 +63,7 @@ def test_bad_arguments_raise_library_errors() -> None:
         sharded_filter(make, 0, mesh=mesh)
 
 
+@pytest.mark.heavy  # ~10 s: a subprocess with 4 host devices; CI runs it (pytest -m heavy)
 def test_four_devices_global_equals_unsharded_and_local_matches_kalman() -> None:
     env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4")
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])

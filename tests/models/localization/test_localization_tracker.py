@@ -136,6 +136,7 @@ def test_mrclam_loader(shared_data) -> None:
     assert np.max(position_errors(dead, seq.truth[1:])) < 1.0
 
 
+@pytest.mark.heavy  # ~9 s: 90 s of real MRCLAM data; CI runs it (pytest -m heavy)
 def test_mrclam_filter_beats_dead_reckoning(shared_data) -> None:
     from models.localization.mrclam import build_sequence, load_robot, mrclam_model
 

@@ -180,6 +180,7 @@ def test_chain_decoding_continues_each_observation_at_most_once():
     assert lab[3] == lab[2]
 
 
+@pytest.mark.heavy  # ~14 s: the projection run op by op; CI runs it (pytest -m heavy)
 def test_step_eager_equals_jitted():
     import jax
 

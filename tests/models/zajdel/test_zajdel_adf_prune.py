@@ -20,6 +20,7 @@ def pointer_rows(state) -> np.ndarray:
     return rows
 
 
+@pytest.mark.heavy  # ~16 s: one compile per table size; CI runs it (pytest -m heavy)
 def test_table_sized_by_open_slots_at_threshold_zero_equals_the_fixed_table():
     sc = simulate_office(4)
     # min_open = max_open: a fixed table (with the prune hook at threshold 0, which
