@@ -64,8 +64,14 @@ def _place(boxes: np.ndarray, i: int, start: int, path: np.ndarray, size: np.nda
     """Write person ``i``'s path from frame ``start``, only where the centre is inside
     the image (entering and leaving); ``size`` is ``(num_frames, 2)``."""
     f = np.arange(start, start + path.shape[0])
-    inside = (f >= 0) & (f < boxes.shape[0]) & (path[:, 0] > 0) & (path[:, 0] < WIDTH) \
-        & (path[:, 1] > 0) & (path[:, 1] < HEIGHT)
+    inside = (
+        (f >= 0)
+        & (f < boxes.shape[0])
+        & (path[:, 0] > 0)
+        & (path[:, 0] < WIDTH)
+        & (path[:, 1] > 0)
+        & (path[:, 1] < HEIGHT)
+    )
     boxes[f[inside], i, :2] = path[inside]
     boxes[f[inside], i, 2:] = size[f[inside]]
 
@@ -92,8 +98,13 @@ def _slots(rng, k: int, sizes: np.ndarray) -> np.ndarray:
     return np.stack([x - x.mean(), y], axis=1)
 
 
-def simulate_meeting(seed, group_size: int = 3, num_walkers: int = 2, pair_prob: float = 0.3,
-                     num_frames: int | None = None) -> GroundTruth:
+def simulate_meeting(
+    seed,
+    group_size: int = 3,
+    num_walkers: int = 2,
+    pair_prob: float = 0.3,
+    num_frames: int | None = None,
+) -> GroundTruth:
     """SIMULATED boxes of a CAVIAR-like meeting of ``group_size`` people (module docstring).
 
     Parameters
@@ -117,8 +128,10 @@ def simulate_meeting(seed, group_size: int = 3, num_walkers: int = 2, pair_prob:
         ``groups`` lists, per frame, the members standing in the group (two or more).
     """
     if group_size < 2 or num_walkers < 0 or not 0.0 <= pair_prob <= 1.0:
-        raise InputError(f"simulate_meeting: need group_size >= 2, num_walkers >= 0 and pair_prob in "
-                         f"[0, 1], got {group_size}, {num_walkers}, {pair_prob}")
+        raise InputError(
+            f"simulate_meeting: need group_size >= 2, num_walkers >= 0 and pair_prob in "
+            f"[0, 1], got {group_size}, {num_walkers}, {pair_prob}"
+        )
     rng = np.random.default_rng(seed)
     k = group_size
     n = k + num_walkers
@@ -159,11 +172,21 @@ def simulate_meeting(seed, group_size: int = 3, num_walkers: int = 2, pair_prob:
         a = rng.uniform(0, 2 * np.pi)
         mid = np.array([rng.uniform(40, WIDTH - 40), rng.uniform(40, HEIGHT - 40)])
         path = _walk(_edge_point(rng, mid, a + np.pi), _edge_point(rng, mid, a), speeds[w])
-        _place(boxes, w, int(rng.integers(0, max(1, total - path.shape[0] // 2))), path, extent[:, w])
+        _place(
+            boxes, w, int(rng.integers(0, max(1, total - path.shape[0] // 2))), path, extent[:, w]
+        )
     keep = ~np.all(np.isnan(boxes[..., 0]), axis=0)
     groups = tuple(
-        (frozenset(i for i in range(k) if arrive[i] <= f < leave[i]),) if np.sum((arrive <= f) & (f < leave)) > 1
-        else () for f in range(total)
+        (frozenset(i for i in range(k) if arrive[i] <= f < leave[i]),)
+        if np.sum((arrive <= f) & (f < leave)) > 1
+        else ()
+        for f in range(total)
     )
-    return GroundTruth(f"simulated meeting k={k}", np.arange(total), np.flatnonzero(keep), boxes[:, keep],
-                       groups, 25.0)
+    return GroundTruth(
+        f"simulated meeting k={k}",
+        np.arange(total),
+        np.flatnonzero(keep),
+        boxes[:, keep],
+        groups,
+        25.0,
+    )
