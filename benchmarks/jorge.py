@@ -70,10 +70,12 @@ groups of one and two only, so ``error_rate_meeting_sim`` and
 three or more people) score the same pipeline on :func:`models.jorge.meeting.simulate_meeting`
 scenes (k people gather one by one, stand, split; two walkers pass; box sizes vary as in
 the CAVIAR ground truth), 2 scenes per k with ``--quick`` (a smoke figure of a few
-seconds), 10 otherwise; details in ``meeting_sim``. Measured with 10 scenes (stroke seeds
-``[0, i]``): all strokes 0.120 / 0.144 / 0.252 and 3+ strokes 0.27 / 0.44 / 0.80 for
-k = 3 / 4 / 5 (0.51 for k = 4 before the palette-count row of 5 stopped counting the
-crowds, ``models.jorge.fit``). Diagnosis (issue 16, third round): about 12% of the
+seconds), 10 otherwise; details in ``meeting_sim``. Measured with 10 scenes and stroke seeds
+0-4 (the full run): all strokes 0.134 / 0.156 / 0.291 and 3+ strokes 0.37 / 0.52 / 0.75
+for k = 3 / 4 / 5 (the users' bars: 0.20 and 0.35); with seed 0 alone 0.120 / 0.144 /
+0.252 and 0.27 / 0.44 / 0.80 (0.51 for k = 4 before the palette-count row of 5 stopped
+counting the crowds, ``models.jorge.fit``). The 2-scene ``--quick`` figure swings widely
+(one scene's 3+ error ranges from 0 to 0.9). Diagnosis (issue 16, third round): about 12% of the
 errors are first mistakes, the rest are carried along the group's chain of strokes (a
 label never regains a member without a merge link). The first mistakes are spread: the
 wrong partition at a split (which member left), the whole group read as a part after a

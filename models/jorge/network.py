@@ -154,7 +154,7 @@ search's ``"ml_gain"``): it is the palette evidence given the objects a label na
 the strokes of one group, which all show its palette, do not multiply one count's
 evidence. Issue 16, third round: the search re-scored on seeds 100-104 (box gate)
 prefers it, 0.2763 against 0.2872 (single seed 100: 0.2823 against 0.2712), and on
-SIMULATED meetings (10 scenes per k) its 3+ error is 0.27 / 0.25 / 0.70 against
+SIMULATED meetings (10 scenes per k, stroke seeds [0, i]) its 3+ error is 0.27 / 0.25 / 0.70 against
 0.27 / 0.44 / 0.80 for k = 3 / 4 / 5; but on the benchmark's seeds 0-4 it labels the real
 CAVIAR sequences worse (ms3ggt 0.015 -> 0.027, mws1gt 0.047 -> 0.057, validation 0.190 ->
 0.196; training pooled 0.408 -> 0.406), so the default stays the documented search's

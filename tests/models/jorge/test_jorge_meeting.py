@@ -72,14 +72,11 @@ def test_a_simulated_meeting_is_labelled_within_the_users_overall_bar(k):
 def test_ten_simulated_meetings_of_3_and_4_people():
     """Pooled over scenes 0-9 (stroke seeds [0, i]) the default pipeline was measured at
     0.120 (k = 3) and 0.144 (k = 4) over all strokes, 0.27 and 0.44 over strokes of three
-    or more people (benchmark ``error_rate_meeting_sim``): within the users' 0.20 overall;
-    their 0.35 on 3+ strokes is met for k = 3 and not for k = 4. Bars: the measured
-    figures plus 0.05."""
-    rate3_by_k = {}
+    or more people; with stroke seeds 0-4 (the full benchmark, ``error_rate_meeting_sim``)
+    0.134 / 0.156 and 0.37 / 0.52: within the users' 0.20 overall, not their 0.35 on 3+
+    strokes. Bars: the seed-0 figures plus 0.05 (a regression check, not the users' bar)."""
     for k, (bar, bar3) in {3: (0.17, 0.33), 4: (0.20, 0.49)}.items():
         rate, rate3, n3 = _errors(k, range(10))
         assert n3 >= 50
         assert rate <= bar, (k, rate)
         assert rate3 <= bar3, (k, rate3)
-        rate3_by_k[k] = rate3
-    assert rate3_by_k[3] <= 0.35  # the users' bar on 3+ strokes, met for groups of three
