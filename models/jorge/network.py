@@ -155,7 +155,9 @@ the strokes of one group, which all show its palette, do not multiply one count'
 evidence. Issue 16, third round: the search re-scored on seeds 100-104 (box gate)
 prefers it, 0.2763 against 0.2872 (single seed 100: 0.2823 against 0.2712), and on
 SIMULATED meetings (10 scenes per k, stroke seeds [0, i]) its 3+ error is 0.27 / 0.25 / 0.70 against
-0.27 / 0.44 / 0.80 for k = 3 / 4 / 5; but on the benchmark's seeds 0-4 it labels the real
+0.27 / 0.44 / 0.80 for k = 3 / 4 / 5 (stroke seeds 0-4: 0.31 / 0.33 / 0.65 against
+0.37 / 0.52 / 0.75, all strokes 0.10 / 0.10 / 0.23 against 0.13 / 0.16 / 0.29); but on
+the benchmark's seeds 0-4 it labels the real
 CAVIAR sequences worse (ms3ggt 0.015 -> 0.027, mws1gt 0.047 -> 0.057, validation 0.190 ->
 0.196; training pooled 0.408 -> 0.406), so the default stays the documented search's
 choice (scored with seed 100), the count table."""
