@@ -17,7 +17,12 @@ from models.jorge.fit import (
     training_strokes,
 )
 from models.jorge.labels import LabelParams
-from models.jorge.network import FITTED_LABELS, FITTED_PALETTE_COUNTS, NetworkConfig
+from models.jorge.network import (
+    FITTED_LABELS,
+    FITTED_PALETTE_COUNTS,
+    FITTED_PALETTE_GAINS,
+    NetworkConfig,
+)
 from models.jorge.strokes import StrokeSet, make_stroke
 
 
@@ -85,3 +90,4 @@ def test_default_parameters_are_the_fit_on_the_training_split():
     for name in ("p_new", "p_merge", "p_merge_one_split", "p_merge_both_split", "p_split", "p_part"):
         assert getattr(fitted, name) == pytest.approx(getattr(FITTED_LABELS, name), rel=1e-9), name
     np.testing.assert_allclose(cfg.palette_count_table, FITTED_PALETTE_COUNTS, rtol=1e-9)
+    np.testing.assert_allclose(cfg.palette_gain_table, FITTED_PALETTE_GAINS, rtol=1e-9)
