@@ -51,7 +51,7 @@ __all__ = ["simulate_meeting"]
 WIDTH, HEIGHT = 384.0, 288.0
 
 
-def _edge_point(rng, centre: np.ndarray, angle: float) -> np.ndarray:
+def _edge_point(centre: np.ndarray, angle: float) -> np.ndarray:
     """Where the ray from ``centre`` at ``angle`` leaves the image (a little outside)."""
     d = np.array([np.cos(angle), np.sin(angle)])
     with np.errstate(divide="ignore"):
@@ -155,13 +155,13 @@ def simulate_meeting(
     for i in range(k):
         ang = angle0 if together and i == 1 else rng.uniform(0, 2 * np.pi)
         speed = speeds[0] if together and i == 1 else speeds[i]
-        paths_in.append(_walk(_edge_point(rng, slots[i], ang), slots[i], speed))
+        paths_in.append(_walk(_edge_point(slots[i], ang), slots[i], speed))
     first = int(max(p.shape[0] for p in paths_in) - arrive.min()) + 10  # everyone can walk in
     arrive = arrive + first
     split = int(arrive.max() + rng.integers(100, 251))
     leave = split + (np.zeros(k, int) if rng.random() < 0.3 else np.cumsum(rng.integers(0, 61, k)))
     away = rng.uniform(0, 2 * np.pi) + 2 * np.pi * np.arange(k) / k + rng.uniform(-0.3, 0.3, k)
-    paths_out = [_walk(slots[i], _edge_point(rng, slots[i], away[i]), speeds[i]) for i in range(k)]
+    paths_out = [_walk(slots[i], _edge_point(slots[i], away[i]), speeds[i]) for i in range(k)]
     end = int(max(leave[i] + paths_out[i].shape[0] for i in range(k))) + 10
     total = end if num_frames is None else int(num_frames)
     if total < 10:
@@ -177,7 +177,7 @@ def simulate_meeting(
     for w in range(k, n):  # single walkers crossing the image
         a = rng.uniform(0, 2 * np.pi)
         mid = np.array([rng.uniform(40, WIDTH - 40), rng.uniform(40, HEIGHT - 40)])
-        path = _walk(_edge_point(rng, mid, a + np.pi), _edge_point(rng, mid, a), speeds[w])
+        path = _walk(_edge_point(mid, a + np.pi), _edge_point(mid, a), speeds[w])
         _place(
             boxes, w, int(rng.integers(0, max(1, total - path.shape[0] // 2))), path, extent[:, w]
         )
