@@ -29,7 +29,14 @@ relative log area :math:`a` (as the labeller sees it when the stroke starts) on
 colour-count table :math:`p(c \mid k)` (``NetworkConfig.palette_count_table``, issue 16)
 is the add-one smoothed frequency of :math:`c` distinct colours in the palettes of
 training strokes of :math:`k = |T_k|` people (strokes of more people than the largest group
-are off the model and not counted).
+are off the model and not counted). The palette gain table :math:`p(e \mid m)`
+(``NetworkConfig.palette_gain_table``, the default since issue 16's fourth round) is the
+add-one smoothed frequency of the :math:`e` colours a training stroke's palette has beyond
+the birth palettes of its *known* people (inherited, and born alone or with their whole
+cohort in the stroke), :math:`m` the others. What the likelihood does not settle (these
+tables or neither, new groups, size evidence once per region, the link gate) is chosen by
+the documented search :func:`search_settings` on the training split
+(``python -m models.jorge.fit``).
 
 The split (declared here and in tutorial 04)
 --------------------------------------------
@@ -63,6 +70,7 @@ __all__ = [
     "training_strokes",
     "labelling_error",
     "SEARCH_GRID",
+    "SCORE_SEEDS",
     "search_settings",
 ]
 
@@ -182,18 +190,24 @@ def count_events(strokes: StrokeSet, config: NetworkConfig | None = None, counts
 
 
 def _count_palette_gains(c: EventCounts, g: LabelGraph) -> None:
-    """(m, e) per stroke: its people not in its linked parents (newcomers, ``m``) and the
-    colours its palette has beyond the birth palettes (the palette of the first stroke
-    holding each) of its inherited people (``e``), as the network sees a label of them."""
+    """(m, e) per stroke, as the network sees a label of its true people
+    (:func:`models.jorge.labels.known_objects`): ``e`` the colours its palette has beyond
+    the birth palettes (the palette of the first stroke holding each) of its *known*
+    people, ``m`` the others. Known: inherited from its linked parents, and born alone or
+    with all their cohort (the newcomers of their birth stroke) in this stroke."""
     birth: dict = {}
+    cohort: dict = {}
     for node in g.nodes:
         s = node.stroke
-        for person in s.truth:
-            birth.setdefault(person, frozenset(int(x) for x in s.palette))
         parents = frozenset().union(*[g.nodes[p].stroke.truth for p in node.parents])
+        newcomers = frozenset(p for p in s.truth if p not in birth)
+        for person in newcomers:
+            birth[person] = frozenset(int(x) for x in s.palette)
+            cohort[person] = newcomers - parents
         inherited = s.truth & parents
-        known = frozenset().union(*[birth[p] for p in inherited])
-        c.palette_gains.append((len(s.truth) - len(inherited), int(np.unique(s.palette).size) - len(known)))
+        known = [p for p in inherited if cohort[p] <= inherited]
+        colours = frozenset().union(*[birth[p] for p in known])
+        c.palette_gains.append((len(s.truth) - len(known), int(np.unique(s.palette).size) - len(colours)))
 
 
 def _rate(num: float, den: float) -> float:
@@ -309,7 +323,7 @@ def labelling_error(config: NetworkConfig, stroke_sets: Sequence[StrokeSet]) -> 
 SEARCH_GRID = {
     "gate": ("pixels", "scaled", "boxes"),
     "parameters": ("previous", "ml", "ml_gain", "ml_both"),
-    "new_groups": (False, True),
+    "new_groups": ("off", "roots", "all"),
     "size_once": (False, True),
 }
 """The documented search over what the likelihood alone does not settle: the CPD
@@ -318,41 +332,81 @@ colour-count table; ``"ml_gain"``, with the count given the label's known palett
 :func:`models.jorge.labels.palette_gain_log_likelihood`; ``"ml_both"``, both) or the
 previous defaults (``"previous"``, no palette evidence: chosen in issues 4-5 by labelling
 error with simulation seeds 20-39 on ms3ggt and mws1gt, both in the training split);
-whether a stroke seen first may be a new group (``q_m`` fitted, or only ``m = 1``;
-``p_join`` likewise); whether the region size is counted once per occlusion chain
-(``NetworkConfig.size_once``); and the link gate (pixels and frames as tuned on CAVIAR,
-or scaled by the region's size and the frame rate, or the box gate of issue 16 with
-``v_box`` 0.5 (0.25 scored worse), ``NetworkConfig.gate``). Each point is scored by
-:func:`labelling_error` on the training split (never validation data); the lowest error
-wins."""
+whether a stroke seen first may be a new group (``q_m`` fitted; ``"off"``: only ``m = 1``;
+``"roots"``: only a stroke with no parent, ``LabelParams.child_new_groups`` False;
+``"all"``: any, with ``p_join`` fitted too); whether the region size is counted once per
+occlusion chain (``NetworkConfig.size_once``); and the link gate (pixels and frames as
+tuned on CAVIAR, or scaled by the region's size and the frame rate, or the box gate of
+issue 16 with ``v_box`` 0.5 (0.25 scored worse), ``NetworkConfig.gate``). Each point is
+scored by :func:`labelling_error` on the training split (never validation data) with every
+seed of :data:`SCORE_SEEDS`; the lowest mean error wins."""
+
+SCORE_SEEDS = (100, 101, 102, 103, 104)
+"""Simulation seeds the search scores with (a subset of :data:`TRAIN_SEEDS`). One seed was
+used until issue 16's fourth round; the mean error over the training sequences moves by up to
+0.03 from seed to seed, more than between the best grid points, and the one-seed and
+five-seed winners differed."""
 
 
-def search_settings(fit_sets: Sequence[StrokeSet], score_sets: Sequence[StrokeSet],
-                    base: NetworkConfig | None = None) -> tuple[NetworkConfig, list]:
+def search_settings(fit_sets: Sequence[StrokeSet], score_groups: Sequence[Sequence[StrokeSet]],
+                    base: NetworkConfig | None = None, gates: Sequence[str] | None = None,
+                    workers: int = 1) -> tuple[NetworkConfig, list]:
     """Grid search of :data:`SEARCH_GRID` on the training split (never validation data).
+
+    Parameters
+    ----------
+    fit_sets : sequence of StrokeSet
+        What :func:`fit_parameters` fits on (seeds :data:`TRAIN_SEEDS`).
+    score_groups : sequence of sequences of StrokeSet
+        The scoring sets, one group per seed (:data:`SCORE_SEEDS`), each over the
+        training sequences.
+    gates : sequence of str, optional
+        Part of ``SEARCH_GRID["gate"]`` to search (default all).
+    workers : int
+        Processes labelling in parallel (1: in this process).
 
     Returns
     -------
     best : NetworkConfig
-    table : list of (settings dict, training error)
+        The point of lowest mean training error.
+    table : list of (settings dict, mean training error, per-seed errors)
     """
     base = NetworkConfig() if base is None else base
-    table = []
-    best, best_err = None, np.inf
-    for gate in SEARCH_GRID["gate"]:
+    points = []
+    for gate in SEARCH_GRID["gate"] if gates is None else gates:
         gated = replace(base, gate=gate)
         fitted = fit_parameters(fit_sets, gated)
         for params, new_groups, once in itertools.product(
                 SEARCH_GRID["parameters"], SEARCH_GRID["new_groups"], SEARCH_GRID["size_once"]):
             cfg = replace(_grid_point(gated, fitted, params, new_groups), size_once=once)
-            err = labelling_error(cfg, score_sets)
-            table.append(({"gate": gate, "parameters": params, "new_groups": new_groups, "size_once": once}, err))
-            if err < best_err:
-                best, best_err = cfg, err
-    return best, table
+            points.append(({"gate": gate, "parameters": params, "new_groups": new_groups, "size_once": once}, cfg))
+    jobs = [(cfg, strokes) for _, cfg in points for group in score_groups for strokes in group]
+    rates = _map(_error_rate, jobs, workers)
+    table, i = [], 0
+    for settings, _ in points:
+        per_seed = []
+        for group in score_groups:
+            per_seed.append(float(np.mean(rates[i:i + len(group)])))
+            i += len(group)
+        table.append((settings, float(np.mean(per_seed)), per_seed))
+    return points[int(np.argmin([err for _, err, _ in table]))][1], table
 
 
-def _grid_point(base: NetworkConfig, fitted: NetworkConfig, params: str, new_groups: bool) -> NetworkConfig:
+def _error_rate(job: tuple) -> float:
+    cfg, strokes = job
+    return labelling_error(cfg, [strokes])
+
+
+def _map(fn, jobs: list, workers: int) -> list:
+    if workers <= 1:
+        return [fn(j) for j in jobs]
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(workers) as pool:
+        return list(pool.map(fn, jobs, chunksize=4))
+
+
+def _grid_point(base: NetworkConfig, fitted: NetworkConfig, params: str, new_groups: str) -> NetworkConfig:
     # "previous": the parameters before issue 16's fit, without palette evidence
     # "ml": the marginal palette count table; "ml_gain": the gain table given the known
     # objects' palettes (labels.palette_gain_log_likelihood)
@@ -361,8 +415,36 @@ def _grid_point(base: NetworkConfig, fitted: NetworkConfig, params: str, new_gro
     else:
         cfg = {"ml": replace(fitted, palette_gain_table=()), "ml_both": fitted,
                "ml_gain": replace(fitted, palette_count_table=())}[params]
-    if new_groups:
-        labels = replace(cfg.labels, new_group_probs=fitted.labels.new_group_probs, p_join=fitted.labels.p_join)
-    else:
-        labels = replace(cfg.labels, new_group_probs=(1.0,), p_join=0.0)
+    q = fitted.labels.new_group_probs
+    labels = {
+        "off": replace(cfg.labels, new_group_probs=(1.0,), p_join=0.0, child_new_groups=True),
+        "roots": replace(cfg.labels, new_group_probs=q, p_join=0.0, child_new_groups=False),
+        "all": replace(cfg.labels, new_group_probs=q, p_join=fitted.labels.p_join, child_new_groups=True),
+    }[new_groups]
     return replace(cfg, labels=labels)
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """``python -m models.jorge.fit [--gates boxes] [--workers 2]``: run the documented
+    search on the declared training split and print one JSON line per grid point, then the
+    chosen one (needs the training sequences in ``DBNTRACK_DATA``)."""
+    import argparse
+    import json
+
+    ap = argparse.ArgumentParser(prog="python -m models.jorge.fit", description=main.__doc__)
+    ap.add_argument("--gates", nargs="+", choices=SEARCH_GRID["gate"], default=None)
+    ap.add_argument("--workers", type=int, default=1)
+    args = ap.parse_args(argv)
+    fit_sets = training_strokes(seeds=TRAIN_SEEDS)
+    if not fit_sets:
+        raise SystemExit("no training sequence found (set DBNTRACK_DATA to the shared data folder)")
+    groups = [training_strokes(seeds=(s,)) for s in SCORE_SEEDS]
+    best, table = search_settings(fit_sets, groups, gates=args.gates, workers=args.workers)
+    for settings, err, per_seed in table:
+        print(json.dumps({**settings, "error": round(err, 4), "per_seed": [round(e, 4) for e in per_seed]}))
+    chosen = min(table, key=lambda row: row[1])
+    print(json.dumps({"chosen": chosen[0], "error": round(chosen[1], 4)}))
+
+
+if __name__ == "__main__":
+    main()

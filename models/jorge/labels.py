@@ -106,6 +106,8 @@ __all__ = [
     "NEW_STRIDE",
     "new_objects",
     "birth_stroke",
+    "cohort_size",
+    "known_objects",
     "is_new_object",
 ]
 
@@ -155,6 +157,11 @@ class LabelParams:
         Probability that a stroke with parents holds, besides what it inherits, one
         object seen for the first time (a person joining while unseen or unlinked). 0
         (the default) is the seed's model. Our addition.
+    child_new_groups : bool
+        Whether a stroke *with* parents may also be a new group (``new_group_probs``);
+        False: only a root (a stroke with no parent, e.g. people walking in together) may,
+        a child's :math:`P_{new}` mass all goes to :math:`l_{new}`. Our addition (issue 16:
+        new groups at children made the training crowds worse, at roots they do not).
     """
 
     p_new: float = 0.02
@@ -166,6 +173,7 @@ class LabelParams:
     p_merge_both_split: float = 0.02
     new_group_probs: tuple = (1.0,)
     p_join: float = 0.0
+    child_new_groups: bool = True
 
     def __post_init__(self) -> None:
         q = np.asarray(self.new_group_probs, dtype=np.float64)
@@ -213,22 +221,55 @@ def structure_of(num_parents: int, shared: Sequence[bool]) -> str:
 
 
 NEW_STRIDE = 1_000_000
-"""Object ids: the ``j``-th object born at stroke ``k`` is ``k + j * NEW_STRIDE`` (``j = 0``:
-``k`` itself, the seed's ``l_new``); so a stroke of a group seen for the first time (people
-entering together) can be labelled with a new group of ``m`` objects."""
+"""Object ids: the objects born at stroke ``k`` are ``k + j * NEW_STRIDE``. A lone newcomer
+is ``k`` itself (``j = 0``, the seed's ``l_new``); the ``m`` objects of a new group of ``m``
+(people entering together) are ``j = T(m) .. T(m) + m - 1`` with ``T(m) = m (m - 1) / 2``,
+so that the size of the group an object was born in (its *cohort*, :func:`cohort_size`)
+can be read from its id: a stroke seen for the first time can be labelled with a new group
+of ``m`` objects, and a later label holding only some of them is known to be a part."""
+
+
+def _cohort_offset(m: int) -> int:
+    return m * (m - 1) // 2
 
 
 def new_objects(k: int, m: int = 1) -> Label:
-    """The new label of stroke ``k`` holding ``m`` new objects: ``{k, k + S, ..., k + (m-1) S}``
-    with ``S = NEW_STRIDE`` (``m = 1``: the seed's ``l_new = {k}``)."""
+    """The new label of stroke ``k`` holding ``m`` new objects (a new group for ``m >= 2``):
+    ``{k + j S : T(m) <= j < T(m) + m}``, ``S = NEW_STRIDE``, ``T(m) = m (m - 1) / 2``
+    (``m = 1``: the seed's ``l_new = {k}``)."""
     if m < 1:
         raise InputError(f"new_objects: m must be >= 1, got {m}")
-    return frozenset(int(k) + j * NEW_STRIDE for j in range(m))
+    first = _cohort_offset(m)
+    return frozenset(int(k) + j * NEW_STRIDE for j in range(first, first + m))
 
 
 def birth_stroke(o: int) -> int:
     """The stroke where object ``o`` was born (whose palette it takes, sec. 4.1)."""
     return int(o) % NEW_STRIDE
+
+
+def cohort_size(o: int) -> int:
+    """The number of objects born together with object ``o`` (itself included): 1 for a
+    lone newcomer, ``m`` for a member of a new group of ``m`` (:func:`new_objects`)."""
+    j = int(o) // NEW_STRIDE
+    m = 1
+    while _cohort_offset(m + 1) <= j:
+        m += 1
+    return m
+
+
+def known_objects(label: Label, k: int) -> list[int]:
+    """The objects of ``label`` whose palette is on record at stroke ``k``: not born at
+    ``k``, and born alone or with their whole cohort in ``label``. The palette recorded at
+    a new group's birth is the group's, not any one member's, so a label holding only
+    part of a cohort knows none of their own palettes (issue 16: otherwise one member is
+    credited with the whole pair's colours and a pair continued as one person explains
+    them as well as the pair does)."""
+    born: dict[tuple[int, int], list[int]] = {}
+    for o in label:
+        if birth_stroke(o) != k:
+            born.setdefault((birth_stroke(o), cohort_size(o)), []).append(int(o))
+    return [o for (_, m), objs in born.items() if len(objs) == m for o in objs]
 
 
 def is_new_object(o: int, k: int) -> bool:
@@ -393,6 +434,7 @@ def child_table(
     domain: Sequence[Label],
     new_label: Label,
     params: LabelParams,
+    truncate: bool = False,
 ) -> np.ndarray:
     r"""CPD of a hidden node with 1 or 2 parents: structures (b)-(f) of fig. 3.
 
@@ -417,7 +459,12 @@ def child_table(
     :math:`q_m` (``new_group_probs``; the seed: all on :math:`l_{new}`), and a fraction
     :math:`P_{join}` of the inherited mass on each label :math:`a` moves to
     :math:`a \cup l_{new}` (a person joining unseen). Then restricted to ``domain`` and
-    each row renormalised (module docstring).
+    each row renormalised (module docstring), or, with ``truncate``, each row divided by
+    the mass it has over *all* admissible labels (:func:`admissible_labels` of these
+    parent domains), so a row of a pruned ``domain`` sums to the share of its mass that
+    the pruning kept (issue 16, fourth round: renormalising a row whose likely labels were
+    pruned moved their mass onto what was left, often :math:`l_{new}`, and made a wrong
+    parent label look as good as the right one).
 
     Parameters
     ----------
@@ -430,17 +477,25 @@ def child_table(
     new_label : Label
     params : LabelParams
 
+    truncate : bool
+        Rows divided by their unpruned mass instead of renormalised (see above).
+
     Returns
     -------
     ndarray, shape (len(L_1), [len(L_2),] len(domain))
-        Last axis the child; every row sums to 1.
+        Last axis the child; every row sums to 1 (``truncate``: at most 1).
     """
     n = len(parent_domains)
     if n not in (1, 2) or len(parent_shared) != n:
         raise ModelError(f"child_table: need 1 or 2 parents with flags, got {n} / {len(parent_shared)}")
-    index = {lab: i for i, lab in enumerate(domain)}
-    if new_label not in index:
+    if new_label not in domain:
         raise ModelError(f"child_table: new label {set(new_label)} not in the child's domain")
+    kept = len(domain)
+    if params.p_join > 0:  # a kept join label's source is needed even where it was pruned
+        have = set(domain)
+        sources = {lab - new_label for lab in domain if new_label < lab} - have
+        domain = [*domain, *sorted(sources, key=sorted)]
+    index = {lab: i for i, lab in enumerate(domain)}
     p_new = params.p_new
     p_merge = 0.0
     if n == 2:
@@ -454,13 +509,18 @@ def child_table(
     shape = tuple(len(d) for d in parent_domains) + (len(domain),)
     table = np.zeros(shape)
     # single-parent inheritance: one slab per parent, broadcast over the other parent
+    gmax = params.max_group_size
+    total = np.zeros(shape[:-1])  # mass per row over all admissible labels (``truncate``)
     for p in range(n):
         slab = np.zeros((len(parent_domains[p]), len(domain)))
+        mass = np.zeros(len(parent_domains[p]))
         for i, law in enumerate(laws[p]):
             for s, w in law:
+                mass[i] += w_single * w * (len(s) <= gmax)
                 j = index.get(s)
                 if j is not None:
                     slab[i, j] += w_single * w
+        total += mass.reshape([-1 if q == p else 1 for q in range(n)])
         if n == 1:
             table += slab
         elif p == 0:
@@ -472,24 +532,44 @@ def child_table(
             for j, law2 in enumerate(laws[1]):
                 for a, wa in law1:
                     for b, wb in law2:
-                        if a & b:
-                            continue  # eq. 8: only disjoint unions
+                        if a & b or len(a) + len(b) > gmax:
+                            continue  # eq. 8: only disjoint unions (of admissible size)
+                        total[i, j] += p_merge * wa * wb
                         c = index.get(a | b)
                         if c is not None:
                             table[i, j, c] += p_merge * wa * wb
     if params.p_join > 0:  # one new object joins what is inherited (our addition)
-        src, dst = [], []
-        for lab, c in index.items():
-            d = index.get(lab | new_label)
-            if d is not None and not (lab & new_label):
-                src.append(c)
-                dst.append(d)
-        moved = params.p_join * table[..., src]
-        table *= 1.0 - params.p_join
-        for t_i, d in enumerate(dst):
-            table[..., d] += moved[..., t_i]
-    table += p_new * _new_column(domain, new_label, params)
+        _join(table, index, new_label, params)
+    new_params = params if params.child_new_groups else None
+    table += p_new * _new_column(domain, new_label, new_params)
+    table = table[..., :kept]
+    if truncate:
+        total += p_new * _new_mass(new_label, new_params)
+        return table / total[..., None]
     return table / table.sum(axis=-1, keepdims=True)
+
+
+def _join(table: np.ndarray, index: dict, new_label: Label, params: LabelParams) -> None:
+    """Joins: every kept label ``a`` that can take one more object gives :math:`P_{join}`
+    of its mass to :math:`a \\cup l_{new}` (kept or not); a label of ``max_group_size``
+    objects keeps all of its mass."""
+    moves = [(c, index.get(lab | new_label)) for lab, c in index.items()
+             if not (lab & new_label) and len(lab) < params.max_group_size]
+    if not moves:
+        return
+    src = [c for c, _ in moves]
+    moved = params.p_join * table[..., src]
+    table[..., src] *= 1.0 - params.p_join
+    for t_i, (_, d) in enumerate(moves):
+        if d is not None:
+            table[..., d] += moved[..., t_i]
+
+
+def _new_mass(new_label: Label, params: LabelParams | None) -> float:
+    """Sum of :func:`_new_column` over all admissible new labels."""
+    if params is None or len(new_label) != 1:
+        return 1.0 if params is None else float(params.new_group_probs[0])
+    return float(np.sum(params.new_group_probs[: params.max_group_size]))
 
 
 def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label]) -> np.ndarray:

@@ -91,3 +91,25 @@ def test_default_parameters_are_the_fit_on_the_training_split():
         assert getattr(fitted, name) == pytest.approx(getattr(FITTED_LABELS, name), rel=1e-9), name
     np.testing.assert_allclose(cfg.palette_count_table, FITTED_PALETTE_COUNTS, rtol=1e-9)
     np.testing.assert_allclose(cfg.palette_gain_table, FITTED_PALETTE_GAINS, rtol=1e-9)
+
+
+
+def test_search_scores_every_grid_point_per_seed_and_keeps_the_lowest():
+    """The documented search on a small SIMULATED sequence (one gate): one row per grid
+    point with one error per scoring seed, and the kept point is the lowest mean."""
+    from models.jorge.fit import SEARCH_GRID, search_settings
+    from models.jorge.simulate import simulate_ground_truth
+    from models.jorge.strokes import build_strokes
+
+    truth = simulate_ground_truth(3, num_people=3, num_frames=150)
+    fit_sets = [build_strokes(s, truth) for s in (100, 101)]
+    groups = [[build_strokes(s, truth)] for s in (102, 103)]
+    base = NetworkConfig(labels=LabelParams(max_group_size=3))
+    best, table = search_settings(fit_sets, groups, base, gates=["pixels"])
+    n = len(SEARCH_GRID["parameters"]) * len(SEARCH_GRID["new_groups"]) * len(SEARCH_GRID["size_once"])
+    assert len(table) == n and all(len(per) == 2 for _, _, per in table)
+    for _, err, per in table:
+        assert err == pytest.approx(np.mean(per))
+    lowest = min(table, key=lambda row: row[1])[0]
+    assert best.gate == "pixels" and best.size_once == lowest["size_once"]
+    assert (len(best.labels.new_group_probs) > 1) == (lowest["new_groups"] != "off")

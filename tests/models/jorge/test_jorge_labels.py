@@ -130,3 +130,22 @@ def test_prune_keeps_map_and_forced():
     kept = prune_labels(dom, post, 0.05, keep=[F({0})])
     assert kept == [F({0}), F({1}), F({2}), F({3})]
     assert prune_labels(dom, post, 0.05, keep=[F({0})], max_labels=2) == [F({0}), F({1})]
+
+
+def test_cohort_size_and_known_objects():
+    """Objects of a new group of m carry m in their ids; a label holding part of a cohort
+    knows none of its palettes (issue 16: the palette recorded at a group's birth is the
+    group's, not one member's)."""
+    from models.jorge.labels import cohort_size, known_objects, new_objects
+
+    for m in range(1, 6):
+        group = new_objects(7, m)
+        assert len(group) == m and all(cohort_size(o) == m for o in group)
+    assert new_objects(7, 1) == F({7})
+    assert all(not (new_objects(7, a) & new_objects(7, b)) for a in range(1, 6) for b in range(a + 1, 6))
+    pair, trio = sorted(new_objects(3, 2)), sorted(new_objects(4, 3))
+    assert sorted(known_objects(F(pair), 9)) == pair  # the whole cohort
+    assert known_objects(F(pair[:1]), 9) == []  # half of it
+    assert sorted(known_objects(F({5, *trio}), 9)) == sorted([5, *trio])
+    assert sorted(known_objects(F({5, trio[0]}), 9)) == [5]
+    assert known_objects(F({9}), 9) == []  # born at the stroke itself: no record yet

@@ -209,9 +209,10 @@ def test_a_single_sized_child_of_a_group_moves_mass_to_single_labels():
     """The case the size evidence is for: a group's only visible child. With a
     one-person-sized region the posterior mass on two-person labels drops."""
     def two_person_mass(size_evidence: bool) -> float:
-        # a size model in which a stroke of the reference size is one person
+        # a size model in which a stroke of the reference size is one person; node 3 is an
+        # OCCLUSION child, which size_once (the default) leaves without size evidence
         g = LabelGraph(NetworkConfig(colour_mode="ratio", size_evidence=size_evidence, size_mu_single=0.0,
-                                     size_slope=1.0 / np.log(2.0), size_sigma=0.68))
+                                     size_slope=1.0 / np.log(2.0), size_sigma=0.68, size_once=False))
         g.add_stroke(make_stroke(0, 0, 10, (0, 10), (10, 10), [0, 1, 2, 3, 4], size=SINGLE))
         g.add_stroke(make_stroke(1, 0, 10, (0, 40), (10, 40), [5, 6, 7, 8, 9], size=SINGLE))
         g.add_stroke(make_stroke(2, 12, 20, (12, 25), (20, 25), [0, 1, 5, 6, 10], size=PAIR))
