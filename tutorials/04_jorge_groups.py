@@ -226,12 +226,14 @@ print("means:", np.round(rates.mean(0), 3))
 # every stroke are known, so the label nodes are observed and the maximum-likelihood
 # CPD parameters are event frequencies (new objects, merges per structure, proper parts
 # at splits, people joining unseen, new groups of m people) with one pseudo-count; the
-# size likelihood is a least-squares fit, and the palette colour-count table
-# p(c | k) (how many distinct colours a region of k people shows: the evidence that
-# tells a group from one person) add-one smoothed frequencies. A small documented search
-# (`fit.SEARCH_GRID`, scored on the training split only) then chose between these and
-# the previous defaults, with and without new groups; the default network
-# (`network.FITTED_LABELS`) is its result. Here we refit on fewer seeds and score the
+# size likelihood is a least-squares fit, and the palette tables (how many distinct
+# colours a region of k people shows, and how many colours a stroke adds to the palettes
+# of the people its label names: the evidence that tells a group from one person) are
+# add-one smoothed frequencies. A small documented search (`fit.SEARCH_GRID`, scored on
+# the training split only, with the five seeds `fit.SCORE_SEEDS`; run it with
+# `python -m models.jorge.fit --gates boxes`) then chose between these and the previous
+# defaults, with new groups off, at roots only or anywhere; the default network
+# (`network.FITTED_LABELS`, `network.FITTED_PALETTE_GAINS`) is its result. Here we refit on fewer seeds and score the
 # validation part with the default network and the colour-only baseline.
 
 # %%
