@@ -93,7 +93,6 @@ def test_default_parameters_are_the_fit_on_the_training_split():
     np.testing.assert_allclose(cfg.palette_gain_table, FITTED_PALETTE_GAINS, rtol=1e-9)
 
 
-
 def test_search_scores_every_grid_point_per_seed_and_keeps_the_lowest():
     """The documented search on a small SIMULATED sequence (one gate): one row per grid
     point with one error per scoring seed, and the kept point is the lowest mean."""

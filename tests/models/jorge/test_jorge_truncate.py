@@ -14,7 +14,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from models.jorge.labels import LabelParams, admissible_labels, child_table
+from models.jorge.labels import LabelParams, admissible_labels, birth_stroke, child_table
 from models.jorge.network import LabelGraph, kept_name, node_name, solve
 from tests.models.jorge.test_jorge_groups import CFG, _dense_log_joint, merge_split_strokes
 
@@ -57,7 +57,7 @@ def test_children_are_single_new_objects_when_new_groups_are_at_roots_only():
     for s in strokes:
         g.add_stroke(s)
     for k, node in enumerate(g.nodes):
-        born_here = [lab for lab in node.domain if all(o % 1_000_000 == k for o in lab)]
+        born_here = [lab for lab in node.domain if all(birth_stroke(o) == k for o in lab)]
         assert born_here == [F({k})] if node.parents else len(born_here) == 3
 
 
@@ -94,7 +94,7 @@ def test_a_pruned_window_is_the_unpruned_joint_restricted():
     np.testing.assert_array_equal(np.isfinite(pruned), finite)
     np.testing.assert_allclose(diff[finite], diff[finite].flat[0], atol=1e-9)
     res = solve(win)  # exact inference on the window with kept-mass nodes against the oracle
-    assert res.log_prob == np.max(pruned) or abs(res.log_prob - np.max(pruned)) < 1e-9
+    assert abs(res.log_prob - np.max(pruned)) < 1e-9
     renorm = replace(g.config, truncate_pruned=False)
     g.config = renorm
     _, old = _dense_log_joint(g.window(active))
