@@ -439,7 +439,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     if not fit_sets:
         raise SystemExit("no training sequence found (set DBNTRACK_DATA to the shared data folder)")
     groups = [training_strokes(seeds=(s,)) for s in SCORE_SEEDS]
-    best, table = search_settings(fit_sets, groups, gates=args.gates, workers=args.workers)
+    _, table = search_settings(fit_sets, groups, gates=args.gates, workers=args.workers)
     for settings, err, per_seed in table:
         print(json.dumps({**settings, "error": round(err, 4), "per_seed": [round(e, 4) for e in per_seed]}))
     chosen = min(table, key=lambda row: row[1])

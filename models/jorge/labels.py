@@ -566,10 +566,10 @@ def _join(table: np.ndarray, index: dict, new_label: Label, params: LabelParams)
 
 
 def _new_mass(new_label: Label, params: LabelParams | None) -> float:
-    """Sum of :func:`_new_column` over all admissible new labels."""
-    if params is None or len(new_label) != 1:
-        return 1.0 if params is None else float(params.new_group_probs[0])
-    return float(np.sum(params.new_group_probs[: params.max_group_size]))
+    """Sum of :func:`_new_column` over all admissible new labels (new groups only of up to
+    ``max_group_size`` objects, and only where ``new_label`` is a single object)."""
+    q = (1.0,) if params is None else params.new_group_probs[: params.max_group_size]
+    return float(np.sum(q)) if len(new_label) == 1 else float(q[0])
 
 
 def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label]) -> np.ndarray:
