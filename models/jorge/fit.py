@@ -32,8 +32,9 @@ training strokes of :math:`k = |T_k|` people (strokes of more people than the la
 are off the model and not counted). The palette gain table :math:`p(e \mid m)`
 (``NetworkConfig.palette_gain_table``, the default since issue 16's fourth round) is the
 add-one smoothed frequency of the :math:`e` colours a training stroke's palette has beyond
-the birth palettes of its *known* people (inherited, and born alone or with their whole
-cohort in the stroke), :math:`m` the others. What the likelihood does not settle (these
+the palettes of its *known* people (inherited, and born alone, or with their whole cohort
+in the stroke, or seen alone since, which gives a member of a cohort a palette of its own),
+:math:`m` the others. What the likelihood does not settle (these
 tables or neither, new groups, size evidence once per region, the link gate) is chosen by
 the documented search :func:`search_settings` on the training split
 (``python -m models.jorge.fit``).
@@ -192,9 +193,12 @@ def count_events(strokes: StrokeSet, config: NetworkConfig | None = None, counts
 def _count_palette_gains(c: EventCounts, g: LabelGraph) -> None:
     """(m, e) per stroke, as the network sees a label of its true people
     (:func:`models.jorge.labels.known_objects`): ``e`` the colours its palette has beyond
-    the birth palettes (the palette of the first stroke holding each) of its *known*
-    people, ``m`` the others. Known: inherited from its linked parents, and born alone or
-    with all their cohort (the newcomers of their birth stroke) in this stroke."""
+    the palettes of its *known* people, ``m`` the others. Known: inherited from its linked
+    parents, and born alone, or with all their cohort (the newcomers of their birth
+    stroke) in this stroke, or seen alone in an earlier stroke. A person's palette is that
+    of the first stroke holding them, or for a member of a cohort the first earlier
+    stroke holding them alone (:meth:`models.jorge.network.LabelGraph.palette_stroke`;
+    the network has it once that stroke is frozen, here at once)."""
     birth: dict = {}
     cohort: dict = {}
     for node in g.nodes:
@@ -208,6 +212,9 @@ def _count_palette_gains(c: EventCounts, g: LabelGraph) -> None:
         known = [p for p in inherited if cohort[p] <= inherited]
         colours = frozenset().union(*[birth[p] for p in known])
         c.palette_gains.append((len(s.truth) - len(known), int(np.unique(s.palette).size) - len(colours)))
+        if len(s.truth) == 1 and len(cohort[next(iter(s.truth))]) > 1 and s.truth <= parents:
+            (person,) = s.truth
+            birth[person], cohort[person] = frozenset(int(x) for x in s.palette), frozenset({person})
 
 
 def _rate(num: float, den: float) -> float:

@@ -78,7 +78,7 @@ the domain, so no row is empty.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -258,18 +258,20 @@ def cohort_size(o: int) -> int:
     return m
 
 
-def known_objects(label: Label, k: int) -> list[int]:
+def known_objects(label: Label, k: int, own: Collection[int] = ()) -> list[int]:
     """The objects of ``label`` whose palette is on record at stroke ``k``: not born at
-    ``k``, and born alone or with their whole cohort in ``label``. The palette recorded at
-    a new group's birth is the group's, not any one member's, so a label holding only
-    part of a cohort knows none of their own palettes (issue 16: otherwise one member is
-    credited with the whole pair's colours and a pair continued as one person explains
-    them as well as the pair does)."""
+    ``k``, and born alone, or with their whole cohort in ``label``, or in ``own`` (members
+    of a new group with a palette of their own, seen alone since:
+    :meth:`models.jorge.network.LabelGraph.freeze`). The palette recorded at a new group's
+    birth is the group's, not any one member's, so a label holding only part of a cohort
+    knows none of their own palettes (issue 16: otherwise one member is credited with the
+    whole pair's colours and a pair continued as one person explains them as well as the
+    pair does)."""
     born: dict[tuple[int, int], list[int]] = {}
     for o in label:
         if birth_stroke(o) != k:
             born.setdefault((birth_stroke(o), cohort_size(o)), []).append(int(o))
-    return [o for (_, m), objs in born.items() if len(objs) == m for o in objs]
+    return [o for (_, m), objs in born.items() for o in objs if len(objs) == m or o in own]
 
 
 def is_new_object(o: int, k: int) -> bool:
