@@ -110,9 +110,9 @@ Fifth round (issue 16): a member of a new group takes the palette of the first s
 frozen to it alone (:meth:`models.jorge.network.LabelGraph.palette_stroke`). Before, the
 members of a pair that entered together kept the pair's palette for good, so the colours
 could not tell which member took which person at a later split, and splits swapped the two
-people (CAVIAR lb1gt, training). The re-run search's training errors: new groups at roots 0.2783 (was 0.2870),
-at any stroke 0.2813 (was 0.2868), no new groups 0.2772. So the default is unchanged (only
-the refitted gain table). Measured after choosing, seeds 0-4, never used to choose:
+people (CAVIAR lb1gt, training). The re-run search's training errors: new groups at
+roots 0.2783 (was 0.2870), at any stroke 0.2813 (was 0.2868), no new groups 0.2772. So the
+default is unchanged (only the refitted gain table). Measured after choosing, seeds 0-4, never used to choose:
 validation 0.185 for the default, 0.131 with new groups at roots (wk2gt 0.10), 0.153 at
 any stroke.
 """

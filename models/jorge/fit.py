@@ -203,18 +203,20 @@ def _count_palette_gains(c: EventCounts, g: LabelGraph) -> None:
     cohort: dict = {}
     for node in g.nodes:
         s = node.stroke
+        palette = frozenset(int(x) for x in s.palette)
         parents = frozenset().union(*[g.nodes[p].stroke.truth for p in node.parents])
         newcomers = frozenset(p for p in s.truth if p not in birth)
         for person in newcomers:
-            birth[person] = frozenset(int(x) for x in s.palette)
+            birth[person] = palette
             cohort[person] = newcomers - parents
         inherited = s.truth & parents
         known = [p for p in inherited if cohort[p] <= inherited]
         colours = frozenset().union(*[birth[p] for p in known])
-        c.palette_gains.append((len(s.truth) - len(known), int(np.unique(s.palette).size) - len(colours)))
-        if len(s.truth) == 1 and len(cohort[next(iter(s.truth))]) > 1 and s.truth <= parents:
-            (person,) = s.truth
-            birth[person], cohort[person] = frozenset(int(x) for x in s.palette), frozenset({person})
+        c.palette_gains.append((len(s.truth) - len(known), len(palette) - len(colours)))
+        if len(inherited) == 1 == len(s.truth):  # seen alone: a cohort member's own palette
+            (person,) = inherited
+            if len(cohort[person]) > 1:
+                birth[person], cohort[person] = palette, frozenset({person})
 
 
 def _rate(num: float, den: float) -> float:

@@ -22,10 +22,16 @@ CFG = NetworkConfig(pool_size=POOL, labels=PARAMS, size_min_reference=2, size_re
 person), no palette count or gain evidence: colours alone tell the members apart."""
 
 
+def _colours(people) -> list[int]:
+    """Person ``p`` shows their colours ``5p .. 5p + 4``; the pair {0, 1} shows colours of both."""
+    if len(people) == 1:
+        (p,) = people
+        return list(range(5 * p, 5 * p + 5))
+    return [0, 1, 2, 5, 6]
+
+
 def _stroke(k, start, end, x0, x1, people):
-    colours = sorted({c for p in sorted(people) for c in range(5 * p, 5 * p + 5)})[:5] if len(people) == 1 \
-        else [0, 1, 2, 5, 6]  # the pair shows colours of both
-    return make_stroke(k, start, end, (x0, 100), (x1, 100), colours, people, pool_size=POOL,
+    return make_stroke(k, start, end, (x0, 100), (x1, 100), _colours(people), people, pool_size=POOL,
                        size=(20.0 * len(people), 50.0))
 
 
