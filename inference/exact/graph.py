@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping, Sequence
 from itertools import combinations
 
 import networkx as nx
-import numpy as np
 
 from dbn.bayesnet import BayesNet
 
@@ -59,10 +59,12 @@ def elimination_order(
     todo = set(g) if nodes is None else set(nodes)
     order: list[str] = []
 
-    def score(n: str) -> tuple[float, float, str]:
+    def score(n: str) -> tuple[int, int, str]:
         nb = g[n]
         fill = sum(1 for a, b in combinations(nb, 2) if b not in g[a])
-        weight = float(np.sum(np.log([cards[n], *(cards[m] for m in nb)])))
+        # exact (Python int): a float sum of logs depends on the order of the set ``nb``,
+        # i.e. on string hashing, and turned ties on the weight into hash-order choices
+        weight = math.prod(int(cards[m]) for m in (n, *nb))
         return (fill, weight, n) if heuristic == "min_fill" else (weight, fill, n)
 
     while todo:
