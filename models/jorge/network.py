@@ -19,7 +19,8 @@ in start order, as an on-line builder must.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import operator
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -547,8 +548,60 @@ class LabelGraph:
             front = {p for f in front for p in self.nodes[f].parents} - out
         return out
 
-    def add_stroke(self, stroke: Stroke) -> tuple[int, list[int]]:
+    def check_links(self, stroke: Stroke, parents: Iterable[int]) -> tuple[int, ...]:
+        """Validate links given for a new stroke instead of :meth:`candidate_parents`
+        (from a low-level tracker that reports its merges and splits, or the true
+        predecessors as an oracle); nothing changes.
+
+        Parameters
+        ----------
+        stroke : Stroke
+            The next stroke (index ``len(self)``).
+        parents : iterable of int
+            Indices of earlier strokes, at most ``max_parents``, distinct, each ended
+            before ``stroke.start`` and with fewer than ``max_children`` children.
+
+        Returns
+        -------
+        tuple of int
+            The parents, sorted.
+
+        Raises
+        ------
+        InputError
+            A parent that is not an earlier stroke, repeated, not ended before the stroke
+            starts, already with ``max_children`` children, or too many parents.
+        """
+        k = len(self.nodes)
+        try:
+            links = [operator.index(p) for p in parents]
+        except TypeError as err:
+            raise InputError(f"stroke {k}: parents must be stroke indices (ints), got {parents!r}") from err
+        cfg = self.config
+        if len(set(links)) != len(links) or len(links) > cfg.max_parents:
+            raise InputError(f"stroke {k}: parents {links} must be distinct and at most "
+                             f"max_parents={cfg.max_parents}")
+        for p in links:
+            if not 0 <= p < k:
+                raise InputError(f"stroke {k}: parent {p} is not an earlier stroke (0..{k - 1})")
+            if self._end[p] >= stroke.start:
+                raise InputError(f"stroke {k}: parent {p} ends at frame {self._end[p]}, not before "
+                                 f"the stroke starts (frame {stroke.start})")
+            if self._nchild[p] >= cfg.max_children:
+                raise InputError(f"stroke {k}: parent {p} already has max_children="
+                                 f"{cfg.max_children} children")
+        return tuple(sorted(links))
+
+    def add_stroke(self, stroke: Stroke, parents: Iterable[int] | None = None) -> tuple[int, list[int]]:
         """Add the node of a new stroke (validated first: nothing changes on error).
+
+        Parameters
+        ----------
+        stroke : Stroke
+            The next stroke, in start order.
+        parents : iterable of int, optional
+            Its links, checked by :meth:`check_links`; ``None`` (default): the on-line
+            link rule, :meth:`candidate_parents`.
 
         Returns
         -------
@@ -560,7 +613,10 @@ class LabelGraph:
         """
         self.check_stroke(stroke)
         k = len(self.nodes)
-        parents = tuple(int(p) for p in sorted(self.candidate_parents(stroke)))
+        if parents is None:
+            parents = tuple(int(p) for p in sorted(self.candidate_parents(stroke)))
+        else:
+            parents = self.check_links(stroke, parents)
         if k >= self._end.shape[0]:
             self._grow()
         self._end[k] = stroke.end

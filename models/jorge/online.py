@@ -17,6 +17,13 @@ Instant labelling between inferences (eq. 12)
     It takes :math:`\arg\max_{x} p(y | x)\, p(x | x_{pa}) \prod_s p(r_{s} = 1 | x, x_s)`.
     Nodes that took part in the last inference keep their MAP label until the next one.
 
+Links
+    By default each new stroke is linked by the on-line link rule
+    (:meth:`models.jorge.network.LabelGraph.candidate_parents`). A low-level tracker that
+    knows its merges and splits can give the links instead (``add_stroke(stroke,
+    parents)``, ``label_online(..., links=...)``); :func:`true_links` gives the true
+    predecessors, the oracle with which the benchmark measures what the link rule costs.
+
 Object re-identification (final off-line pass; our addition)
     In the seed's net a label only travels along links, so once a person's stroke takes a
     new label (a missed link, or a wrong MAP at a split) every later stroke of that person
@@ -70,6 +77,7 @@ __all__ = [
     "reidentify",
     "first_errors",
     "true_predecessors",
+    "true_links",
     "link_accuracy",
     "object_people",
     "optimal_people",
@@ -261,8 +269,17 @@ class OnlineLabeller:
         self.beliefs[k] = post
         self.labels[k] = g.nodes[k].domain[int(np.argmax(post))]
 
-    def add_stroke(self, stroke: Stroke) -> Label:
+    def add_stroke(self, stroke: Stroke, parents: Iterable[int] | None = None) -> Label:
         """Add a stroke that starts now; run any periodic inference due first.
+
+        Parameters
+        ----------
+        stroke : Stroke
+            The next stroke, in start order.
+        parents : iterable of int, optional
+            Its links, if the low-level tracker knows them
+            (:meth:`models.jorge.network.LabelGraph.check_links`); ``None``: the
+            on-line link rule.
 
         Returns
         -------
@@ -272,15 +289,17 @@ class OnlineLabeller:
         Raises
         ------
         InputError, TimeOrderError
-            Bad stroke (nothing changes).
+            Bad stroke or links (nothing changes).
         """
         self.graph.check_stroke(stroke)
+        if parents is not None:
+            parents = self.graph.check_links(stroke, parents)
         if self._next_inference is None:
             self._next_inference = stroke.start + self._period_frames
         while stroke.start >= self._next_inference:
             self.infer(int(np.floor(self._next_inference)))
             self._next_inference += self._period_frames
-        k, widened = self.graph.add_stroke(stroke)
+        k, widened = self.graph.add_stroke(stroke, parents)
         for c in sorted(set(widened)):  # parents before children
             self._relabel(c)
         self._relabel(k)
@@ -374,7 +393,8 @@ class OnlineResult:
 
 
 def label_online(strokes: StrokeSet | Sequence[Stroke], config: OnlineConfig | None = None,
-                 fps: float = 25.0, keep_windows: bool = False) -> OnlineResult:
+                 fps: float = 25.0, keep_windows: bool = False,
+                 links: Sequence[Iterable[int]] | None = None) -> OnlineResult:
     """Run the on-line labeller over a stroke set (seed 004, sec. 5).
 
     Parameters
@@ -384,16 +404,30 @@ def label_online(strokes: StrokeSet | Sequence[Stroke], config: OnlineConfig | N
     config : OnlineConfig, optional
     fps : float
     keep_windows : bool
+    links : sequence of iterable of int, optional
+        Each stroke's parents (length num_strokes), e.g. :func:`true_links`; ``None``:
+        the on-line link rule.
 
     Returns
     -------
     OnlineResult
+
+    Raises
+    ------
+    InputError
+        ``links`` not one entry per stroke, or a bad link.
     """
     if isinstance(strokes, StrokeSet):
         fps = strokes.fps
+    strokes = list(strokes)
+    if links is not None and len(links) != len(strokes):
+        raise InputError(f"label_online: {len(links)} link sets for {len(strokes)} strokes")
     lab = OnlineLabeller(config, fps, keep_windows)
     t0 = time.perf_counter()
-    instant = [lab.add_stroke(s) for s in strokes]
+    if links is None:
+        instant = [lab.add_stroke(s) for s in strokes]
+    else:
+        instant = [lab.add_stroke(s, par) for s, par in zip(strokes, links)]
     final = lab.finish()
     seconds = time.perf_counter() - t0
     return OnlineResult([final[k] for k in range(len(final))], [lab.labels[k] for k in range(len(final))],
@@ -659,6 +693,28 @@ def true_predecessors(strokes: Sequence[Stroke]) -> list[frozenset]:
         out.append(frozenset(preds))
         for p in s.truth:
             latest.setdefault(p, []).append(k)
+    return out
+
+
+def true_links(strokes: Sequence[Stroke], max_parents: int = 2, max_children: int = 2) -> list[tuple]:
+    """The true predecessors (:func:`true_predecessors`) as links the label network can
+    hold: at most ``max_parents`` per stroke (the latest-ending first) and
+    ``max_children`` per parent (first come), for :func:`label_online` ``links=`` (the
+    oracle that measures what the on-line link rule costs; issue 16 diagnosis).
+
+    Returns
+    -------
+    list of tuple of int, length num_strokes
+    """
+    strokes = list(strokes)
+    children: dict[int, int] = {}
+    out = []
+    for preds in true_predecessors(strokes):
+        kept = [p for p in sorted(preds, key=lambda i: (-strokes[i].end, i))
+                if children.get(p, 0) < max_children][:max_parents]
+        for p in kept:
+            children[p] = children.get(p, 0) + 1
+        out.append(tuple(sorted(kept)))
     return out
 
 
