@@ -77,6 +77,7 @@ the domain, so no row is empty.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
@@ -248,6 +249,7 @@ def birth_stroke(o: int) -> int:
     return int(o) % NEW_STRIDE
 
 
+@functools.lru_cache(maxsize=1 << 16)
 def cohort_size(o: int) -> int:
     """The number of objects born together with object ``o`` (itself included): 1 for a
     lone newcomer, ``m`` for a member of a new group of ``m`` (:func:`new_objects`)."""

@@ -96,7 +96,7 @@ def test_default_parameters_are_the_fit_on_the_training_split():
 def test_search_scores_every_grid_point_per_seed_and_keeps_the_lowest():
     """The documented search on a small SIMULATED sequence (one gate): one row per grid
     point with one error per scoring seed, and the kept point is the lowest mean."""
-    from models.jorge.fit import SEARCH_GRID, search_settings
+    from models.jorge.fit import REALTIME_BAR, SEARCH_GRID, search_settings
     from models.jorge.simulate import simulate_ground_truth
     from models.jorge.strokes import build_strokes
 
@@ -105,10 +105,41 @@ def test_search_scores_every_grid_point_per_seed_and_keeps_the_lowest():
     groups = [[build_strokes(s, truth)] for s in (102, 103)]
     base = NetworkConfig(labels=LabelParams(max_group_size=3))
     best, table = search_settings(fit_sets, groups, base, gates=["pixels"])
-    n = len(SEARCH_GRID["parameters"]) * len(SEARCH_GRID["new_groups"]) * len(SEARCH_GRID["size_once"])
-    assert len(table) == n and all(len(per) == 2 for _, _, per in table)
-    for _, err, per in table:
-        assert err == pytest.approx(np.mean(per))
-    lowest = min(table, key=lambda row: row[1])[0]
+    n = (len(SEARCH_GRID["parameters"]) * len(SEARCH_GRID["new_groups"]) * len(SEARCH_GRID["size_once"])
+         * len(SEARCH_GRID["merge_area"]))
+    assert len(table) == n and all(len(per) == 2 for _, _, per, _ in table)
+    for _, err, per, speed in table:
+        assert err == pytest.approx(np.mean(per)) and speed > 0
+    # the lowest mean error among the points fast enough for the bar (all, if none is)
+    fast = [row for row in table if row[3] >= REALTIME_BAR] or table
+    lowest = min(fast, key=lambda row: row[1])[0]
     assert best.gate == "pixels" and best.size_once == lowest["size_once"]
+    assert best.merge_area == lowest["merge_area"]
     assert (len(best.labels.new_group_probs) > 1) == (lowest["new_groups"] != "off")
+
+
+def test_search_keeps_only_points_fast_enough_for_the_bar(monkeypatch):
+    """A point more accurate on training but slower than ``REALTIME_BAR`` is not kept
+    (scores stubbed: the rule, not the labeller, is under test)."""
+    from models.jorge import fit
+    from models.jorge.simulate import simulate_ground_truth
+    from models.jorge.strokes import build_strokes
+
+    def stub(job):
+        cfg, _ = job
+        joins = cfg.labels.p_join > 0  # new groups anywhere: best error, too slow
+        return (0.1, 5.0) if joins else (0.2 + 0.01 * cfg.size_once, 40.0)
+
+    assert 5.0 < fit.REALTIME_BAR <= 40.0
+    monkeypatch.setattr(fit, "_error_and_speed", stub)
+    truth = simulate_ground_truth(3, num_people=3, num_frames=100)
+    sets = [build_strokes(100, truth)]
+    best, table = fit.search_settings(sets, [sets], NetworkConfig(labels=LabelParams(max_group_size=3)),
+                                      gates=["pixels"])
+    assert min(table, key=lambda row: row[1])[0]["new_groups"] == "all"
+    assert best.labels.p_join == 0 and not best.size_once
+    # when no point is fast enough, the most accurate is kept
+    monkeypatch.setattr(fit, "REALTIME_BAR", 1e9)
+    best, _ = fit.search_settings(sets, [sets], NetworkConfig(labels=LabelParams(max_group_size=3)),
+                                  gates=["pixels"])
+    assert best.labels.p_join > 0

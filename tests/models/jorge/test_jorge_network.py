@@ -3,21 +3,27 @@
 from __future__ import annotations
 
 import itertools
+from dataclasses import replace
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dbn.errors import InputError, TimeOrderError, UnknownVariableError
+from dbn.errors import InputError, ModelError, TimeOrderError, UnknownVariableError
 from models.jorge.labels import format_label
-from models.jorge.network import LabelGraph, NetworkConfig, node_name, solve
+from models.jorge.network import FITTED_LABELS, LabelGraph, NetworkConfig, node_name, solve
 from models.jorge.strokes import make_stroke
+
+# the seed's label model (no new groups, no joins, as the default): with new groups and
+# joins the unpruned domains of this window run to thousands of labels, too many to enumerate
+SEED_LABELS = replace(FITTED_LABELS, new_group_probs=(1.0,), p_join=0.0)
+GROUP_LABELS = replace(FITTED_LABELS, new_group_probs=(0.67, 0.18, 0.07, 0.04, 0.04), p_join=0.12)
 
 
 def _graph(colour_mode: str = "ratio") -> LabelGraph:
     """Two people merge (s2), the group splits (s3, s4), s3 goes on (s5)."""
-    g = LabelGraph(NetworkConfig(colour_mode=colour_mode))
+    g = LabelGraph(NetworkConfig(colour_mode=colour_mode, labels=SEED_LABELS))
     strokes = [
         make_stroke(0, 0, 10, (0, 10), (10, 10), [0, 1, 2, 3, 4], {0}),
         make_stroke(1, 0, 10, (0, 40), (10, 40), [5, 6, 7, 8, 9], {1}),
@@ -151,3 +157,20 @@ def test_window_rejects_unknown_nodes():
     g.freeze(0, frozenset({0}))
     with pytest.raises(InputError):
         g.window([0, 1])
+
+
+def test_unpruned_domains_too_large_raise_a_model_error():
+    """With new groups and joins the unpruned domains of the example grow along its chain;
+    the window refuses a table past the limit with a ModelError (not a raw MemoryError),
+    while the on-line labeller, which prunes, labels the strokes."""
+    from models.jorge.online import OnlineConfig, label_online
+
+    seed = _graph()
+    cfg = NetworkConfig(colour_mode="ratio", labels=GROUP_LABELS)
+    g = LabelGraph(cfg)
+    for node in seed.nodes:
+        g.add_stroke(node.stroke)
+    with pytest.raises(ModelError, match="node 5: its CPD table"):
+        g.window(range(6))
+    labels = label_online([n.stroke for n in seed.nodes], OnlineConfig(network=cfg)).labels
+    assert labels[3] != labels[4]
