@@ -324,10 +324,7 @@ def labelling_error(config: NetworkConfig, stroke_sets: Sequence[StrokeSet]) -> 
     """Mean over stroke sets of the labelling error rate (LE / NT) of the on-line
     labeller with ``config`` (default on-line settings otherwise); each sequence weighs
     the same, so a long dense crowd does not swamp the rest."""
-    from models.jorge.online import OnlineConfig, label_online, score
-
-    rates = [score(strokes, label_online(strokes, OnlineConfig(network=config)).labels).error_rate
-             for strokes in stroke_sets]
+    rates = [_error_and_speed((config, strokes))[0] for strokes in stroke_sets]
     return float(np.mean(rates)) if rates else float("nan")
 
 
@@ -417,9 +414,14 @@ def search_settings(fit_sets: Sequence[StrokeSet], score_groups: Sequence[Sequen
             fastest = min(fastest, *(rt for _, rt in part))
             i += len(group)
         table.append((settings, float(np.mean(per_seed)), per_seed, float(fastest)))
+    return points[_kept(table)][1], table
+
+
+def _kept(table: list) -> int:
+    """Index of the row the search keeps: the lowest mean error among the rows whose
+    slowest scoring set runs at :data:`REALTIME_BAR` or faster (all rows if none does)."""
     fast = [j for j, row in enumerate(table) if row[3] >= REALTIME_BAR] or list(range(len(table)))
-    best = min(fast, key=lambda j: table[j][1])
-    return points[best][1], table
+    return min(fast, key=lambda j: table[j][1])
 
 
 def _error_and_speed(job: tuple) -> tuple[float, float]:
@@ -478,8 +480,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     for settings, err, per_seed, speed in table:
         print(json.dumps({**settings, "error": round(err, 4), "per_seed": [round(e, 4) for e in per_seed],
                           "min_realtime_factor": round(speed, 1)}))
-    fast = [row for row in table if row[3] >= REALTIME_BAR] or table
-    chosen = min(fast, key=lambda row: row[1])
+    chosen = table[_kept(table)]
     print(json.dumps({"chosen": chosen[0], "error": round(chosen[1], 4),
                       "min_realtime_factor": round(chosen[3], 1)}))
 

@@ -750,39 +750,23 @@ class LabelGraph:
         ndarray of bool, shape (num_labels, pool_size)
         """
         out = np.zeros((len(domain), self.config.pool_size), dtype=bool)
-        cache = self._palette_cache
-        if len(cache) > _CACHE_LIMIT:
-            cache.clear()
         for i, lab in enumerate(domain):
-            row = cache.get(lab)
-            if row is None:
-                row = cache[lab] = self._palettes[[self.palette_stroke(o) for o in lab]].any(axis=0)
-            out[i] = row
+            out[i] = _memo(self._palette_cache, lab,
+                           lambda lab=lab: self._palettes[[self.palette_stroke(o) for o in lab]].any(axis=0))
         return out
 
     def _known(self, lab: Label, k: int) -> frozenset:
         """:func:`models.jorge.labels.known_objects` of ``lab`` at stroke ``k``, cached per
         label: the objects born at ``k`` are whole cohorts of their own, so leaving them
         out after the grouping gives the same set."""
-        cache = self._known_cache
-        if len(cache) > _CACHE_LIMIT:
-            cache.clear()
-        known = cache.get(lab)
-        if known is None:
-            known = cache[lab] = frozenset(known_objects(lab, -1, own=self._own))
+        known = _memo(self._known_cache, lab, lambda: frozenset(known_objects(lab, -1, own=self._own)))
         if k in self._births(lab):
             known = frozenset(o for o in known if birth_stroke(o) != k)
         return known
 
     def _births(self, lab: Label) -> frozenset:
         """The birth strokes of ``lab``'s objects, cached."""
-        cache = self._births_cache
-        if len(cache) > _CACHE_LIMIT:
-            cache.clear()
-        births = cache.get(lab)
-        if births is None:
-            births = cache[lab] = frozenset(birth_stroke(o) for o in lab)
-        return births
+        return _memo(self._births_cache, lab, lambda: frozenset(birth_stroke(o) for o in lab))
 
     def colour_loglik(self, k: int, domain: Sequence[Label] | None = None, mode: str | None = None) -> np.ndarray:
         """Colour log-likelihood of stroke ``k`` for each label of ``domain`` (eq. 6).
@@ -1101,6 +1085,17 @@ def solve(win: WindowNet, marginals: bool = True) -> Inference:
 # pixel coordinates / sizes beyond this are not an image (a unit or scale mistake)
 _MAX_PIXELS = 1e6
 _CACHE_LIMIT = 200_000  # entries per label cache of a LabelGraph (cleared when full)
+
+
+def _memo(cache: dict, key, compute):
+    """``cache[key]``, computed by ``compute()`` on a miss; the cache is emptied once it
+    holds more than ``_CACHE_LIMIT`` entries (bounded memory on long sequences)."""
+    value = cache.get(key)
+    if value is None:
+        if len(cache) > _CACHE_LIMIT:
+            cache.clear()
+        value = cache[key] = compute()
+    return value
 _MAX_TABLE_ENTRIES = 5e7  # a CPD table of one node (400 MB of float64)
 
 
