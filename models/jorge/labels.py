@@ -79,7 +79,7 @@ from __future__ import annotations
 
 import functools
 import itertools
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -109,6 +109,9 @@ __all__ = [
     "birth_stroke",
     "cohort_size",
     "known_objects",
+    "LabelObjects",
+    "label_objects",
+    "union_rows",
     "is_new_object",
 ]
 
@@ -260,6 +263,12 @@ def cohort_size(o: int) -> int:
     return m
 
 
+@functools.lru_cache(maxsize=1 << 16)
+def _cohort(o: int) -> Label:
+    """All the objects born together with ``o`` (itself included)."""
+    return new_objects(birth_stroke(o), cohort_size(o))
+
+
 def known_objects(label: Label, k: int, own: Collection[int] = ()) -> list[int]:
     """The objects of ``label`` whose palette is on record at stroke ``k``: not born at
     ``k``, and born alone, or with their whole cohort in ``label``, or in ``own`` (members
@@ -274,6 +283,80 @@ def known_objects(label: Label, k: int, own: Collection[int] = ()) -> list[int]:
         if birth_stroke(o) != k:
             born.setdefault((birth_stroke(o), cohort_size(o)), []).append(int(o))
     return [o for (_, m), objs in born.items() for o in objs if len(objs) == m or o in own]
+
+
+@dataclass(frozen=True)
+class LabelObjects:
+    """What the evidence needs of each label of a domain at stroke ``k``, flattened over
+    the labels in order (one pass over their objects, :func:`label_objects`).
+
+    Attributes
+    ----------
+    palette_strokes : ndarray of int64, shape (sum of the label sizes,)
+        For each object of each label in turn, the stroke whose palette it has.
+    sizes : ndarray of int64, shape (num_labels,)
+    known_strokes : ndarray of int64, shape (sum of known_counts,)
+        The same for the known objects only (:func:`known_objects` at ``k``).
+    known_counts : ndarray of int64, shape (num_labels,)
+    is_new : ndarray of bool, shape (num_labels,)
+        Whether the label holds an object born at ``k``.
+    """
+
+    palette_strokes: np.ndarray
+    sizes: np.ndarray
+    known_strokes: np.ndarray
+    known_counts: np.ndarray
+    is_new: np.ndarray
+
+
+def label_objects(domain: Sequence[Label], k: int, own: Mapping[int, int] | None = None) -> LabelObjects:
+    """:class:`LabelObjects` of ``domain`` at stroke ``k``; ``own`` maps a member of a new
+    group to the stroke with its own palette (else its birth stroke's). The known objects
+    are those of :func:`known_objects` (``label``, ``k``, ``own``)."""
+    own = {} if own is None else own
+    pal: list[int] = []
+    known: list[int] = []
+    known_counts, is_new = [], []
+    for lab in domain:
+        if max(lab) < NEW_STRIDE:  # lone newcomers only: each its own palette, all known
+            pal.extend(lab)
+            new = k in lab
+            known.extend(o for o in lab if o != k) if new else known.extend(lab)
+            known_counts.append(len(lab) - new)
+            is_new.append(new)
+            continue
+        new, n_known = False, 0
+        for o in lab:
+            b = o % NEW_STRIDE
+            pal.append(own.get(o, b))
+            if b == k:
+                new = True
+            elif o < NEW_STRIDE or o in own or _cohort(o) <= lab:  # alone, own, whole cohort
+                known.append(own.get(o, b))
+                n_known += 1
+        known_counts.append(n_known)
+        is_new.append(new)
+    return LabelObjects(np.array(pal, dtype=np.int64), np.array([len(lab) for lab in domain], dtype=np.int64),
+                        np.array(known, dtype=np.int64), np.array(known_counts, dtype=np.int64),
+                        np.array(is_new, dtype=bool))
+
+
+def union_rows(palettes: np.ndarray, strokes: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Row ``i``: the union of the palettes (rows of ``palettes``, bool, shape
+    (num_strokes, pool_size)) of the next ``counts[i]`` entries of ``strokes``; an empty
+    group gives an empty palette.
+
+    Returns
+    -------
+    ndarray of bool, shape (len(counts), pool_size)
+    """
+    counts = np.asarray(counts, dtype=np.int64)
+    out = np.zeros((counts.size, palettes.shape[1]), dtype=bool)
+    full = counts > 0
+    if full.any():
+        starts = (np.cumsum(counts) - counts)[full]
+        out[full] = np.logical_or.reduceat(palettes[np.asarray(strokes, dtype=np.int64)], starts, axis=0)
+    return out
 
 
 def is_new_object(o: int, k: int) -> bool:
@@ -414,14 +497,11 @@ def root_table(domain: Sequence[Label], new_label: Label, params: LabelParams | 
 def _new_column(domain: Sequence[Label], new_label: Label, params: LabelParams | None) -> np.ndarray:
     """:math:`q_m` at each new-group label of the domain (``new_label`` is ``m = 1``)."""
     q = (1.0,) if params is None else params.new_group_probs
-    t = np.zeros(len(domain))
-    (k,) = tuple(new_label) if len(new_label) == 1 else (None,)
-    for i, lab in enumerate(domain):
-        if lab == new_label:
-            t[i] = q[0]
-        elif k is not None and len(lab) <= len(q) and lab == new_objects(k, len(lab)):
-            t[i] = q[len(lab) - 1]
-    return t
+    weight = {new_label: q[0]}
+    if len(new_label) == 1:
+        (k,) = tuple(new_label)
+        weight.update({new_objects(k, m): q[m - 1] for m in range(2, len(q) + 1)})
+    return np.array([weight.get(lab, 0.0) for lab in domain], dtype=np.float64)
 
 
 def _piece_law(label: Label, shared: bool, params: LabelParams) -> list[tuple[Label, float]]:
@@ -532,16 +612,7 @@ def child_table(
         else:
             table += slab[None, :, :]
     if n == 2 and p_merge > 0:
-        for i, law1 in enumerate(laws[0]):
-            for j, law2 in enumerate(laws[1]):
-                for a, wa in law1:
-                    for b, wb in law2:
-                        if a & b or len(a) + len(b) > gmax:
-                            continue  # eq. 8: only disjoint unions (of admissible size)
-                        total[i, j] += p_merge * wa * wb
-                        c = index.get(a | b)
-                        if c is not None:
-                            table[i, j, c] += p_merge * wa * wb
+        _merge_mass(table, total, laws, index, p_merge, gmax)
     if params.p_join > 0:  # one new object joins what is inherited (our addition)
         _join(table, index, new_label, params)
     new_params = params if params.child_new_groups else None
@@ -551,6 +622,50 @@ def child_table(
         total += p_new * _new_mass(new_label, new_params)
         return table / total[..., None]
     return table / table.sum(axis=-1, keepdims=True)
+
+
+def _merge_mass(table: np.ndarray, total: np.ndarray, laws: list, index: dict, p_merge: float,
+                gmax: int) -> None:
+    """Eq. 8 in place: each pair of pieces ``a`` (of parent label ``i``, weight ``wa``) and
+    ``b`` (of ``j``, ``wb``), disjoint and together at most ``gmax`` objects, adds
+    :math:`P_{merge} w_a w_b` to ``total[i, j]`` and, if ``a | b`` is in ``index``, to
+    ``table[i, j, index[a | b]]``. Vectorised over the pairs with object bit masks, in the
+    loop's order (so the sums are the same to the last bit); a loop past 62 objects."""
+    objects = sorted({o for law in laws[0] + laws[1] for piece, _ in law for o in piece})
+    if len(objects) > 62:
+        _merge_mass_loop(table, total, laws, index, p_merge, gmax)
+        return
+    bit = {o: 1 << t for t, o in enumerate(objects)}
+    flat = []
+    for p in (0, 1):
+        pieces_ = [(i, sum(bit[o] for o in piece), w, len(piece))
+                   for i, law in enumerate(laws[p]) for piece, w in law]
+        rows, masks, ws, sizes = zip(*pieces_)
+        flat.append((np.array(rows), np.array(masks, dtype=np.int64), np.array(ws), np.array(sizes)))
+    (r0, m0, w0, s0), (r1, m1, w1, s1) = flat
+    ia, ib = np.nonzero(((m0[:, None] & m1[None, :]) == 0) & (s0[:, None] + s1[None, :] <= gmax))
+    w = p_merge * w0[ia] * w1[ib]
+    np.add.at(total, (r0[ia], r1[ib]), w)
+    universe = frozenset(objects)
+    child = {sum(bit[o] for o in lab): c for lab, c in index.items() if lab <= universe}
+    c = np.array([child.get(u, -1) for u in (m0[ia] | m1[ib]).tolist()], dtype=np.int64)
+    hit = c >= 0
+    np.add.at(table, (r0[ia][hit], r1[ib][hit], c[hit]), w[hit])
+
+
+def _merge_mass_loop(table: np.ndarray, total: np.ndarray, laws: list, index: dict, p_merge: float,
+                     gmax: int) -> None:
+    """:func:`_merge_mass` as a plain loop (any number of objects)."""
+    for i, law1 in enumerate(laws[0]):
+        for j, law2 in enumerate(laws[1]):
+            for a, wa in law1:
+                for b, wb in law2:
+                    if a & b or len(a) + len(b) > gmax:
+                        continue  # eq. 8: only disjoint unions (of admissible size)
+                    total[i, j] += p_merge * wa * wb
+                    c = index.get(a | b)
+                    if c is not None:
+                        table[i, j, c] += p_merge * wa * wb
 
 
 def _join(table: np.ndarray, index: dict, new_label: Label, params: LabelParams) -> None:

@@ -33,6 +33,7 @@ from dbn.variables import DiscreteVariable
 from inference.exact import JunctionTree, map_assignment
 from models.jorge.labels import (
     Label,
+    LabelObjects,
     LabelParams,
     admissible_labels,
     birth_stroke,
@@ -40,13 +41,14 @@ from models.jorge.labels import (
     cohort_size,
     colour_log_likelihood,
     format_label,
-    known_objects,
+    label_objects,
     palette_count_log_likelihood,
     palette_gain_log_likelihood,
     restriction_table,
     root_table,
     size_log_likelihood,
     structure_of,
+    union_rows,
 )
 from models.jorge.strokes import Stroke, _check_colours
 
@@ -440,10 +442,6 @@ class LabelGraph:
         self._foot_y = np.full(n0, np.nan)
         self._scale = np.full(n0, np.nan)
         self._own: dict[int, int] = {}  # member of a new group -> stroke with its own palette
-        # per-label palettes and known objects: they change only when ``_own`` does
-        self._palette_cache: dict[Label, np.ndarray] = {}
-        self._known_cache: dict[Label, frozenset] = {}
-        self._births_cache: dict[Label, frozenset] = {}
 
     # --- growth --------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -749,40 +747,28 @@ class LabelGraph:
         -------
         ndarray of bool, shape (num_labels, pool_size)
         """
-        out = np.zeros((len(domain), self.config.pool_size), dtype=bool)
-        for i, lab in enumerate(domain):
-            out[i] = _memo(self._palette_cache, lab,
-                           lambda lab=lab: self._palettes[[self.palette_stroke(o) for o in lab]].any(axis=0))
-        return out
+        obj = label_objects(domain, -1, self._own)
+        return union_rows(self._palettes, obj.palette_strokes, obj.sizes)
 
-    def _known(self, lab: Label, k: int) -> frozenset:
-        """:func:`models.jorge.labels.known_objects` of ``lab`` at stroke ``k``, cached per
-        label: the objects born at ``k`` are whole cohorts of their own, so leaving them
-        out after the grouping gives the same set."""
-        known = _memo(self._known_cache, lab, lambda: frozenset(known_objects(lab, -1, own=self._own)))
-        if k in self._births(lab):
-            known = frozenset(o for o in known if birth_stroke(o) != k)
-        return known
-
-    def _births(self, lab: Label) -> frozenset:
-        """The birth strokes of ``lab``'s objects, cached."""
-        return _memo(self._births_cache, lab, lambda: frozenset(birth_stroke(o) for o in lab))
-
-    def colour_loglik(self, k: int, domain: Sequence[Label] | None = None, mode: str | None = None) -> np.ndarray:
-        """Colour log-likelihood of stroke ``k`` for each label of ``domain`` (eq. 6).
+    def colour_loglik(self, k: int, domain: Sequence[Label] | None = None, mode: str | None = None,
+                      objects: LabelObjects | None = None) -> np.ndarray:
+        """Colour log-likelihood of stroke ``k`` for each label of ``domain`` (eq. 6);
+        ``objects``: :func:`models.jorge.labels.label_objects` of ``domain`` at ``k`` if
+        already computed.
 
         Returns
         -------
         ndarray, shape (num_labels,)
         """
         domain = self.nodes[k].domain if domain is None else domain
+        obj = label_objects(domain, k, self._own) if objects is None else objects
         # a new label's palette comes from this stroke itself (seed 004, sec. 4.1)
         # (``Stroke.palette``): a label holding an object born here (a new group, or an
         # inherited label joined by a newcomer) gets no colour evidence (ratio 1)
-        is_new = np.array([k in self._births(lab) for lab in domain], dtype=bool)
         return colour_log_likelihood(
-            self.nodes[k].stroke.colours, self.palettes(domain), is_new, self.config.match_prob,
-            self.config.pool_size, self.config.colour_mode if mode is None else mode,
+            self.nodes[k].stroke.colours, union_rows(self._palettes, obj.palette_strokes, obj.sizes),
+            obj.is_new, self.config.match_prob, self.config.pool_size,
+            self.config.colour_mode if mode is None else mode,
         )
 
     def rel_log_area(self, k: int) -> float:
@@ -822,7 +808,8 @@ class LabelGraph:
         sizes = np.array([len(lab) for lab in domain], dtype=np.int64)
         return size_log_likelihood(rel, sizes, cfg.size_mu_single, cfg.size_slope, cfg.size_sigma)
 
-    def palette_count_loglik(self, k: int, domain: Sequence[Label] | None = None) -> np.ndarray:
+    def palette_count_loglik(self, k: int, domain: Sequence[Label] | None = None,
+                             objects: LabelObjects | None = None) -> np.ndarray:
         """Palette colour-count log-likelihood of stroke ``k`` for each label of ``domain``:
         given the known objects' palettes with ``palette_gain_table``
         (:func:`models.jorge.labels.palette_gain_log_likelihood`), else the marginal
@@ -838,10 +825,10 @@ class LabelGraph:
         sizes = np.array([len(lab) for lab in domain], dtype=np.int64)
         out = palette_count_log_likelihood(count, sizes, np.array(self.config.palette_count_table))
         if self.config.palette_gain_table:
-            known = [self._known(lab, k) for lab in domain]
-            new = sizes - np.array([len(a) for a in known], dtype=np.int64)
-            u = self.palettes(known).sum(axis=1)
-            out = out + palette_gain_log_likelihood(count, u, new, np.array(self.config.palette_gain_table))
+            obj = label_objects(domain, k, self._own) if objects is None else objects
+            u = union_rows(self._palettes, obj.known_strokes, obj.known_counts).sum(axis=1)
+            out = out + palette_gain_log_likelihood(count, u, sizes - obj.known_counts,
+                                                    np.array(self.config.palette_gain_table))
         return out
 
     def evidence_loglik(self, k: int, domain: Sequence[Label] | None = None) -> np.ndarray:
@@ -853,7 +840,10 @@ class LabelGraph:
         -------
         ndarray, shape (num_labels,)
         """
-        return self.colour_loglik(k, domain) + self.size_loglik(k, domain) + self.palette_count_loglik(k, domain)
+        domain = self.nodes[k].domain if domain is None else domain
+        obj = label_objects(domain, k, self._own)
+        return (self.colour_loglik(k, domain, objects=obj) + self.size_loglik(k, domain)
+                + self.palette_count_loglik(k, domain, objects=obj))
 
     def cpd_table(self, k: int) -> np.ndarray:
         """CPD table of (non-frozen) node ``k`` over its parents' current domains.
@@ -893,8 +883,6 @@ class LabelGraph:
             o = int(next(iter(label)))
             if cohort_size(o) > 1 and self._own.get(o, k) >= k:
                 self._own[o] = k
-                self._palette_cache.clear()
-                self._known_cache.clear()
 
     def set_domain(self, k: int, domain: Sequence[Label]) -> None:
         """Replace the (pruned) domain of an active node; its new label always stays."""
@@ -1084,18 +1072,6 @@ def solve(win: WindowNet, marginals: bool = True) -> Inference:
 
 # pixel coordinates / sizes beyond this are not an image (a unit or scale mistake)
 _MAX_PIXELS = 1e6
-_CACHE_LIMIT = 200_000  # entries per label cache of a LabelGraph (cleared when full)
-
-
-def _memo(cache: dict, key, compute):
-    """``cache[key]``, computed by ``compute()`` on a miss; the cache is emptied once it
-    holds more than ``_CACHE_LIMIT`` entries (bounded memory on long sequences)."""
-    value = cache.get(key)
-    if value is None:
-        if len(cache) > _CACHE_LIMIT:
-            cache.clear()
-        value = cache[key] = compute()
-    return value
 _MAX_TABLE_ENTRIES = 5e7  # a CPD table of one node (400 MB of float64)
 
 

@@ -228,9 +228,13 @@ class OnlineLabeller:
         -------
         ndarray, shape (num_labels,)
         """
+        return self._posterior(k, self._log_score(k), siblings)
+
+    def _log_score(self, k: int) -> np.ndarray:
+        """Unnormalised log of eq. 12 without the siblings' clash: evidence plus the log
+        prior through the CPD, shape (num_labels,)."""
         g = self.graph
         node = g.nodes[k]
-        domain = node.domain
         score = g.evidence_loglik(k)
         if node.parents:
             table = g.cpd_table(k)
@@ -239,6 +243,12 @@ class OnlineLabeller:
                 np.einsum("i,j,ijk->k", beliefs[0], beliefs[1], table)
             with np.errstate(divide="ignore"):
                 score = score + np.log(prior)
+        return score
+
+    def _posterior(self, k: int, score: np.ndarray, siblings: bool) -> np.ndarray:
+        """Normalised ``exp(score)``, with the labelled siblings' clash if ``siblings``."""
+        g = self.graph
+        domain = g.nodes[k].domain
         for sib in g.siblings(k) if siblings else ():
             if sib in self.labels:
                 clash = np.array([bool(lab & self.labels[sib]) for lab in domain])
@@ -251,14 +261,15 @@ class OnlineLabeller:
     def _relabel(self, k: int) -> None:
         """Eq. 12 posterior of ``k``, its domain capped to ``max_labels``, its label."""
         g = self.graph
-        post = self.instant_posterior(k)
+        score = self._log_score(k)  # once: evidence and CPD are the costly part
+        post = self._posterior(k, score, siblings=True)
         domain = g.nodes[k].domain
         keep = [frozenset({k})] + ([self.labels[k]] if k in self.labels else [])
         # ranked without the clash with the siblings' instant labels: those are point
         # guesses the next inference may revise, and a label they exclude (posterior 0)
         # would otherwise be the first the cap drops, for good (issue 16: the two parts of
         # a split swapped once new groups and joins widened the domains past the cap)
-        rank = self.instant_posterior(k, siblings=False) if len(domain) > self.config.max_labels else post
+        rank = self._posterior(k, score, siblings=False) if len(domain) > self.config.max_labels else post
         kept = prune_labels(domain, rank, 0.0, keep=keep + [domain[int(np.argmax(post))]],
                             max_labels=self.config.max_labels)
         if len(kept) < len(domain):

@@ -36,7 +36,7 @@ def test_the_cap_ranks_labels_without_the_sibling_clash():
     with_clash[1], with_clash[2] = 0.9, 0.0  # label 2 excluded by a sibling's instant label
     without = with_clash.copy()
     without[2] = 0.95  # ... which the colours favour
-    lab.instant_posterior = lambda k, siblings=True: (
+    lab._posterior = lambda k, score, siblings: (
         (with_clash if siblings else without) / ((with_clash if siblings else without).sum())
     )
     lab._relabel(3)
