@@ -10,7 +10,9 @@ protocol run of ``K`` strokes costs ``O(K^2)`` in copying on top of the labellin
 full labeller takes ~1.4 ms against ~14 ms of labelling per stroke (shared 2-core machine);
 :func:`~models.jorge.online.label_online` stays the batch entry point.
 Deterministic (the key is not used). Info's ``log_prob`` is the log eq. 12 posterior
-probability of the label given to the new stroke.
+probability of the label given to the new stroke. An observation is a
+:class:`~models.jorge.strokes.Stroke` (linked by the on-line link rule) or a
+:class:`LinkedStroke` (a stroke with the links a low-level tracker reported for it).
 """
 
 from __future__ import annotations
@@ -26,13 +28,21 @@ from models.jorge.online import OnlineConfig, OnlineLabeller
 from models.jorge.strokes import Stroke
 from models.protocol import Example, StepTracker, seed_from_key
 
-__all__ = ["JorgeState", "JorgeInfo", "JorgeTracker", "make", "example"]
+__all__ = ["JorgeState", "JorgeInfo", "LinkedStroke", "JorgeTracker", "make", "example"]
 
 
 class JorgeState(NamedTuple):
     """A labeller after some strokes (never mutated by the protocol)."""
 
     labeller: OnlineLabeller
+
+
+class LinkedStroke(NamedTuple):
+    """A stroke with its links given (its parents: indices of earlier strokes,
+    :meth:`models.jorge.network.LabelGraph.check_links`) instead of the link rule."""
+
+    stroke: Stroke
+    parents: tuple[int, ...]
 
 
 class JorgeInfo(NamedTuple):
@@ -65,14 +75,19 @@ class JorgeTracker(StepTracker):
         """An empty labeller (deterministic: the key is not used)."""
         return JorgeState(OnlineLabeller(self.config, self.fps))
 
-    def step(self, key: jax.Array, state: JorgeState, obs: Stroke) -> tuple[JorgeState, JorgeInfo]:
-        """Add one stroke (in start order) to a copy of the labeller."""
+    def step(self, key: jax.Array, state: JorgeState,
+             obs: Stroke | LinkedStroke) -> tuple[JorgeState, JorgeInfo]:
+        """Add one stroke (in start order) to a copy of the labeller; a
+        :class:`LinkedStroke` brings its own links."""
         lab = state.labeller
-        lab.graph.check_stroke(obs)  # reject before copying
+        stroke, parents = (obs.stroke, obs.parents) if isinstance(obs, LinkedStroke) else (obs, None)
+        lab.graph.check_stroke(stroke)  # reject before copying
+        if parents is not None:
+            parents = lab.graph.check_links(stroke, parents)
         new = copy.deepcopy(lab)
         before = len(new.records)
-        label = new.add_stroke(obs)
-        k = obs.index
+        label = new.add_stroke(stroke, parents)
+        k = stroke.index
         post = new.beliefs[k]
         lp = float(np.log(post[new.graph.nodes[k].domain.index(label)]))
         ran = new.records[before:]

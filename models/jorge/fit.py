@@ -358,7 +358,8 @@ REALTIME_BAR = 20.0
 """Issue 16's speed bar: the search keeps only points that label every training scoring
 set at least this many times faster than real time (sixth round: the most accurate point
 on training, with new groups and joins, labelled the PETS2009 S1 crowds at 2.4x in the
-search and 4.8x in the full benchmark)."""
+search and 4.8x in the full benchmark; 5.8x in the search since the seventh round's
+vectorised evidence)."""
 
 SCORE_SEEDS = (100, 101, 102, 103, 104)
 """Simulation seeds the search scores with (a subset of :data:`TRAIN_SEEDS`). One seed was

@@ -321,7 +321,7 @@ def label_objects(domain: Sequence[Label], k: int, own: Mapping[int, int] | None
         if max(lab) < NEW_STRIDE:  # lone newcomers only: each its own palette, all known
             pal.extend(lab)
             new = k in lab
-            known.extend(o for o in lab if o != k) if new else known.extend(lab)
+            known.extend(lab - {k} if new else lab)
             known_counts.append(len(lab) - new)
             is_new.append(new)
             continue

@@ -145,6 +145,11 @@ accurate point, both tables with new groups anywhere and joins, 0.2703, labels t
 S1 crowds at 2.4x real time (5x in the benchmark), so the bar excludes it; the gain table
 with new groups anywhere 0.2724 (5.5x). The CPD parameters above and
 :data:`FITTED_PALETTE_GAINS` are refitted with the merge test.
+Seventh round (issue 16; the evidence and the merge CPD vectorised, the same labels on
+every training set): the search re-run gives the same errors and the same choice; the
+slowest training sets now: the kept point 32.6x (two labellers sharing 2 cores; about 54x
+alone), new groups at roots 36.0x, both tables 28.9x, both tables with new groups and
+joins 5.8x (still under the bar), the gain table with them 8.6x.
 ``tests/models/jorge/test_jorge_fit.py`` re-runs the fit (not the search, about 25 minutes
 on 2 cores) and checks the fitted numbers."""
 

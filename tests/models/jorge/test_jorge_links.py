@@ -68,3 +68,23 @@ def test_bad_links_are_rejected_before_any_change(parents):
 def test_label_online_needs_one_link_set_per_stroke():
     with pytest.raises(InputError, match="3 link sets for 4 strokes"):
         label_online(_crossing(), links=[(), (), (0,)])
+
+
+def test_the_protocol_takes_links_and_rejects_bad_ones_before_any_change():
+    import jax
+
+    from models.jorge.api import LinkedStroke, make
+
+    s = _crossing()
+    links = true_links(s)
+    tracker = make()
+    state = tracker.init(jax.random.key(0))
+    for st, parents in zip(s, links):
+        state, info = tracker.step(jax.random.key(0), state, LinkedStroke(st, parents))
+    assert [tuple(n.parents) for n in state.labeller.graph.nodes] == [(), (), (0,), (1,)]
+    assert info.label == tuple(sorted(state.labeller.labels[1]))
+    assert [state.labeller.labels[k] for k in range(4)] == label_online(s, links=links).labels
+    before = tracker.fingerprint(state)
+    with pytest.raises(InputError, match="stroke 4"):
+        tracker.step(jax.random.key(0), state, LinkedStroke(make_stroke(4, 30, 40, (0, 0), (1, 1), [1]), (9,)))
+    assert repr(tracker.fingerprint(state)) == repr(before)
