@@ -25,11 +25,14 @@ each upward message normalised with its log scale added to :math:`\log Z` (no un
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from itertools import combinations
 from string import ascii_letters
 
+import networkx as nx
 import numpy as np
 
 from dbn.errors import ModelError
+from inference.exact.graph import elimination_order
 
 __all__ = ["SlicePlan", "MAX_CLIQUE_SIZE"]
 
@@ -40,22 +43,17 @@ MAX_CLIQUE_SIZE = 2**22
 def _elimination_order(
     cards: Mapping[str, int], scopes: Sequence[tuple[str, ...]]
 ) -> list[tuple[str, tuple[str, ...]]]:
-    """Greedy min-fill order (ties: smaller clique, then name): [(var, neighbours)]."""
-    adj: dict[str, set[str]] = {v: set() for v in cards}
+    """The greedy min-fill order of :func:`inference.exact.graph.elimination_order` (ties:
+    smaller clique, then name) over the factors' interaction graph, each variable with its
+    neighbours still present when it is eliminated: [(var, neighbours)]."""
+    graph = nx.Graph()
+    graph.add_nodes_from(cards)
     for s in scopes:
-        for a in s:
-            adj[a].update(b for b in s if b != a)
-    out = []
+        graph.add_edges_from(combinations(s, 2))
+    adj = {v: set(graph.neighbors(v)) for v in cards}
     remaining = set(cards)
-    while remaining:
-
-        def cost(v: str) -> tuple[int, float, str]:
-            nb = sorted(adj[v] & remaining)
-            fill = sum(1 for i, a in enumerate(nb) for b in nb[i + 1 :] if b not in adj[a])
-            size = float(np.prod([cards[u] for u in nb])) * cards[v]
-            return fill, size, v
-
-        v = min(remaining, key=cost)
+    out = []
+    for v in elimination_order(graph, cards):
         nb = tuple(sorted(adj[v] & remaining))
         for a in nb:
             adj[a].update(b for b in nb if b != a)
