@@ -81,9 +81,7 @@ class JorgeTracker(StepTracker):
         :class:`LinkedStroke` brings its own links."""
         lab = state.labeller
         stroke, parents = (obs.stroke, obs.parents) if isinstance(obs, LinkedStroke) else (obs, None)
-        lab.graph.check_stroke(stroke)  # reject before copying
-        if parents is not None:
-            parents = lab.graph.check_links(stroke, parents)
+        lab.graph.check_stroke(stroke)  # reject before copying (the links: on the copy)
         new = copy.deepcopy(lab)
         before = len(new.records)
         label = new.add_stroke(stroke, parents)

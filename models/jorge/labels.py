@@ -318,13 +318,6 @@ def label_objects(domain: Sequence[Label], k: int, own: Mapping[int, int] | None
     known: list[int] = []
     known_counts, is_new = [], []
     for lab in domain:
-        if max(lab) < NEW_STRIDE:  # lone newcomers only: each its own palette, all known
-            pal.extend(lab)
-            new = k in lab
-            known.extend(lab - {k} if new else lab)
-            known_counts.append(len(lab) - new)
-            is_new.append(new)
-            continue
         new, n_known = False, 0
         for o in lab:
             b = o % NEW_STRIDE

@@ -885,9 +885,9 @@ class LabelGraph:
             raise InputError(f"node {k}: cannot freeze to {set(label)}, not in its domain")
         node.frozen = label
         if len(label) == 1:
-            o = int(next(iter(label)))
-            if cohort_size(o) > 1 and self._own.get(o, k) >= k:
-                self._own[o] = k
+            (o,) = label
+            if cohort_size(o) > 1 and k < self._own.get(int(o), k + 1):
+                self._own[int(o)] = k
 
     def set_domain(self, k: int, domain: Sequence[Label]) -> None:
         """Replace the (pruned) domain of an active node; its new label always stays."""
