@@ -35,7 +35,7 @@ add-one smoothed frequency of the :math:`e` colours a training stroke's palette 
 the palettes of its *known* people (inherited, and born alone, or with their whole cohort
 in the stroke, or seen alone since, which gives a member of a cohort a palette of its own),
 :math:`m` the others. What the likelihood does not settle (these
-tables or neither, new groups, size evidence once per region, the link gate and its merge
+tables or neither, new groups or joins, size evidence once per region, the link gate and its merge
 test) is chosen by
 the documented search :func:`search_settings` on the training split
 (``python -m models.jorge.fit``).
@@ -73,6 +73,10 @@ __all__ = [
     "labelling_error",
     "SEARCH_GRID",
     "SCORE_SEEDS",
+    "DEFAULT_POINT",
+    "MEETING_SIZES",
+    "meeting_strokes",
+    "scoring_groups",
     "REALTIME_BAR",
     "search_settings",
 ]
@@ -331,7 +335,7 @@ def labelling_error(config: NetworkConfig, stroke_sets: Sequence[StrokeSet]) -> 
 SEARCH_GRID = {
     "gate": ("pixels", "scaled", "boxes"),
     "parameters": ("previous", "ml", "ml_gain", "ml_both"),
-    "new_groups": ("off", "roots", "all"),
+    "new_groups": ("off", "roots", "all", "joins"),
     "size_once": (False, True),
     "merge_area": (0.0, 1.0),
 }
@@ -343,7 +347,9 @@ previous defaults (``"previous"``, no palette evidence: chosen in issues 4-5 by 
 error with simulation seeds 20-39 on ms3ggt and mws1gt, both in the training split);
 whether a stroke seen first may be a new group (``q_m`` fitted; ``"off"``: only ``m = 1``;
 ``"roots"``: only a stroke with no parent, ``LabelParams.child_new_groups`` False;
-``"all"``: any, with ``p_join`` fitted too); whether the region size is counted once per
+``"all"``: any, with ``p_join`` fitted too; ``"joins"``: no new groups, but a stroke may add
+one new object to what it inherits, ``p_join`` fitted: a person who enters the view inside
+another's region, common in the PETS2009 crowds, issue 16's eighth round); whether the region size is counted once per
 occlusion chain (``NetworkConfig.size_once``); and the link gate (pixels and frames as
 tuned on CAVIAR, or scaled by the region's size and the frame rate, or the box gate of
 issue 16 with ``v_box`` 0.5 (0.25 scored worse), ``NetworkConfig.gate``), with or without
@@ -351,8 +357,12 @@ the merge test of the link rule (``NetworkConfig.merge_area``: 0 off, 1 its geom
 bound; the parameters are fitted again for each gate and merge test, since both change
 the links the fit counts on). Each point is
 scored by :func:`labelling_error` on the training split (never validation data) with every
-seed of :data:`SCORE_SEEDS`; the lowest mean error among the points fast enough for the
-issue's bar (:data:`REALTIME_BAR`) wins."""
+seed of :data:`SCORE_SEEDS`, and since issue 16's eighth round also on SIMULATED meetings
+of 3-5 people (:data:`MEETING_SIZES`, :func:`scoring_groups`); the lowest mean error among
+the points fast enough for the issue's bar (:data:`REALTIME_BAR`) wins, unless it does
+not beat the current default (:data:`DEFAULT_POINT`) by more than one standard error.
+The speeds are measured one labeller at a time (``--workers 1``, the default): two
+labellers sharing 2 cores read 20-40% slower and move points across the bar."""
 
 REALTIME_BAR = 20.0
 """Issue 16's speed bar: the search keeps only points that label every training scoring
@@ -367,10 +377,46 @@ used until issue 16's fourth round; the mean error over the training sequences m
 0.03 from seed to seed, more than between the best grid points, and the one-seed and
 five-seed winners differed."""
 
+DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "off",
+                 "size_once": True}
+"""The grid point of the default network (:class:`models.jorge.network.NetworkConfig`,
+:data:`models.jorge.network.FITTED_LABELS`): the incumbent of :func:`search_settings` in
+``python -m models.jorge.fit``. Since issue 16's eighth round another point replaces it only
+if it beats it by more than one standard error of the paired per-seed differences; the
+best points are often within the seed-to-seed noise of each other, and the lowest of them
+then changed with the noise (and with the load on the machine, through the speed bar)."""
+
+MEETING_SIZES = (3, 4, 5)
+"""Group sizes of the SIMULATED meetings the search also scores (:func:`meeting_strokes`;
+issue 16's eighth round). The real training split has no CAVIAR-like group of three or
+more people (its CAVIAR sequences hold groups of one and two; every stroke of 3+ people is
+in the PETS2009 S1 crowds), while the users' held-out sequences have groups of two to
+four, so without them the search cannot see such groups. The search scores only these
+scenes' labels; nothing is fitted on them."""
+
+
+def meeting_strokes(seeds: Sequence[int] = SCORE_SEEDS, sizes: Sequence[int] = MEETING_SIZES) -> list[StrokeSet]:
+    """Stroke sets of SIMULATED meetings (:func:`models.jorge.meeting.simulate_meeting`),
+    one per seed and group size: scene ``seed``, stroke seed ``seed``. The search's seeds
+    (100-104) are other scenes than the benchmark's (0-9)."""
+    from models.jorge.meeting import simulate_meeting
+    from models.jorge.strokes import build_strokes
+
+    return [build_strokes(s, simulate_meeting(s, k)) for s in seeds for k in sizes]
+
+
+def scoring_groups(seeds: Sequence[int] = SCORE_SEEDS, meetings: bool = True) -> list[list[StrokeSet]]:
+    """The search's scoring sets, one group per seed: the training sequences
+    (:func:`training_strokes`) and, with ``meetings``, the SIMULATED meetings of
+    :data:`MEETING_SIZES` (:func:`meeting_strokes`); each set weighs the same in
+    :func:`search_settings`."""
+    return [training_strokes(seeds=(s,)) + (meeting_strokes((s,)) if meetings else []) for s in seeds]
+
 
 def search_settings(fit_sets: Sequence[StrokeSet], score_groups: Sequence[Sequence[StrokeSet]],
                     base: NetworkConfig | None = None, gates: Sequence[str] | None = None,
-                    workers: int = 1) -> tuple[NetworkConfig, list]:
+                    workers: int = 1, new_groups: Sequence[str] | None = None,
+                    incumbent: dict | None = None) -> tuple[NetworkConfig, list]:
     """Grid search of :data:`SEARCH_GRID` on the training split (never validation data).
 
     Parameters
@@ -384,26 +430,38 @@ def search_settings(fit_sets: Sequence[StrokeSet], score_groups: Sequence[Sequen
         Part of ``SEARCH_GRID["gate"]`` to search (default all).
     workers : int
         Processes labelling in parallel (1: in this process).
+    new_groups : sequence of str, optional
+        Part of ``SEARCH_GRID["new_groups"]`` to search (default all).
+    incumbent : dict, optional
+        Settings of the current default (:data:`DEFAULT_POINT`): kept unless a faster-
+        than-the-bar point beats it by more than one standard error (:func:`_kept`).
+        ``None``: the lowest mean error wins.
 
     Returns
     -------
     best : NetworkConfig
         The point of lowest mean training error among those that label every scoring
         set at least :data:`REALTIME_BAR` times faster than real time (all points if
-        none does).
+        none does), or the incumbent if that point does not beat it by more than one
+        standard error.
     table : list of (settings dict, mean training error, per-seed errors, min real-time factor)
     """
     base = NetworkConfig() if base is None else base
+    for name, part in (("gate", gates), ("new_groups", new_groups)):
+        unknown = sorted(set(part or ()) - set(SEARCH_GRID[name]))
+        if unknown:
+            raise InputError(f"search_settings: {name} {unknown} not in SEARCH_GRID[{name!r}]")
     points = []
     for gate, merge in itertools.product(SEARCH_GRID["gate"] if gates is None else gates,
                                          SEARCH_GRID["merge_area"]):
         gated = replace(base, gate=gate, merge_area=merge)
         fitted = fit_parameters(fit_sets, gated)
-        for params, new_groups, once in itertools.product(
-                SEARCH_GRID["parameters"], SEARCH_GRID["new_groups"], SEARCH_GRID["size_once"]):
-            cfg = replace(_grid_point(gated, fitted, params, new_groups), size_once=once)
+        for params, news, once in itertools.product(
+                SEARCH_GRID["parameters"], SEARCH_GRID["new_groups"] if new_groups is None else new_groups,
+                SEARCH_GRID["size_once"]):
+            cfg = replace(_grid_point(gated, fitted, params, news), size_once=once)
             points.append(({"gate": gate, "merge_area": merge, "parameters": params,
-                            "new_groups": new_groups, "size_once": once}, cfg))
+                            "new_groups": news, "size_once": once}, cfg))
     jobs = [(cfg, strokes) for _, cfg in points for group in score_groups for strokes in group]
     scores = _map(_error_and_speed, jobs, workers)
     table, i = [], 0
@@ -415,14 +473,23 @@ def search_settings(fit_sets: Sequence[StrokeSet], score_groups: Sequence[Sequen
             fastest = min(fastest, *(rt for _, rt in part))
             i += len(group)
         table.append((settings, float(np.mean(per_seed)), per_seed, float(fastest)))
-    return points[_kept(table)][1], table
+    return points[_kept(table, incumbent)][1], table
 
 
-def _kept(table: list) -> int:
+def _kept(table: list, incumbent: dict | None = None) -> int:
     """Index of the row the search keeps: the lowest mean error among the rows whose
-    slowest scoring set runs at :data:`REALTIME_BAR` or faster (all rows if none does)."""
+    slowest scoring set runs at :data:`REALTIME_BAR` or faster (all rows if none does),
+    unless the ``incumbent`` row is fast enough too and the lowest does not beat it by
+    more than one standard error of their paired per-seed differences (then the
+    incumbent stays; with one scoring seed there is no standard error and the lowest
+    wins)."""
     fast = [j for j, row in enumerate(table) if row[3] >= REALTIME_BAR] or list(range(len(table)))
-    return min(fast, key=lambda j: table[j][1])
+    best = min(fast, key=lambda j: table[j][1])
+    inc = [j for j in fast if table[j][0] == incumbent]
+    if not inc or inc[0] == best or len(table[best][2]) < 2:
+        return best
+    diff = np.asarray(table[inc[0]][2]) - np.asarray(table[best][2])
+    return best if diff.mean() > diff.std(ddof=1) / np.sqrt(diff.size) else inc[0]
 
 
 def _error_and_speed(job: tuple) -> tuple[float, float]:
@@ -458,12 +525,13 @@ def _grid_point(base: NetworkConfig, fitted: NetworkConfig, params: str, new_gro
         "off": replace(cfg.labels, new_group_probs=(1.0,), p_join=0.0, child_new_groups=True),
         "roots": replace(cfg.labels, new_group_probs=q, p_join=0.0, child_new_groups=False),
         "all": replace(cfg.labels, new_group_probs=q, p_join=fitted.labels.p_join, child_new_groups=True),
+        "joins": replace(cfg.labels, new_group_probs=(1.0,), p_join=fitted.labels.p_join, child_new_groups=True),
     }[new_groups]
     return replace(cfg, labels=labels)
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    """``python -m models.jorge.fit [--gates boxes] [--workers 2]``: run the documented
+    """``python -m models.jorge.fit [--gates boxes] [--new-groups joins] [--workers 2]``: run the documented
     search on the declared training split and print one JSON line per grid point, then the
     chosen one (needs the training sequences in ``DBNTRACK_DATA``)."""
     import argparse
@@ -471,17 +539,21 @@ def main(argv: Sequence[str] | None = None) -> None:
 
     ap = argparse.ArgumentParser(prog="python -m models.jorge.fit", description=main.__doc__)
     ap.add_argument("--gates", nargs="+", choices=SEARCH_GRID["gate"], default=None)
+    ap.add_argument("--new-groups", nargs="+", choices=SEARCH_GRID["new_groups"], default=None)
     ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--real-only", action="store_true",
+                    help="score on the real training sequences only (no SIMULATED meetings; before issue 16's eighth round)")
     args = ap.parse_args(argv)
     fit_sets = training_strokes(seeds=TRAIN_SEEDS)
     if not fit_sets:
         raise SystemExit("no training sequence found (set DBNTRACK_DATA to the shared data folder)")
-    groups = [training_strokes(seeds=(s,)) for s in SCORE_SEEDS]
-    _, table = search_settings(fit_sets, groups, gates=args.gates, workers=args.workers)
+    groups = scoring_groups(SCORE_SEEDS, meetings=not args.real_only)
+    _, table = search_settings(fit_sets, groups, gates=args.gates, workers=args.workers,
+                               new_groups=args.new_groups, incumbent=DEFAULT_POINT)
     for settings, err, per_seed, speed in table:
         print(json.dumps({**settings, "error": round(err, 4), "per_seed": [round(e, 4) for e in per_seed],
                           "min_realtime_factor": round(speed, 1)}))
-    chosen = table[_kept(table)]
+    chosen = table[_kept(table, DEFAULT_POINT)]
     print(json.dumps({"chosen": chosen[0], "error": round(chosen[1], 4),
                       "min_realtime_factor": round(chosen[3], 1)}))
 

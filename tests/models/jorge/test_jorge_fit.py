@@ -91,6 +91,15 @@ def test_default_parameters_are_the_fit_on_the_training_split():
         assert getattr(fitted, name) == pytest.approx(getattr(FITTED_LABELS, name), rel=1e-9), name
     np.testing.assert_allclose(cfg.palette_count_table, FITTED_PALETTE_COUNTS, rtol=1e-9)
     np.testing.assert_allclose(cfg.palette_gain_table, FITTED_PALETTE_GAINS, rtol=1e-9)
+    # the search's incumbent is the default network itself, refitted as the search does
+    from dataclasses import replace
+
+    from models.jorge.fit import DEFAULT_POINT, _grid_point
+
+    point = DEFAULT_POINT
+    gated = replace(NetworkConfig(), gate=point["gate"], merge_area=point["merge_area"])
+    ours = _grid_point(gated, fit_parameters(sets, gated), point["parameters"], point["new_groups"])
+    assert replace(ours, size_once=point["size_once"]) == NetworkConfig()
 
 
 def test_search_scores_every_grid_point_per_seed_and_keeps_the_lowest():
@@ -115,7 +124,8 @@ def test_search_scores_every_grid_point_per_seed_and_keeps_the_lowest():
     lowest = min(fast, key=lambda row: row[1])[0]
     assert best.gate == "pixels" and best.size_once == lowest["size_once"]
     assert best.merge_area == lowest["merge_area"]
-    assert (len(best.labels.new_group_probs) > 1) == (lowest["new_groups"] != "off")
+    assert (len(best.labels.new_group_probs) > 1) == (lowest["new_groups"] in ("roots", "all"))
+    assert (best.labels.p_join > 0) == (lowest["new_groups"] in ("all", "joins"))
 
 
 def test_search_keeps_only_points_fast_enough_for_the_bar(monkeypatch):
@@ -127,8 +137,8 @@ def test_search_keeps_only_points_fast_enough_for_the_bar(monkeypatch):
 
     def stub(job):
         cfg, _ = job
-        joins = cfg.labels.p_join > 0  # new groups anywhere: best error, too slow
-        return (0.1, 5.0) if joins else (0.2 + 0.01 * cfg.size_once, 40.0)
+        anywhere = len(cfg.labels.new_group_probs) > 1 and cfg.labels.p_join > 0  # best error, too slow
+        return (0.1, 5.0) if anywhere else (0.2 + 0.01 * cfg.size_once + 0.05 * (cfg.labels.p_join > 0), 40.0)
 
     assert 5.0 < fit.REALTIME_BAR <= 40.0
     monkeypatch.setattr(fit, "_error_and_speed", stub)
@@ -143,3 +153,68 @@ def test_search_keeps_only_points_fast_enough_for_the_bar(monkeypatch):
     best, _ = fit.search_settings(sets, [sets], NetworkConfig(labels=LabelParams(max_group_size=3)),
                                   gates=["pixels"])
     assert best.labels.p_join > 0
+
+
+def test_search_can_be_limited_to_part_of_the_grid(monkeypatch):
+    """``new_groups=`` (``--new-groups``) searches only those rows; "joins" admits a
+    newcomer joining an inherited label (``p_join`` fitted) without new groups; a name
+    not in the grid is refused before anything is labelled (scores stubbed)."""
+    from models.jorge import fit
+    from models.jorge.simulate import simulate_ground_truth
+    from models.jorge.strokes import build_strokes
+
+    seen = []
+    monkeypatch.setattr(fit, "_error_and_speed", lambda job: seen.append(job[0]) or (0.2, 40.0))
+    sets = [build_strokes(100, simulate_ground_truth(3, num_people=3, num_frames=100))]
+    base = NetworkConfig(labels=LabelParams(max_group_size=3))
+    _, table = fit.search_settings(sets, [sets], base, gates=["pixels"], new_groups=["joins"])
+    assert {row[0]["new_groups"] for row in table} == {"joins"}
+    assert seen and all(c.labels.p_join > 0 and c.labels.new_group_probs == (1.0,) for c in seen)
+    seen.clear()
+    for bad in ({"new_groups": ["sometimes"]}, {"gates": ["nearby"]}):
+        with pytest.raises(InputError, match="not in SEARCH_GRID"):
+            fit.search_settings(sets, [sets], base, **bad)
+    assert not seen
+
+
+def test_search_scores_simulated_meetings_beside_the_training_sequences():
+    """Each scoring group holds the training sequences of its seed, then one SIMULATED
+    meeting per size in ``MEETING_SIZES`` (scene and stroke seed = the scoring seed,
+    other scenes than the benchmark's 0-9), whose largest stroke holds the whole group;
+    ``meetings=False`` leaves them out."""
+    from models.jorge.fit import MEETING_SIZES, meeting_strokes, scoring_groups
+
+    meet = meeting_strokes((100,))
+    assert len(meet) == len(MEETING_SIZES)
+    for k, strokes in zip(MEETING_SIZES, meet):
+        assert max(len(s.truth) for s in strokes) >= k  # a passing walker may be in it too
+    real = training_strokes(seeds=(100,))
+    (group,) = scoring_groups((100,))
+    assert len(group) == len(real) + len(MEETING_SIZES)
+    for ours, theirs in zip(group[len(real):], meet):
+        assert [(s.start, s.end, s.truth) for s in ours] == [(s.start, s.end, s.truth) for s in theirs]
+    assert len(scoring_groups((100,), meetings=False)[0]) == len(real)
+
+
+def test_the_incumbent_stays_unless_beaten_by_more_than_one_standard_error():
+    """The search's rule (``fit._kept``) on hand-made rows (settings, mean, per-seed errors,
+    slowest real-time factor): a point lower by less than one standard error of the
+    paired per-seed differences leaves the incumbent; one lower on every seed replaces it;
+    one slower than the bar never does; without an incumbent (or with one seed) the
+    lowest mean wins."""
+    from models.jorge.fit import REALTIME_BAR, _kept
+
+    def row(name, per, speed=2 * REALTIME_BAR):
+        return ({"name": name}, float(np.mean(per)), list(per), speed)
+
+    inc = {"name": "incumbent"}
+    noisy = [row("incumbent", [0.30, 0.30, 0.30]), row("noisy", [0.20, 0.38, 0.29])]
+    assert noisy[1][1] < noisy[0][1] and _kept(noisy, inc) == 0 and _kept(noisy) == 1
+    clear = [row("incumbent", [0.30, 0.30, 0.30]), row("clear", [0.27, 0.28, 0.26])]
+    assert _kept(clear, inc) == 1
+    slow = [row("incumbent", [0.30, 0.30, 0.30]), row("slow", [0.10, 0.10, 0.10], REALTIME_BAR / 2)]
+    assert _kept(slow, inc) == 0
+    one_seed = [row("incumbent", [0.30]), row("lower", [0.29])]
+    assert _kept(one_seed, inc) == 1
+    # an incumbent slower than the bar is no incumbent
+    assert _kept([row("incumbent", [0.30, 0.30], REALTIME_BAR / 2), row("other", [0.31, 0.32])], inc) == 1
