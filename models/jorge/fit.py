@@ -553,7 +553,10 @@ def main(argv: Sequence[str] | None = None) -> None:
     for settings, err, per_seed, speed in table:
         print(json.dumps({**settings, "error": round(err, 4), "per_seed": [round(e, 4) for e in per_seed],
                           "min_realtime_factor": round(speed, 1)}))
-    chosen = table[_kept(table, DEFAULT_POINT)]
+    chosen, lowest = table[_kept(table, DEFAULT_POINT)], table[_kept(table)]
+    if lowest is not chosen:  # the incumbent stayed: say what it was not replaced by
+        print(json.dumps({"lowest_not_kept": lowest[0], "error": round(lowest[1], 4),
+                          "min_realtime_factor": round(lowest[3], 1)}))
     print(json.dumps({"chosen": chosen[0], "error": round(chosen[1], 4),
                       "min_realtime_factor": round(chosen[3], 1)}))
 

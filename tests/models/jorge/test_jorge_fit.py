@@ -218,3 +218,33 @@ def test_the_incumbent_stays_unless_beaten_by_more_than_one_standard_error():
     assert _kept(one_seed, inc) == 1
     # an incumbent slower than the bar is no incumbent
     assert _kept([row("incumbent", [0.30, 0.30], REALTIME_BAR / 2), row("other", [0.31, 0.32])], inc) == 1
+
+
+def test_the_command_line_search_says_which_lower_point_it_did_not_keep(monkeypatch, capsys):
+    """``python -m models.jorge.fit``: one JSON line per grid point, then, when the default
+    stays, the lowest point it was not replaced by, then the chosen point (training and
+    scoring sets SIMULATED and scores stubbed: joins lower on one seed, higher on the
+    other, so their lower mean is within one standard error)."""
+    import json
+
+    from models.jorge import fit
+    from models.jorge.simulate import simulate_ground_truth
+    from models.jorge.strokes import build_strokes
+
+    truth = simulate_ground_truth(3, num_people=3, num_frames=100)
+    a, b = build_strokes(100, truth), build_strokes(101, truth)
+    monkeypatch.setattr(fit, "training_strokes", lambda **kw: [a])
+    monkeypatch.setattr(fit, "scoring_groups", lambda seeds, meetings=True: [[a], [b]])
+
+    def stub(job):
+        cfg, strokes = job
+        joins = cfg.labels.p_join > 0 and len(cfg.labels.new_group_probs) == 1
+        return ((0.38 if strokes is b else 0.20) if joins else 0.30), 40.0
+
+    monkeypatch.setattr(fit, "_error_and_speed", stub)
+    fit.main(["--gates", "boxes"])
+    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    rows, (lowest, chosen) = lines[:-2], lines[-2:]
+    assert len(rows) == np.prod([len(v) for k, v in fit.SEARCH_GRID.items() if k != "gate"])
+    assert lowest["lowest_not_kept"]["new_groups"] == "joins" and lowest["error"] == pytest.approx(0.29)
+    assert chosen["chosen"] == fit.DEFAULT_POINT
