@@ -50,8 +50,12 @@ def elimination_order(
 
     Notes
     -----
-    Greedy and deterministic: ``O(n^2 d^2)`` for ``n`` nodes of degree ``d``, fine for the
-    networks exact inference is meant for.
+    Greedy and deterministic. A node's score depends only on its neighbourhood, so after
+    each elimination only the eliminated node's neighbours and their neighbours are
+    re-scored (the fill-in edges join the neighbours); the order is the one a full re-score
+    at every step gives. (The structured engine's orders come from
+    :func:`inference.exact.triangulation.greedy_order`: float weights, ties by position,
+    randomised restarts.)
     """
     if heuristic not in ("min_fill", "min_weight"):
         raise ValueError(f"heuristic must be 'min_fill' or 'min_weight', got {heuristic!r}")
@@ -67,15 +71,18 @@ def elimination_order(
         weight = math.prod(int(cards[m]) for m in (n, *nb))
         return (fill, weight, n) if heuristic == "min_fill" else (weight, fill, n)
 
-    while todo:
-        n = min(todo, key=score)
+    scores = {n: score(n) for n in todo}
+    while scores:
+        n = min(scores, key=scores.__getitem__)
         nb = g[n]
         for a, b in combinations(nb, 2):
             g[a].add(b)
             g[b].add(a)
         for m in nb:
             g[m].discard(n)
-        del g[n]
-        todo.discard(n)
+        del g[n], scores[n]
         order.append(n)
+        touched = set(nb).union(*(g[m] for m in nb))
+        for m in touched & scores.keys():
+            scores[m] = score(m)
     return order

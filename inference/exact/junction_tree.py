@@ -15,10 +15,9 @@ cost of plain sums and products instead of logsumexp.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-import networkx as nx
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -27,7 +26,7 @@ from dbn.errors import EvidenceError, ModelError
 from inference.exact.factor import Factor
 from inference.exact.graph import elimination_order, interaction_graph
 
-__all__ = ["JunctionTree", "Calibration", "marginals"]
+__all__ = ["JunctionTree", "Calibration", "marginals", "clique_tree_edges"]
 
 
 @dataclass(frozen=True)
@@ -87,6 +86,52 @@ class _Structure:
     max_clique_size: int
 
 
+def clique_tree_edges(cliques: Sequence[frozenset]) -> list[tuple[int, int]]:
+    """The edges ``(parent, child)`` of a junction tree of ``cliques``, breadth first from
+    clique 0.
+
+    A maximum spanning tree of the clique graph weighted by separator sizes (Kruskal: pairs
+    ``(i, j), i < j`` in lexicographic order, stably sorted by decreasing weight, so ties go
+    to the earlier pair): when the cliques are the maximal cliques of a chordal graph it has
+    the running-intersection property (Jensen & Jensen 1994). Disconnected parts are joined
+    by empty separators. Neighbours are visited in the order their edges were accepted.
+
+    Parameters
+    ----------
+    cliques : sequence of frozenset, length C >= 1
+
+    Returns
+    -------
+    list of (int, int), length C - 1
+    """
+    n = len(cliques)
+    pairs = sorted(((i, j) for i in range(n) for j in range(i + 1, n)),
+                   key=lambda e: len(cliques[e[0]] & cliques[e[1]]), reverse=True)
+    root = list(range(n))
+
+    def find(i: int) -> int:
+        while root[i] != i:
+            root[i] = root[root[i]]
+            i = root[i]
+        return i
+
+    adjacent: list[list[int]] = [[] for _ in range(n)]
+    for i, j in pairs:
+        ri, rj = find(i), find(j)
+        if ri != rj:
+            root[ri] = rj
+            adjacent[i].append(j)
+            adjacent[j].append(i)
+    edges, queue, seen = [], [0], {0}
+    for u in queue:
+        for v in adjacent[u]:
+            if v not in seen:
+                seen.add(v)
+                edges.append((u, v))
+                queue.append(v)
+    return edges
+
+
 class JunctionTree:
     """A junction tree of a discrete Bayes net.
 
@@ -100,7 +145,8 @@ class JunctionTree:
     Attributes
     ----------
     cliques : tuple of tuple of str
-        The maximal cliques of the tree with no evidence.
+        The maximal cliques of the tree with no evidence (compiled on first use: a net
+        only ever calibrated with evidence never needs this tree).
     max_clique_size : int
         Number of entries of its largest clique table.
     """
@@ -112,9 +158,14 @@ class JunctionTree:
         self.heuristic = heuristic
         self._cards = {n: bn.cardinality(n) for n in bn.nodes}
         self._cache: dict[frozenset[str], _Structure] = {}
-        base = self._structure(frozenset())
-        self.cliques = base.cliques
-        self.max_clique_size = base.max_clique_size
+
+    @property
+    def cliques(self) -> tuple[tuple[str, ...], ...]:
+        return self._structure(frozenset()).cliques
+
+    @property
+    def max_clique_size(self) -> int:
+        return self._structure(frozenset()).max_clique_size
 
     def __repr__(self) -> str:
         return f"JunctionTree({len(self.cliques)} cliques, largest table {self.max_clique_size})"
@@ -139,24 +190,20 @@ class JunctionTree:
                 g[a] |= g[n] - {a}
                 g[a].discard(n)
             del g[n]
+        position = {n: i for i, n in enumerate(nodes)}
         cliques: list[tuple[str, ...]] = []
+        seen: set[frozenset[str]] = set()
         for c in raw:
-            if not any(c < d for d in raw):
-                t = tuple(sorted(c, key=nodes.index))
-                if t not in cliques:
-                    cliques.append(t)
+            if c not in seen and not any(c < d for d in raw):
+                seen.add(c)
+                cliques.append(tuple(sorted(c, key=position.__getitem__)))
         if not cliques:
             cliques = [()]
-        tree = nx.Graph()
-        tree.add_nodes_from(range(len(cliques)))
-        for i in range(len(cliques)):
-            for j in range(i + 1, len(cliques)):
-                tree.add_edge(i, j, weight=len(set(cliques[i]) & set(cliques[j])))
-        tree = nx.maximum_spanning_tree(tree, weight="weight")
+        sets = [frozenset(c) for c in cliques]
 
         def smallest_holding(vars_: set[str]) -> int:
             return min(
-                (i for i, c in enumerate(cliques) if vars_ <= set(c)),
+                (i for i, c in enumerate(sets) if vars_ <= c),
                 key=lambda i: (len(cliques[i]), i),
             )
 
@@ -184,7 +231,7 @@ class JunctionTree:
                 tuple(cards[v] if v in sep else 1 for v in cd),
             )
 
-        bfs = list(nx.bfs_edges(tree, 0)) if len(cliques) > 1 else []
+        bfs = clique_tree_edges(sets)
         structure = _Structure(
             cliques=tuple(cliques),
             placements=tuple(placements),

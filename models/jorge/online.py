@@ -145,7 +145,8 @@ class InferenceRecord:
     max_domain : int
         Largest active domain.
     max_clique_entries : int
-        Entries of the largest junction-tree clique table (0 without marginals).
+        Entries of the largest junction-tree clique table calibrated (the window's
+        restriction and kept-mass nodes are observed, so indexed away; 0 without marginals).
     seconds : float
         Wall time of building the window net and solving it.
     log_prob : float
@@ -336,9 +337,9 @@ class OnlineLabeller:
         marg = None
         pruned = 0.0
         if cfg.marginals:
-            jt = JunctionTree(win.bn)
-            clique = jt.max_clique_size
-            marg = jt.calibrate(win.evidence, win.soft_evidence).marginals
+            cal = JunctionTree(win.bn).calibrate(win.evidence, win.soft_evidence)
+            marg = cal.marginals
+            clique = max(table.size for table in cal.clique_tables)
         for k in active:
             name = node_name(k)
             lab = win.domains[name][assignment[name]]
