@@ -167,6 +167,19 @@ Scored on both (each set weighs the same): both tables with joins 0.20397, the g
 without size once 0.20401, this default 0.20415, the gain table with joins 0.2099; the lowest
 beats the default by 0.0002 with one standard error 0.0087, so the default and its
 parameters stay.
+Ninth round (issue 16): the re-identification pass (:func:`models.jorge.online.reidentify`)
+also asks of an object born inside a group (a newcomer who joined, or a member of a new
+group) whether it is a lost object, once it has a stroke alone; labels with new groups off
+and no joins (this default) are unchanged. The search again (boxes gate, seeds 100-104,
+one labeller at a time) keeps the default: both tables with joins and size once 0.2026
+(0.2040 before; slowest set 41.5x), the gain table without size once 0.2040, this default
+0.2041 (71.2x), the gain table at roots only 0.2047, the gain table with joins 0.2080
+(0.2099 before); the lowest beats the default by 0.0015 with one standard error 0.0093.
+Two other changes scored worse on the same sets and were not kept: entry probabilities
+that depend on whether a stroke starts at the edge of the view (``p_join`` 0.188 at the
+edge, 0.032 inside; with joins at the edge only, 0.2046, scored before the change to
+re-identification), and a superseded ancestor kept as a second parent when a region grows
+back (0.2116 and 0.2321).
 ``tests/models/jorge/test_jorge_fit.py`` re-runs the fit (not the search, about 25 minutes
 on 2 cores) and checks the fitted numbers."""
 

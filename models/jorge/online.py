@@ -33,10 +33,12 @@ Object re-identification (final off-line pass; our addition)
     ``b`` appears (every stroke labelled with ``a`` ends before the first stroke labelled
     with ``b`` starts, so the two never coexist), and the colours (eq. 6, the configured
     colour model) of ``b``'s palette and of its later one-object strokes must favour
-    ``a``, with prior probability ``reid_prior`` that a new-looking object is a lost one
-    (shared equally among the candidates; default 0.5, no preference: chosen on CAVIAR
-    ground truth with held-out simulation seeds 20-39 and on simulated sequences). Objects are renamed in birth order; the network
-    itself (domains, frozen labels) is not changed. ``reid_prior = 0`` turns it off.
+    ``a`` (an object born inside a group, by a join or in a new group, is asked too once
+    it has a stroke alone; issue 16, ninth round), with prior probability ``reid_prior``
+    that a new-looking object is a lost one (shared equally among the candidates; default
+    0.5, no preference: chosen on CAVIAR ground truth with held-out simulation seeds 20-39
+    and on simulated sequences). Objects are renamed in birth order; the network itself
+    (domains, frozen labels) is not changed. ``reid_prior = 0`` turns it off.
 
 Scoring
     An object id ``o`` is the object first seen in stroke ``o``. Objects are matched one to
@@ -61,7 +63,7 @@ from scipy.optimize import linear_sum_assignment
 
 from dbn.errors import InputError, ModelError
 from inference.exact import JunctionTree, map_assignment
-from models.jorge.labels import NEW_STRIDE, Label, birth_stroke, colour_log_likelihood, prune_labels
+from models.jorge.labels import Label, birth_stroke, colour_log_likelihood, prune_labels
 from models.jorge.network import LabelGraph, NetworkConfig, node_name
 from models.jorge.strokes import Stroke, StrokeSet
 
@@ -450,20 +452,24 @@ def reidentify(graph: LabelGraph, labels: Sequence[Label], prior: float) -> list
     r"""Final off-line pass: rename objects born as new labels that are earlier objects
     seen again (module docstring; our addition to seed 004).
 
-    For each object :math:`b` in birth order whose birth stroke is labelled
-    :math:`\{b\}`, the candidates :math:`a` are the earlier objects (after renaming)
-    whose every stroke ends before the first stroke of :math:`b` starts. The evidence is
-    :math:`b`'s palette :math:`\pi_b` (the colours it got at birth, seed 004 sec. 4.1),
-    taken as one more observation of the object's colours, and the colours of the later
-    strokes :math:`S_b` labelled exactly :math:`\{b\}`; with :math:`\ell(c \mid \pi)` the
-    colour log-likelihood ratio of eq. 6 (the network's colour model),
+    For each object :math:`b` in birth order with at least one stroke labelled exactly
+    :math:`\{b\}` (the set :math:`S_b`), the candidates :math:`a` are the earlier objects
+    (after renaming) whose every stroke ends before the first stroke of :math:`b` starts.
+    The evidence is :math:`b`'s palette :math:`\pi_b`, taken as one more observation of the
+    object's colours, and the colours of the other strokes of :math:`S_b`. :math:`\pi_b` is
+    the palette of the first stroke of :math:`S_b`: the colours :math:`b` got at birth
+    (seed 004 sec. 4.1) when it was born alone; for an object born inside a group (a
+    newcomer who joined, or a member of a new group, whose birth palette holds the others'
+    colours too; asked since issue 16's ninth round) the first stroke where it is alone.
+    With :math:`\ell(c \mid \pi)` the colour log-likelihood ratio of eq. 6 (the network's
+    colour model),
 
     .. math::
         \Lambda_a = \log\frac{\rho / |A|}{1 - \rho} + \ell(\pi_b \mid \pi_a)
           + \sum_{s \in S_b} \ell(c_s \mid \pi_a) - \ell(c_s \mid \pi_b)
 
     (under "b is new" its palette is a chance palette, :math:`\ell = 0`, and given
-    :math:`\pi_b` the birth stroke's own colours say nothing more), and :math:`b` is
+    :math:`\pi_b` the stroke it came from says nothing more), and :math:`b` is
     renamed to the best :math:`a` when :math:`\Lambda_a > 0`. Passes over all objects
     are repeated until no object is renamed.
 
@@ -511,22 +517,25 @@ def _reidentify_pass(graph: LabelGraph, labels: list, prior: float) -> list:
     pal = graph.palettes([frozenset({o}) for o in objects])
     row = {o: i for i, o in enumerate(objects)}
     for i, b in enumerate(objects):
-        if b >= NEW_STRIDE or labels[b] != frozenset({b}):  # not born alone: kept as is
-            roots.append(b)
-            continue
+        singles = [int(k) for k in np.flatnonzero(member[i]) if labels[k] == frozenset({b})]
         cands = [a for a in roots if last[a] < first[b]]
-        if not cands:
+        if not cands or not singles:
             roots.append(b)
             continue
-        singles = [k for k in np.flatnonzero(member[i]) if labels[k] == frozenset({b})]
-        palettes = pal[[row[a] for a in cands] + [i]]
+        # b's palette: that of its first stroke alone (its birth stroke if born alone;
+        # a newcomer who joined a group, or a member of a new group, was born with the
+        # others' colours too)
+        own = singles[0]
+        palettes = np.zeros((len(cands) + 1, pal.shape[1]), dtype=bool)
+        palettes[:-1] = pal[[row[a] for a in cands]]
+        palettes[-1, graph.nodes[own].stroke.palette] = True
         score = np.full(len(cands), np.log(prior / len(cands)) - np.log1p(-prior))
-        # b's palette (the colours it got at birth) as one more observation of the object
-        score += colour_log_likelihood(np.flatnonzero(pal[i]), palettes[:-1], np.zeros(len(cands), dtype=bool),
+        # b's palette as one more observation of the object
+        score += colour_log_likelihood(np.flatnonzero(palettes[-1]), palettes[:-1], np.zeros(len(cands), dtype=bool),
                                        cfg.match_prob, cfg.pool_size, cfg.colour_mode)
         for k in singles:
-            if k == b:
-                continue  # given b's palette, its birth stroke says nothing more
+            if k == own:
+                continue  # given b's palette, the stroke it came from says nothing more
             ll = colour_log_likelihood(graph.nodes[k].stroke.colours, palettes, np.zeros(len(cands) + 1, dtype=bool),
                                        cfg.match_prob, cfg.pool_size, cfg.colour_mode)
             score += ll[:-1] - ll[-1]

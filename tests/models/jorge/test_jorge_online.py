@@ -136,6 +136,34 @@ def test_reidentification_pass():
         reidentify(on.labeller.graph, on.network_labels, 1.0)
 
 
+def _joined_graph(alone_colours):
+    """A (colours 0-4) is lost after frame 10; B (5-9) walks on; a region of B and a
+    newcomer starts at frame 20 (linked to B only: A's link was missed), then splits into
+    the newcomer alone (``alone_colours``) and B alone."""
+    from models.jorge.network import LabelGraph, NetworkConfig
+
+    g = LabelGraph(NetworkConfig(), with_domains=False)
+    for stroke, parents in [
+        (make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2, 3, 4], {0}), ()),
+        (make_stroke(1, 0, 10, (300, 0), (310, 0), [5, 6, 7, 8, 9], {1}), ()),
+        (make_stroke(2, 20, 30, (310, 0), (320, 0), [0, 1, 2, 5, 6, 7], {0, 1}), (1,)),
+        (make_stroke(3, 31, 40, (320, 0), (330, 0), alone_colours, {0}), (2,)),
+        (make_stroke(4, 31, 40, (340, 0), (350, 0), [5, 6, 7, 8, 9], {1}), (2,)),
+    ]:
+        g.add_stroke(stroke, parents)
+    return g
+
+
+def test_reidentification_of_a_newcomer_who_joined_a_group():
+    """An object born inside a group (a join) is an earlier object seen again when its
+    first stroke alone has that object's colours; with other colours it stays new."""
+    labels = [F({0}), F({1}), F({1, 2}), F({2}), F({1})]
+    same = reidentify(_joined_graph([0, 1, 2, 3, 4]), labels, 0.5)
+    assert same == [F({0}), F({1}), F({0, 1}), F({0}), F({1})]
+    other = reidentify(_joined_graph([8, 9, 10, 11]), labels, 0.5)
+    assert other == labels
+
+
 def test_first_errors_by_hand():
     s = _strokes() + [make_stroke(4, 30, 40, (20, 0), (30, 0), [0, 1], {0}),
                       make_stroke(5, 30, 40, (120, 0), (130, 0), [5, 6], {1})]
