@@ -517,9 +517,9 @@ def _reidentify_pass(graph: LabelGraph, labels: list, prior: float) -> list:
     pal = graph.palettes([frozenset({o}) for o in objects])
     row = {o: i for i, o in enumerate(objects)}
     for i, b in enumerate(objects):
-        singles = [int(k) for k in np.flatnonzero(member[i]) if labels[k] == frozenset({b})]
         cands = [a for a in roots if last[a] < first[b]]
-        if not cands or not singles:
+        singles = [int(k) for k in np.flatnonzero(member[i]) if labels[k] == frozenset({b})] if cands else []
+        if not singles:  # no candidate, or never seen alone: kept as is
             roots.append(b)
             continue
         # b's palette: that of its first stroke alone (its birth stroke if born alone;

@@ -9,6 +9,10 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from dbn.bayesnet import BayesNet
+from dbn.cpds import TabularCPD
+from dbn.variables import DiscreteVariable
+from inference.exact import JunctionTree
 from inference.exact.junction_tree import clique_tree_edges
 
 
@@ -59,10 +63,6 @@ def test_running_intersection_on_triangulated_graphs(n, density, seed):
 
 
 def _chain():
-    from dbn.bayesnet import BayesNet
-    from dbn.cpds import TabularCPD
-    from dbn.variables import DiscreteVariable
-
     rng = np.random.default_rng(0)
     cards = {"a": 2, "b": 3, "c": 4}
     variables = [DiscreteVariable(n, k) for n, k in cards.items()]
@@ -75,8 +75,6 @@ def _chain():
 
 
 def test_the_tree_without_evidence_is_compiled_only_when_asked_for():
-    from inference.exact import JunctionTree
-
     jt = JunctionTree(_chain())
     cal = jt.calibrate({"b": 1})
     assert list(jt._cache) == [frozenset({"b"})]  # only the tree with b indexed away

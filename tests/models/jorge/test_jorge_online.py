@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from dbn.errors import InputError, TimeOrderError
+from models.jorge.network import LabelGraph, NetworkConfig
 from models.jorge.online import (
     OnlineConfig,
     OnlineLabeller,
@@ -140,8 +141,6 @@ def _joined_graph(alone_colours):
     """A (colours 0-4) is lost after frame 10; B (5-9) walks on; a region of B and a
     newcomer starts at frame 20 (linked to B only: A's link was missed), then splits into
     the newcomer alone (``alone_colours``) and B alone."""
-    from models.jorge.network import LabelGraph, NetworkConfig
-
     g = LabelGraph(NetworkConfig(), with_domains=False)
     for stroke, parents in [
         (make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2, 3, 4], {0}), ()),
