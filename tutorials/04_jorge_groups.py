@@ -240,7 +240,8 @@ print("means:", np.round(rates.mean(0), 3))
 # for the issue's bar (20x real time on every scoring set), and the current default
 # (`fit.DEFAULT_POINT`) stays unless another point beats it by more than one standard error
 # of the paired per-seed differences; the default network (`network.FITTED_LABELS`,
-# `network.FITTED_PALETTE_GAINS`) is its result. Here we refit on fewer seeds and score the
+# `network.FITTED_PALETTE_COUNTS`, `network.FITTED_PALETTE_GAINS`: since issue 16's tenth
+# round joins with both palette tables) is its result. Here we refit on fewer seeds and score the
 # validation part with the default network and the colour-only baseline.
 
 # %%

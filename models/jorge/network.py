@@ -98,7 +98,7 @@ FITTED_LABELS = LabelParams(
     p_part=0.3644544431946007,
     max_group_size=5,
     new_group_probs=(1.0,),
-    p_join=0.0,
+    p_join=0.11513437057991513,
 )
 """The label parameters of the default network: the output of
 :func:`models.jorge.fit.search_settings` on the declared training split
@@ -180,6 +180,24 @@ that depend on whether a stroke starts at the edge of the view (``p_join`` 0.188
 edge, 0.032 inside; with joins at the edge only, 0.2046, scored before the change to
 re-identification), and a superseded ancestor kept as a second parent when a region grows
 back (0.2116 and 0.2321).
+Tenth round (issue 16): a bug in the SIMULATED meetings the search scores
+(:func:`models.jorge.meeting.simulate_meeting`): of a pair meant to arrive together, side by
+side (``pair_prob`` 0.3), only the second took the shared direction, so no scene had a pair
+that entered the view together. I looked because new groups or joins are what such pairs
+need, and the held-out wk2gt was known from earlier rounds' benchmark runs to be lost on
+them (its strokes of two people are wrong with correct links): so this round's validation
+figure is not blind to why I looked, though nothing was chosen on it. The fixed scenes hold
+such pairs; the same search (boxes gate, seeds 100-104, two labellers sharing 2 cores) now
+replaces the default: both palette tables with joins and size once 0.2135 (per seed
+0.2172, 0.2267, 0.2171, 0.2058, 0.2006; slowest set 42.2x), the previous default 0.2566
+(0.2810, 0.2327, 0.2862, 0.2299, 0.2533; 71.3x), every seed lower, the mean difference
+0.043 far above its standard error; next both tables with joins without size once 0.2170,
+both tables with new groups anywhere 0.2280 (7.2x, under the bar). The points faster
+with one labeller at a time are not lower, so the choice does not hang on the shared
+cores. So the default is now ``p_join`` fitted (0.115, a stroke may add one new object to
+what it inherits), no new groups, both :data:`FITTED_PALETTE_COUNTS` and
+:data:`FITTED_PALETTE_GAINS`, size once (:data:`models.jorge.fit.DEFAULT_POINT`); the CPD
+parameters are the same fit.
 ``tests/models/jorge/test_jorge_fit.py`` re-runs the fit (not the search, about 25 minutes
 on 2 cores) and checks the fitted numbers."""
 
@@ -195,6 +213,8 @@ FITTED_PALETTE_COUNTS = (
 :math:`c = 0..12` of distinct colours in a stroke's palette given its :math:`k = 1..5`
 people (row ``k - 1``; 5 stands for 5 or more), add-one smoothed frequencies from
 :func:`models.jorge.fit.fit_parameters` on the declared training split (seeds 100-109).
+Beside :data:`FITTED_PALETTE_GAINS` it is part of the default
+again since issue 16's tenth round (see :data:`FITTED_LABELS`).
 With it the documented search (:data:`models.jorge.fit.SEARCH_GRID`, scored with seed
 100) gives training errors: scaled gate, ML parameters 0.2846 without new groups (chosen;
 0.2917 with the previous parameters, which carry no palette evidence) and 0.3137 with
@@ -298,8 +318,9 @@ class NetworkConfig:
         :math:`\\log p(c \\mid k)`, rows ``k = 1..`` people, columns ``c = 0..pool_size``
         distinct colours of the stroke's palette (the last row and column stand for
         that many or more) (:func:`models.jorge.labels.palette_count_log_likelihood`; our addition, issue 16);
-        fitted by :func:`models.jorge.fit.fit_parameters`; ``()`` (default since issue 16's
-        fourth round, which uses ``palette_gain_table``): none.
+        fitted by :func:`models.jorge.fit.fit_parameters`; default
+        :data:`FITTED_PALETTE_COUNTS` (beside ``palette_gain_table``: the search's choice
+        since issue 16's tenth round; from the fourth to the ninth round ``()``, none).
     gate : {"pixels", "scaled", "boxes"}
         Link gate. ``"pixels"``: ``radius`` + ``v_max`` * gap in pixels and frames (values
         chosen on CAVIAR, 384x288 at 25 fps: they do not carry over to other image sizes
@@ -370,7 +391,7 @@ class NetworkConfig:
     size_min_reference: int = 1
     size_reference_neighbours: int = 0
     gate: str = "boxes"
-    palette_count_table: tuple = ()
+    palette_count_table: tuple = FITTED_PALETTE_COUNTS
     radius_scaled: float = 1.2
     v_max_scaled: float = 1.0
     v_box: float = 0.5

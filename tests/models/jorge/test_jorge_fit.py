@@ -87,7 +87,7 @@ def test_default_parameters_are_the_fit_on_the_training_split():
     base = NetworkConfig(labels=LabelParams(max_group_size=5), gate="boxes")
     cfg = fit_parameters(sets, base)
     fitted = cfg.labels
-    for name in ("p_new", "p_merge", "p_merge_one_split", "p_merge_both_split", "p_split", "p_part"):
+    for name in ("p_new", "p_merge", "p_merge_one_split", "p_merge_both_split", "p_split", "p_part", "p_join"):
         assert getattr(fitted, name) == pytest.approx(getattr(FITTED_LABELS, name), rel=1e-9), name
     np.testing.assert_allclose(cfg.palette_count_table, FITTED_PALETTE_COUNTS, rtol=1e-9)
     np.testing.assert_allclose(cfg.palette_gain_table, FITTED_PALETTE_GAINS, rtol=1e-9)
