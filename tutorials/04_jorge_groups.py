@@ -233,7 +233,7 @@ print("means:", np.round(rates.mean(0), 3))
 # the training split only, with the five seeds `fit.SCORE_SEEDS`; run it with
 # `python -m models.jorge.fit --gates boxes`) then chose between these and the previous
 # defaults, with new groups off, at roots only or anywhere, with joins only (a newcomer
-# added to an inherited label), and with or without the merge test of the link rule
+# added to an inherited label) or with new groups at roots and joins, and with or without the merge test of the link rule
 # (`NetworkConfig.merge_area`). Since the real training split has no CAVIAR-like group of
 # three or more people, the search also scores SIMULATED meetings of 3-5 people
 # (`fit.MEETING_SIZES`, other scenes than the benchmark's). It keeps only points fast enough
@@ -241,8 +241,9 @@ print("means:", np.round(rates.mean(0), 3))
 # (`fit.DEFAULT_POINT`) stays unless another point beats it by more than one standard error
 # of the paired per-seed differences; the default network (`network.FITTED_LABELS`,
 # `network.FITTED_PALETTE_COUNTS`, `network.FITTED_PALETTE_GAINS`: since issue 16's tenth
-# round joins with both palette tables) is its result. Here we refit on fewer seeds and score the
-# validation part with the default network and the colour-only baseline.
+# round new groups at roots and joins, with both palette tables) is its result. Here we
+# refit on fewer seeds and score the validation part with the default network and the
+# colour-only baseline.
 
 # %%
 from models.jorge.fit import (

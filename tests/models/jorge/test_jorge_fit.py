@@ -87,7 +87,8 @@ def test_default_parameters_are_the_fit_on_the_training_split():
     base = NetworkConfig(labels=LabelParams(max_group_size=5), gate="boxes")
     cfg = fit_parameters(sets, base)
     fitted = cfg.labels
-    for name in ("p_new", "p_merge", "p_merge_one_split", "p_merge_both_split", "p_split", "p_part", "p_join"):
+    for name in ("p_new", "p_merge", "p_merge_one_split", "p_merge_both_split", "p_split", "p_part", "p_join",
+                 "new_group_probs"):
         assert getattr(fitted, name) == pytest.approx(getattr(FITTED_LABELS, name), rel=1e-9), name
     np.testing.assert_allclose(cfg.palette_count_table, FITTED_PALETTE_COUNTS, rtol=1e-9)
     np.testing.assert_allclose(cfg.palette_gain_table, FITTED_PALETTE_GAINS, rtol=1e-9)
@@ -124,8 +125,8 @@ def test_search_scores_every_grid_point_per_seed_and_keeps_the_lowest():
     lowest = min(fast, key=lambda row: row[1])[0]
     assert best.gate == "pixels" and best.size_once == lowest["size_once"]
     assert best.merge_area == lowest["merge_area"]
-    assert (len(best.labels.new_group_probs) > 1) == (lowest["new_groups"] in ("roots", "all"))
-    assert (best.labels.p_join > 0) == (lowest["new_groups"] in ("all", "joins"))
+    assert (len(best.labels.new_group_probs) > 1) == (lowest["new_groups"] in ("roots", "all", "roots_joins"))
+    assert (best.labels.p_join > 0) == (lowest["new_groups"] in ("all", "joins", "roots_joins"))
 
 
 def test_search_keeps_only_points_fast_enough_for_the_bar(monkeypatch):
@@ -137,7 +138,8 @@ def test_search_keeps_only_points_fast_enough_for_the_bar(monkeypatch):
 
     def stub(job):
         cfg, _ = job
-        anywhere = len(cfg.labels.new_group_probs) > 1 and cfg.labels.p_join > 0  # best error, too slow
+        anywhere = (len(cfg.labels.new_group_probs) > 1 and cfg.labels.p_join > 0
+                    and cfg.labels.child_new_groups)  # best error, too slow
         return (0.1, 5.0) if anywhere else (0.2 + 0.01 * cfg.size_once + 0.05 * (cfg.labels.p_join > 0), 40.0)
 
     assert 5.0 < fit.REALTIME_BAR <= 40.0

@@ -79,7 +79,8 @@ def _errors(k: int, scenes) -> tuple[float, float, int]:
 @pytest.mark.parametrize("k, bar", [(3, 0.20), (4, 0.27)])
 def test_a_simulated_meeting_is_labelled_within_the_users_overall_bar(k, bar):
     """Scene 0 of each size (the first, not chosen), the whole default pipeline. Issue 16's
-    tenth round (joins on, pairs that arrive together in the scenes) measured 0.133 for
+    tenth round (new groups at roots and joins, pairs that arrive together in the scenes;
+    the same with joins alone) measured 0.133 for
     k = 3, within the users' overall bar of 0.20, and 0.218 for k = 4, above it: there the
     bar is the measured figure plus 0.05, a regression check (the ninth round's default
     on the scenes before the fix of arriving pairs: 0.012 and 0.172). Its strokes of 3+
@@ -94,13 +95,13 @@ def test_a_simulated_meeting_is_labelled_within_the_users_overall_bar(k, bar):
 @pytest.mark.slow
 def test_ten_simulated_meetings_of_3_and_4_people():
     """Pooled over scenes 0-9 (stroke seeds [0, i]) the default pipeline was measured at
-    0.190 (k = 3) and 0.306 (k = 4) over all strokes, 0.56 and 0.70 over strokes of three
-    or more people (issue 16's tenth round: joins on, and the scenes hold pairs that
-    arrive together; the ninth round's default on the same scenes 0.226 / 0.241 and 0.56 /
-    0.62, on the scenes before the fix 0.120 / 0.144 and 0.27 / 0.44): not within the
-    users' 0.20 overall for k = 4, nor their 0.35 on 3+ strokes. Bars: the measured
-    figures plus 0.05 (a regression check, not the users' bar)."""
-    for k, (bar, bar3) in {3: (0.24, 0.61), 4: (0.36, 0.75)}.items():
+    0.171 (k = 3) and 0.298 (k = 4) over all strokes, 0.52 and 0.66 over strokes of three
+    or more people (issue 16's tenth round: new groups at roots and joins, and the scenes
+    hold pairs that arrive together; the ninth round's default on the same scenes 0.226 /
+    0.241 and 0.56 / 0.62, on the scenes before the fix 0.120 / 0.144 and 0.27 / 0.44):
+    not within the users' 0.20 overall for k = 4, nor their 0.35 on 3+ strokes. Bars: the
+    measured figures plus 0.05 (a regression check, not the users' bar)."""
+    for k, (bar, bar3) in {3: (0.22, 0.57), 4: (0.35, 0.71)}.items():
         rate, rate3, n3 = _errors(k, range(10))
         assert n3 >= 50
         assert rate <= bar, (k, rate)
