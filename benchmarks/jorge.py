@@ -163,19 +163,19 @@ Tenth round (issue 16): the SIMULATED meetings held no pair that entered the vie
 pair took the shared direction). With pairs that arrive side by side the search's scenes
 (100-104) reward joins, and the documented search replaced the default by both palette
 tables with joins, then, with the grid's missing cell added, by both tables with new
-groups at roots and joins (:data:`models.jorge.network.FITTED_LABELS`, tenth round). I
-looked for such pairs because wk2gt (validation) was known from earlier runs to be lost on
-them, so the validation figures below are not blind to that, though nothing was chosen on
-them. Measured after choosing, seeds 0-4: validation 0.194 -> 0.136 (wk2gt 0.485 -> 0.256,
-S2L1 0.151 -> 0.126, with the true links 0.038), training 0.403 -> 0.380, 3+ strokes 0.977
--> 0.904 (0.864 over groups of 3-5), ms3ggt 0.024 -> 0.018, mws1gt 0.060 -> 0.053, lb1gt
-0.059 -> 0.092, min real-time factor 40.9 (joins alone: validation 0.128, training 0.385,
-3+ 0.925, 48.3x). The benchmark's meetings (scenes 0-9, now with arriving pairs) 0.168 /
-0.252 / 0.294 and 3+ 0.48 / 0.67 / 0.64 for k = 3 / 4 / 5. With stroke seed 0 only, the
-previous default labels the same scenes 0.226 / 0.241 / 0.309 and this one 0.171 / 0.298 /
-0.320; a fresh draw of scenes (200-209) gives 0.066 / 0.208 / 0.126 against 0.071 / 0.138 /
-0.162 (3+ 0.11 / 0.55 / 0.37 against 0.17 / 0.31 / 0.45): the scene-to-scene spread is
-larger than the difference between the two defaults.
+groups at roots and joins; a joiner's palette is now known only with its whole birth
+label (:data:`models.jorge.network.FITTED_LABELS`, tenth round). I looked for such pairs
+because wk2gt (validation) was known from earlier runs to be lost on them, so the
+validation figures below are not blind to that, though nothing was chosen on them.
+Measured after choosing, seeds 0-4: validation 0.194 -> 0.130 (wk2gt 0.485 -> 0.256, S2L1
+0.151 -> 0.118, with the true links 0.035), training 0.403 -> 0.373, 3+ strokes 0.977 ->
+0.897 (0.854 over groups of 3-5), ms3ggt 0.024 -> 0.018, mws1gt 0.060 -> 0.047, lb1gt 0.059
+-> 0.092, min real-time factor 40.7. The benchmark's meetings (scenes 0-9, now with
+arriving pairs) 0.170 / 0.245 / 0.305 and 3+ 0.52 / 0.67 / 0.68 for k = 3 / 4 / 5. With
+stroke seed 0 only, the previous default labels the same scenes 0.226 / 0.241 / 0.309 and
+this one 0.171 / 0.301 / 0.333; a fresh draw of scenes (200-209) gives 0.066 / 0.208 /
+0.126 against 0.071 / 0.120 / 0.139 (3+ 0.11 / 0.55 / 0.37 against 0.19 / 0.36 / 0.41):
+the scene-to-scene spread is larger than the difference between the two defaults.
 """
 
 from __future__ import annotations

@@ -200,10 +200,11 @@ def _count_palette_gains(c: EventCounts, g: LabelGraph) -> None:
     """(m, e) per stroke, as the network sees a label of its true people
     (:func:`models.jorge.labels.known_objects`): ``e`` the colours its palette has beyond
     the palettes of its *known* people, ``m`` the others. Known: inherited from its linked
-    parents, and born alone, or with all their cohort (the newcomers of their birth
-    stroke) in this stroke, or seen alone in an earlier stroke. A person's palette is that
-    of the first stroke holding them, or for a member of a cohort the first earlier
-    stroke holding them alone (:meth:`models.jorge.network.LabelGraph.palette_stroke`;
+    parents, and born alone, or with all their cohort (everyone of their birth stroke who
+    was new there or inherited: a joiner's birth palette holds the inherited people's
+    colours too, issue 16's tenth round) in this stroke, or seen alone in an earlier
+    stroke. A person's palette is that of the first stroke holding them, or for a member
+    of a cohort the first earlier stroke holding them alone (:meth:`models.jorge.network.LabelGraph.palette_stroke`;
     the network has it once that stroke is frozen, here at once)."""
     birth: dict = {}
     cohort: dict = {}
@@ -212,10 +213,10 @@ def _count_palette_gains(c: EventCounts, g: LabelGraph) -> None:
         palette = frozenset(int(x) for x in s.palette)
         parents = frozenset().union(*[g.nodes[p].stroke.truth for p in node.parents])
         newcomers = frozenset(p for p in s.truth if p not in birth)
-        for person in newcomers:
-            birth[person] = palette
-            cohort[person] = newcomers - parents
         inherited = s.truth & parents
+        for person in newcomers:  # a joiner's birth palette also holds the inherited colours
+            birth[person] = palette
+            cohort[person] = newcomers | inherited
         known = [p for p in inherited if cohort[p] <= inherited]
         colours = frozenset().union(*[birth[p] for p in known])
         c.palette_gains.append((len(s.truth) - len(known), len(palette) - len(colours)))

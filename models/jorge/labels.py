@@ -309,11 +309,17 @@ class LabelObjects:
     is_new: np.ndarray
 
 
-def label_objects(domain: Sequence[Label], k: int, own: Mapping[int, int] | None = None) -> LabelObjects:
+def label_objects(domain: Sequence[Label], k: int, own: Mapping[int, int] | None = None,
+                  joined: Mapping[int, Label] | None = None) -> LabelObjects:
     """:class:`LabelObjects` of ``domain`` at stroke ``k``; ``own`` maps a member of a new
-    group to the stroke with its own palette (else its birth stroke's). The known objects
-    are those of :func:`known_objects` (``label``, ``k``, ``own``)."""
+    group (or a joiner) to the stroke with its own palette (else its birth stroke's). The
+    known objects are those of :func:`known_objects` (``label``, ``k``, ``own``), except that
+    an object in ``joined`` (a newcomer who joined an inherited label: its birth palette
+    holds the colours of everyone in its birth label, ``joined[o]``) is known only in a
+    label holding that whole birth label, or once it has a palette of its own (issue 16,
+    tenth round)."""
     own = {} if own is None else own
+    joined = {} if joined is None else joined
     pal: list[int] = []
     known: list[int] = []
     known_counts, is_new = [], []
@@ -324,7 +330,7 @@ def label_objects(domain: Sequence[Label], k: int, own: Mapping[int, int] | None
             pal.append(own.get(o, b))
             if b == k:
                 new = True
-            elif o < NEW_STRIDE or o in own or _cohort(o) <= lab:  # alone, own, whole cohort
+            elif o in own or (joined[o] <= lab if o in joined else o < NEW_STRIDE or _cohort(o) <= lab):
                 known.append(own.get(o, b))
                 n_known += 1
         known_counts.append(n_known)
