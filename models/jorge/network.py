@@ -950,17 +950,19 @@ class LabelGraph:
         A member of a new group frozen alone gets that stroke's palette as its own
         (:meth:`palette_stroke`; issue 16): the group's birth palette holds every member's
         colours, so without it the members of a pair that entered together stay
-        exchangeable and every later split is a coin toss. A stroke frozen to a join (its
-        own new object with inherited ones) records the newcomer as a joiner, whose birth
-        palette holds the inherited colours too: it is known only in a label with its whole
-        birth label (:func:`models.jorge.labels.label_objects`) and takes the palette of
-        the first stroke frozen to it alone in the same way (issue 16, tenth round)."""
+        exchangeable and every later split is a coin toss. A stroke frozen to a label with
+        objects born there and inherited ones (a join; with new groups anywhere, also a new
+        group joining) records its newcomers as joiners, whose birth palette holds the
+        inherited colours too: each is known only in a label with its whole birth label
+        (:func:`models.jorge.labels.label_objects`) and takes the palette of the first
+        stroke frozen to it alone in the same way (issue 16, tenth round)."""
         node = self.nodes[k]
         if label not in node.domain:
             raise InputError(f"node {k}: cannot freeze to {set(label)}, not in its domain")
         node.frozen = label
-        if k in label and len(label) > 1:  # a join: stroke k's newcomer with inherited objects
-            self._joined[k] = label
+        born = [int(o) for o in label if birth_stroke(o) == k]
+        if born and len(born) < len(label):  # newcomers with inherited objects: joiners
+            self._joined.update(dict.fromkeys(born, label))
         if len(label) == 1:
             (o,) = label
             if (cohort_size(o) > 1 or int(o) in self._joined) and k < self._own.get(int(o), k + 1):

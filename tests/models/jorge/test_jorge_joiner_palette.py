@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from models.jorge.fit import EventCounts, _count_palette_gains
-from models.jorge.labels import LabelParams, label_objects
+from models.jorge.labels import LabelParams, label_objects, new_objects
 from models.jorge.network import LabelGraph, NetworkConfig
 from models.jorge.strokes import make_stroke
 
@@ -67,6 +67,20 @@ def test_a_newcomer_born_alone_is_not_a_joiner():
     g.freeze(0, frozenset({0}))
     assert g._joined == {}
     assert label_objects([frozenset({0})], 2, g._own, g._joined).known_counts.tolist() == [1]
+
+
+def test_a_new_group_that_joins_inherited_objects_records_each_member():
+    """With new groups anywhere, two newcomers may join an inherited label at once: both
+    are joiners, known together only with the inherited object too."""
+    g = _graph()
+    pair = new_objects(1, 2)
+    g.freeze(0, frozenset({0}))
+    if frozenset({0}) | pair not in g.nodes[1].domain:  # p_join only: add the label by hand
+        g.nodes[1].domain = (*g.nodes[1].domain, frozenset({0}) | pair)
+    g.freeze(1, frozenset({0}) | pair)
+    assert set(g._joined) == set(pair)
+    known = label_objects([pair, frozenset({0}) | pair], 2, g._own, g._joined).known_counts
+    assert known.tolist() == [0, 3]
 
 
 def test_the_fit_counts_a_joiner_as_unknown_until_seen_alone():
