@@ -233,10 +233,11 @@ print("means:", np.round(rates.mean(0), 3))
 # the training split only, with the five seeds `fit.SCORE_SEEDS`; run it with
 # `python -m models.jorge.fit --gates boxes`) then chose between these and the previous
 # defaults, with new groups off, at roots only or anywhere, with joins only (a newcomer
-# added to an inherited label) or with new groups at roots and joins, and with or without the merge test of the link rule
-# (`NetworkConfig.merge_area`). Since the real training split has no CAVIAR-like group of
-# three or more people, the search also scores SIMULATED meetings of 3-5 people
-# (`fit.MEETING_SIZES`, other scenes than the benchmark's). It keeps only points fast enough
+# added to an inherited label) or with new groups at roots and joins, and with or without
+# the merge test of the link rule (`NetworkConfig.merge_area`). Since the real training
+# split has no CAVIAR-like group of three or more people, the search also scores
+# SIMULATED meetings of 3-5 people (`fit.MEETING_SIZES`, other scenes than the
+# benchmark's). It keeps only points fast enough
 # for the bar (20x real time on every scoring set), and the current default
 # (`fit.DEFAULT_POINT`) stays unless another point beats it by more than one standard error
 # of the paired per-seed differences; the default network (`network.FITTED_LABELS`,
