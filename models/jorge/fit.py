@@ -204,8 +204,9 @@ def _count_palette_gains(c: EventCounts, g: LabelGraph) -> None:
     was new there or inherited: a joiner's birth palette holds the inherited people's
     colours too, issue 16's tenth round) in this stroke, or seen alone in an earlier
     stroke. A person's palette is that of the first stroke holding them, or for a member
-    of a cohort the first earlier stroke holding them alone (:meth:`models.jorge.network.LabelGraph.palette_stroke`;
-    the network has it once that stroke is frozen, here at once)."""
+    of a cohort the first earlier stroke holding them alone
+    (:meth:`models.jorge.network.LabelGraph.palette_stroke`; the network has it once that
+    stroke is frozen, here at once)."""
     birth: dict = {}
     cohort: dict = {}
     for node in g.nodes:

@@ -269,20 +269,30 @@ def _cohort(o: int) -> Label:
     return new_objects(birth_stroke(o), cohort_size(o))
 
 
-def known_objects(label: Label, k: int, own: Collection[int] = ()) -> list[int]:
+def known_objects(label: Label, k: int, own: Collection[int] = (),
+                  joined: Mapping[int, Label] | None = None) -> list[int]:
     """The objects of ``label`` whose palette is on record at stroke ``k``: not born at
     ``k``, and born alone, or with their whole cohort in ``label``, or in ``own`` (members
-    of a new group with a palette of their own, seen alone since:
+    of a new group or joiners with a palette of their own, seen alone since:
     :meth:`models.jorge.network.LabelGraph.freeze`). The palette recorded at a new group's
     birth is the group's, not any one member's, so a label holding only part of a cohort
     knows none of their own palettes (issue 16: otherwise one member is credited with the
     whole pair's colours and a pair continued as one person explains them as well as the
-    pair does)."""
+    pair does). Likewise a joiner (in ``joined``: a newcomer who joined an inherited label,
+    ``joined[o]`` its birth label) is known only where ``label`` holds that whole birth
+    label (issue 16, tenth round). The plain definition :func:`label_objects` follows."""
+    joined = {} if joined is None else joined
     born: dict[tuple[int, int], list[int]] = {}
+    out = []
     for o in label:
-        if birth_stroke(o) != k:
+        if birth_stroke(o) == k:
+            continue
+        if o in joined:
+            if o in own or joined[o] <= label:
+                out.append(int(o))
+        else:
             born.setdefault((birth_stroke(o), cohort_size(o)), []).append(int(o))
-    return [o for (_, m), objs in born.items() for o in objs if len(objs) == m or o in own]
+    return out + [o for (_, m), objs in born.items() for o in objs if len(objs) == m or o in own]
 
 
 @dataclass(frozen=True)
@@ -312,12 +322,10 @@ class LabelObjects:
 def label_objects(domain: Sequence[Label], k: int, own: Mapping[int, int] | None = None,
                   joined: Mapping[int, Label] | None = None) -> LabelObjects:
     """:class:`LabelObjects` of ``domain`` at stroke ``k``; ``own`` maps a member of a new
-    group (or a joiner) to the stroke with its own palette (else its birth stroke's). The
-    known objects are those of :func:`known_objects` (``label``, ``k``, ``own``), except that
-    an object in ``joined`` (a newcomer who joined an inherited label: its birth palette
-    holds the colours of everyone in its birth label, ``joined[o]``) is known only in a
-    label holding that whole birth label, or once it has a palette of its own (issue 16,
-    tenth round)."""
+    group (or a joiner) to the stroke with its own palette (else its birth stroke's);
+    ``joined`` maps a joiner to its birth label. The known objects are those of
+    :func:`known_objects` (``label``, ``k``, ``own``, ``joined``): a joiner's birth palette
+    holds the colours of everyone in its birth label (issue 16, tenth round)."""
     own = {} if own is None else own
     joined = {} if joined is None else joined
     pal: list[int] = []

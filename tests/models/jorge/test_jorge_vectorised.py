@@ -34,17 +34,21 @@ labels_strategy = st.frozensets(st.sampled_from(_OBJECTS), min_size=1, max_size=
 
 @settings(max_examples=80, deadline=None)
 @given(domain=st.lists(labels_strategy, min_size=1, max_size=8), k=st.integers(0, 7),
-       own_items=st.dictionaries(st.sampled_from([o for o in _OBJECTS if o >= NEW_STRIDE]),
-                                 st.integers(0, 7), max_size=3))
-def test_label_objects_matches_the_definitions(domain, k, own_items):
-    own = dict(own_items)
-    obj = label_objects(domain, k, own)
+       own_items=st.dictionaries(st.sampled_from(_OBJECTS), st.integers(0, 7), max_size=3),
+       joined_items=st.dictionaries(st.sampled_from([o for o in _OBJECTS if o < NEW_STRIDE]),
+                                    labels_strategy, max_size=3))
+def test_label_objects_matches_the_definitions(domain, k, own_items, joined_items):
+    """``own``: members of new groups or joiners with a palette of their own; ``joined``:
+    lone newcomers that joined an inherited label, mapped to their birth label."""
+    own = {o: s for o, s in own_items.items() if o >= NEW_STRIDE or o in joined_items}
+    joined = {o: lab | {o} for o, lab in joined_items.items()}
+    obj = label_objects(domain, k, own, joined)
     start = known_start = 0
     for i, lab in enumerate(domain):
         strokes = obj.palette_strokes[start:start + obj.sizes[i]]
         assert sorted(strokes.tolist()) == sorted(own.get(o, birth_stroke(o)) for o in lab)
         known = obj.known_strokes[known_start:known_start + obj.known_counts[i]]
-        expected = known_objects(lab, k, own=own)
+        expected = known_objects(lab, k, own=own, joined=joined)
         assert sorted(known.tolist()) == sorted(own.get(o, birth_stroke(o)) for o in expected)
         assert obj.is_new[i] == any(birth_stroke(o) == k for o in lab)
         start += obj.sizes[i]
