@@ -241,6 +241,9 @@ class OnlineLabeller:
         score = g.evidence_loglik(k)
         if node.parents:
             table = g.cpd_table(k)
+            corr = g.chain_log_ratio(k)
+            if corr is not None:  # NetworkConfig.chain_palette: the parent's view alone
+                table = table * np.exp(corr)
             beliefs = [self.belief_of(p) for p in node.parents]
             prior = np.einsum("i,ik->k", beliefs[0], table) if len(beliefs) == 1 else \
                 np.einsum("i,j,ijk->k", beliefs[0], beliefs[1], table)
@@ -508,7 +511,10 @@ def _reidentify_pass(graph: LabelGraph, labels: list, prior: float) -> list:
     cfg = graph.config
     starts = np.array([nd.stroke.start for nd in graph.nodes])
     ends = np.array([nd.stroke.end for nd in graph.nodes])
-    objects = sorted(set().union(*labels))
+    # in birth order (a new group's members have ids past every lone newcomer's,
+    # ``models.jorge.labels.NEW_STRIDE``: sorting by id examined them last; issue 16,
+    # eleventh round)
+    objects = sorted(set().union(*labels), key=lambda o: (birth_stroke(o), o))
     member = np.array([[o in lab for lab in labels] for o in objects])  # (num_objects, num_strokes)
     first = {o: int(starts[member[i]].min()) for i, o in enumerate(objects)}
     last = {o: int(ends[member[i]].max()) for i, o in enumerate(objects)}
