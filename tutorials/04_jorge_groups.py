@@ -96,7 +96,14 @@ plt.show()
 # inherits the new object. A final off-line pass (our addition, `reid_prior`) renames an
 # object born as a new label to an earlier object that had finished before it appeared,
 # when its palette and the colours of its later one-person strokes favour that object
-# (even prior odds). Both figures are printed.
+# (even prior odds), examining the objects in birth order. Both figures are printed.
+#
+# A person first seen inside a group (a new group's member, or a newcomer who joined)
+# has the group's colours for a palette until a stroke of them alone is frozen. Inside
+# the window, a stroke that continues such a person alone is scored on the parent
+# stroke's palette, their latest view alone (`NetworkConfig.chain_palette`, an observed
+# node over the parent's and the child's labels; issue 16's eleventh round): otherwise
+# "a newcomer born as the member left" was scored on its own colours and won.
 
 # %%
 result = label_online(strokes, OnlineConfig())
