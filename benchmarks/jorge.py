@@ -177,18 +177,21 @@ this one 0.171 / 0.301 / 0.333; a fresh draw of scenes (200-209) gives 0.066 / 0
 0.126 against 0.071 / 0.120 / 0.139 (3+ 0.11 / 0.55 / 0.37 against 0.19 / 0.36 / 0.41):
 the scene-to-scene spread is larger than the difference between the two defaults.
 
-Eleventh round (issue 16): the re-identification pass in birth order and the chain palette
-(a new group's member or a joiner who continues alone is scored on the parent stroke's
-palette; :data:`models.jorge.network.FITTED_LABELS`, eleventh round), both found and
-scored on the search's own scenes. Measured after choosing, seeds 0-4: validation 0.130 ->
-0.096 (wk2gt 0.256 -> 0.141, S2L1 0.118 -> 0.099; with the true links 0.070 -> 0.050),
-training 0.373 -> 0.360, 3+ strokes 0.897 -> 0.899 (0.854 -> 0.857 over groups of 3-5),
-ms3ggt 0.018, mws1gt 0.047, lb1gt 0.092 -> 0.043, min real-time factor 38.6; meetings
-(scenes 0-9) 0.151 / 0.230 / 0.294 and 3+ 0.47 / 0.63 / 0.67 for k = 3 / 4 / 5. With
-``--quick`` (seed 0) the meetings of three got worse, 0.161 -> 0.248: in scene 1 a joiner
-who left the group alone took the place of a person with a palette of their own, since the
-chain scores the joiner on its latest view and the other on an older one (scenes 105-114,
-training side: never worse with the chain, 0.170 -> 0.146 over k = 3-5).
+Eleventh round (issue 16): the re-identification pass in birth order, the chain palette (a
+new group's member or a joiner who continues alone is scored on the parent stroke's
+palette) and, chosen by the full search with a new dimension, the palette counts weighed
+0.5 where a region continues with the size counted at every stroke
+(:data:`models.jorge.network.FITTED_LABELS`, eleventh round); all found and scored on the
+search's own scenes. Measured after choosing, seeds 0-4: validation 0.130 -> 0.096 (wk2gt
+0.256 -> 0.141, S2L1 0.118 -> 0.099; with the true links 0.070 -> 0.050), training 0.373
+-> 0.359, 3+ strokes 0.897 -> 0.900 (0.854 -> 0.859 over groups of 3-5), ms3ggt 0.018 ->
+0.021, mws1gt 0.047 -> 0.050, lb1gt 0.092 -> 0.038, min real-time factor 36.0; meetings
+(scenes 0-9) 0.170 / 0.245 / 0.305 -> 0.134 / 0.225 / 0.273 and 3+ 0.52 / 0.67 / 0.68 ->
+0.36 / 0.62 / 0.64 for k = 3 / 4 / 5. With ``--quick`` (seed 0) the meetings of three got
+worse, 0.161 -> 0.224: in scene 1 a joiner who left the group alone took the place of a
+person with a palette of their own, since the chain scores the joiner on its latest view
+and the other on an older one (on scenes 105-114, training side, the chain alone was never
+worse: 0.170 -> 0.146 over k = 3-5).
 """
 
 from __future__ import annotations

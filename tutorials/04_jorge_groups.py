@@ -249,7 +249,9 @@ print("means:", np.round(rates.mean(0), 3))
 # (`fit.DEFAULT_POINT`) stays unless another point beats it by more than one standard error
 # of the paired per-seed differences; the default network (`network.FITTED_LABELS`,
 # `network.FITTED_PALETTE_COUNTS`, `network.FITTED_PALETTE_GAINS`: since issue 16's tenth
-# round new groups at roots and joins, with both palette tables) is its result. Here we
+# round new groups at roots and joins, with both palette tables; since the eleventh, the
+# palette counts weighed 0.5 where a region continues, `NetworkConfig.palette_continued`,
+# a dimension of the grid) is its result. Here we
 # refit on fewer seeds and score the validation part with the default network and the
 # colour-only baseline.
 

@@ -340,6 +340,7 @@ SEARCH_GRID = {
     "new_groups": ("off", "roots", "all", "joins", "roots_joins"),
     "size_once": (False, True),
     "merge_area": (0.0, 1.0),
+    "palette_continued": (1.0, 0.75, 0.5),
 }
 """The documented search over what the likelihood alone does not settle: the CPD
 parameters as fitted by :func:`fit_parameters` (``"ml"``, with the marginal palette
@@ -359,7 +360,9 @@ tuned on CAVIAR, or scaled by the region's size and the frame rate, or the box g
 issue 16 with ``v_box`` 0.5 (0.25 scored worse), ``NetworkConfig.gate``), with or without
 the merge test of the link rule (``NetworkConfig.merge_area``: 0 off, 1 its geometric
 bound; the parameters are fitted again for each gate and merge test, since both change
-the links the fit counts on). Each point is
+the links the fit counts on); and, since issue 16's eleventh round, the weight of the palette
+colour-count evidence where a region continues (``NetworkConfig.palette_continued``: 1 full,
+0.75, 0.5; the counts of one region's strokes are not independent). Each point is
 scored by :func:`labelling_error` on the training split (never validation data) with every
 seed of :data:`SCORE_SEEDS`, and since issue 16's eighth round also on SIMULATED meetings
 of 3-5 people (:data:`MEETING_SIZES`, :func:`scoring_groups`); the lowest mean error among
@@ -382,7 +385,7 @@ used until issue 16's fourth round; the mean error over the training sequences m
 five-seed winners differed."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_both", "new_groups": "roots_joins",
-                 "size_once": True}
+                 "size_once": False, "palette_continued": 0.5}
 """The grid point of the default network (:class:`models.jorge.network.NetworkConfig`,
 :data:`models.jorge.network.FITTED_LABELS`): the incumbent of :func:`search_settings` in
 ``python -m models.jorge.fit``. Since issue 16's eighth round another point replaces it only
@@ -392,9 +395,10 @@ then changed with the noise (and with the load on the machine, through the speed
 Since issue 16's tenth round: both palette tables, new groups at roots and joins (joins beat
 the previous default, the gain table without them, on every seed once the SIMULATED
 meetings held pairs that arrive together; new groups at roots then beat joins alone by 1.35
-standard errors; :data:`models.jorge.network.FITTED_LABELS`). Re-run over the joins rows in
-the eleventh round (chain palette on, re-identification in birth order), it is the lowest
-outright (0.2024)."""
+standard errors; :data:`models.jorge.network.FITTED_LABELS`). Since the eleventh round, with
+the palette counts' weight where a region continues in the grid: the same with the size
+counted at every stroke and that weight 0.5 (0.1974 against 0.2024, 1.8 standard errors;
+:data:`models.jorge.network.FITTED_LABELS`, eleventh round)."""
 
 MEETING_SIZES = (3, 4, 5)
 """Group sizes of the SIMULATED meetings the search also scores (:func:`meeting_strokes`;
@@ -426,7 +430,8 @@ def scoring_groups(seeds: Sequence[int] = SCORE_SEEDS, meetings: bool = True) ->
 def search_settings(fit_sets: Sequence[StrokeSet], score_groups: Sequence[Sequence[StrokeSet]],
                     base: NetworkConfig | None = None, gates: Sequence[str] | None = None,
                     workers: int = 1, new_groups: Sequence[str] | None = None,
-                    incumbent: dict | None = None) -> tuple[NetworkConfig, list]:
+                    incumbent: dict | None = None,
+                    parameters: Sequence[str] | None = None) -> tuple[NetworkConfig, list]:
     """Grid search of :data:`SEARCH_GRID` on the training split (never validation data).
 
     Parameters
@@ -446,6 +451,8 @@ def search_settings(fit_sets: Sequence[StrokeSet], score_groups: Sequence[Sequen
         Settings of the current default (:data:`DEFAULT_POINT`): kept unless a faster-
         than-the-bar point beats it by more than one standard error (:func:`_kept`).
         ``None``: the lowest mean error wins.
+    parameters : sequence of str, optional
+        Part of ``SEARCH_GRID["parameters"]`` to search (default all).
 
     Returns
     -------
@@ -457,7 +464,7 @@ def search_settings(fit_sets: Sequence[StrokeSet], score_groups: Sequence[Sequen
     table : list of (settings dict, mean training error, per-seed errors, min real-time factor)
     """
     base = NetworkConfig() if base is None else base
-    for name, part in (("gate", gates), ("new_groups", new_groups)):
+    for name, part in (("gate", gates), ("new_groups", new_groups), ("parameters", parameters)):
         unknown = sorted(set(part or ()) - set(SEARCH_GRID[name]))
         if unknown:
             raise InputError(f"search_settings: {name} {unknown} not in SEARCH_GRID[{name!r}]")
@@ -466,12 +473,13 @@ def search_settings(fit_sets: Sequence[StrokeSet], score_groups: Sequence[Sequen
                                          SEARCH_GRID["merge_area"]):
         gated = replace(base, gate=gate, merge_area=merge)
         fitted = fit_parameters(fit_sets, gated)
-        for params, news, once in itertools.product(
-                SEARCH_GRID["parameters"], SEARCH_GRID["new_groups"] if new_groups is None else new_groups,
-                SEARCH_GRID["size_once"]):
-            cfg = replace(_grid_point(gated, fitted, params, news), size_once=once)
+        for params, news, once, cont in itertools.product(
+                SEARCH_GRID["parameters"] if parameters is None else parameters,
+                SEARCH_GRID["new_groups"] if new_groups is None else new_groups,
+                SEARCH_GRID["size_once"], SEARCH_GRID["palette_continued"]):
+            cfg = replace(_grid_point(gated, fitted, params, news), size_once=once, palette_continued=cont)
             points.append(({"gate": gate, "merge_area": merge, "parameters": params,
-                            "new_groups": news, "size_once": once}, cfg))
+                            "new_groups": news, "size_once": once, "palette_continued": cont}, cfg))
     jobs = [(cfg, strokes) for _, cfg in points for group in score_groups for strokes in group]
     scores = _map(_error_and_speed, jobs, workers)
     table, i = [], 0
@@ -542,7 +550,8 @@ def _grid_point(base: NetworkConfig, fitted: NetworkConfig, params: str, new_gro
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    """``python -m models.jorge.fit [--gates boxes] [--new-groups joins] [--workers 2]``: run the documented
+    """``python -m models.jorge.fit [--gates boxes] [--new-groups joins] [--parameters ml_both]
+    [--workers 2]``: run the documented
     search on the declared training split and print one JSON line per grid point, then the
     chosen one (needs the training sequences in ``DBNTRACK_DATA``)."""
     import argparse
@@ -551,6 +560,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap = argparse.ArgumentParser(prog="python -m models.jorge.fit", description=main.__doc__)
     ap.add_argument("--gates", nargs="+", choices=SEARCH_GRID["gate"], default=None)
     ap.add_argument("--new-groups", nargs="+", choices=SEARCH_GRID["new_groups"], default=None)
+    ap.add_argument("--parameters", nargs="+", choices=SEARCH_GRID["parameters"], default=None)
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--real-only", action="store_true",
                     help="score on the real training sequences only (no SIMULATED meetings; before issue 16's eighth round)")
@@ -560,7 +570,8 @@ def main(argv: Sequence[str] | None = None) -> None:
         raise SystemExit("no training sequence found (set DBNTRACK_DATA to the shared data folder)")
     groups = scoring_groups(SCORE_SEEDS, meetings=not args.real_only)
     _, table = search_settings(fit_sets, groups, gates=args.gates, workers=args.workers,
-                               new_groups=args.new_groups, incumbent=DEFAULT_POINT)
+                               new_groups=args.new_groups, parameters=args.parameters,
+                               incumbent=DEFAULT_POINT)
     for settings, err, per_seed, speed in table:
         print(json.dumps({**settings, "error": round(err, 4), "per_seed": [round(e, 4) for e in per_seed],
                           "min_realtime_factor": round(speed, 1)}))

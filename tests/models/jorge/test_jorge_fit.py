@@ -100,7 +100,7 @@ def test_default_parameters_are_the_fit_on_the_training_split():
     point = DEFAULT_POINT
     gated = replace(NetworkConfig(), gate=point["gate"], merge_area=point["merge_area"])
     ours = _grid_point(gated, fit_parameters(sets, gated), point["parameters"], point["new_groups"])
-    assert replace(ours, size_once=point["size_once"]) == NetworkConfig()
+    assert replace(ours, size_once=point["size_once"], palette_continued=point["palette_continued"]) == NetworkConfig()
 
 
 def test_search_scores_every_grid_point_per_seed_and_keeps_the_lowest():
@@ -116,7 +116,7 @@ def test_search_scores_every_grid_point_per_seed_and_keeps_the_lowest():
     base = NetworkConfig(labels=LabelParams(max_group_size=3))
     best, table = search_settings(fit_sets, groups, base, gates=["pixels"])
     n = (len(SEARCH_GRID["parameters"]) * len(SEARCH_GRID["new_groups"]) * len(SEARCH_GRID["size_once"])
-         * len(SEARCH_GRID["merge_area"]))
+         * len(SEARCH_GRID["merge_area"]) * len(SEARCH_GRID["palette_continued"]))
     assert len(table) == n and all(len(per) == 2 for _, _, per, _ in table)
     for _, err, per, speed in table:
         assert err == pytest.approx(np.mean(per)) and speed > 0
@@ -124,7 +124,7 @@ def test_search_scores_every_grid_point_per_seed_and_keeps_the_lowest():
     fast = [row for row in table if row[3] >= REALTIME_BAR] or table
     lowest = min(fast, key=lambda row: row[1])[0]
     assert best.gate == "pixels" and best.size_once == lowest["size_once"]
-    assert best.merge_area == lowest["merge_area"]
+    assert best.merge_area == lowest["merge_area"] and best.palette_continued == lowest["palette_continued"]
     assert (len(best.labels.new_group_probs) > 1) == (lowest["new_groups"] in ("roots", "all", "roots_joins"))
     assert (best.labels.p_join > 0) == (lowest["new_groups"] in ("all", "joins", "roots_joins"))
 
@@ -158,9 +158,10 @@ def test_search_keeps_only_points_fast_enough_for_the_bar(monkeypatch):
 
 
 def test_search_can_be_limited_to_part_of_the_grid(monkeypatch):
-    """``new_groups=`` (``--new-groups``) searches only those rows; "joins" admits a
-    newcomer joining an inherited label (``p_join`` fitted) without new groups; a name
-    not in the grid is refused before anything is labelled (scores stubbed)."""
+    """``new_groups=`` (``--new-groups``) and ``parameters=`` (``--parameters``) search
+    only those rows; "joins" admits a newcomer joining an inherited label (``p_join``
+    fitted) without new groups; a name not in the grid is refused before anything is
+    labelled (scores stubbed)."""
     from models.jorge import fit
     from models.jorge.simulate import simulate_ground_truth
     from models.jorge.strokes import build_strokes
@@ -173,7 +174,13 @@ def test_search_can_be_limited_to_part_of_the_grid(monkeypatch):
     assert {row[0]["new_groups"] for row in table} == {"joins"}
     assert seen and all(c.labels.p_join > 0 and c.labels.new_group_probs == (1.0,) for c in seen)
     seen.clear()
-    for bad in ({"new_groups": ["sometimes"]}, {"gates": ["nearby"]}):
+    _, table = fit.search_settings(sets, [sets], base, gates=["pixels"], new_groups=["joins"],
+                                   parameters=["ml_both"])
+    assert {(row[0]["new_groups"], row[0]["parameters"]) for row in table} == {("joins", "ml_both")}
+    assert len(table) == len(fit.SEARCH_GRID["size_once"]) * len(fit.SEARCH_GRID["merge_area"]) * len(
+        fit.SEARCH_GRID["palette_continued"])
+    seen.clear()
+    for bad in ({"new_groups": ["sometimes"]}, {"gates": ["nearby"]}, {"parameters": ["guessed"]}):
         with pytest.raises(InputError, match="not in SEARCH_GRID"):
             fit.search_settings(sets, [sets], base, **bad)
     assert not seen

@@ -115,3 +115,31 @@ def test_size_once_drops_the_size_evidence_of_an_occlusion_child_only():
         two = [frozenset({0}), frozenset({0, 1})]  # a person and a pair
         assert np.ptp(g.size_loglik(1, two)) > 0  # a root keeps its size evidence
         assert (np.ptp(g.size_loglik(2, two)) == 0) == once
+
+
+def test_palette_continued_weighs_the_count_evidence_of_an_occlusion_child_only():
+    """``NetworkConfig.palette_continued`` scales the palette count and gain evidence
+    where a region continues (an OCCLUSION child) and nowhere else; outside [0, 1] it is
+    refused."""
+    strokes = [
+        make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2], {0}),
+        make_stroke(1, 0, 10, (100, 0), (110, 0), [3, 4, 5], {1}),
+        make_stroke(2, 12, 20, (12, 0), (20, 0), [0, 1, 2, 7], {0}),
+    ]
+    graphs = {}
+    for w in (1.0, 0.5, 0.0):
+        g = LabelGraph(NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels", palette_continued=w))
+        for s in strokes:
+            g.add_stroke(s)
+        graphs[w] = g
+    assert graphs[1.0].structure(2) == "OCCLUSION" and graphs[1.0].structure(1) == "ROOT"
+    labels = [frozenset({0}), frozenset({0, 1}), frozenset({0, 2})]  # alone, a pair, a join
+    full = graphs[1.0].palette_count_loglik(2, labels)
+    assert np.ptp(full) > 0
+    np.testing.assert_allclose(graphs[0.5].palette_count_loglik(2, labels), 0.5 * full, rtol=1e-12)
+    assert np.all(graphs[0.0].palette_count_loglik(2, labels) == 0.0)
+    root = [frozenset({1})]  # a root keeps its full weight
+    np.testing.assert_array_equal(graphs[0.5].palette_count_loglik(1, root), graphs[1.0].palette_count_loglik(1, root))
+    for bad in (-0.1, 1.5, float("nan")):
+        with pytest.raises(ModelError, match="palette_continued"):
+            NetworkConfig(palette_continued=bad)
