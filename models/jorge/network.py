@@ -222,8 +222,8 @@ seed 0.2140, 0.2249, 0.2162, 0.1848, 0.2019; slowest set 27.5x with two labeller
 alone 0.20840, so the default stays (0.2119 before the fix: lower, but within one standard
 error of the paired differences, 0.0044; the rows without joins, which the fix touches only
 through the refitted gain table, were 0.04 behind and not re-run).
-Eleventh round (issue 16): two faults found on the search's own meeting scenes (seeds
-100-104), the CPD parameters and tables unchanged. (1) The re-identification pass
+Eleventh round (issue 16): three faults found on the search's own meeting scenes (seeds
+100-104); the CPD parameters and tables are unchanged. (1) The re-identification pass
 (:func:`models.jorge.online.reidentify`) examined the objects in id order, which puts a
 new group's members after every lone newcomer: a later newcomer took the earlier object
 first and the member it should continue was left with no candidate (scoring sets 0.2084 ->
