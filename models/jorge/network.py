@@ -64,7 +64,6 @@ __all__ = [
     "restriction_name",
     "kept_name",
     "colour_name",
-    "chain_name",
     "solve",
 ]
 
@@ -81,19 +80,14 @@ def restriction_name(i: int, j: int) -> str:
 
 def kept_name(k: int) -> str:
     """Name of the observed node carrying the mass node ``k``'s pruned domain kept
-    (``NetworkConfig.truncate_pruned``)."""
+    (``NetworkConfig.truncate_pruned``), times the row sums of the chain factor
+    (``NetworkConfig.chain_palette``, :meth:`LabelGraph.chain_log_ratio`)."""
     return f"m{k}"
 
 
 def colour_name(k: int) -> str:
     """Name of the explicit colour node (only in :meth:`WindowNet.with_colour_nodes`)."""
     return f"y{k}"
-
-
-def chain_name(k: int) -> str:
-    """Name of the observed node carrying the colour correction of stroke ``k`` given its
-    parent's label (``NetworkConfig.chain_palette``, :meth:`LabelGraph.chain_log_ratio`)."""
-    return f"c{k}"
 
 
 FITTED_LABELS = LabelParams(
@@ -440,9 +434,10 @@ class NetworkConfig:
         (:meth:`LabelGraph.freeze`), so inside the window "the member who left the group"
         was scored on the group's palette stroke after stroke, while "a new object born
         when the member left" was scored on its own first stroke: a member leaving a group
-        was labelled a newcomer and the member vanished. It enters the window as an
-        observed binary node over the parent's and the child's labels
-        (:meth:`LabelGraph.chain_log_ratio`, :func:`chain_name`). On by default: on the
+        was labelled a newcomer and the member vanished. A factor over the parent's and
+        the child's labels (:meth:`LabelGraph.chain_log_ratio`): in the window it is folded
+        into the child's CPD rows, each row's scale carried by the observed node
+        :func:`kept_name` (as the pruned mass is). On by default: on the
         search's scoring sets (training sequences plus SIMULATED meetings, seeds
         100-104, :func:`models.jorge.fit.scoring_groups`) the combined error fell from
         0.2052 to 0.2024 (per seed 0.2175, 0.2204, 0.2159, 0.1731, 0.1991 -> 0.2175,
@@ -1151,7 +1146,6 @@ class LabelGraph:
             cpds.append(TabularCPD(name, [], np.ones(1)))
         soft: dict[str, np.ndarray] = {}
         kept_nodes: list = []
-        chain_nodes: list = []
         for a in active:
             name = node_name(a)
             dom = self.nodes[a].domain
@@ -1159,24 +1153,21 @@ class LabelGraph:
             variables.append(DiscreteVariable(name, len(dom), tuple(format_label(x) for x in dom)))
             parents = [node_name(p) for p in self.nodes[a].parents]
             table = self.cpd_table(a)
+            corr = self.chain_log_ratio(a)
+            if corr is not None:  # chain_palette: a factor on (parent, x_a), scaled to max 1,
+                table = table * np.exp(corr - corr.max())  # row sums to m_a with the kept mass
             kept = table.sum(axis=-1)
             cpds.append(TabularCPD(name, parents, table / kept[..., None]))
             if parents and np.any(kept < 1.0 - 1e-12):
                 kept_nodes.append((kept_name(a), parents, kept))
             ll = self.evidence_loglik(a)
             soft[name] = np.exp(ll - ll.max())
-            corr = self.chain_log_ratio(a)
-            if corr is not None:  # chain_palette: p(c_k = 1 | parent, x_k), scaled to max 1
-                chain_nodes.append((chain_name(a), [parents[0], name], np.exp(corr - corr.max())))
         evidence: dict[str, int] = {}
-        for name, parents, kept in kept_nodes:  # p(m_k = 1 | parents) = mass kept (truncate_pruned)
+        # p(m_k = 1 | parents) = mass kept (truncate_pruned) times the chain factor's row sums
+        for name, parents, kept in kept_nodes:
             variables.append(DiscreteVariable(name, 2, ("0", "1")))
             kept = np.minimum(kept, 1.0)  # rounding: a full row may sum to 1 + 1e-16
             cpds.append(TabularCPD(name, parents, np.stack([1.0 - kept, kept], axis=-1)))
-            evidence[name] = 1
-        for name, parents, lik in chain_nodes:
-            variables.append(DiscreteVariable(name, 2, ("0", "1")))
-            cpds.append(TabularCPD(name, parents, np.stack([1.0 - lik, lik], axis=-1)))
             evidence[name] = 1
         for i, j in sorted(pairs):
             name = restriction_name(i, j)
