@@ -1009,29 +1009,26 @@ class LabelGraph:
         if not cells:
             return None
         labs = [dom[j] for _, j in cells]
-        recorded = self.colour_loglik(k, labs) + self.palette_count_loglik(k, labs)
-        cfg, stroke = self.config, node.stroke
-        pal = self._palettes[p][None, :]
-        alt = colour_log_likelihood(stroke.colours, pal, np.zeros(1, dtype=bool), cfg.match_prob,
-                                    cfg.pool_size, cfg.colour_mode)[0]
-        count = int(np.unique(stroke.palette).size)
-        one = np.ones(1, dtype=np.int64)
-        counted = palette_count_log_likelihood(count, one, np.array(cfg.palette_count_table))[0]
-        if cfg.palette_gain_table:
-            counted += palette_gain_log_likelihood(count, pal.sum(axis=1), one - 1,
-                                                   np.array(cfg.palette_gain_table))[0]
-        alt += self._palette_weight(k) * counted
+        # the same evidence with the parent stroke as each person's own palette (as
+        # freezing it alone would make it) against the recorded palettes
+        alt = label_objects(labs, k, {**self._own, **{o: p for lab in labs for o in lab}}, self._joined)
+        rec = label_objects(labs, k, self._own, self._joined)
+        diff = (self.colour_loglik(k, labs, objects=alt) + self.palette_count_loglik(k, labs, objects=alt)
+                - self.colour_loglik(k, labs, objects=rec) - self.palette_count_loglik(k, labs, objects=rec))
         out = np.zeros((len(dom_p), len(dom)))
-        for (i, j), r in zip(cells, recorded):
-            out[i, j] = alt - r
+        for (i, j), d in zip(cells, diff):
+            out[i, j] = d
         return out
 
     def _borrowed(self, o: int, k: int) -> bool:
         """Whether object ``o`` (not born at ``k``) has a palette that is not its own yet:
         a member of a new group or a joiner with no stroke frozen to it alone."""
-        o = int(o)
-        return (birth_stroke(o) != k and o not in self._own
-                and (cohort_size(o) > 1 or o in self._joined))
+        return birth_stroke(o) != k and int(o) not in self._own and self._born_with_others(o)
+
+    def _born_with_others(self, o: int) -> bool:
+        """Whether object ``o``'s birth palette holds others' colours too: a member of a
+        new group, or a joiner (:meth:`freeze`)."""
+        return cohort_size(o) > 1 or int(o) in self._joined
 
     def cpd_table(self, k: int) -> np.ndarray:
         """CPD table of (non-frozen) node ``k`` over its parents' current domains.
@@ -1077,7 +1074,7 @@ class LabelGraph:
             self._joined.update(dict.fromkeys(born, label))
         if len(label) == 1:
             (o,) = label
-            if (cohort_size(o) > 1 or int(o) in self._joined) and k < self._own.get(int(o), k + 1):
+            if self._born_with_others(o) and k < self._own.get(int(o), k + 1):
                 self._own[int(o)] = k
 
     def set_domain(self, k: int, domain: Sequence[Label]) -> None:
