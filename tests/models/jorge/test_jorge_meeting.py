@@ -102,8 +102,9 @@ def test_ten_simulated_meetings_of_3_and_4_people():
     not within the users' 0.20 overall for k = 4, nor their 0.35 on 3+ strokes. Bars: the
     measured figures plus 0.05 (a regression check, not the users' bar). The eleventh
     round (chain palette, re-identification in birth order, palette counts weighed 0.5
-    where a region continues): 0.143 / 0.292 and 0.49 / 0.70."""
-    for k, (bar, bar3) in {3: (0.22, 0.60), 4: (0.35, 0.76)}.items():
+    where a region continues): 0.143 / 0.292 and 0.49 / 0.70, and the bars follow (plus
+    0.05, rounded up)."""
+    for k, (bar, bar3) in {3: (0.20, 0.54), 4: (0.35, 0.76)}.items():
         rate, rate3, n3 = _errors(k, range(10))
         assert n3 >= 50
         assert rate <= bar, (k, rate)
