@@ -192,6 +192,17 @@ worse, 0.161 -> 0.224: in scene 1 a joiner who left the group alone took the pla
 person with a palette of their own, since the chain scores the joiner on its latest view
 and the other on an older one (on scenes 105-114, training side, the chain alone was never
 worse: 0.170 -> 0.146 over k = 3-5).
+
+Twelfth round (issue 16): nested links (``NetworkConfig.nested_links``: a member of a
+group seen alone for a moment, then the group again, linked to both strokes, with the
+restriction of eq. 5 admitting the member inside the group), the fit refitted with them,
+and the search's new choice (the size once, palette counts weighed 0.75 where a region
+continues; :data:`models.jorge.network.FITTED_LABELS`). Measured after choosing, seeds
+0-4: validation 0.096 -> 0.098 (wk2gt 0.141, S2L1 0.099 -> 0.101, fra1gt 0.005), training
+0.359 -> 0.361 (S1L2-2 0.769 -> 0.795, S1L1-2 0.604 -> 0.599), 3+ strokes 0.900 -> 0.897
+(with the true links 0.836 -> 0.824), ms3ggt 0.021 -> 0.018, mws1gt 0.050 -> 0.041;
+meetings (scenes 0-9) 0.134 / 0.225 / 0.273 -> 0.120 / 0.207 / 0.261 and 3+ 0.36 / 0.62 /
+0.64 -> 0.36 / 0.60 / 0.60 for k = 3 / 4 / 5.
 """
 
 from __future__ import annotations

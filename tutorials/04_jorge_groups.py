@@ -101,9 +101,17 @@ plt.show()
 # A person first seen inside a group (a new group's member, or a newcomer who joined)
 # has the group's colours for a palette until a stroke of them alone is frozen. Inside
 # the window, a stroke that continues such a person alone is scored on the parent
-# stroke's palette, their latest view alone (`NetworkConfig.chain_palette`, an observed
-# node over the parent's and the child's labels; issue 16's eleventh round): otherwise
-# "a newcomer born as the member left" was scored on its own colours and won.
+# stroke's palette, their latest view alone (`NetworkConfig.chain_palette`, a factor over
+# the parent's and the child's labels folded into the child's CPD; issue 16's eleventh
+# round): otherwise "a newcomer born as the member left" was scored on its own colours
+# and won.
+#
+# A member of a group may be seen alone for a moment while the others are hidden, and
+# then the whole group again. The link rule then links the new stroke to both the group's
+# stroke and the member's (`NetworkConfig.nested_links`, issue 16's twelfth round), and the
+# restriction between the group's two children admits the member inside the new stroke
+# (`labels.restriction_allows`): before, the group came back as the member alone, or the
+# member and a newcomer.
 
 # %%
 result = label_online(strokes, OnlineConfig())
@@ -249,9 +257,10 @@ print("means:", np.round(rates.mean(0), 3))
 # (`fit.DEFAULT_POINT`) stays unless another point beats it by more than one standard error
 # of the paired per-seed differences; the default network (`network.FITTED_LABELS`,
 # `network.FITTED_PALETTE_COUNTS`, `network.FITTED_PALETTE_GAINS`: since issue 16's tenth
-# round new groups at roots and joins, with both palette tables; since the eleventh, the
-# palette counts weighed 0.5 where a region continues, `NetworkConfig.palette_continued`,
-# a dimension of the grid) is its result. Here we
+# round new groups at roots and joins, with both palette tables; since the twelfth, with
+# nested links, the size counted once per region and the palette counts weighed 0.75 where
+# a region continues, `NetworkConfig.palette_continued`, a dimension of the grid) is its
+# result. Here we
 # refit on fewer seeds and score the validation part with the default network and the
 # colour-only baseline.
 

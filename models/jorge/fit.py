@@ -16,7 +16,9 @@ group are off the model and not counted.
 * otherwise ``join`` if there are newcomers (:math:`P_{join}`), ``merge`` if :math:`I`
   takes people from both parents (:math:`P_{merge}` of the structure d, e or f), and
   for each parent handing a group a *proper part* (:math:`P_{split}` when the parent
-  splits, :math:`P_{part}` when it does not) or all of it.
+  splits, :math:`P_{part}` when it does not) or all of it. A nested link
+  (``NetworkConfig.nested_links``: the first parent is also the second's) hands only
+  people the second parent does not hold (eq. 5, nested), so its piece is a proper part.
 
 :math:`\hat P_{new}` = new / children, :math:`\hat P_{merge,s}` = merges / two-parent
 nodes of structure s, :math:`\hat P_{split}`, :math:`\hat P_{part}` = proper parts /
@@ -144,9 +146,13 @@ class EventCounts:
         self.new_sizes[m - 1] += 1
 
 
-def _count_child(c: EventCounts, truth: frozenset, parents: list[frozenset], shared: list[bool]) -> None:
+def _count_child(c: EventCounts, truth: frozenset, parents: list[frozenset], shared: list[bool],
+                 nested: bool = False) -> None:
+    """``nested``: the first parent is also the second's parent (``NetworkConfig.nested_links``);
+    it hands the child a piece that misses the second parent's people (eq. 5, nested)."""
     c.children += 1
     inherited = truth & frozenset().union(*parents)
+    handed = [inherited - parents[1], inherited] if nested else [inherited] * len(parents)
     if not inherited:
         c.new += 1
         c.add_new(len(truth))
@@ -156,9 +162,9 @@ def _count_child(c: EventCounts, truth: frozenset, parents: list[frozenset], sha
     if len(parents) == 2:
         s = int(sum(shared))
         c.two_parent[s] += 1
-        c.merge[s] += bool(inherited & parents[0]) and bool(inherited & parents[1])
-    for tp, sh in zip(parents, shared):
-        piece = inherited & tp
+        c.merge[s] += bool(handed[0] & parents[0]) and bool(handed[1] & parents[1])
+    for tp, sh, got in zip(parents, shared, handed):
+        piece = got & tp
         if piece and len(tp) > 1:
             proper = piece != tp
             if sh:
@@ -192,7 +198,8 @@ def count_events(strokes: StrokeSet, config: NetworkConfig | None = None, counts
         if not node.parents:
             c.add_new(len(truth))
             continue
-        _count_child(c, truth, [g.nodes[p].stroke.truth for p in node.parents], g.shared(k))
+        nested = len(node.parents) == 2 and node.parents[0] in g.nodes[node.parents[1]].parents
+        _count_child(c, truth, [g.nodes[p].stroke.truth for p in node.parents], g.shared(k), nested)
     return c
 
 
@@ -362,7 +369,10 @@ the merge test of the link rule (``NetworkConfig.merge_area``: 0 off, 1 its geom
 bound; the parameters are fitted again for each gate and merge test, since both change
 the links the fit counts on); and, since issue 16's eleventh round, the weight of the palette
 colour-count evidence where a region continues (``NetworkConfig.palette_continued``: 1 full,
-0.75, 0.5; the counts of one region's strokes are not independent). Each point is
+0.75, 0.5; the counts of one region's strokes are not independent). The nested links of
+the link rule (``NetworkConfig.nested_links``, issue 16's twelfth round) are on at every
+point: their threshold was chosen among 1.5, 2 and 3 on the same scoring sets, and the
+grid was re-run with them (:data:`models.jorge.network.FITTED_LABELS`). Each point is
 scored by :func:`labelling_error` on the training split (never validation data) with every
 seed of :data:`SCORE_SEEDS`, and since issue 16's eighth round also on SIMULATED meetings
 of 3-5 people (:data:`MEETING_SIZES`, :func:`scoring_groups`); the lowest mean error among
@@ -385,7 +395,7 @@ used until issue 16's fourth round; the mean error over the training sequences m
 five-seed winners differed."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_both", "new_groups": "roots_joins",
-                 "size_once": False, "palette_continued": 0.5}
+                 "size_once": True, "palette_continued": 0.75}
 """The grid point of the default network (:class:`models.jorge.network.NetworkConfig`,
 :data:`models.jorge.network.FITTED_LABELS`): the incumbent of :func:`search_settings` in
 ``python -m models.jorge.fit``. Since issue 16's eighth round another point replaces it only
@@ -398,7 +408,9 @@ meetings held pairs that arrive together; new groups at roots then beat joins al
 standard errors; :data:`models.jorge.network.FITTED_LABELS`). Since the eleventh round, with
 the palette counts' weight where a region continues in the grid: the same with the size
 counted at every stroke and that weight 0.5 (0.1974 against 0.2024, 1.8 standard errors;
-:data:`models.jorge.network.FITTED_LABELS`, eleventh round)."""
+:data:`models.jorge.network.FITTED_LABELS`, eleventh round). Since the twelfth, with nested
+links: the size counted once and that weight 0.75 (0.1926 against 0.1974, 1.2 standard
+errors; :data:`models.jorge.network.FITTED_LABELS`, twelfth round)."""
 
 MEETING_SIZES = (3, 4, 5)
 """Group sizes of the SIMULATED meetings the search also scores (:func:`meeting_strokes`;

@@ -34,6 +34,11 @@ second child, i.e. splits):
  g    RESTRICTION          2 labels  :func:`restriction_table` (eq. 5)
 ====  ===================  ========  =========================================
 
+A restriction node sits on two children of one parent. When one child is also the
+other's parent (a nested link, ``NetworkConfig.nested_links``: a member seen alone for a
+moment, then the group again) it restricts the pieces the shared parent hands them, and
+allows the first child inside the second (:func:`restriction_allows`; our addition).
+
 All hidden-node CPDs come from one generative rule. A parent :math:`p` hands its child a
 *piece* :math:`s` of its label, with the piece law
 
@@ -99,6 +104,7 @@ __all__ = [
     "root_table",
     "child_table",
     "restriction_table",
+    "restriction_allows",
     "colour_log_likelihood",
     "size_log_likelihood",
     "palette_count_log_likelihood",
@@ -698,7 +704,21 @@ def _new_mass(new_label: Label, params: LabelParams | None) -> float:
     return float(np.sum(q)) if len(new_label) == 1 else float(q[0])
 
 
-def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label]) -> np.ndarray:
+def restriction_allows(a: Label, b: Label, nested: bool = False) -> bool:
+    r"""Whether two children of one parent may have labels ``a`` and ``b`` (eq. 5).
+
+    Seed 004: never a shared object, :math:`a \cap b = \emptyset`. Our addition, ``nested``:
+    the child labelled ``a`` is also a parent of the child labelled ``b`` (a member seen
+    alone for a moment, then the whole group again: a split whose parts merge back). The restriction
+    then holds between the pieces the shared parent hands its two children: ``b`` is
+    that parent's piece, which must miss ``a``, alone or united with ``a``. So ``a`` and
+    ``b`` share nothing, or ``a`` is inside ``b`` (a part of ``a`` with its rest hidden,
+    :math:`P_{part}`, is not admitted in ``b`` here).
+    """
+    return not (a & b) or (nested and a <= b)
+
+
+def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label], nested: bool = False) -> np.ndarray:
     r"""CPD of structure (g), the restriction node :math:`r_{ij}` (eq. 5).
 
     ===============================  ==============  ==============
@@ -709,14 +729,16 @@ def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label]) -> n
     ===============================  ==============  ==============
 
     Observed :math:`r_{ij} = 1`, it forbids two children of one parent to share an object.
+    With ``nested`` (node ``i`` is also a parent of node ``j``; our addition,
+    :func:`restriction_allows`), :math:`x_i \subseteq x_j` is allowed too.
 
     Returns
     -------
     ndarray, shape (len(domain_i), len(domain_j), 2)
     """
-    disjoint = np.array([[not (a & b) for b in domain_j] for a in domain_i], dtype=np.float64)
-    disjoint = disjoint.reshape(len(domain_i), len(domain_j))
-    return np.stack([1.0 - disjoint, disjoint], axis=-1)
+    ok = np.array([[restriction_allows(a, b, nested) for b in domain_j] for a in domain_i], dtype=np.float64)
+    ok = ok.reshape(len(domain_i), len(domain_j))
+    return np.stack([1.0 - ok, ok], axis=-1)
 
 
 def _log_binom(n: np.ndarray, total: int, p: np.ndarray) -> np.ndarray:

@@ -63,7 +63,13 @@ from scipy.optimize import linear_sum_assignment
 
 from dbn.errors import InputError, ModelError
 from inference.exact import JunctionTree, map_assignment
-from models.jorge.labels import Label, birth_stroke, colour_log_likelihood, prune_labels
+from models.jorge.labels import (
+    Label,
+    birth_stroke,
+    colour_log_likelihood,
+    prune_labels,
+    restriction_allows,
+)
 from models.jorge.network import LabelGraph, NetworkConfig, node_name
 from models.jorge.strokes import Stroke, StrokeSet
 
@@ -225,7 +231,9 @@ class OnlineLabeller:
 
         with :math:`b_p` the parents' beliefs at the last inference (or their own eq. 12
         posteriors), :math:`\ell_s` the current labels of its labelled siblings and
-        :math:`p(a_k \mid |x_k|)` the region-size evidence (1 when not recorded or off).
+        :math:`p(a_k \mid |x_k|)` the region-size evidence (1 when not recorded or off);
+        where one of ``k`` and a sibling is also the other's parent (a nested link) the
+        clash is :func:`~models.jorge.labels.restriction_allows`'s, nested.
 
         Returns
         -------
@@ -257,12 +265,21 @@ class OnlineLabeller:
         domain = g.nodes[k].domain
         for sib in g.siblings(k) if siblings else ():
             if sib in self.labels:
-                clash = np.array([bool(lab & self.labels[sib]) for lab in domain])
+                clash = np.array([not self._allowed(k, lab, sib) for lab in domain])
                 if not clash.all():
                     score = np.where(clash, -np.inf, score)
         score = score - score.max()
         post = np.exp(score)
         return post / post.sum()
+
+    def _allowed(self, k: int, lab: Label, sib: int) -> bool:
+        """Restriction (eq. 5, :func:`~models.jorge.labels.restriction_allows`) between label
+        ``lab`` of ``k`` and sibling ``sib``'s current label; nested when one of the two
+        is also the other's parent."""
+        nodes, other = self.graph.nodes, self.labels[sib]
+        if sib in nodes[k].parents:
+            return restriction_allows(other, lab, nested=True)
+        return restriction_allows(lab, other, nested=k in nodes[sib].parents)
 
     def _relabel(self, k: int) -> None:
         """Eq. 12 posterior of ``k``, its domain capped to ``max_labels``, its label."""
