@@ -198,7 +198,7 @@ def count_events(strokes: StrokeSet, config: NetworkConfig | None = None, counts
         if not node.parents:
             c.add_new(len(truth))
             continue
-        nested = len(node.parents) == 2 and node.parents[0] in g.nodes[node.parents[1]].parents
+        nested = len(node.parents) == 2 and g.nested(*node.parents)
         _count_child(c, truth, [g.nodes[p].stroke.truth for p in node.parents], g.shared(k), nested)
     return c
 

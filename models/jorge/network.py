@@ -92,9 +92,9 @@ def colour_name(k: int) -> str:
 
 FITTED_LABELS = LabelParams(
     p_new=0.06157112526539278,
-    p_merge=np.float64(0.9148418491484185),
-    p_merge_one_split=np.float64(0.49572649572649574),
-    p_merge_both_split=np.float64(0.18181818181818182),
+    p_merge=0.9148418491484185,
+    p_merge_one_split=0.49572649572649574,
+    p_merge_both_split=0.18181818181818182,
     p_split=0.9561510353227771,
     p_part=0.3392018779342723,
     max_group_size=5,
@@ -727,8 +727,8 @@ class LabelGraph:
         cand = np.array([c for c in cand.tolist() if c not in superseded - back], dtype=np.int64)
         order = np.lexsort((cand, dist[cand]))
         cand = cand[order][: cfg.max_parents]
-        # a nested pair (one the other's parent) passed its own merge test in _merges_back
-        nested = len(cand) == 2 and int(min(cand)) in self.nodes[int(max(cand))].parents
+        # a nested pair passed its own merge test in _merges_back
+        nested = len(cand) == 2 and self.nested(*sorted(int(c) for c in cand))
         if len(cand) == 2 and not nested and cfg.merge_area > 0 and not self._merge_fits(stroke, cand):
             cand = cand[:1]
         return cand
@@ -894,6 +894,11 @@ class LabelGraph:
     def parent_domains(self, k: int) -> list[tuple[Label, ...]]:
         """Current domains of node ``k``'s parents (a frozen parent: its label alone)."""
         return [self.current_domain(p) for p in self.nodes[k].parents]
+
+    def nested(self, i: int, j: int) -> bool:
+        """Whether node ``i`` (``i < j``) is a parent of node ``j``: two siblings in a nested
+        link (``NetworkConfig.nested_links``; :func:`models.jorge.labels.restriction_allows`)."""
+        return i in self.nodes[j].parents
 
     def shared(self, k: int) -> list[bool]:
         """For each parent of ``k``: whether it has a second child."""
@@ -1230,8 +1235,7 @@ class LabelGraph:
             name = restriction_name(i, j)
             di, dj = domains[node_name(i)], domains[node_name(j)]
             variables.append(DiscreteVariable(name, 2, ("0", "1")))
-            nested = i in self.nodes[j].parents  # i < j: only the later node can be the child
-            cpds.append(TabularCPD(name, [node_name(i), node_name(j)], restriction_table(di, dj, nested)))
+            cpds.append(TabularCPD(name, [node_name(i), node_name(j)], restriction_table(di, dj, self.nested(i, j))))
             evidence[name] = 1
         bn = BayesNet(variables, cpds)
         return WindowNet(bn, evidence, soft, domains, tuple(active), tuple(sorted(boundary)))

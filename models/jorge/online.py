@@ -265,21 +265,23 @@ class OnlineLabeller:
         domain = g.nodes[k].domain
         for sib in g.siblings(k) if siblings else ():
             if sib in self.labels:
-                clash = np.array([not self._allowed(k, lab, sib) for lab in domain])
+                clash = ~self._allowed(k, domain, sib)
                 if not clash.all():
                     score = np.where(clash, -np.inf, score)
         score = score - score.max()
         post = np.exp(score)
         return post / post.sum()
 
-    def _allowed(self, k: int, lab: Label, sib: int) -> bool:
-        """Restriction (eq. 5, :func:`~models.jorge.labels.restriction_allows`) between label
-        ``lab`` of ``k`` and sibling ``sib``'s current label; nested when one of the two
-        is also the other's parent."""
-        nodes, other = self.graph.nodes, self.labels[sib]
-        if sib in nodes[k].parents:
-            return restriction_allows(other, lab, nested=True)
-        return restriction_allows(lab, other, nested=k in nodes[sib].parents)
+    def _allowed(self, k: int, domain: Sequence[Label], sib: int) -> np.ndarray:
+        """Restriction (eq. 5, :func:`~models.jorge.labels.restriction_allows`) between each
+        label of ``domain`` for ``k`` and sibling ``sib``'s current label, nested where the
+        earlier of the two is the later's parent; shape (len(domain),) of bool."""
+        other = self.labels[sib]
+        if k < sib:
+            nested = self.graph.nested(k, sib)
+            return np.array([restriction_allows(lab, other, nested) for lab in domain])
+        nested = self.graph.nested(sib, k)
+        return np.array([restriction_allows(other, lab, nested) for lab in domain])
 
     def _relabel(self, k: int) -> None:
         """Eq. 12 posterior of ``k``, its domain capped to ``max_labels``, its label."""
