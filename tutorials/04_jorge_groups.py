@@ -256,11 +256,15 @@ print("means:", np.round(rates.mean(0), 3))
 # for the issue's bar (20x real time on every scoring set), and the current default
 # (`fit.DEFAULT_POINT`) stays unless another point beats it by more than one standard error
 # of the paired per-seed differences; the default network (`network.FITTED_LABELS`,
-# `network.FITTED_PALETTE_COUNTS`, `network.FITTED_PALETTE_GAINS`: since issue 16's tenth
-# round new groups at roots and joins, with both palette tables; since the twelfth, with
-# nested links, the size counted once per region and the palette counts weighed 0.75 where
-# a region continues, `NetworkConfig.palette_continued`, a dimension of the grid) is its
-# result. Here we
+# `network.FITTED_PALETTE_GAINS`: since issue 16's tenth round new groups at roots and
+# joins; since the twelfth, with nested links, the size counted once per region and the
+# palette counts weighed 0.75 where a region continues, `NetworkConfig.palette_continued`,
+# a dimension of the grid) is its result. A change the grid cannot express is confirmed on
+# more scoring sets, `fit.CONFIRM_SEEDS`, with the rule written down before it runs: since
+# the fourteenth round the colour-count evidence is the gain table given how many colours
+# the label's known people already show (`NetworkConfig.palette_gain_bins`), alone, and a
+# newcomer labelled into a group counts as a joiner as soon as that is its current label
+# (`OnlineConfig.tentative_joiners`). Here we
 # refit on fewer seeds and score the validation part with the default network and the
 # colour-only baseline.
 

@@ -114,6 +114,11 @@ class OnlineConfig:
         Prior probability that an object born as a new label is an earlier, finished
         object seen again (final re-identification pass, :func:`reidentify`); 0 turns
         the pass off.
+    tentative_joiners : bool
+        After every relabel and inference, the newcomers of an unfrozen node whose current
+        label is a join are joiners already (:meth:`LabelGraph.set_tentative_joiners`;
+        issue 16, fourteenth round); ``False``: only once their birth node is frozen (the
+        thirteenth round's behaviour).
     network : NetworkConfig
     """
 
@@ -123,6 +128,7 @@ class OnlineConfig:
     max_labels: int = 12
     marginals: bool = True
     reid_prior: float = 0.5
+    tentative_joiners: bool = True
     network: NetworkConfig = field(default_factory=NetworkConfig)
 
     def __post_init__(self) -> None:
@@ -304,6 +310,8 @@ class OnlineLabeller:
             post = post[idx] / post[idx].sum()
         self.beliefs[k] = post
         self.labels[k] = g.nodes[k].domain[int(np.argmax(post))]
+        if self.config.tentative_joiners:
+            g.set_tentative_joiners({k: self.labels[k]})
 
     def add_stroke(self, stroke: Stroke, parents: Iterable[int] | None = None) -> Label:
         """Add a stroke that starts now; run any periodic inference due first.
@@ -379,6 +387,8 @@ class OnlineLabeller:
                 pruned = max(pruned, float(1.0 - b.sum()))
                 self.beliefs[k] = b / b.sum() if b.sum() > 0 else np.full(len(idx), 1.0 / len(idx))
         self._inferred.update(active)
+        if cfg.tentative_joiners:
+            g.set_tentative_joiners({k: self.labels[k] for k in active})
         seconds = time.perf_counter() - t0
         rec = InferenceRecord(frame, len(active), len(win.boundary),
                               max(len(win.domains[node_name(k)]) for k in active), clique,

@@ -84,14 +84,15 @@ def test_a_new_group_that_joins_inherited_objects_records_each_member():
 
 
 def test_the_fit_counts_a_joiner_as_unknown_until_seen_alone():
-    """(m, e) per stroke as :func:`_count_palette_gains` counts them on the true labels: at
-    stroke 2 person 1 (the joiner) is not known (m = 1, all 5 colours new); at stroke 4 both
-    are known, person 1 with the palette of stroke 2, so the pair adds no colour."""
+    """(m, u, e) per stroke as :func:`_count_palette_gains` counts them on the true labels:
+    at stroke 2 person 1 (the joiner) is not known (m = 1, nothing known, all 5 colours
+    new); at stroke 3 the person seen alone is known with 5 colours and adds none; at
+    stroke 4 both are known, person 1 with the palette of stroke 2."""
     g = LabelGraph(CFG)
     for s in join_strokes():
         g.add_stroke(s)
     c = EventCounts()
     _count_palette_gains(c, g)
-    assert c.palette_gains[2] == (1, 5)
-    assert c.palette_gains[3] == (0, 0)
-    assert c.palette_gains[4][0] == 0
+    assert c.palette_gains[2] == (1, 0, 5)
+    assert c.palette_gains[3] == (0, 5, 0)
+    assert c.palette_gains[4][:2] == (0, 10)

@@ -105,12 +105,13 @@ def test_the_fit_counts_a_member_seen_alone_as_known():
     is known with that stroke's palette."""
     strokes = StrokeSet.from_strokes(pair_strokes((1, 0)), pool_size=POOL)
     p = np.exp(np.array(fit_parameters([strokes], CFG).palette_gain_table))
-    assert p.shape == (4, 2 * POOL + 1)
-    # (m, e) per stroke: walkers (1, 5) twice; pair (2, 5); first split (1, 5) twice (part
-    # of a cohort: unknown); merge (0, 5 - 10) (each known with five colours of their own);
-    # second split (0, 0) twice
+    assert p.shape == (4, 5, 2 * POOL + 1)  # m, bin of the known colours u, e
+    # (m, u, e) per stroke: walkers (1, 0, 5) twice; pair (2, 0, 5); first split (1, 0, 5)
+    # twice (part of a cohort: unknown); merge (0, 10, 5 - 10) (each known with five
+    # colours of their own); second split (0, 5, 0) twice. Bins of u: 0, 1-5, 6-7, 8-9, 10+
     zero = POOL
-    assert p[0, zero] == pytest.approx((2 + 1) / (3 + 2 * POOL + 1))
-    assert p[0, zero - 5] == pytest.approx((1 + 1) / (3 + 2 * POOL + 1))
-    assert p[1, zero + 5] == pytest.approx((4 + 1) / (4 + 2 * POOL + 1))
-    assert p[2, zero + 5] == pytest.approx((1 + 1) / (1 + 2 * POOL + 1))
+    assert p[0, 1, zero] == pytest.approx((2 + 1) / (2 + 2 * POOL + 1))
+    assert p[0, 4, zero - 5] == pytest.approx((1 + 1) / (1 + 2 * POOL + 1))
+    assert p[1, 0, zero + 5] == pytest.approx((4 + 1) / (4 + 2 * POOL + 1))
+    assert p[2, 0, zero + 5] == pytest.approx((1 + 1) / (1 + 2 * POOL + 1))
+    np.testing.assert_allclose(p[0, 0], 1 / (2 * POOL + 1))  # no stroke: add-one uniform

@@ -44,6 +44,30 @@ def test_gain_likelihood_reads_gain_columns_by_newcomers_and_clips():
         NetworkConfig(palette_gain_table=tuple(map(tuple, -table)))
 
 
+def test_gain_likelihood_given_known_colours_reads_the_bin_of_u():
+    rng = np.random.default_rng(2)
+    table = np.log(rng.dirichlet(np.ones(9), size=(3, 3)))  # m = 0..2, u bins 0 / 1-5 / 6+, e = -4..4
+    bins = (0, 1, 6)
+    known, new = np.array([0, 1, 5, 6, 11, 3]), np.array([2, 1, 0, 0, 0, 7])
+    out = palette_gain_log_likelihood(6, known, new, table, bins)
+    cols = np.clip(6 - known + 4, 0, 8)
+    np.testing.assert_array_equal(out, table[[2, 1, 0, 0, 0, 2], [0, 1, 1, 2, 2, 1], cols])
+    with pytest.raises(ModelError):  # a 3-D table needs its bins
+        palette_gain_log_likelihood(6, known, new, table)
+    with pytest.raises(ModelError):  # a 2-D table has none
+        palette_gain_log_likelihood(6, known, new, table[:, 0], bins)
+    with pytest.raises(ModelError):  # one bin per row of axis 1, rising from 0
+        palette_gain_log_likelihood(6, known, new, table, (0, 6))
+    with pytest.raises(ModelError):
+        palette_gain_log_likelihood(6, known, new, table, (1, 2, 6))
+    cfg = tuple(tuple(map(tuple, block)) for block in table)
+    with pytest.raises(ModelError, match="palette_gain_table"):
+        NetworkConfig(palette_gain_table=cfg)  # default bins: five
+    assert NetworkConfig(palette_gain_table=cfg, palette_gain_bins=bins).palette_gain_bins == bins
+    with pytest.raises(ModelError, match="palette_gain_bins"):
+        NetworkConfig(palette_gain_bins=(0, 3, 3, 8, 10))
+
+
 def _merge(palettes=((0, 1, 2, 3, 4), (5, 6, 7, 8, 9))) -> StrokeSet:
     """Two people seen alone, then together (their palettes' union), then one again."""
     a, b = palettes
@@ -63,13 +87,21 @@ def test_fitted_gain_table_is_smoothed_frequencies():
         [_merge()], NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels")
     )
     p = np.exp(np.array(cfg.palette_gain_table))
-    assert p.shape == (4, 25)
-    np.testing.assert_allclose(p.sum(axis=1), 1.0)
+    assert p.shape == (4, 5, 25)  # m, bin of the known colours u (0, 1-5, 6-7, 8-9, 10+), e
+    np.testing.assert_allclose(p.sum(axis=2), 1.0)
     # the merge inherits both people (10 known colours, 10 seen: gain 0); the two roots
-    # bring one newcomer each with 5 colours
-    assert p[0, 12] == pytest.approx((1 + 1) / (1 + 25))
-    assert p[1, 17] == pytest.approx((2 + 1) / (2 + 25))
+    # bring one newcomer each with 5 colours and nothing known
+    assert p[0, 4, 12] == pytest.approx((1 + 1) / (1 + 25))
+    assert p[1, 0, 17] == pytest.approx((2 + 1) / (2 + 25))
     np.testing.assert_allclose(p[2], 1 / 25)
+    np.testing.assert_allclose(p[0, :4], 1 / 25)
+    # one bin: the table given m alone, p(e | m)
+    one = fit_parameters([_merge()], NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels",
+                                                   palette_gain_table=(), palette_gain_bins=(0,)))
+    p1 = np.exp(np.array(one.palette_gain_table))
+    assert p1.shape == (4, 1, 25)
+    assert p1[0, 0, 12] == pytest.approx((1 + 1) / (1 + 25))
+    assert p1[1, 0, 17] == pytest.approx((2 + 1) / (2 + 25))
 
 
 def _merge_label(gain: bool) -> frozenset:
