@@ -1226,7 +1226,15 @@ class LabelGraph:
         ----------
         labels : mapping int -> Label
             Current labels of nodes (frozen ones are skipped).
+
+        Raises
+        ------
+        InputError
+            A node that does not exist, or a label outside its domain (nothing changes).
         """
+        for k, label in labels.items():
+            if not 0 <= k < len(self.nodes) or (self.nodes[k].frozen is None and label not in self.nodes[k].domain):
+                raise InputError(f"set_tentative_joiners: node {k} has no label {set(label)} in its domain")
         for k, label in labels.items():
             if self.nodes[k].frozen is not None:
                 continue

@@ -8,6 +8,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import pytest
+
+from dbn.errors import InputError
 from models.jorge.fit import meeting_strokes
 from models.jorge.labels import birth_stroke, label_objects
 from models.jorge.online import OnlineConfig, OnlineLabeller
@@ -27,6 +30,10 @@ def test_an_unfrozen_join_makes_its_newcomer_a_joiner_until_relabelled():
     assert g._joiners == {}
     g.set_tentative_joiners({1: ALONE | JOINER, 0: ALONE})  # frozen node 0 is skipped
     assert g._joiners == {1: ALONE | JOINER}
+    for bad in ({1: JOINER, 9: JOINER}, {1: JOINER, 2: frozenset({7})}):
+        with pytest.raises(InputError):  # no node 9; a label outside node 2's domain
+            g.set_tentative_joiners(bad)
+    assert g._joiners == {1: ALONE | JOINER}  # nothing changed
 
 
 def test_freezing_replaces_the_tentative_record():
