@@ -676,8 +676,7 @@ class LabelGraph:
         self._foot_y = np.full(n0, np.nan)
         self._scale = np.full(n0, np.nan)
         self._own: dict[int, int] = {}  # member of a new group or joiner -> stroke with its own palette
-        self._joined: dict[int, Label] = {}  # joiner -> its (frozen) birth label
-        self._joiners: dict[int, Label] = {}  # the joiners above and the tentative ones
+        self._joiners: dict[int, Label] = {}  # joiner -> its birth label (frozen, or tentative)
         self._tentative: dict[int, list[int]] = {}  # unfrozen node -> its tentative joiners
         self._gain_table = np.asarray(self.config.palette_gain_table, dtype=np.float64)
         self._gain_bins = self.config.palette_gain_bins if self._gain_table.ndim == 3 else ()
@@ -1203,12 +1202,7 @@ class LabelGraph:
         if label not in node.domain:
             raise InputError(f"node {k}: cannot freeze to {set(label)}, not in its domain")
         node.frozen = label
-        for o in self._tentative.pop(k, ()):
-            del self._joiners[o]
-        born = [int(o) for o in label if birth_stroke(o) == k]
-        if born and len(born) < len(label):  # newcomers with inherited objects: joiners
-            self._joined.update(dict.fromkeys(born, label))
-            self._joiners.update(dict.fromkeys(born, label))
+        self._replace_joiners(k, label)
         if len(label) == 1:
             (o,) = label
             if self._born_with_others(o) and k < self._own.get(int(o), k + 1):
@@ -1236,14 +1230,27 @@ class LabelGraph:
             if not 0 <= k < len(self.nodes) or (self.nodes[k].frozen is None and label not in self.nodes[k].domain):
                 raise InputError(f"set_tentative_joiners: node {k} has no label {set(label)} in its domain")
         for k, label in labels.items():
-            if self.nodes[k].frozen is not None:
-                continue
-            for o in self._tentative.pop(k, ()):
-                del self._joiners[o]
-            born = [int(o) for o in label if birth_stroke(o) == k]
-            if born and len(born) < len(label):
-                self._joiners.update(dict.fromkeys(born, label))
-                self._tentative[k] = born
+            if self.nodes[k].frozen is None:
+                born = self._replace_joiners(k, label)
+                if born:
+                    self._tentative[k] = born
+
+    def _replace_joiners(self, k: int, label: Label) -> list[int]:
+        """Drop node ``k``'s tentative joiners, then record the newcomers of ``label`` as
+        joiners when it is a join (objects born at ``k`` beside inherited ones); returns
+        them (empty otherwise)."""
+        for o in self._tentative.pop(k, ()):
+            del self._joiners[o]
+        born = [int(o) for o in label if birth_stroke(o) == k]
+        if not born or len(born) == len(label):
+            return []
+        self._joiners.update(dict.fromkeys(born, label))
+        return born
+
+    @property
+    def _joined(self) -> dict[int, Label]:
+        """The joiners whose birth node is frozen (:meth:`freeze`), with their birth labels."""
+        return {o: lab for o, lab in self._joiners.items() if self.nodes[birth_stroke(o)].frozen is not None}
 
     def set_domain(self, k: int, domain: Sequence[Label]) -> None:
         """Replace the (pruned) domain of an active node; its new label always stays."""
