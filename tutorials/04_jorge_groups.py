@@ -264,7 +264,9 @@ print("means:", np.round(rates.mean(0), 3))
 # the fourteenth round the colour-count evidence is the gain table given how many colours
 # the label's known people already show (`NetworkConfig.palette_gain_bins`), alone, and a
 # newcomer labelled into a group counts as a joiner as soon as that is its current label
-# (`OnlineConfig.tentative_joiners`). Here we
+# (`OnlineConfig.tentative_joiners`); since the fifteenth, a merge's second parent must be
+# covered by the merged region's box, not merely touch it (`NetworkConfig.merge_cover`,
+# chosen on how many links differ from the true ones on training-side data). Here we
 # refit on fewer seeds and score the validation part with the default network and the
 # colour-only baseline.
 

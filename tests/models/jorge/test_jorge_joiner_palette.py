@@ -20,21 +20,22 @@ CFG = NetworkConfig(pool_size=POOL, labels=LabelParams(max_group_size=3, p_join=
                     palette_count_table=())
 
 
-def _stroke(k, start, end, x0, x1, people):
+def _stroke(k, start, end, x0, x1, people, width=20.0):
     """Person ``p`` shows colours ``5p .. 5p + 4``; a region of two shows 3 of each."""
     cols = sorted({c for p in people for c in range(5 * p, 5 * p + (5 if len(people) == 1 else 3))})
-    return make_stroke(k, start, end, (x0, 100), (x1, 100), cols, people, pool_size=POOL, size=(20.0, 50.0))
+    return make_stroke(k, start, end, (x0, 100), (x1, 100), cols, people, pool_size=POOL, size=(width, 50.0))
 
 
 def join_strokes() -> list:
     """Person 0 walks alone (stroke 0); person 1 appears inside their region (1, a join);
-    the two part (2: person 1 alone, 3: person 0) and meet again (4)."""
+    the two part (2: person 1 alone, 3: person 0) and meet again (4: one region spanning
+    both, the merge test's ``merge_area`` and ``merge_cover``)."""
     return [
         _stroke(0, 0, 10, 100, 100, {0}),
         _stroke(1, 12, 20, 100, 100, {0, 1}),
         _stroke(2, 22, 30, 95, 80, {1}),
         _stroke(3, 22, 30, 105, 120, {0}),
-        _stroke(4, 32, 40, 100, 100, {0, 1}),
+        _stroke(4, 32, 40, 100, 100, {0, 1}, width=60.0),
     ]
 
 
@@ -47,7 +48,7 @@ def _graph():
 
 def test_a_frozen_join_makes_its_newcomer_known_only_with_the_whole_birth_label():
     g = _graph()
-    assert g.nodes[1].parents == (0,) and g.nodes[2].parents == (1,)
+    assert g.nodes[1].parents == (0,) and g.nodes[2].parents == (1,) and set(g.nodes[4].parents) == {2, 3}
     joiner, alone = frozenset({1}), frozenset({0})
     before = label_objects([joiner, alone | joiner], 2, g._own, g._joined)
     assert before.known_counts.tolist() == [1, 2]  # not frozen yet: counted as born alone

@@ -25,7 +25,8 @@ def _scene(new_size):
 
 
 def _parents(merge_area: float, strokes) -> tuple:
-    g = LabelGraph(replace(NetworkConfig(), merge_area=merge_area))
+    # the area test alone (the cover test, ``merge_cover``, has its own file)
+    g = LabelGraph(replace(NetworkConfig(), merge_area=merge_area, merge_cover=0.0))
     for st in strokes:
         g.add_stroke(st)
     return g.nodes[-1].parents
