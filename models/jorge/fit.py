@@ -372,9 +372,9 @@ occlusion chain (``NetworkConfig.size_once``); and the link gate (pixels and fra
 tuned on CAVIAR, or scaled by the region's size and the frame rate, or the box gate of
 issue 16 with ``v_box`` 0.5 (0.25 scored worse), ``NetworkConfig.gate``), with or without
 the area part of the link rule's merge test (``NetworkConfig.merge_area``: 0 off, 1 its
-geometric bound; its cover part, ``NetworkConfig.merge_cover``, holds at every point since
-issue 16's fifteenth round; the parameters are fitted again for each gate and merge test, since both change
-the links the fit counts on); and, since issue 16's eleventh round, the weight of the palette
+geometric bound; its cover part, ``NetworkConfig.merge_cover``, holds at every point
+since issue 16's fifteenth round; the parameters are fitted again for each gate and merge
+test, since both change the links the fit counts on); and, since issue 16's eleventh round, the weight of the palette
 colour-count evidence where a region continues (``NetworkConfig.palette_continued``: 1 full,
 0.75, 0.5; the counts of one region's strokes are not independent). The nested links of
 the link rule (``NetworkConfig.nested_links``, issue 16's twelfth round) are on at every
