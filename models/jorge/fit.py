@@ -61,6 +61,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from dbn.errors import InputError
+from models.jorge.labels import palette_gain_bin
 from models.jorge.network import LabelGraph, NetworkConfig
 from models.jorge.strokes import StrokeSet
 
@@ -299,10 +300,8 @@ def _palette_gain_table(triples: list, gmax: int, pool_size: int, bins: Sequence
     ``m = 0..gmax`` (more counted as ``gmax``) and bin of the known colours ``u`` (lower
     edges ``bins``), shape ``(gmax + 1, len(bins), 2 * pool_size + 1)``."""
     counts = np.ones((gmax + 1, len(bins), 2 * pool_size + 1))
-    edges = np.asarray(bins)
     for m, u, e in triples:
-        b = int(np.searchsorted(edges, u, side="right")) - 1
-        counts[min(m, gmax), b, int(np.clip(e, -pool_size, pool_size)) + pool_size] += 1.0
+        counts[min(m, gmax), int(palette_gain_bin(bins, u)), int(np.clip(e, -pool_size, pool_size)) + pool_size] += 1.0
     table = np.log(counts / counts.sum(axis=2, keepdims=True))
     return tuple(tuple(tuple(float(v) for v in row) for row in block) for block in table)
 

@@ -108,6 +108,8 @@ __all__ = [
     "colour_log_likelihood",
     "size_log_likelihood",
     "palette_count_log_likelihood",
+    "gain_bins_rise",
+    "palette_gain_bin",
     "palette_gain_log_likelihood",
     "prune_labels",
     "NEW_STRIDE",
@@ -854,6 +856,21 @@ def palette_count_log_likelihood(count: int, sizes: np.ndarray, table: np.ndarra
     return table[rows, min(max(int(count), 0), table.shape[1] - 1)].copy()
 
 
+def gain_bins_rise(bins) -> bool:
+    """Whether ``bins`` are valid lower edges of the bins of :math:`u`: 1-D, not empty,
+    rising strictly from 0 (``NetworkConfig.palette_gain_bins``)."""
+    edges = np.asarray(bins)
+    return bool(edges.ndim == 1 and edges.size > 0 and edges[0] == 0 and np.all(np.diff(edges) > 0))
+
+
+def palette_gain_bin(bins: Sequence[int], known) -> np.ndarray:
+    r""":math:`b(u)`: the index of the last of the increasing lower edges ``bins`` that is at
+    most :math:`u` (``known``, an int or an array of them), as the palette gain table is
+    indexed (:func:`palette_gain_log_likelihood`) and fitted
+    (:func:`models.jorge.fit.fit_parameters`)."""
+    return np.searchsorted(np.asarray(bins), known, side="right") - 1
+
+
 def palette_gain_log_likelihood(count: int, known: np.ndarray, new: np.ndarray, table: np.ndarray,
                                 bins: Sequence[int] = ()) -> np.ndarray:
     r"""Soft evidence of a stroke's palette colour count on each label, given the palettes
@@ -904,7 +921,7 @@ def palette_gain_log_likelihood(count: int, known: np.ndarray, new: np.ndarray, 
     if table.ndim != 2 + (edges.size > 0) or table.shape[-1] % 2 != 1:
         raise ModelError(f"palette_gain_log_likelihood: table must be {2 + (edges.size > 0)}-D (with "
                          f"{edges.size} bins of u) with an odd number of columns, got shape {table.shape}")
-    if edges.size and (table.shape[1] != edges.size or edges[0] != 0 or np.any(np.diff(edges) <= 0)):
+    if edges.size and (table.shape[1] != edges.size or not gain_bins_rise(edges)):
         raise ModelError(f"palette_gain_log_likelihood: bins {tuple(bins)} must rise from 0, one per "
                          f"entry of the table's axis 1 (shape {table.shape})")
     if known.shape != new.shape or known.ndim != 1 or np.any(known < 0) or np.any(new < 0):
@@ -914,7 +931,7 @@ def palette_gain_log_likelihood(count: int, known: np.ndarray, new: np.ndarray, 
     cols = np.clip(int(count) - known + off, 0, table.shape[-1] - 1)
     rows = np.minimum(new, table.shape[0] - 1)
     if edges.size:
-        return table[rows, np.searchsorted(edges, known, side="right") - 1, cols]
+        return table[rows, palette_gain_bin(edges, known), cols]
     return table[rows, cols].copy()
 
 

@@ -41,6 +41,7 @@ from models.jorge.labels import (
     cohort_size,
     colour_log_likelihood,
     format_label,
+    gain_bins_rise,
     label_objects,
     palette_count_log_likelihood,
     palette_gain_log_likelihood,
@@ -641,7 +642,7 @@ class NetworkConfig:
                     f"probabilities (max_k, max_count + 1), got shape {t.shape}"
                 )
         bins = np.asarray(self.palette_gain_bins)
-        if bins.ndim != 1 or bins.size == 0 or bins[0] != 0 or np.any(np.diff(bins) <= 0):
+        if not gain_bins_rise(bins):
             raise ModelError(f"NetworkConfig.palette_gain_bins must rise from 0, got {self.palette_gain_bins}")
         if self.palette_gain_table:
             t = np.asarray(self.palette_gain_table, dtype=np.float64)
@@ -816,7 +817,7 @@ class LabelGraph:
             max_gap, window = cfg.max_gap_frames, cfg.sibling_window
         near = dist <= reach
         if cfg.gate == "boxes":
-            near = self._boxes_near(stroke, unit * cfg.v_box * secs, near)
+            near = self._boxes_near(stroke, self._box_slack(stroke, slice(0, n)), near)
         ok = (gap > 0) & (gap <= max_gap) & near
         ok &= self._nchild[:n] < cfg.max_children
         # a second child (the other part of a split) must start within ``sibling_window``
@@ -833,7 +834,7 @@ class LabelGraph:
         cand = cand[order][: cfg.max_parents]
         # a nested pair passed its own merge test in _merges_back
         nested = len(cand) == 2 and self.nested(*sorted(int(c) for c in cand))
-        if len(cand) == 2 and not nested and (cfg.merge_area > 0 or cfg.merge_cover > 0) and not self._merge_fits(stroke, cand):
+        if len(cand) == 2 and not nested and not self._merge_fits(stroke, cand):
             cand = cand[:1]
         return cand
 
@@ -869,17 +870,21 @@ class LabelGraph:
 
     def _cover(self, stroke: Stroke, parents: np.ndarray) -> np.ndarray:
         r"""Share of each parent's last box, grown by the box gate's slack
-        (``v_box`` :math:`\cdot` scale :math:`\cdot` seconds of gap, as in
-        :meth:`_boxes_near`), inside the new stroke's first box; shape ``(len(parents),)``.
+        (:meth:`_box_slack`), inside the new stroke's first box; shape ``(len(parents),)``.
         A merged region covers both its parts; a neighbour that only touches it does not."""
         half = 0.5 * stroke.extent[0]
         lo, hi = stroke.positions[0] - half, stroke.positions[0] + half
-        secs = (stroke.start - self._end[parents]) / self.fps
-        slack = np.nan_to_num(self._scale[parents] * self.config.v_box * secs)[:, None]
+        slack = np.nan_to_num(self._box_slack(stroke, parents))[:, None]
         plo = self._end_pos[parents] - 0.5 * self._end_ext[parents] - slack
         phi = self._end_pos[parents] + 0.5 * self._end_ext[parents] + slack
         inter = np.prod(np.clip(np.minimum(hi, phi) - np.maximum(lo, plo), 0.0, None), axis=1)
         return inter / np.prod(phi - plo, axis=1)
+
+    def _box_slack(self, stroke: Stroke, idx) -> np.ndarray:
+        """The box gate's slack in pixels for earlier strokes ``idx``: ``v_box`` times each
+        one's scale (NaN where it has no boxes) times the seconds from its end to the new
+        stroke's start."""
+        return self._scale[idx] * self.config.v_box * (stroke.start - self._end[idx]) / self.fps
 
     def _boxes_near(self, stroke: Stroke, slack: np.ndarray, fallback: np.ndarray) -> np.ndarray:
         """Box gate: the new stroke's first region box meets each earlier stroke's last

@@ -13,7 +13,12 @@ import pytest
 
 from dbn.errors import InputError, ModelError
 from models.jorge.fit import fit_parameters
-from models.jorge.labels import LabelParams, palette_gain_log_likelihood
+from models.jorge.labels import (
+    LabelParams,
+    gain_bins_rise,
+    palette_gain_bin,
+    palette_gain_log_likelihood,
+)
 from models.jorge.network import LabelGraph, NetworkConfig
 from models.jorge.online import OnlineConfig, OnlineLabeller
 from models.jorge.strokes import StrokeSet, make_stroke
@@ -175,3 +180,14 @@ def test_palette_continued_weighs_the_count_evidence_of_an_occlusion_child_only(
     for bad in (-0.1, 1.5, float("nan")):
         with pytest.raises(ModelError, match="palette_continued"):
             NetworkConfig(palette_continued=bad)
+
+
+def test_the_bin_of_u_is_the_last_edge_at_most_u():
+    bins = (0, 1, 6, 8, 10)
+    u = np.arange(14)
+    want = [max(i for i, edge in enumerate(bins) if edge <= x) for x in u]
+    assert palette_gain_bin(bins, u).tolist() == want
+    assert int(palette_gain_bin(bins, 7)) == 2
+    assert gain_bins_rise(bins) and gain_bins_rise((0,))
+    for bad in ((), (1, 2), (0, 3, 3), (0, 5, 2), ((0, 1), (2, 3))):
+        assert not gain_bins_rise(bad)
