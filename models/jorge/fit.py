@@ -416,8 +416,13 @@ with the parameters refitted; issue 16's fifteenth round): 0.1987 against 0.2014
 the scoring seeds, lower on 19 of 25 sets; landed. Seeds 185-204 then served the grid's
 lowest point under it, the same without the area test (``merge_area`` 0), under a stricter
 rule (pooled lower and the paired difference below -1 standard error): 0.1897 against
-0.1914, paired -0.0017 (standard error 0.0028), lower on 11 of 25; not landed. The next
-confirmation takes seeds from 205 on."""
+0.1914, paired -0.0017 (standard error 0.0028), lower on 11 of 25; not landed. Seeds
+205-224 served a fallback gap limit of the link rule (issue 16's sixteenth round: when no
+earlier stroke passes the gate within ``max_gap_frames``, a stroke without a child that
+ended up to 60 frames at 25 fps before may continue, parameters refitted; it had cut the
+links that differ from the true ones from 509 to 471 on training-side data), under the
+stricter rule: 0.1977 against 0.1925, paired +0.0052 (standard error 0.0015), lower on 7 of
+25; not landed. The next confirmation takes seeds from 225 on."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "roots_joins",
                  "size_once": True, "palette_continued": 0.75}
