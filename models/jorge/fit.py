@@ -422,7 +422,13 @@ earlier stroke passes the gate within ``max_gap_frames``, a stroke without a chi
 ended up to 60 frames at 25 fps before may continue, parameters refitted; it had cut the
 links that differ from the true ones from 509 to 471 on training-side data), under the
 stricter rule: 0.1977 against 0.1925, paired +0.0052 (standard error 0.0015), lower on 7 of
-25; not landed. The next confirmation takes seeds from 225 on."""
+25; not landed. Seeds 225-244 served a split prior that prefers partitions (the restriction
+node of two children of one group also takes the group as its parent: two disjoint labels
+weigh 1 if they hold all of its people and a fitted ``split_loss`` w if not, where eq. 5
+alone weighs 6 of 12 / 14 of 50 / 30 of 180 disjoint piece pairs of a group of 3 / 4 / 5 as
+partitions; w = 0.021 by maximum likelihood on the training split, other parameters
+refitted), under the stricter rule: 0.1968 against 0.1988, paired -0.0019 (standard error
+0.0024), lower on 16 of 25; not landed. The next confirmation takes seeds from 245 on."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "roots_joins",
                  "size_once": True, "palette_continued": 0.75}
