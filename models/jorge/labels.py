@@ -174,6 +174,12 @@ class LabelParams:
         False: only a root (a stroke with no parent, e.g. people walking in together) may,
         a child's :math:`P_{new}` mass all goes to :math:`l_{new}`. Our addition (issue 16:
         new groups at children made the training crowds worse, at roots they do not).
+    split_cover : tuple of float
+        :math:`p_n`, probability that the two children of a group of ``n = 1, 2, ...``
+        people (the last entry for larger groups) that take disjoint parts of it hold all
+        of its people (:func:`split_loss_weights`, :func:`restriction_table` with the
+        parent). ``()``, the default, is seed 004's eq. 5. Our addition (issue 16,
+        sixteenth round).
     """
 
     p_new: float = 0.02
@@ -186,6 +192,7 @@ class LabelParams:
     new_group_probs: tuple = (1.0,)
     p_join: float = 0.0
     child_new_groups: bool = True
+    split_cover: tuple = ()
 
     def __post_init__(self) -> None:
         q = np.asarray(self.new_group_probs, dtype=np.float64)
@@ -211,6 +218,9 @@ class LabelParams:
                 )
         if isinstance(self.max_group_size, bool) or int(self.max_group_size) < 1:
             raise ModelError(f"LabelParams.max_group_size must be >= 1, got {self.max_group_size}")
+        c = np.asarray(self.split_cover, dtype=np.float64)
+        if c.ndim != 1 or not np.all((c > 0) & (c <= 1)):
+            raise ModelError(f"LabelParams.split_cover must be probabilities in (0, 1], got {self.split_cover}")
 
 
 def structure_of(num_parents: int, shared: Sequence[bool]) -> str:
@@ -720,7 +730,8 @@ def restriction_allows(a: Label, b: Label, nested: bool = False) -> bool:
     return not (a & b) or (nested and a <= b)
 
 
-def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label], nested: bool = False) -> np.ndarray:
+def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label], nested: bool = False,
+                      parent_domain: Sequence[Label] | None = None, split_cover: Sequence[float] = ()) -> np.ndarray:
     r"""CPD of structure (g), the restriction node :math:`r_{ij}` (eq. 5).
 
     ===============================  ==============  ==============
@@ -734,13 +745,45 @@ def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label], nest
     With ``nested`` (node ``i`` is also a parent of node ``j``; our addition,
     :func:`restriction_allows`), :math:`x_i \subseteq x_j` is allowed too.
 
+    With ``parent_domain`` (the labels :math:`x_p` of the children's shared parent; our
+    addition, issue 16's sixteenth round), two disjoint labels weigh 1 if they hold all of
+    the parent's people, :math:`x_p \subseteq x_i \cup x_j`, and :math:`w_{|x_p|}` if not
+    (:func:`split_loss_weights` of ``split_cover``).
+    The children's pieces are drawn independently (eq. 9), so without it, of two disjoint
+    pieces of a group of 3 / 4 / 5 only 6 of 12 / 14 of 50 / 30 of 180 hold everyone: the
+    prior expected a group's split to lose people, where on the training split most
+    splits are partitions. Not with ``nested``.
+
     Returns
     -------
-    ndarray, shape (len(domain_i), len(domain_j), 2)
+    ndarray, shape (len(domain_i), len(domain_j), 2), or with ``parent_domain``
+    (len(parent_domain), len(domain_i), len(domain_j), 2)
     """
     ok = np.array([[restriction_allows(a, b, nested) for b in domain_j] for a in domain_i], dtype=np.float64)
     ok = ok.reshape(len(domain_i), len(domain_j))
+    if parent_domain is not None and not nested:
+        union = [[a | b for b in domain_j] for a in domain_i]
+        cover = np.array([[[x <= u for u in row] for row in union] for x in parent_domain], dtype=np.float64)
+        cover = cover.reshape(len(parent_domain), len(domain_i), len(domain_j))
+        w = split_loss_weights(split_cover)
+        loss = np.array([w[min(len(x), len(w)) - 1] if len(w) else 1.0 for x in parent_domain])[:, None, None]
+        ok = ok * (cover + loss * (1.0 - cover))
     return np.stack([1.0 - ok, ok], axis=-1)
+
+
+def split_loss_weights(split_cover: Sequence[float]) -> np.ndarray:
+    r""":math:`w_n`, the restriction's weight of two disjoint parts of a group of ``n`` that
+    lose someone (1 for a partition), such that two pieces drawn as in eq. 9 hold everyone
+    with probability ``split_cover[n - 1]``: :math:`w_n = C_n (1 - p_n) / (p_n N_n)`, with
+    :math:`C_n = 2^n - 2` ordered partitions and :math:`N_n = 3^n - 3 \cdot 2^n + 3` ordered
+    disjoint pairs that lose someone; at most 1, and 1 where :math:`N_n = 0`
+    (:math:`n \le 2`). Shape ``(len(split_cover),)``."""
+    p = np.asarray(split_cover, dtype=np.float64)
+    n = np.arange(1, p.size + 1, dtype=np.float64)
+    part, lose = 2.0**n - 2.0, 3.0**n - 3.0 * 2.0**n + 3.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = np.where(lose > 0, part * (1.0 - p) / (p * lose), 1.0)
+    return np.minimum(w, 1.0)
 
 
 def _log_binom(n: np.ndarray, total: int, p: np.ndarray) -> np.ndarray:

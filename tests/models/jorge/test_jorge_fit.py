@@ -12,8 +12,10 @@ from models.jorge.fit import (
     TRAIN_SEEDS,
     TRAIN_SEQUENCES,
     VALIDATION_SEQUENCES,
+    EventCounts,
     count_events,
     fit_parameters,
+    fit_split_cover,
     training_strokes,
 )
 from models.jorge.labels import LabelParams
@@ -21,6 +23,7 @@ from models.jorge.network import (
     FITTED_LABELS,
     FITTED_PALETTE_COUNTS,
     FITTED_PALETTE_GAINS,
+    FITTED_SPLIT_COVER,
     NetworkConfig,
 )
 from models.jorge.strokes import StrokeSet, make_stroke
@@ -92,6 +95,11 @@ def test_default_parameters_are_the_fit_on_the_training_split():
         assert getattr(fitted, name) == pytest.approx(getattr(FITTED_LABELS, name), rel=1e-9), name
     np.testing.assert_allclose(cfg.palette_count_table, FITTED_PALETTE_COUNTS, rtol=1e-9)
     np.testing.assert_allclose(cfg.palette_gain_table, FITTED_PALETTE_GAINS, rtol=1e-9)
+    # the split cover option's values (off by default) are the same fit's
+    counts = EventCounts()
+    for strokes in sets:
+        count_events(strokes, base, counts)
+    assert fit_split_cover(counts.splits, 5) == pytest.approx(FITTED_SPLIT_COVER, rel=1e-12)
     # the search's incumbent is the default network itself, refitted as the search does
     from dataclasses import replace
 

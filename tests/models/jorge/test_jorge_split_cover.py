@@ -1,0 +1,197 @@
+"""The split prior that prefers partitions (issue 16, sixteenth round): the restriction
+node of two children of one group also takes the group as its parent, and two disjoint
+labels that lose one of its people weigh :math:`w_n` (``LabelParams.split_cover``)
+against 1 for a partition; checked against enumeration of the pieces, the definition of
+the table, brute force over a window, and pgmpy."""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from dbn.errors import ModelError
+from models.jorge.fit import EventCounts, _count_splits, fit_parameters, fit_split_cover
+from models.jorge.labels import (
+    LabelParams,
+    proper_subsets,
+    restriction_allows,
+    restriction_table,
+    split_loss_weights,
+)
+from models.jorge.network import (
+    FITTED_LABELS,
+    FITTED_SPLIT_COVER,
+    LabelGraph,
+    NetworkConfig,
+    node_name,
+    solve,
+)
+from models.jorge.strokes import StrokeSet, make_stroke
+
+SEED_LABELS = replace(FITTED_LABELS, new_group_probs=(1.0,), p_join=0.0)
+
+
+def _cover_share(n: int, w: float) -> float:
+    """P(two disjoint proper pieces of a group of n hold everyone), pieces drawn uniformly
+    and independently (eq. 9), disjoint pairs weighted 1 (partition) or w."""
+    group = frozenset(range(n))
+    cover = lose = 0.0
+    for a, b in itertools.product(proper_subsets(group), repeat=2):
+        if a & b:
+            continue
+        if a | b == group:
+            cover += 1.0
+        else:
+            lose += w
+    return cover / (cover + lose)
+
+
+@settings(max_examples=30, deadline=None)
+@given(n=st.integers(3, 5), p=st.floats(0.01, 1.0))
+def test_the_weights_give_the_cover_probability(n, p):
+    w = split_loss_weights([1.0] * (n - 1) + [p])[n - 1]
+    floor = _cover_share(n, 1.0)  # eq. 5 alone; w is at most 1
+    assert 0 <= w <= 1
+    assert _cover_share(n, w) == pytest.approx(max(p, floor), rel=1e-9)
+
+
+def test_eq5_alone_expects_groups_to_lose_people():
+    assert [round(_cover_share(n, 1.0), 4) for n in (3, 4, 5)] == [
+        round(6 / 12, 4), round(14 / 50, 4), round(30 / 180, 4)]
+    assert np.all(split_loss_weights([1.0, 1.0]) == 1.0)  # two disjoint parts of a pair always cover
+
+
+def _labels(draw_sets):
+    return [frozenset(s) for s in draw_sets]
+
+
+@settings(max_examples=30, deadline=None)
+@given(di=st.lists(st.sets(st.integers(0, 4), min_size=1, max_size=3), min_size=1, max_size=4),
+       dj=st.lists(st.sets(st.integers(0, 4), min_size=1, max_size=3), min_size=1, max_size=4),
+       dp=st.lists(st.sets(st.integers(0, 4), min_size=1, max_size=5), min_size=1, max_size=4),
+       cover=st.lists(st.floats(0.05, 1.0), min_size=1, max_size=5))
+def test_the_table_is_its_definition(di, dj, dp, cover):
+    di, dj, dp = _labels(di), _labels(dj), _labels(dp)
+    t = restriction_table(di, dj, False, dp, cover)
+    w = split_loss_weights(cover)
+    assert t.shape == (len(dp), len(di), len(dj), 2)
+    for (x, xp), (y, a), (z, b) in itertools.product(enumerate(dp), enumerate(di), enumerate(dj)):
+        want = 0.0 if a & b else (1.0 if xp <= a | b else w[min(len(xp), len(w)) - 1])
+        assert t[x, y, z, 1] == pytest.approx(want)
+        assert t[x, y, z, 0] == pytest.approx(1.0 - want)
+    # without a parent, or nested, it is eq. 5 (nested: our restriction_allows)
+    np.testing.assert_array_equal(restriction_table(di, dj, False, None, cover), restriction_table(di, dj))
+    np.testing.assert_array_equal(restriction_table(di, dj, True, dp, cover), restriction_table(di, dj, True))
+    assert all(t[:, y, z, 1].max() <= float(restriction_allows(a, b)) for (y, a), (z, b)
+               in itertools.product(enumerate(di), enumerate(dj)))
+
+
+def _split_graph(split_cover) -> LabelGraph:
+    """Three people walk in together (stroke 0, a new group), the group splits into strokes 1
+    and 2."""
+    labels = replace(SEED_LABELS, max_group_size=3, new_group_probs=(0.4, 0.3, 0.3), split_cover=split_cover)
+    g = LabelGraph(NetworkConfig(labels=labels))
+    for s in (make_stroke(0, 0, 10, (50, 50), (60, 50), [0, 1, 2, 3, 4, 5], {0, 1, 2}, size=(60, 50)),
+              make_stroke(1, 12, 20, (50, 50), (40, 50), [0, 1, 2], {0}, size=(20, 50)),
+              make_stroke(2, 12, 20, (70, 50), (80, 50), [3, 4, 5], {1, 2}, size=(40, 50))):
+        g.add_stroke(s)
+    return g
+
+
+def test_the_restriction_node_takes_the_group_as_parent():
+    g = _split_graph((1.0, 1.0, 0.9))
+    win = g.window([0, 1, 2])
+    cpd = win.bn.cpd("r1_2")
+    assert list(cpd.parents) == [node_name(0), node_name(1), node_name(2)]
+    assert list(_split_graph(()).window([0, 1, 2]).bn.cpd("r1_2").parents) == [node_name(1), node_name(2)]
+
+
+def _joint(win):
+    """Log joint (times the soft evidence) of every labelling of the active nodes."""
+    bn = win.bn
+    names = [node_name(k) for k in win.active]
+    lps = {}
+    for states in itertools.product(*[range(bn.cardinality(n)) for n in names]):
+        x = dict(zip(names, states)) | win.evidence
+        with np.errstate(divide="ignore"):
+            lps[states] = bn.log_joint(x) + sum(np.log(win.soft_evidence[n][x[n]]) for n in names)
+    return names, lps
+
+
+@pytest.mark.parametrize("split_cover", [(), (1.0, 1.0, 0.9), (1.0, 1.0, 0.2)])
+def test_window_against_brute_force(split_cover):
+    win = _split_graph(split_cover).window([0, 1, 2])
+    res = solve(win)
+    names, lps = _joint(win)
+    best = max(lps, key=lps.get)
+    assert res.log_prob == pytest.approx(lps[best], abs=1e-9)
+    logz = np.logaddexp.reduce(np.array(list(lps.values())))
+    assert res.log_evidence == pytest.approx(logz, abs=1e-9)
+    for i, n in enumerate(names):
+        m = np.zeros(win.bn.cardinality(n))
+        for states, lp in lps.items():
+            m[states[i]] += np.exp(lp - logz)
+        np.testing.assert_allclose(res.marginals[i], m, atol=1e-12)
+
+
+def test_window_same_as_pgmpy(assert_window_matches_pgmpy):
+    assert_window_matches_pgmpy(_split_graph((1.0, 1.0, 0.9)).window([0, 1, 2]), 3)
+
+
+def test_the_posterior_of_a_partition_rises_with_the_cover_probability():
+    def p_partition(split_cover):
+        win = _split_graph(split_cover).window([0, 1, 2])
+        _, lps = _joint(win)
+        dom = [win.domains[node_name(k)] for k in range(3)]
+        lp = np.array(list(lps.values()))
+        cover = np.array([len(dom[0][x]) == 3 and dom[0][x] <= dom[1][y] | dom[2][z] for x, y, z in lps])
+        w = np.exp(lp - lp.max())
+        return float(w[cover].sum() / w[(lp > -np.inf)].sum())
+    eq5 = p_partition(())
+    probs = [p_partition((1.0, 1.0, p)) for p in (0.6, 0.9, 0.99)]
+    assert p_partition((1.0, 1.0, 0.2)) == pytest.approx(eq5)  # below eq. 5's share: w = 1
+    assert eq5 < probs[0] < probs[1] < probs[2]
+
+
+def _two_splits():
+    """A group of 3 splits into all of its people (strokes 1, 2); another loses one (4, 5)."""
+    return [
+        make_stroke(0, 0, 10, (50, 50), (60, 50), [0, 1, 2], {0, 1, 2}, size=(60, 50)),
+        make_stroke(1, 12, 20, (50, 50), (40, 50), [0], {0}, size=(20, 50)),
+        make_stroke(2, 12, 20, (70, 50), (80, 50), [1, 2], {1, 2}, size=(40, 50)),
+        make_stroke(3, 30, 40, (250, 50), (260, 50), [3, 4, 5], {3, 4, 5}, size=(60, 50)),
+        make_stroke(4, 42, 50, (250, 50), (240, 50), [3], {3}, size=(20, 50)),
+        make_stroke(5, 42, 50, (270, 50), (280, 50), [4], {4}, size=(20, 50)),  # person 5 lost
+    ]
+
+
+def test_fit_counts_partitions_per_group_size():
+    g = LabelGraph(NetworkConfig(labels=replace(SEED_LABELS, max_group_size=3)))
+    for s in _two_splits():
+        g.add_stroke(s)
+    assert [g.nodes[k].parents for k in (1, 2, 4, 5)] == [(0,), (0,), (3,), (3,)]
+    c = EventCounts()
+    _count_splits(c, g)
+    assert sorted(c.splits) == [(3, False), (3, True)]
+    assert fit_split_cover(c.splits, 4) == (1.0, 1.0, 0.5, 0.5)  # add-one: (1 + 1) / (2 + 2); none of 4
+
+
+def test_fit_parameters_fits_it_only_where_it_is_on():
+    sets = [StrokeSet.from_strokes(_two_splits())]
+    on = NetworkConfig(labels=replace(SEED_LABELS, max_group_size=3, split_cover=(1.0,)))
+    assert fit_parameters(sets, on).labels.split_cover == (1.0, 1.0, 0.5)
+    off = NetworkConfig(labels=replace(SEED_LABELS, max_group_size=3))
+    assert fit_parameters(sets, off).labels.split_cover == ()
+    assert FITTED_LABELS.split_cover == ()  # the default network is seed 004's eq. 5
+    assert len(FITTED_SPLIT_COVER) == FITTED_LABELS.max_group_size
+
+
+@pytest.mark.parametrize("bad", [(0.0,), (1.0, 1.5), (float("nan"),), ((0.5, 0.5),)])
+def test_bad_split_cover_raises_naming_the_field(bad):
+    with pytest.raises(ModelError, match="split_cover"):
+        LabelParams(split_cover=bad)
