@@ -436,8 +436,8 @@ meetings) a change the grid cannot express (new evidence, a new rule of the on-l
 labeller) is confirmed on, pooled with :data:`SCORE_SEEDS`, before it lands (issue 16's
 fourteenth round). Five seeds of meetings of each size left the seed-to-seed noise of the
 combined error as large as the differences between candidates, and thirteen rounds had
-chosen on those same sets; the comparison and its rule (the lower combined error over the
-25 sets lands) are written down before it runs. Used once so far: the gain table given the
+chosen on those same sets; the comparison and its rule (the lower combined error over the 25
+sets lands) are written down before it runs. Used once so far: the gain table given the
 known colours with tentative joiners, :data:`models.jorge.network.FITTED_PALETTE_GAINS`.
 Seeds 145-164 then served one comparison the same way (a part rate of its own for a merge's
 parent, worse: 0.2065 against 0.1990 pooled with the scoring seeds; not landed). Seeds
@@ -446,27 +446,27 @@ with the parameters refitted; issue 16's fifteenth round): 0.1987 against 0.2014
 the scoring seeds, lower on 19 of 25 sets; landed. Seeds 185-204 then served the grid's
 lowest point under it, the same without the area test (``merge_area`` 0), under a stricter
 rule (pooled lower and the paired difference below -1 standard error): 0.1897 against
-0.1914, paired -0.0017 (standard error 0.0028), lower on 11 of 25; not landed. Seeds
-205-224 served a fallback gap limit of the link rule (issue 16's sixteenth round: when no
-earlier stroke passes the gate within ``max_gap_frames``, a stroke without a child that
-ended up to 60 frames at 25 fps before may continue, parameters refitted; it had cut the
-links that differ from the true ones from 509 to 471 on training-side data), under the
-stricter rule: 0.1977 against 0.1925, paired +0.0052 (standard error 0.0015), lower on 7 of
-25; not landed. Seeds 225-244 served a split prior that prefers partitions (the restriction
-node of two children of one group also takes the group as its parent: two disjoint labels
-weigh 1 if they hold all of its people and a fitted ``split_loss`` w if not, where eq. 5
-alone weighs 6 of 12 / 14 of 50 / 30 of 180 disjoint piece pairs of a group of 3 / 4 / 5 as
+0.1914, paired -0.0017 (standard error 0.0028), lower on 11 of 25; not landed. Seeds 205-224
+served a fallback gap limit of the link rule (issue 16's sixteenth round: when no earlier
+stroke passes the gate within ``max_gap_frames``, a stroke without a child that ended up to
+60 frames at 25 fps before may continue, parameters refitted; it had cut the links that
+differ from the true ones from 509 to 471 on training-side data), under the stricter rule:
+0.1977 against 0.1925, paired +0.0052 (standard error 0.0015), lower on 7 of 25; not landed.
+Seeds 225-244 served a split prior that prefers partitions (the restriction node of two
+children of one group also takes the group as its parent: two disjoint labels weigh 1 if
+they hold all of its people and one weight w for every group size if not, where eq. 5 alone
+weighs 6 of 12 / 14 of 50 / 30 of 180 disjoint piece pairs of a group of 3 / 4 / 5 as
 partitions; w = 0.021 by maximum likelihood on the training split, other parameters
 refitted), under the stricter rule: 0.1968 against 0.1988, paired -0.0019 (standard error
-0.0024), lower on 16 of 25; not landed. Seeds 245-264 served the same with the probability
-that a split keeps everyone fitted per group size (``LabelParams.split_cover``,
-:data:`models.jorge.network.FITTED_SPLIT_COVER`), under the stricter rule: 0.1927 against
-0.1949, paired -0.0022 (standard error 0.0025), lower on 14 of 25; not landed. A second,
-larger look at it was declared before it ran, on fresh seeds 265-304, pooled with every set
-it had been scored on (seeds 100-104 and 245-264, 65 sets), landing only below -2 standard
-errors: 0.1930 against 0.1958, paired -0.0028 (standard error 0.0014, -1.97 SE), lower on 35
-of 65 (the new seeds alone: -0.0031, standard error 0.0017); not landed, kept as an option
-off by default. The next confirmation takes seeds from 305 on."""
+0.0024), lower on 16 of 25; not landed (no code kept). Seeds 245-264 served the same with
+the probability that a split keeps everyone fitted per group size
+(``LabelParams.split_cover``, :data:`models.jorge.network.FITTED_SPLIT_COVER`), under the
+stricter rule: 0.1927 against 0.1949, paired -0.0022 (standard error 0.0025), lower on 14 of
+25; not landed. A second, larger look at it was declared before it ran, on fresh seeds
+265-304, pooled with every set it had been scored on (seeds 100-104 and 245-264, 65 sets),
+landing only below -2 standard errors: 0.1930 against 0.1958, paired -0.0028 (standard error
+0.0014, -1.97 SE), lower on 35 of 65 (the new seeds alone: -0.0031, standard error 0.0017);
+not landed, kept as an option off by default. The next confirmation takes seeds from 305 on."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "roots_joins",
                  "size_once": True, "palette_continued": 0.75}

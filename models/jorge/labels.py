@@ -105,6 +105,7 @@ __all__ = [
     "child_table",
     "restriction_table",
     "restriction_allows",
+    "split_loss_weights",
     "colour_log_likelihood",
     "size_log_likelihood",
     "palette_count_log_likelihood",
