@@ -6,7 +6,9 @@ tracker :func:`models.jorge.strokes.build_strokes` (regions of overlapping boxes
 without a break; occlusion gaps and dominant colours simulated from ``--seed``, as in the
 benchmark), then the registry's on-line labeller, one stroke per protocol step, and its
 final re-identification pass. Config keys: the fields of
-:class:`~models.jorge.strokes.StrokeConfig` and ``fps``.
+:class:`~models.jorge.strokes.StrokeConfig`, ``fps``, and ``split_cover`` (true or false,
+default false: the split prior that prefers partitions,
+:data:`models.jorge.network.FITTED_SPLIT_COVER`, an option off by default).
 """
 
 from __future__ import annotations
@@ -28,15 +30,18 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
 
     if len(inputs) != 1:
         raise InputError(f"jorge needs one box file, got {len(inputs)} inputs")
-    known = set(StrokeConfig.__dataclass_fields__) | {"fps"}
+    known = set(StrokeConfig.__dataclass_fields__) | {"fps", "split_cover"}
     if set(config) - known:
         raise InputError(f"unknown config key(s) {sorted(set(config) - known)}")
+    split_cover = config.get("split_cover", False)
+    if not isinstance(split_cover, bool):
+        raise InputError(f"config split_cover must be true or false, got {split_cover!r}")
     with ctx.timed("read"):
         truth = read_boxes(inputs[0])
-        scfg = StrokeConfig(**{k: v for k, v in config.items() if k != "fps"})
+        scfg = StrokeConfig(**{k: v for k, v in config.items() if k not in ("fps", "split_cover")})
         strokes = build_strokes(ctx.seed, truth, scfg)
     fps = float(config.get("fps", truth.fps))
-    tracker = models.get("jorge").make(fps=fps)
+    tracker = models.get("jorge").make(_online_config(split_cover), fps=fps)
     k_init, keys = split_run_keys(ctx.key(), len(strokes))
     with ctx.timed("label"):
         state = tracker.init(k_init)
@@ -49,8 +54,22 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     _plot(ctx, strokes, labels)
     params = {"num_strokes": len(strokes), "num_groups": strokes.num_groups, "fps": fps,
               "num_frames": truth.num_frames, "sequence": truth.name,
+              "split_cover": split_cover,
               **{k: getattr(scfg, k) for k in StrokeConfig.__dataclass_fields__}}  # fmt: skip
     return {"parameters": params, "outputs": ["strokes.csv", "tracks.txt", "strokes.png"]}
+
+
+def _online_config(split_cover: bool):
+    """The default on-line labeller, with the split cover option on if asked."""
+    from dataclasses import replace
+
+    from models.jorge.network import FITTED_LABELS, FITTED_SPLIT_COVER, NetworkConfig
+    from models.jorge.online import OnlineConfig
+
+    if not split_cover:
+        return OnlineConfig()
+    labels = replace(FITTED_LABELS, split_cover=FITTED_SPLIT_COVER)
+    return OnlineConfig(network=NetworkConfig(labels=labels))
 
 
 def _plot(ctx: RunContext, strokes, labels) -> None:

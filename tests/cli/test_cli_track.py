@@ -235,6 +235,32 @@ def test_jorge_track_eval(tmp_path, capsys):
     assert -1.0 <= mot["mota"] <= 1.0 and 0.0 <= mot["idf1"] <= 1.0
 
 
+def test_jorge_split_cover_option(tmp_path, capsys):
+    from dataclasses import replace
+
+    from models.io.jorge import read_strokes
+    from models.jorge.network import FITTED_LABELS, FITTED_SPLIT_COVER, NetworkConfig
+    from models.jorge.online import OnlineConfig, label_online
+    from models.jorge.strokes import build_strokes, load_caviar
+
+    d = DATA / "jorge"
+    cfg = tmp_path / "cfg.json"
+    cfg.write_text('{"split_cover": true}')
+    out = _track(tmp_path, "jorge", [d / "caviar.xml"], "--config", str(cfg))
+    assert json.loads((out / "summary.json").read_text())["parameters"]["split_cover"] is True
+    _, rows = read_strokes(out / "strokes.csv")
+    strokes = build_strokes(3, load_caviar(d / "caviar.xml"))  # the batch labeller, option on
+    on = OnlineConfig(network=NetworkConfig(labels=replace(FITTED_LABELS, split_cover=FITTED_SPLIT_COVER)))
+    want = label_online(strokes, on).labels
+    assert [r["label"] for r in rows] == list(want)
+    from models.track.jorge import _online_config  # (this small file labels the same either way)
+
+    assert _online_config(True) == on and _online_config(False) == OnlineConfig()
+    cfg.write_text('{"split_cover": "yes"}')
+    _bad(capsys, ["track", "jorge", str(d / "caviar.xml"), "-o", str(tmp_path / "bad"), "--config", str(cfg)],
+         "split_cover")  # fmt: skip
+
+
 def test_jorge_formats_agree():
     from models.io.jorge import read_boxes
 
