@@ -29,9 +29,9 @@ from models.jorge.network import (
     LabelGraph,
     NetworkConfig,
     node_name,
-    solve,
 )
 from models.jorge.strokes import StrokeSet, make_stroke
+from tests.models.jorge.test_jorge_groups import _check_window, _dense_log_joint
 
 SEED_LABELS = replace(FITTED_LABELS, new_group_probs=(1.0,), p_join=0.0)
 
@@ -111,32 +111,10 @@ def test_the_restriction_node_takes_the_group_as_parent():
     assert list(_split_graph(()).window([0, 1, 2]).bn.cpd("r1_2").parents) == [node_name(1), node_name(2)]
 
 
-def _joint(win):
-    """Log joint (times the soft evidence) of every labelling of the active nodes."""
-    bn = win.bn
-    names = [node_name(k) for k in win.active]
-    lps = {}
-    for states in itertools.product(*[range(bn.cardinality(n)) for n in names]):
-        x = dict(zip(names, states)) | win.evidence
-        with np.errstate(divide="ignore"):
-            lps[states] = bn.log_joint(x) + sum(np.log(win.soft_evidence[n][x[n]]) for n in names)
-    return names, lps
-
-
 @pytest.mark.parametrize("split_cover", [(), (1.0, 1.0, 0.9), (1.0, 1.0, 0.2)])
 def test_window_against_brute_force(split_cover):
-    win = _split_graph(split_cover).window([0, 1, 2])
-    res = solve(win)
-    names, lps = _joint(win)
-    best = max(lps, key=lps.get)
-    assert res.log_prob == pytest.approx(lps[best], abs=1e-9)
-    logz = np.logaddexp.reduce(np.array(list(lps.values())))
-    assert res.log_evidence == pytest.approx(logz, abs=1e-9)
-    for i, n in enumerate(names):
-        m = np.zeros(win.bn.cardinality(n))
-        for states, lp in lps.items():
-            m[states[i]] += np.exp(lp - logz)
-        np.testing.assert_allclose(res.marginals[i], m, atol=1e-12)
+    # MAP, evidence and marginals against the dense enumeration oracle of test_jorge_groups
+    _check_window(_split_graph(split_cover).window([0, 1, 2]))
 
 
 def test_window_same_as_pgmpy(assert_window_matches_pgmpy):
@@ -146,12 +124,12 @@ def test_window_same_as_pgmpy(assert_window_matches_pgmpy):
 def test_the_posterior_of_a_partition_rises_with_the_cover_probability():
     def p_partition(split_cover):
         win = _split_graph(split_cover).window([0, 1, 2])
-        _, lps = _joint(win)
-        dom = [win.domains[node_name(k)] for k in range(3)]
-        lp = np.array(list(lps.values()))
-        cover = np.array([len(dom[0][x]) == 3 and dom[0][x] <= dom[1][y] | dom[2][z] for x, y, z in lps])
-        w = np.exp(lp - lp.max())
-        return float(w[cover].sum() / w[(lp > -np.inf)].sum())
+        names, lj = _dense_log_joint(win)
+        dom = [win.domains[n] for n in names]
+        cover = np.array([len(dom[0][x]) == 3 and dom[0][x] <= dom[1][y] | dom[2][z]
+                          for x, y, z in np.ndindex(lj.shape)]).reshape(lj.shape)
+        w = np.exp(lj - lj.max())
+        return float(w[cover].sum() / w.sum())
     eq5 = p_partition(())
     probs = [p_partition((1.0, 1.0, p)) for p in (0.6, 0.9, 0.99)]
     assert p_partition((1.0, 1.0, 0.2)) == pytest.approx(eq5)  # below eq. 5's share: w = 1
