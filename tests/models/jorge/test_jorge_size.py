@@ -4,7 +4,6 @@ inference with it still equal to brute-force enumeration and pgmpy, bad sizes re
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import replace
 
 import numpy as np
@@ -18,28 +17,15 @@ from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 from models.jorge.labels import size_log_likelihood
 from models.jorge.network import LabelGraph, NetworkConfig, node_name, solve
 from models.jorge.strokes import GroundTruth, StrokeConfig, build_strokes, make_stroke
+from tests.models.jorge.test_jorge_network import _brute_force
 
 CFG = NetworkConfig()
 SEED_LABELS = replace(CFG.labels, new_group_probs=(1.0,), p_join=0.0)
 
 
-def _brute_force(win):
-    """Every configuration of the active label nodes, scored from the tables directly."""
-    bn = win.bn
-    names = [node_name(k) for k in win.active]
-    joint = {}
-    for states in itertools.product(*[range(bn.cardinality(n)) for n in names]):
-        x = dict(zip(names, states))
-        x.update({node_name(b): 0 for b in win.boundary})
-        x.update(win.evidence)
-        with np.errstate(divide="ignore"):
-            joint[states] = bn.log_joint(x) + sum(np.log(win.soft_evidence[n][x[n]]) for n in names)
-    return names, joint
-
-
 def _check_against_brute_force(win, atol):
     res = solve(win)
-    names, joint = _brute_force(win)
+    names, joint, _, _ = _brute_force(win)  # test_jorge_network's enumeration
     lps = np.array(list(joint.values()))
     assert res.log_prob == pytest.approx(lps.max(), abs=1e-9)
     # the returned labelling attains the maximum (the same as the argmax when it is
