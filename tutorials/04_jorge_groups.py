@@ -267,11 +267,11 @@ print("means:", np.round(rates.mean(0), 3))
 # (`OnlineConfig.tentative_joiners`); since the fifteenth, a merge's second parent must be
 # covered by the merged region's box, not merely touch it (`NetworkConfig.merge_cover`,
 # chosen on how many links differ from the true ones on training-side data). One option
-# is left off after its comparison: a split prior that prefers partitions
+# is left off after three comparisons: a split prior that prefers partitions
 # (`LabelParams.split_cover`, `network.FITTED_SPLIT_COVER`; seed 004 draws the two parts of
 # a split independently, so its prior expects a group of 4 or 5 to lose people at most
-# splits), which helped groups of 4 in the SIMULATED meetings but stayed within two
-# standard errors overall; turn it on with
+# splits), which helped groups of 4 and 5 in the SIMULATED meetings but stayed within two
+# standard errors overall each time; try it where groups of four or more are common:
 # `NetworkConfig(labels=replace(FITTED_LABELS, split_cover=FITTED_SPLIT_COVER))`. Here we
 # refit on fewer seeds and score the validation part with the default network and the
 # colour-only baseline.

@@ -179,8 +179,8 @@ class LabelParams:
         :math:`p_n`, probability that the two children of a group of ``n = 1, 2, ...``
         people (the last entry for larger groups) that take disjoint parts of it hold all
         of its people (:func:`split_loss_weights`, :func:`restriction_table` with the
-        parent). ``()``, the default, is seed 004's eq. 5. Our addition (issue 16,
-        sixteenth round).
+        parent; the instant labels weigh it given the parent's current label). ``()``, the
+        default, is seed 004's eq. 5. Our addition (issue 16, sixteenth round).
     """
 
     p_new: float = 0.02

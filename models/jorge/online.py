@@ -68,7 +68,7 @@ from models.jorge.labels import (
     birth_stroke,
     colour_log_likelihood,
     prune_labels,
-    restriction_allows,
+    restriction_table,
 )
 from models.jorge.network import LabelGraph, NetworkConfig, node_name
 from models.jorge.strokes import Stroke, StrokeSet
@@ -239,7 +239,11 @@ class OnlineLabeller:
         posteriors), :math:`\ell_s` the current labels of its labelled siblings and
         :math:`p(a_k \mid |x_k|)` the region-size evidence (1 when not recorded or off);
         where one of ``k`` and a sibling is also the other's parent (a nested link) the
-        clash is :func:`~models.jorge.labels.restriction_allows`'s, nested.
+        clash is :func:`~models.jorge.labels.restriction_allows`'s, nested. With
+        ``LabelParams.split_cover`` (an option, off by default), the factor of a sibling
+        with one shared parent (not nested) is the window's restriction CPD given the
+        parent's current label :math:`\ell_p` (:func:`~models.jorge.labels.restriction_table`):
+        1 if :math:`x_k \cup \ell_s \supseteq \ell_p`, :math:`w_{|\ell_p|}` if not.
 
         Returns
         -------
@@ -271,23 +275,31 @@ class OnlineLabeller:
         domain = g.nodes[k].domain
         for sib in g.siblings(k) if siblings else ():
             if sib in self.labels:
-                clash = ~self._allowed(k, domain, sib)
-                if not clash.all():
-                    score = np.where(clash, -np.inf, score)
+                weight = self._restriction_weights(k, domain, sib)
+                if weight.any():
+                    with np.errstate(divide="ignore"):
+                        score = score + np.log(weight)
         score = score - score.max()
         post = np.exp(score)
         return post / post.sum()
 
-    def _allowed(self, k: int, domain: Sequence[Label], sib: int) -> np.ndarray:
-        """Restriction (eq. 5, :func:`~models.jorge.labels.restriction_allows`) between each
-        label of ``domain`` for ``k`` and sibling ``sib``'s current label, nested where the
-        earlier of the two is the later's parent; shape (len(domain),) of bool."""
-        other = self.labels[sib]
-        if k < sib:
-            nested = self.graph.nested(k, sib)
-            return np.array([restriction_allows(lab, other, nested) for lab in domain])
-        nested = self.graph.nested(sib, k)
-        return np.array([restriction_allows(other, lab, nested) for lab in domain])
+    def _restriction_weights(self, k: int, domain: Sequence[Label], sib: int) -> np.ndarray:
+        """Restriction node (eq. 5) between each label of ``domain`` for ``k`` and sibling
+        ``sib``'s current label, as the window's CPD weighs it (``r = 1`` column of
+        :func:`~models.jorge.labels.restriction_table`): nested where the earlier of the two
+        is the later's parent; with ``LabelParams.split_cover``, given their one shared
+        parent's current label. Shape (len(domain),), in [0, 1]."""
+        g = self.graph
+        i, j = sorted((k, sib))
+        nested = g.nested(i, j)
+        cover = g.config.labels.split_cover
+        shared = set(g.nodes[k].parents) & set(g.nodes[sib].parents)
+        parent = None
+        if len(cover) and not nested and len(shared) == 1 and min(shared) in self.labels:
+            parent = [self.labels[min(shared)]]
+        other = [self.labels[sib]]
+        di, dj = (domain, other) if k < sib else (other, domain)
+        return restriction_table(di, dj, nested, parent, cover)[..., 1].reshape(len(domain))
 
     def _relabel(self, k: int) -> None:
         """Eq. 12 posterior of ``k``, its domain capped to ``max_labels``, its label."""

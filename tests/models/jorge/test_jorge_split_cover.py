@@ -30,6 +30,7 @@ from models.jorge.network import (
     NetworkConfig,
     node_name,
 )
+from models.jorge.online import OnlineConfig, OnlineLabeller
 from models.jorge.strokes import StrokeSet, make_stroke
 from tests.models.jorge.test_jorge_groups import _check_window, _dense_log_joint
 
@@ -94,13 +95,20 @@ def test_the_table_is_its_definition(di, dj, dp, cover):
 def _split_graph(split_cover) -> LabelGraph:
     """Three people walk in together (stroke 0, a new group), the group splits into strokes 1
     and 2."""
-    labels = replace(SEED_LABELS, max_group_size=3, new_group_probs=(0.4, 0.3, 0.3), split_cover=split_cover)
-    g = LabelGraph(NetworkConfig(labels=labels))
-    for s in (make_stroke(0, 0, 10, (50, 50), (60, 50), [0, 1, 2, 3, 4, 5], {0, 1, 2}, size=(60, 50)),
-              make_stroke(1, 12, 20, (50, 50), (40, 50), [0, 1, 2], {0}, size=(20, 50)),
-              make_stroke(2, 12, 20, (70, 50), (80, 50), [3, 4, 5], {1, 2}, size=(40, 50))):
+    g = LabelGraph(NetworkConfig(labels=_split_labels(split_cover)))
+    for s in _split_strokes():
         g.add_stroke(s)
     return g
+
+
+def _split_labels(split_cover) -> LabelParams:
+    return replace(SEED_LABELS, max_group_size=3, new_group_probs=(0.4, 0.3, 0.3), split_cover=split_cover)
+
+
+def _split_strokes() -> list:
+    return [make_stroke(0, 0, 10, (50, 50), (60, 50), [0, 1, 2, 3, 4, 5], {0, 1, 2}, size=(60, 50)),
+            make_stroke(1, 12, 20, (50, 50), (40, 50), [0, 1, 2], {0}, size=(20, 50)),
+            make_stroke(2, 12, 20, (70, 50), (80, 50), [3, 4, 5], {1, 2}, size=(40, 50))]
 
 
 def test_the_restriction_node_takes_the_group_as_parent():
@@ -173,3 +181,51 @@ def test_fit_parameters_fits_it_only_where_it_is_on():
 def test_bad_split_cover_raises_naming_the_field(bad):
     with pytest.raises(ModelError, match="split_cover"):
         LabelParams(split_cover=bad)
+
+
+def _instant_oracle(lab: OnlineLabeller, k: int, sib: int, parent: int, w: np.ndarray) -> np.ndarray:
+    """Eq. 12 posterior of ``k`` by its definition: evidence and prior (``_log_score``)
+    times, for the sibling's current label, 0 for a shared object, 1 for a partition of
+    the parent's current label and ``w[n - 1]`` for two disjoint labels that lose someone
+    of a parent of n people."""
+    other, group = lab.labels[sib], lab.labels[parent]
+    weight = np.array([0.0 if x & other else 1.0 if group <= x | other else w[len(group) - 1]
+                       for x in lab.graph.nodes[k].domain])
+    with np.errstate(divide="ignore"):
+        score = lab._log_score(k) + np.log(weight)
+    post = np.exp(score - score.max())
+    return post / post.sum()
+
+
+def _known_people_split() -> list:
+    """Three people seen alone (strokes 0-2) merge (3, then 4) and split: one alone (5), two
+    together (6); with their links."""
+    a, b, c = [0, 1, 2, 3, 4], [5, 6, 7, 8, 9], [10, 11, 0, 5, 6]
+    ab, abc, bc = sorted({*a, *b}), sorted({*a, *b, *c}), sorted({*b, *c})
+    strokes = [make_stroke(0, 0, 10, (10, 50), (40, 50), a, {0}, size=(20, 50)),
+               make_stroke(1, 0, 10, (90, 50), (60, 50), b, {1}, size=(20, 50)),
+               make_stroke(2, 0, 30, (50, 10), (50, 40), c, {2}, size=(20, 50)),
+               make_stroke(3, 12, 25, (50, 50), (50, 50), ab, {0, 1}, size=(40, 50)),
+               make_stroke(4, 32, 50, (50, 50), (50, 50), abc, {0, 1, 2}, size=(60, 50)),
+               make_stroke(5, 52, 60, (40, 50), (20, 50), a, {0}, size=(20, 50)),
+               make_stroke(6, 52, 60, (60, 50), (80, 50), bc, {1, 2}, size=(40, 50))]
+    return list(zip(strokes, ((), (), (), (0, 1), (3, 2), (4,), (4,))))
+
+
+@pytest.mark.parametrize("split_cover", [(), (1.0, 1.0, 0.9), (1.0, 1.0, 0.2)])
+def test_instant_labels_weigh_the_split_as_the_window_does(split_cover):
+    lab = OnlineLabeller(OnlineConfig(network=NetworkConfig(labels=_split_labels(split_cover))))
+    for s, parents in _known_people_split():
+        lab.add_stroke(s, parents)
+    assert len(lab.labels[4]) == 3 and len(lab.labels[5]) == 1  # the group, the one who left
+    w = split_loss_weights(split_cover) if split_cover else np.ones(3)
+    expected = _instant_oracle(lab, 6, 5, 4, w)
+    assert np.allclose(lab.instant_posterior(6), expected, rtol=1e-9, atol=0)
+    dom = lab.graph.nodes[6].domain
+    loses = np.array([not (x & lab.labels[5]) and not lab.labels[4] <= x | lab.labels[5] for x in dom])
+    assert loses.any()
+    eq5 = _instant_oracle(lab, 6, 5, 4, np.ones(3))[loses].sum()
+    if w[2] < 1:  # the labels of the rest that lose someone lose mass
+        assert expected[loses].sum() < eq5
+    else:
+        assert expected[loses].sum() == pytest.approx(eq5)
