@@ -283,6 +283,7 @@ def test_jorge_bad_files(tmp_path, capsys):
     _bad(capsys, ["track", "jorge", str(bad), "-o", str(tmp_path)], "broken.xml:4:")
 
 
+@pytest.mark.heavy  # ~12-22 s: a whole RJ-MCMC run through the CLI; CI runs it (pytest -m heavy)
 def test_rjmcmc3d_track_eval(tmp_path, capsys):
     d = DATA / "rjmcmc3d"
     views = [d / f"view{v}" for v in range(3)]

@@ -111,6 +111,7 @@ def test_default_parameters_are_the_fit_on_the_training_split():
     assert replace(ours, size_once=point["size_once"], palette_continued=point["palette_continued"]) == NetworkConfig()
 
 
+@pytest.mark.heavy  # ~20-35 s: 480 labellings; CI runs it (pytest -m heavy)
 def test_search_scores_every_grid_point_per_seed_and_keeps_the_lowest():
     """The documented search on a small SIMULATED sequence (one gate): one row per grid
     point with one error per scoring seed, and the kept point is the lowest mean."""
