@@ -1057,6 +1057,15 @@ class LabelGraph:
         link (``NetworkConfig.nested_links``; :func:`models.jorge.labels.restriction_allows`)."""
         return i in self.nodes[j].parents
 
+    def cover_parent(self, i: int, j: int) -> int | None:
+        """The group whose split the restriction node of siblings ``i < j`` weighs with
+        ``LabelParams.split_cover`` (:func:`models.jorge.labels.restriction_table`): their one
+        shared parent, if the option is on and the link is not nested; else None."""
+        if not len(self.config.labels.split_cover) or self.nested(i, j):
+            return None
+        shared = set(self.nodes[i].parents) & set(self.nodes[j].parents)
+        return min(shared) if len(shared) == 1 else None
+
     def shared(self, k: int) -> list[bool]:
         """For each parent of ``k``: whether it has a second child."""
         return [len(self.nodes[p].children) >= 2 for p in self.nodes[k].parents]
@@ -1441,18 +1450,16 @@ class LabelGraph:
         return WindowNet(bn, evidence, soft, domains, tuple(active), tuple(sorted(boundary)))
 
     def _restriction_cpd(self, name: str, i: int, j: int, domains: dict) -> TabularCPD:
-        """Restriction node of siblings ``i < j`` (eq. 5); with ``LabelParams.split_cover``
-        and one shared parent that is not nested, that parent is its parent too
+        """Restriction node of siblings ``i < j`` (eq. 5); the group of :meth:`cover_parent`,
+        where there is one in the window, is its parent too
         (:func:`models.jorge.labels.restriction_table`)."""
         di, dj = domains[node_name(i)], domains[node_name(j)]
-        nested = self.nested(i, j)
-        shared = set(self.nodes[i].parents) & set(self.nodes[j].parents)
-        cover = self.config.labels.split_cover
-        if len(cover) and not nested and len(shared) == 1 and node_name(min(shared)) in domains:
-            p = node_name(min(shared))
-            table = restriction_table(di, dj, False, domains[p], cover)
+        group = self.cover_parent(i, j)
+        if group is not None and node_name(group) in domains:
+            p = node_name(group)
+            table = restriction_table(di, dj, False, domains[p], self.config.labels.split_cover)
             return TabularCPD(name, [p, node_name(i), node_name(j)], table)
-        return TabularCPD(name, [node_name(i), node_name(j)], restriction_table(di, dj, nested))
+        return TabularCPD(name, [node_name(i), node_name(j)], restriction_table(di, dj, self.nested(i, j)))
 
 
 @dataclass(frozen=True)

@@ -287,19 +287,17 @@ class OnlineLabeller:
         """Restriction node (eq. 5) between each label of ``domain`` for ``k`` and sibling
         ``sib``'s current label, as the window's CPD weighs it (``r = 1`` column of
         :func:`~models.jorge.labels.restriction_table`): nested where the earlier of the two
-        is the later's parent; with ``LabelParams.split_cover``, given their one shared
-        parent's current label. Shape (len(domain),), in [0, 1]."""
+        is the later's parent; with ``LabelParams.split_cover``, given the current label of
+        their group (:meth:`~models.jorge.network.LabelGraph.cover_parent`). Shape
+        (len(domain),), in [0, 1]."""
         g = self.graph
         i, j = sorted((k, sib))
-        nested = g.nested(i, j)
-        cover = g.config.labels.split_cover
-        shared = set(g.nodes[k].parents) & set(g.nodes[sib].parents)
-        parent = None
-        if len(cover) and not nested and len(shared) == 1 and min(shared) in self.labels:
-            parent = [self.labels[min(shared)]]
+        group = g.cover_parent(i, j)
+        parent = [self.labels[group]] if group is not None and group in self.labels else None
         other = [self.labels[sib]]
         di, dj = (domain, other) if k < sib else (other, domain)
-        return restriction_table(di, dj, nested, parent, cover)[..., 1].reshape(len(domain))
+        table = restriction_table(di, dj, g.nested(i, j), parent, g.config.labels.split_cover)
+        return table[..., 1].reshape(len(domain))
 
     def _relabel(self, k: int) -> None:
         """Eq. 12 posterior of ``k``, its domain capped to ``max_labels``, its label."""
