@@ -353,7 +353,7 @@ class OnlineLabeller:
         while stroke.start >= self._next_inference:
             self.infer(int(np.floor(self._next_inference)))
             self._next_inference += self._period_frames
-        k, widened = self.graph.add_stroke(stroke, parents)
+        k, widened = self.graph.add_stroke(stroke, parents, checked=True)
         for c in sorted(set(widened)):  # parents before children
             self._relabel(c)
         self._relabel(k)
