@@ -622,14 +622,21 @@ def child_table(
     gmax = params.max_group_size
     total = np.zeros(shape[:-1])  # mass per row over all admissible labels (``truncate``)
     for p in range(n):
-        slab = np.zeros((len(parent_domains[p]), len(domain)))
-        mass = np.zeros(len(parent_domains[p]))
+        # a law's pieces are distinct, so each (i, j) of the slab is set once
+        rows, cols, vals, masses = [], [], [], []
         for i, law in enumerate(laws[p]):
+            m = 0.0
             for s, w in law:
-                mass[i] += w_single * w * (len(s) <= gmax)
+                m += w_single * w * (len(s) <= gmax)
                 j = index.get(s)
                 if j is not None:
-                    slab[i, j] += w_single * w
+                    rows.append(i)
+                    cols.append(j)
+                    vals.append(w_single * w)
+            masses.append(m)
+        slab = np.zeros((len(parent_domains[p]), len(domain)))
+        slab[rows, cols] = vals
+        mass = np.array(masses)
         total += mass.reshape([-1 if q == p else 1 for q in range(n)])
         if n == 1:
             table += slab
@@ -705,9 +712,10 @@ def _join(table: np.ndarray, index: dict, new_label: Label, params: LabelParams)
     src = [c for c, _ in moves]
     moved = params.p_join * table[..., src]
     table[..., src] *= 1.0 - params.p_join
-    for t_i, (_, d) in enumerate(moves):
-        if d is not None:
-            table[..., d] += moved[..., t_i]
+    # distinct sources have distinct joins (``a | l_new``), none of them a source
+    has = [t for t, (_, d) in enumerate(moves) if d is not None]
+    if has:
+        table[..., [moves[t][1] for t in has]] += moved[..., has]
 
 
 def _new_mass(new_label: Label, params: LabelParams | None) -> float:

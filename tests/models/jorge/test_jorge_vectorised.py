@@ -3,7 +3,8 @@
 ``label_objects`` / ``union_rows`` (one pass over a domain's objects, then palette unions in
 numpy) must give what :func:`known_objects`, :meth:`LabelGraph.palette_stroke` and a
 per-label union give; the bit-mask merge of :func:`child_table` must give the loop's sums
-to the last bit.
+to the last bit, and so must its inherited and joined mass (set per entry, moved in one
+step) give the per-entry loop's.
 """
 
 from __future__ import annotations
@@ -17,6 +18,8 @@ from models.jorge.labels import (
     LabelParams,
     _merge_mass,
     _merge_mass_loop,
+    _new_column,
+    _new_mass,
     _piece_law,
     admissible_labels,
     birth_stroke,
@@ -102,3 +105,54 @@ def test_merge_past_62_objects_falls_back_to_the_loop():
     np.testing.assert_allclose(table.sum(axis=-1), 1.0)
     merged = domain.index(a[3] | b[5])
     assert table[3, 5, merged] > 0 and table[3, 6, merged] == 0
+
+
+def _child_table_loop(doms, shared, domain, new, params):
+    """:func:`child_table` with ``truncate``, its inherited and joined mass entry by entry."""
+    kept = len(domain)
+    sources = {lab - new for lab in domain if new < lab} - set(domain)
+    domain = [*domain, *sorted(sources, key=sorted)]
+    index = {lab: i for i, lab in enumerate(domain)}
+    n = len(doms)
+    p_merge = (params.p_merge, params.p_merge_one_split, params.p_merge_both_split)[sum(shared)] if n == 2 else 0.0
+    w_single = (1.0 - params.p_new - p_merge) / n
+    laws = _laws(doms, shared, params)
+    table = np.zeros(tuple(len(d) for d in doms) + (len(domain),))
+    total = np.zeros(table.shape[:-1])
+    for p in range(n):
+        slab, mass = np.zeros((len(doms[p]), len(domain))), np.zeros(len(doms[p]))
+        for i, law in enumerate(laws[p]):
+            for piece, w in law:
+                mass[i] += w_single * w * (len(piece) <= params.max_group_size)
+                if piece in index:
+                    slab[i, index[piece]] += w_single * w
+        total += mass.reshape([-1 if q == p else 1 for q in range(n)])
+        table += slab if n == 1 else (slab[:, None, :] if p == 0 else slab[None, :, :])
+    if p_merge > 0:
+        _merge_mass(table, total, laws, index, p_merge, params.max_group_size)
+    moves = [(c, index.get(lab | new)) for lab, c in index.items()
+             if not (lab & new) and len(lab) < params.max_group_size]
+    if moves:
+        src = [c for c, _ in moves]
+        moved = params.p_join * table[..., src]
+        table[..., src] *= 1.0 - params.p_join
+        for t, (_, d) in enumerate(moves):
+            if d is not None:
+                table[..., d] += moved[..., t]
+    table += params.p_new * _new_column(domain, new, params)
+    return table[..., :kept] / (total + params.p_new * _new_mass(new, params))[..., None]
+
+
+@settings(max_examples=60, deadline=None)
+@given(a=st.lists(st.frozensets(st.integers(0, 9), min_size=1, max_size=3), min_size=1, max_size=4, unique=True),
+       b=st.lists(st.frozensets(st.integers(0, 9), min_size=1, max_size=3), min_size=1, max_size=4, unique=True),
+       shared=st.tuples(st.booleans(), st.booleans()), two=st.booleans(), gmax=st.integers(2, 5),
+       keep=st.randoms(use_true_random=False))
+def test_inherited_and_joined_mass_equal_the_entrywise_loop_bit_for_bit(a, b, shared, two, gmax, keep):
+    params = LabelParams(p_new=0.1, p_merge=0.3, p_split=0.7, p_part=0.3, max_group_size=gmax,
+                         new_group_probs=(0.6, 0.3, 0.1), p_join=0.2)
+    (doms, flags), new = ([a, b], list(shared)) if two else ([a], [shared[0]]), frozenset({99})
+    full = admissible_labels(doms, flags, new, gmax, partial=True, max_new=3, join=True)
+    domain = [new] + [lab for lab in full[1:] if keep.random() < 0.6]  # a pruned domain
+    np.testing.assert_array_equal(child_table(doms, flags, domain, new, params, truncate=True),
+                                  _child_table_loop(doms, flags, domain, new, params))
