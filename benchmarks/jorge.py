@@ -244,11 +244,13 @@ the window and the domain cap are not where the error is.
 Eighteenth round (issue 16): speed only; every key but the timings is the same to the
 last bit (quick and full runs against the seventeenth round's code in the same session).
 A node reads its CPD table, colour evidence and chain ratio off what it remembers of its
-last scoring (:mod:`models.jorge.memo`), the size reference's quantile skips
+last scoring (:mod:`models.jorge.memo`), :func:`models.jorge.labels.child_table` sets its
+inherited and joined mass in one numpy step each, the size reference's quantile skips
 ``np.quantile``'s overhead, and each stroke is checked once. On PETS2009 S1L2-2 (the
-slowest sequence, seed 0) callgrind counts 2.48e9 -> 1.98e9 instructions per labelling
+slowest sequence, seed 0) callgrind counts 2.48e9 -> 1.92e9 instructions per labelling
 run. Both codes run side by side on this session's machine, full run: min real-time
-factor 14.2 -> 21.4 (per sequence 1.2-2.3x faster); alone: quick 26.2, full 21.9.
+factor 19.7 -> 25.3 (per sequence 1.2-1.8x faster); alone: quick 32.7, full 24.4 (the
+machine's speed varied twofold within the session).
 """
 
 from __future__ import annotations
