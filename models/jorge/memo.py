@@ -42,6 +42,14 @@ def _positions(axis: Mapping[Label, int], labels: Sequence[Label]) -> list[int] 
         return None
 
 
+def _same_records(memo: EvidenceMemo | ChainMemo, config: object, structure: str,
+                  records: Mapping[int, tuple]) -> bool:
+    """Whether ``memo`` was computed under ``config`` (by identity) and ``structure`` with
+    the palette records ``records`` (object -> (own palette stroke, joiner label))."""
+    return (config is memo.config and structure == memo.structure
+            and all(memo.records.get(o) == rec for o, rec in records.items()))
+
+
 @dataclass(frozen=True)
 class TableMemo:
     """A node's CPD table over the parents' domains and its domain when it was computed.
@@ -117,16 +125,11 @@ class EvidenceMemo:
     def select(self, config: object, structure: str, records: Mapping[int, tuple],
                domain: Sequence[Label]) -> tuple[np.ndarray, np.ndarray] | None:
         """``(colour, palette)`` over ``domain`` (fresh arrays), or None if they cannot be
-        read off the remembered ones; ``records``: the current records of at least the
-        objects of ``domain``."""
-        if config is not self.config or structure != self.structure:
-            return None
+        read off the remembered ones; ``records``: the current records of the objects of
+        ``domain`` (or of more)."""
         pos = _positions(self.axis, domain)
-        if pos is None:
+        if pos is None or not _same_records(self, config, structure, records):
             return None
-        for o in frozenset().union(*domain):
-            if self.records[o] != records[o]:
-                return None
         return self.colour[pos], self.palette[pos]
 
 
@@ -140,7 +143,7 @@ class ChainMemo:
     Attributes
     ----------
     config, structure, records
-        As :class:`EvidenceMemo`'s.
+        As :class:`EvidenceMemo`'s (``records``: of the node's domain's objects).
     axes : (dict Label -> int, dict Label -> int)
         The parent's and the node's labels.
     table : ndarray, shape (len(axes[0]), len(axes[1]))
@@ -159,13 +162,8 @@ class ChainMemo:
                parent_domain: Sequence[Label], domain: Sequence[Label]) -> tuple[bool, np.ndarray | None]:
         """``(True, table)`` over these domains (None where no cell is left, as computing
         afresh gives), or ``(False, None)`` if it cannot be read off."""
-        if config is not self.config or structure != self.structure:
-            return False, None
         rows, cols = _positions(self.axes[0], parent_domain), _positions(self.axes[1], domain)
-        if rows is None or cols is None:
+        if rows is None or cols is None or not _same_records(self, config, structure, records):
             return False, None
-        for o in frozenset().union(*domain):
-            if self.records[o] != records[o]:
-                return False, None
         index = np.ix_(rows, cols)
         return True, (self.table[index] if self.cells[index].any() else None)

@@ -1233,8 +1233,7 @@ class LabelGraph:
         (same config and structure, every label remembered, the same palette records for
         their objects), else computed and remembered. The size evidence is not
         remembered: its reference grows with every stroke. Each shape (len(domain),)."""
-        objs = frozenset().union(*domain)
-        records = {o: (self._own.get(o), self._joiners.get(o)) for o in objs}
+        records = self._palette_records(domain)
         structure = self.structure(k)
         memo = self._evidence_memo.get(k)
         hit = None if memo is None else memo.select(self.config, structure, records, domain)
@@ -1246,6 +1245,12 @@ class LabelGraph:
         axis = {lab: i for i, lab in enumerate(domain)}
         self._evidence_memo[k] = EvidenceMemo(self.config, structure, records, axis, colour, palette)
         return colour, palette
+
+    def _palette_records(self, domain: Sequence[Label]) -> dict[int, tuple]:
+        """What the evidence of ``domain``'s labels reads of each of their objects: its own
+        palette stroke and its joiner label (None where it has none), as the memos of
+        :mod:`models.jorge.memo` compare them."""
+        return {o: (self._own.get(o), self._joiners.get(o)) for o in frozenset().union(*domain)}
 
     def chain_log_ratio(self, k: int) -> np.ndarray | None:
         """Colour correction of stroke ``k`` over (parent label, label) for
@@ -1267,7 +1272,7 @@ class LabelGraph:
             return None
         (p,) = node.parents
         dom_p, dom = self.current_domain(p), tuple(node.domain)
-        records = {o: (self._own.get(o), self._joiners.get(o)) for o in frozenset().union(*dom)}
+        records = self._palette_records(dom)
         structure = self.structure(k)
         memo = self._chain_memo.get(k)
         hit, table = (False, None) if memo is None else memo.select(self.config, structure, records, dom_p, dom)

@@ -84,7 +84,7 @@ def test_evidence_of_a_smaller_domain_is_read_off_the_memo_while_the_records_hol
         g._colour_and_palette_loglik(k, dom)  # remembered
         sub = tuple(dom[i] for i in rng.permutation(len(dom))[: len(dom) - 1])
         memo = g._evidence_memo[k]
-        records = {o: (g._own.get(o), g._joiners.get(o)) for o in F().union(*dom)}
+        records = g._palette_records(dom)
         hit = memo.select(g.config, g.structure(k), records, sub)
         assert hit is not None
         for a, b in zip(hit, _afresh(g, k, sub)):
