@@ -71,6 +71,8 @@ def kbest_score(kind: np.ndarray, obs: np.ndarray, true_obs: np.ndarray, k: int)
         raise ShapeError(f"kind must be (num_steps, K), got {kind.shape}")
     if not 1 <= k <= kind.shape[1]:
         raise InputError(f"k must lie in [1, {kind.shape[1]}], got {k!r}")
+    if kind.shape[0] == 0:
+        raise InputError("kind has no steps: a k-best score needs num_steps >= 1")
     ok = correct_states(kind[:, :k], np.asarray(obs)[:, :k], true_obs)
     return float(np.mean(np.any(ok, axis=1)))
 
@@ -83,6 +85,8 @@ def path_score(kind: np.ndarray, obs: np.ndarray, true_obs: np.ndarray) -> PathS
     kind, obs : (num_steps,) the recovered state of every step.
     true_obs : (num_steps,) the target's observation index, -1 when hidden.
     """
+    if np.size(kind) == 0:
+        raise InputError("kind has no steps: a path score needs num_steps >= 1")
     ok = correct_states(np.asarray(kind), np.asarray(obs), true_obs)
     tv = np.asarray(true_obs) >= 0
 

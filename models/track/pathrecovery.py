@@ -115,6 +115,9 @@ def evaluate(result: str, truth: str) -> dict:
 
     pred, true = read_path(result), read_path(truth)
     steps = sorted(t for t in true if t >= 1)
+    if not steps:
+        raise InputError(f"{truth}: no step t >= 1 to score (the path score counts the "
+                         f"steps after the target's start at t = 0)")
     missing = [t for t in steps if t not in pred]
     if missing:
         raise InputError(f"{result}: no state for step(s) {missing[:5]} of {truth}")

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -210,6 +211,18 @@ def test_pathrecovery_bad_network(tmp_path, capsys):
     argv = ["track", "pathrecovery", str(d / "bad_edges.csv"), str(d / "observations.csv"),
             "-o", str(tmp_path)]  # fmt: skip
     _bad(capsys, argv, "bad_edges.csv", "sum")
+
+
+def test_pathrecovery_eval_truth_without_steps(tmp_path, capsys):
+    """A truth path that holds only the start (t = 0) leaves nothing to score: a clear
+    error naming the file, not a metric of an empty mean (NaN and a numpy warning)."""
+    lines = (DATA / "pathrecovery" / "truth_path.csv").read_text().splitlines()
+    truth = tmp_path / "start_only.csv"
+    truth.write_text("\n".join(lines[:2]) + "\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _bad(capsys, ["eval", "pathrecovery", str(truth), str(truth)], "start_only.csv",
+             "no step t >= 1")
 
 
 def test_jorge_track_eval(tmp_path, capsys):
