@@ -1342,7 +1342,16 @@ class LabelGraph:
         """:meth:`cpd_table` computed afresh (:func:`~models.jorge.labels.child_table` or
         :func:`~models.jorge.labels.root_table`)."""
         node = self.nodes[k]
-        entries = math.prod(len(d) for d in parent_domains) * len(node.domain)
+        self._check_table_size(k, parent_domains)
+        if node.parents:
+            return child_table(parent_domains, shared, node.domain,
+                               frozenset({k}), self.config.labels, truncate=self.config.truncate_pruned)
+        return root_table(node.domain, frozenset({k}), self.config.labels)
+
+    def _check_table_size(self, k: int, parent_domains: list[tuple[Label, ...]]) -> None:
+        """Raise a :class:`ModelError` if node ``k``'s CPD table over ``parent_domains``
+        would hold more than ``_MAX_TABLE_ENTRIES`` entries."""
+        entries = math.prod(len(d) for d in parent_domains) * len(self.nodes[k].domain)
         if entries > _MAX_TABLE_ENTRIES:
             raise ModelError(
                 f"node {k}: its CPD table over unpruned domains would hold {entries:.3g} entries "
@@ -1350,10 +1359,6 @@ class LabelGraph:
                 "grow along a chain: label on line (OnlineLabeller prunes the domains) or "
                 "prune them (set_domain)"
             )
-        if node.parents:
-            return child_table(parent_domains, shared, node.domain,
-                               frozenset({k}), self.config.labels, truncate=self.config.truncate_pruned)
-        return root_table(node.domain, frozenset({k}), self.config.labels)
 
     # --- freezing and pruning --------------------------------------------------------------
     def freeze(self, k: int, label: Label) -> None:
@@ -1464,6 +1469,8 @@ class LabelGraph:
                 raise UnknownVariableError(f"window: unknown node {a}")
             if self.nodes[a].frozen is not None:
                 raise InputError(f"window: node {a} is frozen and cannot be active")
+        for a in active:  # every table's size checked before any is built
+            self._check_table_size(a, self.parent_domains(a))
         boundary: set[int] = set()
         pairs: set[tuple[int, int]] = set()
         for a in active:

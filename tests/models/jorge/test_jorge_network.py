@@ -161,8 +161,8 @@ def test_window_rejects_unknown_nodes():
 
 def test_unpruned_domains_too_large_raise_a_model_error():
     """With new groups and joins the unpruned domains of the example grow along its chain;
-    the window refuses a table past the limit with a ModelError (not a raw MemoryError),
-    while the on-line labeller, which prunes, labels the strokes."""
+    the window refuses a table past the limit with a ModelError (not a raw MemoryError)
+    before it builds any table, while the on-line labeller, which prunes, labels the strokes."""
     from models.jorge.online import OnlineConfig, label_online
 
     seed = _graph()
@@ -172,5 +172,6 @@ def test_unpruned_domains_too_large_raise_a_model_error():
         g.add_stroke(node.stroke)
     with pytest.raises(ModelError, match="node 5: its CPD table"):
         g.window(range(6))
+    assert not g._cpd_memo  # refused before any table was built (node 4's holds 5e7)
     labels = label_online([n.stroke for n in seed.nodes], OnlineConfig(network=cfg)).labels
     assert labels[3] != labels[4]
