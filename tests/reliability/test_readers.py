@@ -10,6 +10,7 @@ Any other exception fails the test. The default run draws a few examples per rea
 
 from __future__ import annotations
 
+import functools
 import re
 import shutil
 import tempfile
@@ -182,11 +183,19 @@ def test_known_bif_failures_are_library_errors(tmp_path) -> None:
 
 
 # --- evidence / marginals CSV ------------------------------------------------------------
-def _evidence(path: Path):
-    from models.io.dbn import read_evidence, read_two_slice_bif
+@functools.cache
+def _umbrella():
+    """The evidence's DBN, read once (pgmpy's BIF parser builds its grammar anew on each
+    read: about 1 s)."""
+    from models.io.dbn import read_two_slice_bif
 
-    dbn = read_two_slice_bif(DATA / "dbn" / "umbrella.bif")
-    cols = read_evidence(path, dbn)
+    return read_two_slice_bif(DATA / "dbn" / "umbrella.bif")
+
+
+def _evidence(path: Path):
+    from models.io.dbn import read_evidence
+
+    cols = read_evidence(path, _umbrella())
     for arr in cols.values():
         assert arr.dtype.kind == "i" and np.all((arr >= -1) & (arr < 2))
     return cols
