@@ -1461,6 +1461,12 @@ class LabelGraph:
         Returns
         -------
         WindowNet
+
+        Raises
+        ------
+        ModelError
+            An active node's CPD table would hold more than 5e7 entries (checked for
+            every node before any table is built).
         """
         active = sorted(int(a) for a in active)
         act = set(active)
