@@ -290,6 +290,11 @@ def test_scoring_rules():
     assert np.isnan(path_score(np.array([0]), np.array([5]), np.array([5])).hidden)
     with pytest.raises(InputError):
         kbest_score(kind, obs, true_obs, 3)
+    empty = np.zeros(0, dtype=np.int64)
+    with pytest.raises(InputError, match="no steps"):  # not NaN with numpy's warning
+        path_score(empty, empty, empty)
+    with pytest.raises(InputError, match="no steps"):
+        kbest_score(empty.reshape(0, 2), empty.reshape(0, 2), empty, 1)
 
 
 # ----------------------------------------------------------------------------- bad input
