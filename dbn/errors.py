@@ -21,6 +21,7 @@ __all__ = [
     "FrontierTooLargeError",
     "EvidenceError",
     "InputError",
+    "ConfigError",
     "ShapeError",
     "NonFiniteError",
     "TimeOrderError",
@@ -94,6 +95,11 @@ class NonFiniteError(InputError):
 
 class TimeOrderError(InputError):
     """Observations or log timestamps go backwards in time (or quit before enter)."""
+
+
+class ConfigError(InputError):
+    """A tracker option (a ``--config`` key or value) is unknown or invalid; the message
+    names the key, and ``dbntrack track`` puts the config file before it."""
 
 
 class FileFormatError(InputError):

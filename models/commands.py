@@ -106,7 +106,7 @@ def list_trackers(as_json: bool = False) -> None:
 
 def track(args: argparse.Namespace) -> dict:
     """Run ``dbntrack track``; returns the summary written to ``OUTDIR/summary.json``."""
-    from dbn.errors import InputError
+    from dbn.errors import ConfigError, InputError, in_file
     from models.track import runner
     from models.track.context import RunContext, clean, versions, write_summary
 
@@ -126,7 +126,10 @@ def track(args: argparse.Namespace) -> dict:
     t0 = time.perf_counter()
     summary = {"tracker": args.name, "inputs": [str(Path(p).resolve()) for p in args.inputs],
                "seed": args.seed, "config": dict(config)}  # fmt: skip
-    summary.update(mod.track(ctx, list(args.inputs), config))
+    try:
+        summary.update(mod.track(ctx, list(args.inputs), config))
+    except ConfigError as exc:  # the option's key is named; name the file it came from
+        raise (in_file(exc, args.config) if args.config else exc) from None
     if args.truth:
         with ctx.timed("eval"):
             summary["truth"] = str(Path(args.truth).resolve())

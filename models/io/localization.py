@@ -24,7 +24,7 @@ from dbn.errors import InputError, TimeOrderError
 from models.io.table import as_float, fail, read_lines, read_rows, write_rows
 from models.localization.mrclam import MRCLAMRobot
 
-__all__ = ["read_dat", "read_mrclam_folder", "read_generic", "write_poses", "read_poses"]
+__all__ = ["read_dat", "mrclam_file", "read_mrclam_folder", "read_generic", "write_poses", "read_poses"]
 
 
 def read_dat(path: str | Path, num_columns: int) -> np.ndarray:
@@ -48,6 +48,12 @@ def _read_dat(path: Path, num_columns: int) -> tuple[np.ndarray, list[int]]:
     if not rows:
         raise fail(path, 0, "no data rows")
     return np.asarray(rows, dtype=np.float64), lines
+
+
+def mrclam_file(folder: str | Path, stem: str) -> Path:
+    """The file ``stem.dat`` (or ``stem.dat.gz``) of an MRCLAM folder, e.g.
+    ``Robot1_Odometry``; an :class:`InputError` if it has neither."""
+    return _find(Path(folder), stem)
 
 
 def _find(folder: Path, stem: str, required: bool = True) -> Path | None:

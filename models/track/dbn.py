@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from dbn.dbn import TwoSliceDBN
-from dbn.errors import InputError
+from dbn.errors import ConfigError, InputError
 from models.io.dbn import read_evidence, read_states, read_two_slice_bif, write_marginals
 from models.track.context import RunContext
 
@@ -50,7 +50,7 @@ def _generic(ctx, dbn, ev, method: str, hidden, options: dict):
     except ModuleNotFoundError as exc:  # an engine of inference.filter not installed yet
         raise InputError(f"method {method!r} is not available here (missing {exc.name})") from None
     except TypeError as exc:  # an option the engine does not take
-        raise InputError(f"method {method!r}: {exc}") from None
+        raise ConfigError(f"method {method!r}: {exc}") from None
     return {n: np.asarray(res.marginals[n]) for n in hidden}, np.asarray(res.log_likelihoods)
 
 
@@ -61,6 +61,8 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     method = config.pop("method", None) or "exact"
     if method not in METHODS:
         raise InputError(f"method = {method!r}; valid: {', '.join(METHODS)}")
+    if method == "exact" and config:  # they would be ignored
+        raise ConfigError(f"unknown config key(s) {sorted(config)}: the exact filter takes no options")
     with ctx.timed("read"):
         dbn = read_two_slice_bif(inputs[0])
         ev = read_evidence(inputs[1], dbn)

@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from dbn.errors import InputError
+from dbn.errors import ConfigError, InputError
 from models.io.jorge import read_boxes, read_strokes, write_mot_tracks, write_strokes
 from models.track.context import RunContext
+from models.track.options import build, check_keys, flag, number
 
 INPUTS = ("BOXES: CAVIAR CVML .xml, PETS2009 .xml or MOTChallenge gt.txt (may be .gz)",)
 
@@ -30,17 +31,16 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
 
     if len(inputs) != 1:
         raise InputError(f"jorge needs one box file, got {len(inputs)} inputs")
-    known = set(StrokeConfig.__dataclass_fields__) | {"fps", "split_cover"}
-    if set(config) - known:
-        raise InputError(f"unknown config key(s) {sorted(set(config) - known)}")
-    split_cover = config.get("split_cover", False)
-    if not isinstance(split_cover, bool):
-        raise InputError(f"config split_cover must be true or false, got {split_cover!r}")
+    check_keys(config, set(StrokeConfig.__dataclass_fields__) | {"fps", "split_cover"})
+    split_cover = flag(config, "split_cover", False)
+    scfg = build(StrokeConfig, {k: v for k, v in config.items() if k not in ("fps", "split_cover")})
+    fps = number(config, "fps") if "fps" in config else None
+    if fps is not None and not fps > 0:
+        raise ConfigError(f"config fps = {fps!r}: expected a number > 0")
     with ctx.timed("read"):
         truth = read_boxes(inputs[0])
-        scfg = StrokeConfig(**{k: v for k, v in config.items() if k not in ("fps", "split_cover")})
         strokes = build_strokes(ctx.seed, truth, scfg)
-    fps = float(config.get("fps", truth.fps))
+    fps = truth.fps if fps is None else fps
     tracker = models.get("jorge").make(_online_config(split_cover), fps=fps)
     k_init, keys = split_run_keys(ctx.key(), len(strokes))
     with ctx.timed("label"):

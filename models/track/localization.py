@@ -15,9 +15,16 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from dbn.errors import InputError
-from models.io.localization import read_generic, read_mrclam_folder, read_poses, write_poses
+from dbn.errors import ConfigError, InputError
+from models.io.localization import (
+    mrclam_file,
+    read_generic,
+    read_mrclam_folder,
+    read_poses,
+    write_poses,
+)
 from models.track.context import RunContext
+from models.track.options import array, check_keys, integer, number, text
 
 INPUTS = ("an MRCLAM dataset folder (RobotN_Odometry.dat, ...), or",
           "odometry.csv measurements.csv landmarks.csv [groundtruth.csv]")  # fmt: skip
@@ -25,33 +32,52 @@ _KEYS = {"robot", "duration", "dt", "num_particles", "algorithm", "initial_pose"
 
 
 def _read(inputs: list[str], config: dict):
+    """The robot's data and the odometry file's path (for errors)."""
     if len(inputs) == 1 and Path(inputs[0]).is_dir():
-        return read_mrclam_folder(inputs[0], int(config.get("robot", 1)))
+        robot = integer(config, "robot", 1)
+        return read_mrclam_folder(inputs[0], robot), mrclam_file(inputs[0], f"Robot{robot}_Odometry")
     if len(inputs) in (3, 4):
-        return read_generic(*inputs)
+        return read_generic(*inputs), Path(inputs[0])
     raise InputError(
         f"localization needs an MRCLAM folder or 3-4 CSV files, got {len(inputs)} input(s)"
     )
 
 
-def _sequence(data, config: dict):
+def _options(config: dict) -> dict:
+    """The config's options, checked before any file is read."""
+    check_keys(config, _KEYS)
+    initial = array(config, "initial_pose") if "initial_pose" in config else None
+    if initial is not None and initial.shape != (3,):
+        raise ConfigError(f"config initial_pose = {config['initial_pose']!r}: need [x, y, theta]")
+    opts = {"initial_pose": initial, "dt": number(config, "dt", 0.1),
+            "duration": number(config, "duration") if config.get("duration") else None,
+            "start": number(config, "start") if config.get("start") is not None else None,
+            "num_particles": integer(config, "num_particles", 2000),
+            "algorithm": text(config, "algorithm", "apf")}  # fmt: skip
+    if not opts["dt"] > 0:
+        raise ConfigError(f"config dt = {opts['dt']!r}: expected a step > 0 s")
+    if opts["duration"] is not None and not opts["duration"] > opts["dt"]:
+        raise ConfigError(f"config duration = {opts['duration']!r}: expected more than one step "
+                          f"(dt = {opts['dt']!r})")  # fmt: skip
+    return opts
+
+
+def _sequence(data, odometry: Path, opts: dict):
     from models.localization.mrclam import build_sequence
 
-    initial = config.get("initial_pose")
-    if initial is not None:
-        initial = np.asarray(initial, dtype=np.float64)
-        if initial.shape != (3,) or not np.isfinite(initial).all():
-            raise InputError(
-                f"config initial_pose = {config['initial_pose']!r}: need [x, y, theta]"
-            )
+    initial = opts["initial_pose"]
     if data.groundtruth is None:
         if initial is None:
             raise InputError("no ground truth to start from: give initial_pose in --config")
         data = data._replace(groundtruth=np.array([[data.odometry[0, 0], *initial]]))
-    dt = float(config.get("dt", 0.1))
+    dt, duration = opts["dt"], opts["duration"]
     t0 = max(data.odometry[0, 0], data.groundtruth[0, 0])
-    duration = float(config.get("duration") or (data.odometry[-1, 0] - t0 - 1e-9))
-    seq = build_sequence(data, duration=duration, dt=dt, start=config.get("start"))
+    if duration is None:
+        duration = float(data.odometry[-1, 0] - t0 - 1e-9)
+        if not duration > dt:
+            raise InputError(f"{odometry}: the odometry runs {duration + 1e-9:.6g} s from the start "
+                             f"(t = {t0:.6g}), less than one step (dt = {dt:g})")  # fmt: skip
+    seq = build_sequence(data, duration=duration, dt=dt, start=opts["start"])
     if initial is not None:
         seq = seq._replace(truth=np.vstack([initial, seq.truth[1:]]))
     return seq, data
@@ -66,16 +92,18 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     from models.localization.mrclam import mrclam_model
     from models.protocol import split_run_keys
 
-    unknown = set(config) - _KEYS
-    if unknown:
-        raise InputError(f"unknown config key(s) {sorted(unknown)}; valid: {sorted(_KEYS)}")
+    opts = _options(config)
     with ctx.timed("read"):
-        data = _read(inputs, config)
-        seq, data = _sequence(data, config)
-    n_part = int(config.get("num_particles", 2000))
-    tracker = models.get("localization").make(
-        model=mrclam_model(seq), num_particles=n_part, algorithm=config.get("algorithm", "apf")
-    )
+        data, odometry = _read(inputs, config)
+        seq, data = _sequence(data, odometry, opts)
+    n_part = opts["num_particles"]
+    model = mrclam_model(seq)
+    try:
+        tracker = models.get("localization").make(
+            model=model, num_particles=n_part, algorithm=opts["algorithm"]
+        )
+    except InputError as exc:  # num_particles or algorithm
+        raise ConfigError(str(exc)) from None
     obs = seq.observations
     T = len(seq.odometry)
     k_init, keys = split_run_keys(ctx.key(), T)  # the protocol's run, with progress
@@ -92,8 +120,8 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
                 means[k] = np.asarray(mean_fn(p.particles, p.log_weights))
     write_poses(ctx.outdir / "poses.csv", seq.times[1:], means)
     _plot(ctx, seq, means, data.groundtruth if len(data.groundtruth) > 1 else None)
-    params = {"num_particles": n_part, "algorithm": config.get("algorithm", "apf"),
-              "dt": float(config.get("dt", 0.1)), "num_steps": T,
+    params = {"num_particles": n_part, "algorithm": opts["algorithm"],
+              "dt": opts["dt"], "num_steps": T,
               "initial_pose": [float(x) for x in seq.truth[0]]}  # fmt: skip
     return {"parameters": params, "outputs": ["poses.csv", "trajectory.png"]}
 

@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from dbn.errors import InputError
+from dbn.errors import ConfigError, InputError
 from models.io.pathrecovery import read_network, read_observations, read_path, write_path
 from models.track.context import RunContext
+from models.track.options import array, build, check_keys, integer
 
 INPUTS = ("EDGES.csv: from,to,prob[,gap_mean] camera network (with self loops)",
           "OBSERVATIONS.csv: t,camera,f0,f1,... (the target's start at t = 0)",
@@ -25,12 +26,12 @@ INPUTS = ("EDGES.csv: from,to,prob[,gap_mean] camera network (with self loops)",
 
 def _start(odb, config: dict) -> tuple[int, np.ndarray]:
     if "c0" in config and "f0" in config:
-        return int(config["c0"]), np.asarray(config["f0"], float)
+        return integer(config, "c0"), array(config, "f0")
     lo, hi = int(odb.time_ptr[0]), int(odb.time_ptr[1])
     if "target_obs" in config:
-        hit = np.flatnonzero(odb.ids[lo:hi] == int(config["target_obs"]))
+        hit = np.flatnonzero(odb.ids[lo:hi] == integer(config, "target_obs"))
         if hit.size != 1:
-            raise InputError(f"config target_obs = {config['target_obs']}: no such obs at t = 0")
+            raise ConfigError(f"config target_obs = {config['target_obs']}: no such obs at t = 0")
         i = lo + int(hit[0])
     elif hi - lo == 1:
         i = lo
@@ -51,15 +52,14 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     if len(inputs) not in (2, 3):
         raise InputError(f"pathrecovery needs EDGES.csv OBSERVATIONS.csv [CAMERAS.csv], "
                          f"got {len(inputs)} input(s)")  # fmt: skip
+    check_keys(config, set(FilterConfig._fields) | {"c0", "f0", "target_obs", "sigma", "k_dp"})
+    fcfg = build(FilterConfig, {k: config[k] for k in FilterConfig._fields if k in config})
+    k_dp = integer(config, "k_dp", 7)
     with ctx.timed("read"):
         net = read_network(inputs[0], inputs[2] if len(inputs) == 3 else None)
         odb = read_observations(inputs[1])
-    known = set(FilterConfig._fields) | {"c0", "f0", "target_obs", "sigma", "k_dp"}
-    if set(config) - known:
-        raise InputError(f"unknown config key(s) {sorted(set(config) - known)}")
     c0, f0 = _start(odb, config)
-    sigma = np.asarray(config.get("sigma", np.atleast_2d(np.cov(odb.feat.T))), float)
-    fcfg = FilterConfig(**{k: config[k] for k in FilterConfig._fields if k in config})
+    sigma = array(config, "sigma") if "sigma" in config else np.atleast_2d(np.cov(odb.feat.T))
     model = make_model(net, c0, f0, sigma, fcfg)
     tracker = models.get("pathrecovery").make(model=model)
     T = odb.time_ptr.size - 1
@@ -74,7 +74,6 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     lists = KBestLists(*(np.stack([getattr(i, f) for i in infos])
                          for f in ("kind", "cam", "ta", "obs", "mass", "num_tracked_cameras")),
                        step_seconds=np.zeros(T - 1))  # fmt: skip
-    k_dp = int(config.get("k_dp", 7))
     with ctx.timed("recover"):
         path = recover_path(model, lists, odb.feat, k=min(k_dp, fcfg.k))
     ids = np.where(path.obs >= 0, odb.ids[np.maximum(path.obs, 0)], -1)

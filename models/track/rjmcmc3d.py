@@ -11,25 +11,33 @@ from __future__ import annotations
 
 import numpy as np
 
-from dbn.errors import InputError
+from dbn.errors import ConfigError, InputError
 from models.io.rjmcmc3d import detections, read_png, read_tracks3d, read_view, warp, write_tracks3d
 from models.track.context import RunContext
+from models.track.options import array, build, check_keys, integer, number
 
 INPUTS = ("VIEW_DIR ...: one folder per camera: a Tsai calibration .xml and one foreground "
           "mask .png per frame",)  # fmt: skip
 
 
-def _scene(ctx, views, config: dict):
+def _floor(floor: np.ndarray, error: type) -> np.ndarray:
+    if floor.shape != (4,) or not (floor[1] > floor[0] and floor[3] > floor[2]):
+        raise error(f"floor = {floor.tolist()}: need [x_min, x_max, y_min, y_max]")
+    return floor
+
+
+def _scene(ctx, views, floor: np.ndarray | None, sigma_px: float):
+    """The scene of the views; ``floor`` (from the config) else the span of the camera
+    centres."""
     from models.rjmcmc3d.scene import scene_from_cameras
 
     cams = [v.camera for v in views]
     centres = np.array([-c.R.T @ c.t for c in cams])
-    floor = np.asarray(config.get("floor", [*np.sort(centres[:, 0])[[0, -1]],
-                                            *np.sort(centres[:, 1])[[0, -1]]]), float)  # fmt: skip
-    if floor.shape != (4,) or not (floor[1] > floor[0] and floor[3] > floor[2]):
-        raise InputError(f"floor = {floor.tolist()}: need [x_min, x_max, y_min, y_max]")
+    if floor is None:
+        floor = _floor(np.array([*np.sort(centres[:, 0])[[0, -1]],
+                                 *np.sort(centres[:, 1])[[0, -1]]]), InputError)  # fmt: skip
     V = len(cams)
-    sigma = np.full(V, float(config.get("sigma_px", 4.0)))
+    sigma = np.full(V, sigma_px)
     return scene_from_cameras(ctx.seed, cams, floor, np.ones((V, 3)), sigma)
 
 
@@ -66,23 +74,24 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     from models.protocol import split_run_keys
     from models.rjmcmc3d.model import TrackerParams
 
-    known = set(TrackerParams._fields) | {"floor", "scale", "min_blob", "sigma_px"}
-    if set(config) - known:
-        raise InputError(f"unknown config key(s) {sorted(set(config) - known)}")
+    check_keys(config, set(TrackerParams._fields) | {"floor", "scale", "min_blob", "sigma_px"})
+    params = build(TrackerParams, {k: config[k] for k in TrackerParams._fields if k in config})
+    scale, min_blob = number(config, "scale", 1.0), integer(config, "min_blob", 40)
+    sigma_px = number(config, "sigma_px", 4.0)
+    floor = _floor(array(config, "floor"), ConfigError) if "floor" in config else None
     with ctx.timed("read"):
-        views = [read_view(p, float(config.get("scale", 1.0))) for p in inputs]
+        views = [read_view(p, scale) for p in inputs]
         n = {len(v.masks) for v in views}
         if len(n) != 1:
             raise InputError(f"the views have different numbers of masks: {sorted(n)}")
-        scene = _scene(ctx, views, config)
-    params = TrackerParams(**{k: config[k] for k in TrackerParams._fields if k in config})
+        scene = _scene(ctx, views, floor, sigma_px)
     tracker = models.get("rjmcmc3d").make(scene=scene, params=params)
     T = len(views[0].masks)
     k_init, keys = split_run_keys(ctx.key(), T)
     frames, ids, X, pres = [], [], [], []
     with ctx.timed("track"):
         state = tracker.init(k_init)
-        frame_iter = _frames(views, scene, int(config.get("min_blob", 40)))
+        frame_iter = _frames(views, scene, min_blob)
         for t, frame in ctx.progress(enumerate(frame_iter), T, "frames"):
             state, res = tracker.step(keys[t], state, frame)
             frames.append(t + 1)

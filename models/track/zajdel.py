@@ -20,10 +20,11 @@ from __future__ import annotations
 import jax
 import numpy as np
 
-from dbn.errors import InputError
+from dbn.errors import ConfigError, InputError
 from models.io.zajdel import read_labels, read_observations, write_labels, write_partition
 from models.protocol import split_run_keys
 from models.track.context import RunContext
+from models.track.options import array, build, check_keys, integer, number, text
 
 INPUTS = ("OBSERVATIONS.csv: one row per camera pass (or enter/leave events), "
           "appearance columns a0..",)  # fmt: skip
@@ -37,15 +38,15 @@ def _path_and_start(table, config: dict):
     from models.zajdel.path import make_path_model
 
     o = table.obs
-    C = int(config.get("num_cameras", int(o.camera.max()) + 1))
-    B = int(config.get("num_borders", int(max(o.border_enter.max(), o.border_quit.max())) + 1))
-    trans = np.asarray(config.get("trans", np.full((C, B, C, B), 1.0 / (C * B))), float)
-    entry = np.asarray(config.get("entry", np.full((C, B), 1.0 / (C * B))), float)
+    C = integer(config, "num_cameras", int(o.camera.max()) + 1)
+    B = integer(config, "num_borders", int(max(o.border_enter.max(), o.border_quit.max())) + 1)
+    trans = array(config, "trans", np.full((C, B, C, B), 1.0 / (C * B)))
+    entry = array(config, "entry", np.full((C, B), 1.0 / (C * B)))
     span = float(o.t_quit.max() - o.t_enter.min())
-    window = float(config.get("window", max(span, 1.0)))
+    window = number(config, "window", max(span, 1.0))
     path = make_path_model(trans, entry, 1.0, 1.0, window)
-    start = initial_params(o, path, config.get("p_new"))
-    travel = {k: config[k] for k in ("travel_mean", "travel_std") if k in config}
+    start = initial_params(o, path, number(config, "p_new") if "p_new" in config else None)
+    travel = {k: array(config, k) for k in ("travel_mean", "travel_std") if k in config}
     if travel:
         mu = np.broadcast_to(travel.get("travel_mean", start.path.travel_mean), (C, C))
         sd = np.broadcast_to(travel.get("travel_std", start.path.travel_std), (C, C))
@@ -54,25 +55,26 @@ def _path_and_start(table, config: dict):
 
 
 def _split_config(config: dict, cls) -> tuple[dict, object]:
+    """The fields of the tracker's config class ``cls`` and the instance; every key and
+    type checked (before any file is read)."""
+    check_keys(config, _MODEL_KEYS | set(cls._fields))
     fields = {k: config[k] for k in cls._fields if k in config}
-    unknown = set(config) - _MODEL_KEYS - set(cls._fields)
-    if unknown:
-        raise InputError(f"unknown config key(s) {sorted(unknown)}")
-    return fields, cls(**fields)
+    if text(config, "decode", "chain") not in ("chain", "online"):
+        raise ConfigError(f"config decode = {config['decode']!r}, expected 'chain' or 'online'")
+    return fields, build(cls, fields)
 
 
-def _run_adf(ctx: RunContext, table, start, config: dict):
+def _run_adf(ctx: RunContext, table, start, config: dict, fields: dict, cfg):
     import models
     from models.protocol import split_run_keys
     from models.zajdel.api import one_per_step
     from models.zajdel.params import ZajdelParams, default_prior
-    from models.zajdel.tracker import ADFConfig, RunResult
+    from models.zajdel.tracker import RunResult
 
     v = float(np.mean(np.diag(start.prior_cov))) * 2.0
-    within = float(config.get("within_std", np.sqrt(v / 2)))
-    between = float(config.get("between_std", np.sqrt(v / 2)))
+    within = number(config, "within_std", np.sqrt(v / 2))
+    between = number(config, "between_std", np.sqrt(v / 2))
     params = ZajdelParams(default_prior(start.mean, within, between), start.path, start.p_new)
-    fields, cfg = _split_config(config, ADFConfig)
     tracker = models.get("zajdel_adf").make(params=params, config=cfg)
     steps = one_per_step(table.obs)
     k_init, keys = split_run_keys(ctx.key(), len(steps))
@@ -82,9 +84,7 @@ def _run_adf(ctx: RunContext, table, start, config: dict):
         infos.append(info)
     stacked = [np.stack([np.asarray(x[i]) for x in infos]) for i in range(len(infos[0]))]
     res = RunResult(*stacked, counter=None, first_index=0)
-    decode = config.get("decode", "chain")
-    if decode not in ("chain", "online"):
-        raise InputError(f"decode = {decode!r}, expected 'chain' or 'online'")
+    decode = text(config, "decode", "chain")
     labels = res.labels_chain() if decode == "chain" else res.labels_online()
     extra = {"decode": decode, "within_std": within, "between_std": between, **fields,
              "final_people_estimate": float(res.counter_mean[-1]),
@@ -92,11 +92,9 @@ def _run_adf(ctx: RunContext, table, start, config: dict):
     return labels, res.label_matrix(), extra
 
 
-def _run_learnsearch(ctx: RunContext, table, start, config: dict):
+def _run_learnsearch(ctx: RunContext, table, start, config: dict, fields: dict, cfg):
     import models
-    from models.zajdel.learnsearch import LearnSearchConfig
 
-    fields, cfg = _split_config(config, LearnSearchConfig)
     if "stream_window" in config:
         return _run_learnsearch_stream(ctx, table, start, config, fields, cfg)
     tracker = models.get("zajdel_learnsearch").make(params=start, config=cfg)
@@ -115,7 +113,7 @@ def _run_learnsearch_stream(ctx: RunContext, table, start, config: dict, fields,
     from models.zajdel.data import take
     from models.zajdel.scores import canonical_labels
 
-    window, close_z = config["stream_window"], config.get("close_z", 5.0)
+    window, close_z = integer(config, "stream_window"), number(config, "close_z", 5.0)
     tracker = models.get("zajdel_learnsearch").make(start, cfg, window=window, close_z=close_z)
     o = table.obs
     k_init, keys = split_run_keys(ctx.key(), o.num_obs)
@@ -133,12 +131,17 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     """Label every pass; write ``labels.csv``, ``partition.csv`` and ``labels.png``."""
     if len(inputs) != 1:
         raise InputError(f"{ctx.name} needs one input (OBSERVATIONS.csv), got {len(inputs)}")
+    if ctx.name == "zajdel_adf":
+        from models.zajdel.tracker import ADFConfig as Config
+    else:
+        from models.zajdel.learnsearch import LearnSearchConfig as Config
+    fields, cfg = _split_config(config, Config)
     with ctx.timed("read"):
         table = read_observations(inputs[0])
         start = _path_and_start(table, config)
     run = _run_adf if ctx.name == "zajdel_adf" else _run_learnsearch
     with ctx.timed("track"):
-        labels, matrix, extra = run(ctx, table, start, config)
+        labels, matrix, extra = run(ctx, table, start, config, fields, cfg)
     write_labels(ctx.outdir / "labels.csv", table, labels)
     write_partition(ctx.outdir / "partition.csv", table, labels)
     _plot(ctx, table, labels, matrix)

@@ -1,0 +1,119 @@
+"""Reading a runner's ``--config`` options: every problem is a
+:class:`~dbn.errors.ConfigError` naming the key (``dbntrack track`` adds the file), never
+a raw ``ValueError`` / ``TypeError`` of a conversion."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Collection, Mapping
+from typing import Any, TypeVar
+
+import numpy as np
+
+from dbn.errors import ConfigError
+
+__all__ = ["array", "build", "check_keys", "flag", "integer", "number", "text"]
+
+T = TypeVar("T")
+_MISSING = object()
+
+
+def check_keys(config: Mapping[str, Any], known: Collection[str]) -> None:
+    """Refuse keys outside ``known`` (a misspelt option would silently do nothing)."""
+    unknown = set(config) - set(known)
+    if unknown:
+        raise ConfigError(f"unknown config key(s) {sorted(unknown)}; valid: {sorted(known)}")
+
+
+def _value(config: Mapping[str, Any], key: str, default: Any) -> Any:
+    if key not in config and default is _MISSING:
+        raise ConfigError(f"config {key}: missing")
+    return config.get(key, default)
+
+
+def number(config: Mapping[str, Any], key: str, default: Any = _MISSING) -> float:
+    """``config[key]`` (else ``default``) as a finite float; a JSON number, not a string
+    or a boolean."""
+    v = _value(config, key, default)
+    if key in config and (isinstance(v, bool) or not isinstance(v, int | float)):
+        raise ConfigError(f"config {key} = {v!r}: expected a number")
+    v = float(v)
+    if not np.isfinite(v):
+        raise ConfigError(f"config {key} = {v!r}: expected a finite number")
+    return v
+
+
+def integer(config: Mapping[str, Any], key: str, default: Any = _MISSING) -> int:
+    """``config[key]`` (else ``default``) as an int; a JSON integer (``3.0`` is refused)."""
+    v = _value(config, key, default)
+    if key in config and (isinstance(v, bool) or not isinstance(v, int)):
+        raise ConfigError(f"config {key} = {v!r}: expected an integer")
+    return int(v)
+
+
+def flag(config: Mapping[str, Any], key: str, default: bool) -> bool:
+    """``config[key]`` (else ``default``): ``true`` or ``false``."""
+    v = config.get(key, default)
+    if not isinstance(v, bool):
+        raise ConfigError(f"config {key} = {v!r}: expected true or false")
+    return v
+
+
+def text(config: Mapping[str, Any], key: str, default: str) -> str:
+    """``config[key]`` (else ``default``): a string."""
+    v = config.get(key, default)
+    if not isinstance(v, str):
+        raise ConfigError(f"config {key} = {v!r}: expected a string")
+    return v
+
+
+def array(config: Mapping[str, Any], key: str, default: Any = _MISSING,
+          ndim: int | None = None) -> np.ndarray:
+    """``config[key]`` (else ``default``) as a finite float array (nested JSON lists of
+    numbers), of ``ndim`` axes where given."""
+    v = _value(config, key, default)
+    try:
+        out = np.asarray(v, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ConfigError(f"config {key} = {v!r}: expected numbers (a list, or lists)") from None
+    if ndim is not None and out.ndim != ndim:
+        raise ConfigError(f"config {key}: expected {ndim} axes, got shape {out.shape}")
+    if not np.isfinite(out).all():
+        raise ConfigError(f"config {key}: expected finite numbers")
+    return out
+
+
+def _defaults(cls: Any) -> dict[str, Any]:
+    if hasattr(cls, "_field_defaults"):  # a NamedTuple
+        return dict(cls._field_defaults)
+    if dataclasses.is_dataclass(cls):
+        return {f.name: f.default for f in dataclasses.fields(cls)
+                if f.default is not dataclasses.MISSING}  # fmt: skip
+    return {}
+
+
+def build(cls: Callable[..., T], fields: Mapping[str, Any]) -> T:
+    """``cls(**fields)`` for options taken from the config. A value must have the type of
+    the field's default (a boolean, a string, a number; an integer where the default is
+    one); a wrong type, or a value the class's own check refuses (its constructor, and
+    its ``validate()`` where it has one), is a :class:`ConfigError`."""
+    for key, default in _defaults(cls).items():
+        if key not in fields:
+            continue
+        if isinstance(default, bool):
+            flag(fields, key, default)
+        elif isinstance(default, int):
+            integer(fields, key)
+        elif isinstance(default, float):
+            number(fields, key)
+        elif isinstance(default, str):
+            text(fields, key, default)
+    try:
+        obj = cls(**fields)
+        if callable(getattr(obj, "validate", None)):
+            obj.validate()
+        return obj
+    except ConfigError:
+        raise
+    except (TypeError, ValueError) as exc:  # library errors (DBNError) are ValueErrors
+        raise ConfigError(f"config {sorted(fields)}: {exc}") from None

@@ -1,0 +1,94 @@
+"""Bad ``--config`` options (found by the slow random-damage test: a flipped byte turned a
+key into an unknown one, and the error did not say which file). Every runner refuses an
+unknown key and a value of the wrong type with exit status 2 and one line naming the
+config file and the key; never a traceback of a ``float('x')``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dbn.errors import ConfigError
+from models.cli import main
+from models.jorge.strokes import StrokeConfig
+from models.track.options import array, build, check_keys, flag, integer, number, text
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+LOC = ["localization/odometry.csv", "localization/measurements.csv",
+       "localization/landmarks.csv", "localization/groundtruth.csv"]  # fmt: skip
+#: runner -> (inputs under tests/data, a known key and a value of the wrong type)
+RUNNERS = {
+    "localization": (LOC, "dt", "x"),
+    "jorge": (["jorge/caviar.xml"], "gap_min", "five"),
+    "pathrecovery": (["pathrecovery/edges.csv", "pathrecovery/observations.csv"],
+                     "num_particles", "many"),
+    "rjmcmc3d": (["rjmcmc3d/view0"], "sigma_px", [4]),
+    "zajdel_adf": (["zajdel/observations.csv"], "within_std", "wide"),
+    "zajdel_learnsearch": (["zajdel/observations.csv"], "window", {"a": 1}),
+    "dbn": (["dbn/umbrella.bif", "dbn/evidence.csv"], "num_particles", 100),
+}
+
+
+def _run(capsys, tmp_path: Path, name: str, config: dict) -> tuple[int, str]:
+    inputs, _, _ = RUNNERS[name]
+    path = tmp_path / "opts.json"
+    path.write_text(json.dumps(config))
+    argv = ["track", name, *[str(DATA / p) for p in inputs], "--config", str(path),
+            "-o", str(tmp_path / "out"), "--quiet"]  # fmt: skip
+    rc = main(argv)
+    return rc, capsys.readouterr().err.strip()
+
+
+@pytest.mark.parametrize("name", sorted(RUNNERS))
+def test_unknown_key_names_the_config_file(capsys, tmp_path, name):
+    rc, err = _run(capsys, tmp_path, name, {"bogus_key": 1})
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "opts.json" in err and "bogus_key" in err, err
+
+
+@pytest.mark.parametrize("name", sorted(RUNNERS))
+def test_wrong_type_names_the_config_file_and_key(capsys, tmp_path, name):
+    _, key, bad = RUNNERS[name]
+    rc, err = _run(capsys, tmp_path, name, {key: bad})
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "opts.json" in err and key in err, err
+    assert "Traceback" not in err
+
+
+def test_localization_odometry_shorter_than_a_step_names_the_file(capsys, tmp_path):
+    """A truncated odometry (two rows, 0.05 s): the error names the odometry file, not
+    the derived duration alone."""
+    lines = (DATA / LOC[0]).read_text().splitlines()
+    short = tmp_path / "odometry.csv"
+    short.write_text("\n".join(lines[:3]) + "\n")
+    argv = ["track", "localization", str(short), *[str(DATA / p) for p in LOC[1:]],
+            "-o", str(tmp_path / "out"), "--quiet"]  # fmt: skip
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "odometry.csv" in err and "one step" in err, err
+
+
+def test_option_readers():
+    cfg = {"a": 2, "b": 2.5, "c": True, "d": "x", "e": [[1, 2], [3, 4]], "f": "2", "g": 2.0,
+           "h": [1, "x"], "i": float("nan")}
+    assert integer(cfg, "a") == 2 and integer(cfg, "zz", 7) == 7
+    assert number(cfg, "a") == 2.0 and number(cfg, "b") == 2.5 and number(cfg, "zz", 1) == 1.0
+    assert flag(cfg, "c", False) is True and text(cfg, "d", "y") == "x"
+    np.testing.assert_array_equal(array(cfg, "e", ndim=2), [[1.0, 2.0], [3.0, 4.0]])
+    for fn, key in ((integer, "f"), (integer, "g"), (integer, "c"), (number, "f"),
+                    (number, "c"), (number, "i"), (flag, "a"), (text, "a"), (array, "h"),
+                    (integer, "missing")):  # fmt: skip
+        with pytest.raises(ConfigError, match=key):
+            fn(cfg, key) if fn not in (flag, text) else fn(cfg, key, None)
+    with pytest.raises(ConfigError, match="axes"):
+        array(cfg, "e", ndim=1)
+    with pytest.raises(ConfigError, match="unknown config key"):
+        check_keys(cfg, {"a"})
+    assert build(StrokeConfig, {"gap_min": 3}).gap_min == 3
+    with pytest.raises(ConfigError, match="gap_min"):  # an int field given a float
+        build(StrokeConfig, {"gap_min": 3.5})
+    with pytest.raises(ConfigError, match="iou_threshold"):  # the class's own check
+        build(StrokeConfig, {"iou_threshold": 2.0})
