@@ -32,19 +32,22 @@ def _value(config: Mapping[str, Any], key: str, default: Any) -> Any:
 
 
 def number(config: Mapping[str, Any], key: str, default: Any = _MISSING) -> float:
-    """``config[key]`` (else ``default``) as a finite float; a JSON number, not a string
-    or a boolean."""
+    """``config[key]`` as a finite float (a JSON number, not a string or a boolean), else
+    ``default`` (taken as it is: the caller's own value)."""
     v = _value(config, key, default)
-    if key in config and (isinstance(v, bool) or not isinstance(v, int | float)):
-        raise ConfigError(f"config {key} = {v!r}: expected a number")
-    v = float(v)
-    if not np.isfinite(v):
+    if key not in config:
+        return float(v)
+    try:
+        out = float(v) if isinstance(v, int | float) and not isinstance(v, bool) else np.nan
+    except OverflowError:  # a JSON integer beyond float range
+        out = np.nan
+    if not np.isfinite(out):
         raise ConfigError(f"config {key} = {v!r}: expected a finite number")
-    return v
+    return out
 
 
 def integer(config: Mapping[str, Any], key: str, default: Any = _MISSING) -> int:
-    """``config[key]`` (else ``default``) as an int; a JSON integer (``3.0`` is refused)."""
+    """``config[key]`` as an int (a JSON integer: ``3.0`` is refused), else ``default``."""
     v = _value(config, key, default)
     if key in config and (isinstance(v, bool) or not isinstance(v, int)):
         raise ConfigError(f"config {key} = {v!r}: expected an integer")
@@ -69,9 +72,11 @@ def text(config: Mapping[str, Any], key: str, default: str) -> str:
 
 def array(config: Mapping[str, Any], key: str, default: Any = _MISSING,
           ndim: int | None = None) -> np.ndarray:
-    """``config[key]`` (else ``default``) as a finite float array (nested JSON lists of
-    numbers), of ``ndim`` axes where given."""
+    """``config[key]`` as a finite float array (nested JSON lists of numbers), of ``ndim``
+    axes where given; else ``default`` as a float array (the caller's own value)."""
     v = _value(config, key, default)
+    if key not in config:
+        return np.asarray(v, dtype=np.float64)
     try:
         out = np.asarray(v, dtype=np.float64)
     except (TypeError, ValueError):

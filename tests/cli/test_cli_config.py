@@ -73,13 +73,13 @@ def test_localization_odometry_shorter_than_a_step_names_the_file(capsys, tmp_pa
 
 def test_option_readers():
     cfg = {"a": 2, "b": 2.5, "c": True, "d": "x", "e": [[1, 2], [3, 4]], "f": "2", "g": 2.0,
-           "h": [1, "x"], "i": float("nan")}
+           "h": [1, "x"], "i": float("nan"), "j": 10**400}
     assert integer(cfg, "a") == 2 and integer(cfg, "zz", 7) == 7
     assert number(cfg, "a") == 2.0 and number(cfg, "b") == 2.5 and number(cfg, "zz", 1) == 1.0
     assert flag(cfg, "c", False) is True and text(cfg, "d", "y") == "x"
     np.testing.assert_array_equal(array(cfg, "e", ndim=2), [[1.0, 2.0], [3.0, 4.0]])
     for fn, key in ((integer, "f"), (integer, "g"), (integer, "c"), (number, "f"),
-                    (number, "c"), (number, "i"), (flag, "a"), (text, "a"), (array, "h"),
+                    (number, "c"), (number, "i"), (number, "j"), (flag, "a"), (text, "a"), (array, "h"),
                     (integer, "missing")):  # fmt: skip
         with pytest.raises(ConfigError, match=key):
             fn(cfg, key) if fn not in (flag, text) else fn(cfg, key, None)
