@@ -348,6 +348,10 @@ def _check_bif_text(text: str, source: str) -> None:
     """Whole-file checks: not empty, balanced braces (truncation), no stray bytes."""
     if "\x00" in text:
         raise FileFormatError(source, "binary data (NUL byte): not a BIF text file")
+    ctrl = re.search(r"[\x01-\x08\x0b\x0c\x0e-\x1f\x7f]", text)
+    if ctrl:  # it would end up inside a name or a state (pgmpy keeps it)
+        raise FileFormatError(source, f"control character {ctrl.group()!r} (a damaged file?)",
+                              _line(text, ctrl.start()))
     if not re.search(r"\bvariable\b", text):
         raise FileFormatError(source, "empty or not a BIF file (no variable declaration)")
     depth, opened = 0, []

@@ -23,6 +23,7 @@ import numpy as np
 
 from dbn.errors import DBNError, InputError, TimeOrderError
 from models.io.table import fail, read_rows, write_rows
+from models.pathrecovery.filter import MAX_FEATURE
 
 __all__ = ["Observations", "read_network", "read_observations", "write_path", "read_path"]
 
@@ -92,6 +93,10 @@ def read_observations(path: str | Path) -> Observations:
     if bad.size:
         raise rows[int(bad[0])].fail("t and camera must be >= 0")
     feat = np.array([[r.float(c) for c in fcols] for r in rows])
+    big = np.flatnonzero(np.abs(feat).max(axis=1) > MAX_FEATURE)
+    if big.size:  # the filter refuses them; say where
+        raise rows[int(big[0])].fail(f"a feature of |value| > {MAX_FEATURE:g} (features are "
+                                     "expected of order 1-1000; rescale them)")  # fmt: skip
     ids = np.array([r.int("obs") for r in rows]) if "obs" in header else np.arange(len(rows))
     if np.unique(ids).size != ids.size:
         raise fail(path, 0, "obs ids are not unique")

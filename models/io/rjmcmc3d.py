@@ -28,7 +28,8 @@ __all__ = ["ViewFolder", "read_view", "warp", "detections", "write_tracks3d", "r
 
 
 class ViewFolder:
-    """One view: ``camera`` (unrectified :class:`Camera`), ``masks`` (paths), ``colour``."""
+    """One view: ``camera`` (unrectified :class:`Camera`), ``masks`` (paths), ``colour``,
+    ``calibration`` (the path of its Tsai .xml)."""
 
     def __init__(self, folder: str | Path, scale: float = 1.0) -> None:
         from models.rjmcmc3d.scene import load_tsai_xml
@@ -45,6 +46,7 @@ class ViewFolder:
             raise
         except Exception as exc:  # ElementTree / missing attribute
             raise InputError(f"{xmls[0]}: not a Tsai calibration ({exc})") from None
+        self.calibration = xmls[0]
         self.masks = sorted(folder.glob("*.png"))
         if not self.masks:
             raise InputError(f"{folder}: no foreground mask (.png)")

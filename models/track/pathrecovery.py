@@ -58,6 +58,10 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     with ctx.timed("read"):
         net = read_network(inputs[0], inputs[2] if len(inputs) == 3 else None)
         odb = read_observations(inputs[1])
+    n_cams = net.indptr.size - 1
+    if odb.cam.max() >= n_cams:
+        raise InputError(f"{inputs[1]}: camera {int(odb.cam.max())} is not in the network "
+                         f"{inputs[0]} (cameras 0..{n_cams - 1})")  # fmt: skip
     c0, f0 = _start(odb, config)
     sigma = array(config, "sigma") if "sigma" in config else np.atleast_2d(np.cov(odb.feat.T))
     model = make_model(net, c0, f0, sigma, fcfg)

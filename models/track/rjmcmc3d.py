@@ -20,9 +20,9 @@ INPUTS = ("VIEW_DIR ...: one folder per camera: a Tsai calibration .xml and one 
           "mask .png per frame",)  # fmt: skip
 
 
-def _floor(floor: np.ndarray, error: type) -> np.ndarray:
+def _floor(floor: np.ndarray) -> np.ndarray:
     if floor.shape != (4,) or not (floor[1] > floor[0] and floor[3] > floor[2]):
-        raise error(f"floor = {floor.tolist()}: need [x_min, x_max, y_min, y_max]")
+        raise ConfigError(f"config floor = {floor.tolist()}: need [x_min, x_max, y_min, y_max]")
     return floor
 
 
@@ -33,9 +33,13 @@ def _scene(ctx, views, floor: np.ndarray | None, sigma_px: float):
 
     cams = [v.camera for v in views]
     centres = np.array([-c.R.T @ c.t for c in cams])
-    if floor is None:
-        floor = _floor(np.array([*np.sort(centres[:, 0])[[0, -1]],
-                                 *np.sort(centres[:, 1])[[0, -1]]]), InputError)  # fmt: skip
+    if floor is None:  # the span of the camera centres
+        floor = np.array([*np.sort(centres[:, 0])[[0, -1]], *np.sort(centres[:, 1])[[0, -1]]])
+        if not (floor[1] > floor[0] and floor[3] > floor[2]):
+            files = ", ".join(str(v.calibration) for v in views)
+            raise InputError(f"{files}: the camera centres span no floor area "
+                             f"({floor.tolist()}): give floor [x_min, x_max, y_min, y_max] "
+                             "in --config")  # fmt: skip
     V = len(cams)
     sigma = np.full(V, sigma_px)
     return scene_from_cameras(ctx.seed, cams, floor, np.ones((V, 3)), sigma)
@@ -78,7 +82,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     params = build(TrackerParams, {k: config[k] for k in TrackerParams._fields if k in config})
     scale, min_blob = number(config, "scale", 1.0), integer(config, "min_blob", 40)
     sigma_px = number(config, "sigma_px", 4.0)
-    floor = _floor(array(config, "floor"), ConfigError) if "floor" in config else None
+    floor = _floor(array(config, "floor")) if "floor" in config else None
     with ctx.timed("read"):
         views = [read_view(p, scale) for p in inputs]
         n = {len(v.masks) for v in views}

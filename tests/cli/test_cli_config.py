@@ -92,3 +92,15 @@ def test_option_readers():
         build(StrokeConfig, {"gap_min": 3.5})
     with pytest.raises(ConfigError, match="iou_threshold"):  # the class's own check
         build(StrokeConfig, {"iou_threshold": 2.0})
+
+
+def test_rjmcmc3d_floor_errors_name_their_source(capsys, tmp_path):
+    """One view spans no floor: the error names its calibration file (whose camera centre
+    the default floor comes from); a config floor that is not a rectangle names the
+    config file."""
+    view = str(DATA / "rjmcmc3d" / "view0")
+    assert main(["track", "rjmcmc3d", view, "-o", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "calibration.xml" in err and "give floor" in err, err
+    rc, err = _run(capsys, tmp_path, "rjmcmc3d", {"floor": [1, 0, 0, 1]})
+    assert rc == 2 and "opts.json" in err and "floor" in err, err

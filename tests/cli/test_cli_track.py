@@ -371,3 +371,38 @@ def test_dbn_generic_method_matches_exact_or_says_why(tmp_path, capsys):
     a = read_marginals(tmp_path / "auto" / "marginals.csv")["Rain"][1]
     b = read_marginals(tmp_path / "exact" / "marginals.csv")["Rain"][1]
     np.testing.assert_allclose(a, b, atol=1e-10)
+
+
+def _edited_observations(tmp_path: Path, column: int, value: str) -> Path:
+    lines = (DATA / "pathrecovery" / "observations.csv").read_text().splitlines()
+    fields = lines[5].split(",")
+    fields[column] = value
+    lines[5] = ",".join(fields)
+    out = tmp_path / "observations.csv"
+    out.write_text("\n".join(lines) + "\n")
+    return out
+
+
+@pytest.mark.parametrize(("column", "needle"), [(3, "observations.csv:6:"),
+                                                (2, "not in the network")])  # fmt: skip
+def test_pathrecovery_observation_the_filter_refuses_names_the_file(tmp_path, capsys,
+                                                                    column, needle):
+    """A byte flip made a feature 2e6 (the filter's limit is 1e6) or a camera the network
+    lacks: the error names the observations file (the line, for the feature), not only
+    the filter's array."""
+    obs = _edited_observations(tmp_path, column, "2000000")
+    argv = ["track", "pathrecovery", str(DATA / "pathrecovery" / "edges.csv"), str(obs),
+            "-o", str(tmp_path / "out")]  # fmt: skip
+    _bad(capsys, argv, needle, "observations.csv")
+
+
+def test_bif_with_a_control_character_is_refused_at_its_line(tmp_path, capsys):
+    """A byte flip put U+0001 into a state name: pgmpy would keep it, and the evidence
+    file, naming the state, would be blamed."""
+    raw = (DATA / "dbn" / "umbrella.bif").read_bytes()
+    i = raw.index(b"yes")
+    bif = tmp_path / "damaged.bif"
+    bif.write_bytes(raw[:i] + b"\x01" + raw[i:])
+    line = raw[:i].count(b"\n") + 1
+    argv = ["track", "dbn", str(bif), str(DATA / "dbn" / "evidence.csv"), "-o", str(tmp_path)]
+    _bad(capsys, argv, f"damaged.bif:{line}:", "control character")
