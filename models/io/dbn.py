@@ -89,31 +89,34 @@ def read_two_slice_bif(path: str | Path) -> TwoSliceDBN:
     return two_slice_from_bn(bn, str(path))
 
 
-def _state_index(var: DiscreteVariable, text: str, path, line: int) -> int:
+def _state_index(var: DiscreteVariable, text: str, path, line: int, where: str) -> int:
     if text in var.state_names:
         return var.state_names.index(text)
     if text.isdigit() and int(text) < var.cardinality:
         return int(text)
-    raise fail(path, line, f"{var.name} = {text!r} is not a state of {list(var.state_names)}")
+    raise fail(path, line, f"{var.name} = {text!r} is not a state of {list(var.state_names)}{where}")
 
 
-def read_states(path: str | Path, dbn: TwoSliceDBN) -> dict[str, np.ndarray]:
+def read_states(path: str | Path, dbn: TwoSliceDBN, model: str | Path | None = None) -> dict[str, np.ndarray]:
     """Columns of states per slice: ``name -> (T,) int``, ``-1`` where the field is empty.
 
-    Used for evidence and for truth files (same format).
+    Used for evidence and for truth files (same format). ``model``: the DBN's file, named
+    beside the states or variables it declares when the CSV disagrees with them (either
+    file may be the wrong one).
     """
     header, rows = read_rows(path, what="evidence CSV", keep_blank=True)
     variables = {v.name: v for v in dbn.variables}
+    where = "" if model is None else f" (declared in {model})"
     for col in header:
         if col not in variables:
-            raise fail(path, 1, f"column {col!r} is not a variable of the DBN {sorted(variables)}")
+            raise fail(path, 1, f"column {col!r} is not a variable of the DBN {sorted(variables)}{where}")
     if not rows:
         raise fail(path, 0, "no slices (the file has a header only)")
     cols = {c: np.full(len(rows), -1, dtype=np.int64) for c in header}
     for t, row in enumerate(rows):
         for c in header:
             if row[c] != "":
-                cols[c][t] = _state_index(variables[c], row[c], path, row.line)
+                cols[c][t] = _state_index(variables[c], row[c], path, row.line, where)
     return cols
 
 

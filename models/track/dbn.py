@@ -65,7 +65,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
         raise ConfigError(f"unknown config key(s) {sorted(config)}: the exact filter takes no options")
     with ctx.timed("read"):
         dbn = read_two_slice_bif(inputs[0])
-        ev = read_evidence(inputs[1], dbn)
+        ev = read_evidence(inputs[1], dbn, model=inputs[0])
     T = len(next(iter(ev.values())))
     hidden = [n for n in dbn.names if n not in ev or (ev[n] < 0).any()]
     with ctx.timed("filter"):

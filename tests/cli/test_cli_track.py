@@ -406,3 +406,14 @@ def test_bif_with_a_control_character_is_refused_at_its_line(tmp_path, capsys):
     line = raw[:i].count(b"\n") + 1
     argv = ["track", "dbn", str(bif), str(DATA / "dbn" / "evidence.csv"), "-o", str(tmp_path)]
     _bad(capsys, argv, f"damaged.bif:{line}:", "control character")
+
+
+def test_dbn_evidence_state_mismatch_names_both_files(tmp_path, capsys):
+    """A byte flip renamed a state in the BIF (' yes' -> '!yes'): both files parse, and
+    the evidence's 'yes' is no longer a state; either file may be the wrong one, so the
+    error names the evidence line and the BIF that declares the states."""
+    raw = (DATA / "dbn" / "umbrella.bif").read_text()
+    bif = tmp_path / "renamed.bif"
+    bif.write_text(raw.replace("{ yes, no", "{!yes, no", 1))
+    argv = ["track", "dbn", str(bif), str(DATA / "dbn" / "evidence.csv"), "-o", str(tmp_path)]
+    _bad(capsys, argv, "evidence.csv:2:", "'!yes'", "declared in", "renamed.bif")
