@@ -414,6 +414,7 @@ def test_dbn_evidence_state_mismatch_names_both_files(tmp_path, capsys):
     error names the evidence line and the BIF that declares the states."""
     raw = (DATA / "dbn" / "umbrella.bif").read_text()
     bif = tmp_path / "renamed.bif"
-    bif.write_text(raw.replace("{ yes, no", "{!yes, no", 1))
+    i = raw.index("{ yes, no", raw.index("variable Umbrella_0"))  # a child: no parent rows
+    bif.write_text(raw[:i] + "{!yes, no" + raw[i + len("{ yes, no"):])
     argv = ["track", "dbn", str(bif), str(DATA / "dbn" / "evidence.csv"), "-o", str(tmp_path)]
     _bad(capsys, argv, "evidence.csv:2:", "'!yes'", "declared in", "renamed.bif")
