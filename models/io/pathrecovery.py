@@ -23,7 +23,6 @@ import numpy as np
 
 from dbn.errors import DBNError, InputError, TimeOrderError
 from models.io.table import fail, read_rows, write_rows
-from models.pathrecovery.filter import MAX_FEATURE
 
 __all__ = ["Observations", "read_network", "read_observations", "write_path", "read_path"]
 
@@ -81,6 +80,8 @@ class Observations(NamedTuple):
 
 def read_observations(path: str | Path) -> Observations:
     """Read ``observations.csv`` (module docstring) into the ODB layout."""
+    from models.pathrecovery.filter import MAX_FEATURE  # not at import: the filter needs jax
+
     header, rows = read_rows(path, ("t", "camera"), "observations CSV")
     fcols = sorted((c for c in header if _FEAT.match(c)), key=lambda c: int(c[1:]))
     if not fcols or [int(c[1:]) for c in fcols] != list(range(len(fcols))):

@@ -58,10 +58,9 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     with ctx.timed("read"):
         net = read_network(inputs[0], inputs[2] if len(inputs) == 3 else None)
         odb = read_observations(inputs[1])
-    n_cams = net.indptr.size - 1
-    if odb.cam.max() >= n_cams:
+    if odb.cam.max() >= net.num_cameras:
         raise InputError(f"{inputs[1]}: camera {int(odb.cam.max())} is not in the network "
-                         f"{inputs[0]} (cameras 0..{n_cams - 1})")  # fmt: skip
+                         f"{inputs[0]} (cameras 0..{net.num_cameras - 1})")  # fmt: skip
     c0, f0 = _start(odb, config)
     sigma = array(config, "sigma") if "sigma" in config else np.atleast_2d(np.cov(odb.feat.T))
     model = make_model(net, c0, f0, sigma, fcfg)
@@ -83,7 +82,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     ids = np.where(path.obs >= 0, odb.ids[np.maximum(path.obs, 0)], -1)
     write_path(ctx.outdir / "path.csv", np.arange(1, T), path.kind, path.cam, path.ta, ids)
     _plot(ctx, net, path, c0)
-    params = {"num_steps": T, "num_cameras": net.indptr.size - 1, "c0": c0, "k_dp": k_dp,
+    params = {"num_steps": T, "num_cameras": net.num_cameras, "c0": c0, "k_dp": k_dp,
               **fcfg._asdict(), "jumps": int(path.jumped.sum())}  # fmt: skip
     return {"parameters": params, "outputs": ["path.csv", "path.png"]}
 

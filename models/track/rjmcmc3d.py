@@ -20,8 +20,13 @@ INPUTS = ("VIEW_DIR ...: one folder per camera: a Tsai calibration .xml and one 
           "mask .png per frame",)  # fmt: skip
 
 
+def _spans_area(floor: np.ndarray) -> bool:
+    """Whether ``floor`` is ``[x_min, x_max, y_min, y_max]`` of a rectangle of some area."""
+    return floor.shape == (4,) and bool(floor[1] > floor[0] and floor[3] > floor[2])
+
+
 def _floor(floor: np.ndarray) -> np.ndarray:
-    if floor.shape != (4,) or not (floor[1] > floor[0] and floor[3] > floor[2]):
+    if not _spans_area(floor):
         raise ConfigError(f"config floor = {floor.tolist()}: need [x_min, x_max, y_min, y_max]")
     return floor
 
@@ -35,7 +40,7 @@ def _scene(ctx, views, floor: np.ndarray | None, sigma_px: float):
     centres = np.array([-c.R.T @ c.t for c in cams])
     if floor is None:  # the span of the camera centres
         floor = np.array([*np.sort(centres[:, 0])[[0, -1]], *np.sort(centres[:, 1])[[0, -1]]])
-        if not (floor[1] > floor[0] and floor[3] > floor[2]):
+        if not _spans_area(floor):
             files = ", ".join(str(v.calibration) for v in views)
             raise InputError(f"{files}: the camera centres span no floor area "
                              f"({floor.tolist()}): give floor [x_min, x_max, y_min, y_max] "
