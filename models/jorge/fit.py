@@ -470,7 +470,14 @@ not landed, kept as an option off by default. Seeds 305-344 served the option on
 the instant (eq. 12) labels weighing the split as the window does (issue 16's seventeenth
 round), on the 40 fresh seeds alone (not pooled with the earlier looks) and landing only below
 -2 standard errors: 0.1948 against 0.1973, paired -0.0026 (standard error 0.0020, -1.3 SE),
-lower on 18 of 40 (higher on 22); not landed. The next confirmation takes seeds from 345 on."""
+lower on 18 of 40 (higher on 22); not landed. Seeds 345-384 served the size evidence's
+reference (issue 16's twentieth round): the quantile 0.25 of the strokes seen so far instead of
+the median, with the size line refitted (``NetworkConfig.size_reference_quantile``; chosen on
+the fit sets alone as the reference that tells the most about a stroke's number of people,
+mean log posterior of the true count -0.992 against -1.064), on the 40 fresh seeds alone,
+landing only below -1 standard error: 0.1960 against 0.1950, paired +0.0010 (standard error
+0.0012), lower on 15 of 40; strokes of three and more 0.7817 against 0.7815 (6531 strokes);
+not landed. The next confirmation takes seeds from 385 on."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "roots_joins",
                  "size_once": True, "palette_continued": 0.75}

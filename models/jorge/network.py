@@ -466,6 +466,9 @@ class NetworkConfig:
         strokes seen so far (recomputed as strokes arrive: on line, observable). The
         median (0.5) is pulled up where groups are common (a sequence where one pair
         walks together most of the time); a lower quantile stands for single people.
+        The median is kept: on the fit sets the quantile 0.25 tells more about a
+        stroke's number of people, but it did not lower the labelling error on fresh
+        training-side seeds (issue 16's twentieth round, :data:`models.jorge.fit.CONFIRM_SEEDS`).
     size_min_reference : int
         No size evidence until this many other strokes have been seen.
     size_reference_neighbours : int
