@@ -67,6 +67,16 @@ def concat_observations(parts) -> Observations:
     return Observations(*(np.concatenate([np.asarray(p[i]) for p in parts]) for i in range(6)))
 
 
+def _check_index_range(name: str, v: np.ndarray, limit: int) -> None:
+    """Raise a :class:`ShapeError` naming the first entry of ``v`` (integers, or floats
+    with integer values) outside ``0..limit - 1``, as given (before any cast)."""
+    out = (v < 0) | (v >= limit)
+    if out.any():
+        k = int(np.argmax(out))
+        what = "camera" if name == "camera" else "border"
+        raise ShapeError(f"{name}[{k}] = {v[k]}: unknown {what} (valid: 0..{limit - 1})")
+
+
 def validate_observations(
     obs: Observations,
     obs_dim: int,
@@ -124,6 +134,7 @@ def validate_observations(
         if not np.isfinite(v).all():
             k = int(np.argmax(~np.isfinite(v)))
             raise NonFiniteError(f"{name}[{k}] = {v[k]} is not finite")
+    limits = {"camera": num_cameras, "border_enter": num_borders, "border_quit": num_borders}
     clean_ints = {}
     for name, v in ints.items():
         if v.dtype.kind == "f":
@@ -135,16 +146,8 @@ def validate_observations(
                 raise ShapeError(f"{name}[{k}] = {v[k]} is not an integer index")
         elif v.dtype.kind not in "iu":
             raise ShapeError(f"{name}: expected integer indices, got dtype {v.dtype}")
+        _check_index_range(name, v, limits[name])  # before the cast: 1e300 must not wrap
         clean_ints[name] = v.astype(np.int64)
-    limits = {"camera": num_cameras, "border_enter": num_borders, "border_quit": num_borders}
-    for name, v in clean_ints.items():
-        out = (v < 0) | (v >= limits[name])
-        if out.any():
-            k = int(np.argmax(out))
-            what = "camera" if name == "camera" else "border"
-            raise ShapeError(
-                f"{name}[{k}] = {v[k]}: unknown {what} (valid: 0..{limits[name] - 1})"
-            )
     te, tq = fields["t_enter"], fields["t_quit"]
     if (tq < te).any():
         k = int(np.argmax(tq < te))

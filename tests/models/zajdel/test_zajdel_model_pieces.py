@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import re
+import warnings
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -139,6 +142,21 @@ def test_validation_errors_name_field():
         validate_observations(obs._replace(camera=obs.camera + 7), 9, 7, 2)
     with pytest.raises(ShapeError, match="appearance"):
         validate_observations(obs._replace(appearance=obs.appearance[:, :8]), 9, 7, 2)
+
+
+@pytest.mark.parametrize("value", [1e300, -1e30, 2.0**63])
+def test_a_huge_float_index_is_named_as_given_not_wrapped(value: float) -> None:
+    """A float camera or border index too large for int64 is refused with the value it
+    had; casting first wrapped it (numpy's "invalid value encountered in cast") and the
+    error named -9223372036854775808 (found by the slow ``test_hypothesis_bad_fields``)."""
+    obs, _, _ = small(0, 4)
+    for name in ("camera", "border_enter", "border_quit"):
+        col = getattr(obs, name).astype(np.float64)
+        col[1] = value
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with pytest.raises(ShapeError, match=rf"{name}\[1\] = {re.escape(str(value))}: unknown"):
+                validate_observations(obs._replace(**{name: col}), 9, 7, 2)
 
 
 # ----------------------------------------------------------------------------- oracle
