@@ -72,13 +72,22 @@ def _check_sorted(t: np.ndarray, path, lines: list[int]) -> None:
         raise TimeOrderError(f"{path}:{lines[i]}: time goes back ({t[i]} after {t[i - 1]})")
 
 
-def _check_unique(ids: np.ndarray, path, lines: list[int], what: str) -> None:
-    """A :class:`FileFormatError` at the line of the first repeated (or non-integer) id:
-    a repeated landmark or barcode would silently shadow the other."""
+_MAX_ID = 2**31
+
+
+def _check_ids(ids: np.ndarray, path, lines: list[int], what: str, unique: bool = True) -> None:
+    """A :class:`FileFormatError` at the line of the first id that is not an integer, is
+    out of range (``|id| >= 2^31``: a larger float would wrap when cast) or, with
+    ``unique``, repeats an earlier one (a repeated landmark or barcode would silently
+    shadow the other)."""
     seen: set[int] = set()
     for v, line in zip(ids, lines):
-        if v != int(v) or int(v) in seen:
-            raise fail(path, line, f"{what} {v:g} is repeated or not an integer")
+        if v != np.floor(v):
+            raise fail(path, line, f"{what} {v:g} is not an integer")
+        if abs(v) >= _MAX_ID:
+            raise fail(path, line, f"{what} {v:g} is out of range (|id| < 2^31)")
+        if unique and int(v) in seen:
+            raise fail(path, line, f"{what} {v:g} is repeated")
         seen.add(int(v))
 
 
@@ -94,12 +103,14 @@ def read_mrclam_folder(folder: str | Path, robot: int = 1) -> MRCLAMRobot:
     for p, arr, lines in timed:
         _check_sorted(arr[:, 0], p, lines)
     odo, meas = timed[0][1], timed[1][1]
+    _check_ids(meas[:, 1], meas_p, timed[1][2], "measured barcode", unique=False)
     gt = timed[2][1] if gt_p else None
     lm_p, codes_p = _find(folder, "Landmark_Groundtruth"), _find(folder, "Barcodes")
     lm, lm_lines = _read_dat(lm_p, 3)
     codes, code_lines = _read_dat(codes_p, 2)
-    _check_unique(lm[:, 0], lm_p, lm_lines, "landmark subject")
-    _check_unique(codes[:, 1], codes_p, code_lines, "barcode")
+    _check_ids(lm[:, 0], lm_p, lm_lines, "landmark subject")
+    _check_ids(codes[:, 1], codes_p, code_lines, "barcode")
+    _check_ids(codes[:, 0], codes_p, code_lines, "barcode subject", unique=False)
     barcodes = {int(b): int(s) for s, b in codes}
     return MRCLAMRobot(odo, meas, gt, lm[:, 1:3].copy(), lm[:, 0].astype(int), barcodes)
 
@@ -135,9 +146,10 @@ def read_generic(
     for p, arr, lines in timed:
         _check_sorted(arr[:, 0], p, lines)
     odo, meas = timed[0][1], timed[1][1]
+    _check_ids(meas[:, 1], measurements, timed[1][2], "measured landmark", unique=False)
     gt = timed[2][1] if groundtruth else None
     lm, lm_lines = _csv_lines(landmarks, ("id", "x", "y"), "landmarks CSV")
-    _check_unique(lm[:, 0], landmarks, lm_lines, "landmark id")
+    _check_ids(lm[:, 0], landmarks, lm_lines, "landmark id")
     ids = lm[:, 0].astype(int)
     return MRCLAMRobot(odo, meas, gt, lm[:, 1:3].copy(), ids, {int(i): int(i) for i in ids})
 

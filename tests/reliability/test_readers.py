@@ -291,6 +291,49 @@ def test_mrclam_folder(data, which) -> None:
         finite(robot.odometry, robot.measurements, robot.landmarks)
 
 
+@pytest.mark.parametrize("value", ["1e300", "12.5"])
+@pytest.mark.parametrize(
+    "name,line,column,what",
+    [("Landmark_Groundtruth.dat", 2, 0, "landmark subject"), ("Barcodes.dat", 3, 0, "barcode subject"),
+     ("Barcodes.dat", 3, 1, "barcode"), ("Robot1_Measurement.dat", 2, 1, "measured barcode")],
+)
+def test_mrclam_ids_are_integers_in_range_at_their_line(tmp_path, name, line, column, what, value) -> None:
+    """An id column holding a fraction or a float too large for an integer is refused at
+    its line: ``int()`` had truncated 12.5 to the id 12, and 1e300 wrapped in the cast
+    (numpy's "invalid value encountered in cast") to a garbage landmark id."""
+    import warnings
+
+    from models.io.localization import read_mrclam_folder
+
+    folder = tmp_path / "mrclam"
+    shutil.copytree(DATA / "localization" / "mrclam", folder)
+    rows = (folder / name).read_text().splitlines()
+    fields = rows[line - 1].split()
+    fields[column] = value
+    rows[line - 1] = "\t".join(fields)
+    (folder / name).write_text("\n".join(rows) + "\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(FileFormatError, match=rf"{re.escape(name)}:{line}: {what} {re.escape(f'{float(value):g}')} is (not an integer|out of range)"):
+            read_mrclam_folder(folder)
+
+
+@pytest.mark.parametrize("name,column,what", [("landmarks.csv", 0, "landmark id"), ("measurements.csv", 1, "measured landmark")])
+def test_localization_csv_ids_are_integers_in_range(tmp_path, name, column, what) -> None:
+    from models.io.localization import read_generic
+
+    src = DATA / "localization"
+    for f in ("odometry.csv", "measurements.csv", "landmarks.csv"):
+        shutil.copy(src / f, tmp_path / f)
+    rows = (tmp_path / name).read_text().splitlines()
+    fields = rows[2].split(",")
+    fields[column] = "1e300"
+    rows[2] = ",".join(fields)
+    (tmp_path / name).write_text("\n".join(rows) + "\n")
+    with pytest.raises(FileFormatError, match=rf"{re.escape(name)}:3: {what} 1e\+300 is out of range"):
+        read_generic(tmp_path / "odometry.csv", tmp_path / "measurements.csv", tmp_path / "landmarks.csv")
+
+
 @pytest.mark.parametrize("name", ["odometry.csv", "measurements.csv", "landmarks.csv"])
 @FAST
 @given(data=st.data())
