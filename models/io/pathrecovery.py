@@ -45,7 +45,11 @@ def read_network(edges: str | Path, cameras: str | Path | None = None):
     if (src < 0).any() or (dst < 0).any():
         raise fail(edges, rows[int(np.argmax((src < 0) | (dst < 0)))].line, "negative camera")
     gap = np.nan_to_num(e[:, 3])
-    n = int(max(src.max(), dst.max())) + 1
+    top = int(np.argmax(np.maximum(src, dst)))
+    n = int(max(src[top], dst[top])) + 1
+    if n > len(rows):  # before any array of n cameras is made (an id of 4e18 did)
+        raise fail(edges, rows[top].line, f"camera {n - 1} needs cameras 0..{n - 1}, each with an outgoing "
+                   f"edge, but only {len(rows)} edges are listed (number the cameras from 0)")
     order = np.lexsort((dst, src))
     dup = np.flatnonzero((np.diff(src[order]) == 0) & (np.diff(dst[order]) == 0))
     if dup.size:

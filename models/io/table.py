@@ -97,19 +97,27 @@ def as_float(text: str, path, line: int, name: str, allow_empty: bool = False) -
     return value
 
 
+_INT_LIMIT = 2**63  # the int64 arrays the readers fill
+
+
 def as_int(text: str, path, line: int, name: str) -> int:
-    """``text`` as an int, else ``InputError`` naming file, line and column."""
+    """``text`` as an int (``"3"``, ``"3.0"``, ``"3e2"``) that fits in int64, else
+    ``InputError`` naming file, line and column (a larger one overflowed the reader's
+    int64 array with a raw ``OverflowError``)."""
     text = (text or "").strip()
     try:
-        return int(text)
+        value = int(text)
     except ValueError:
         try:
-            value = float(text)
+            number = float(text)
         except ValueError:
-            value = math.nan
-        if value.is_integer():
-            return int(value)
-        raise fail(path, line, f"{name} = {text!r} is not an integer") from None
+            number = math.nan
+        if not number.is_integer():
+            raise fail(path, line, f"{name} = {text!r} is not an integer") from None
+        value = int(number)
+    if not -_INT_LIMIT <= value < _INT_LIMIT:
+        raise fail(path, line, f"{name} = {text!r} is out of range (|{name}| < 2^63)")
+    return value
 
 
 def read_rows(

@@ -33,13 +33,31 @@ _MODEL_KEYS = {"num_cameras", "num_borders", "trans", "entry", "travel_mean", "t
                "close_z"}  # fmt: skip
 
 
-def _path_and_start(table, config: dict):
+_MAX_PATH_ENTRIES = 10**7  # the dense (C, B, C, B) transition table: 80 MB
+
+
+def _check_path_size(path: str, config: dict, C: int, B: int) -> None:
+    """Refuse camera and border counts whose dense path table would exceed
+    ``_MAX_PATH_ENTRIES`` (an id of 3000 took 35 s and 2 GB; 100000 asked for 298 GiB),
+    naming the config keys or the observations file they came from."""
+    entries = (C * B) ** 2
+    if entries <= _MAX_PATH_ENTRIES:
+        return
+    what = (f"make a dense {C} x {B} x {C} x {B} path table of {entries:.3g} entries "
+            f"(limit {_MAX_PATH_ENTRIES:.0e}): number the cameras and borders from 0")
+    if {"num_cameras", "num_borders"} & set(config):
+        raise ConfigError(f"config num_cameras / num_borders {what}")
+    raise InputError(f"{path}: camera ids up to {C - 1} and border ids up to {B - 1} {what}")
+
+
+def _path_and_start(table, config: dict, path: str):
     from models.zajdel.learnsearch import initial_params
     from models.zajdel.path import make_path_model
 
     o = table.obs
     C = integer(config, "num_cameras", int(o.camera.max()) + 1)
     B = integer(config, "num_borders", int(max(o.border_enter.max(), o.border_quit.max())) + 1)
+    _check_path_size(path, config, C, B)
     trans = array(config, "trans", np.full((C, B, C, B), 1.0 / (C * B)))
     entry = array(config, "entry", np.full((C, B), 1.0 / (C * B)))
     span = float(o.t_quit.max() - o.t_enter.min())
@@ -138,7 +156,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     fields, cfg = _split_config(config, Config)
     with ctx.timed("read"):
         table = read_observations(inputs[0])
-        start = _path_and_start(table, config)
+        start = _path_and_start(table, config, inputs[0])
     run = _run_adf if ctx.name == "zajdel_adf" else _run_learnsearch
     with ctx.timed("track"):
         labels, matrix, extra = run(ctx, table, start, config, fields, cfg)

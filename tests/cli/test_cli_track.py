@@ -164,7 +164,7 @@ def test_zajdel_learnsearch_streaming_window(tmp_path, capsys):
     assert summary["parameters"]["stream_window"] == 6
     table = read_observations(d / "observations.csv")
     labels = read_labels(out / "labels.csv")
-    ref = stream_learn_search(table.obs, _path_and_start(table, conf),
+    ref = stream_learn_search(table.obs, _path_and_start(table, conf, str(d / "observations.csv")),
                               LearnSearchConfig(num_hypotheses=5, learn=False), 6, 3.0)  # fmt: skip
     np.testing.assert_array_equal([labels[i] for i in table.ids], ref.labels)
     cfg.write_text(json.dumps({**conf, "stream_window": 0}))
@@ -418,3 +418,50 @@ def test_dbn_evidence_state_mismatch_names_both_files(tmp_path, capsys):
     bif.write_text(raw[:i] + "{!yes, no" + raw[i + len("{ yes, no"):])
     argv = ["track", "dbn", str(bif), str(DATA / "dbn" / "evidence.csv"), "-o", str(tmp_path)]
     _bad(capsys, argv, "evidence.csv:2:", "'!yes'", "declared in", "renamed.bif")
+
+
+def _edited_csv(src: Path, dst: Path, line: int, column: str, value: str) -> Path:
+    """``src`` with field ``column`` of file line ``line`` set to ``value`` (the header is
+    the first line that is not a comment)."""
+    lines = src.read_text().splitlines()
+    header = next(ln for ln in lines if not ln.startswith("#")).split(",")
+    fields = lines[line - 1].split(",")
+    fields[header.index(column)] = value
+    lines[line - 1] = ",".join(fields)
+    dst.write_text("\n".join(lines) + "\n")
+    return dst
+
+
+@pytest.mark.parametrize("value", ["1e300", "99999999999999999999"])
+def test_an_integer_beyond_int64_is_refused_at_its_line(tmp_path, capsys, value):
+    """It was a raw ``OverflowError`` when the reader filled its int64 array."""
+    obs = _edited_csv(DATA / "zajdel" / "observations.csv", tmp_path / "obs.csv", 4, "camera", value)
+    _bad(capsys, ["track", "zajdel_adf", str(obs), "-o", str(tmp_path / "out")],
+         "obs.csv:4:", f"camera = '{value}' is out of range")  # fmt: skip
+
+
+@pytest.mark.parametrize("config", [None, {"num_cameras": 5000}])
+def test_zajdel_camera_count_beyond_the_dense_path_table_is_refused(tmp_path, capsys, config):
+    """Camera 100000 made the runner ask for a (C, B, C, B) table of 298 GiB (a raw numpy
+    MemoryError); 3000 took 35 s and 2 GB. The count comes from the observations' largest
+    id or from the config, and the error names where."""
+    src = DATA / "zajdel" / "observations.csv"
+    argv = ["track", "zajdel_adf", "-o", str(tmp_path / "out")]
+    if config is None:
+        argv.insert(2, str(_edited_csv(src, tmp_path / "obs.csv", 4, "camera", "100000")))
+        _bad(capsys, argv, "obs.csv:", "camera ids up to 100000", "path table")
+    else:
+        (tmp_path / "cfg.json").write_text(json.dumps(config))
+        argv[2:2] = [str(src), "--config", str(tmp_path / "cfg.json")]
+        _bad(capsys, argv, "cfg.json:", "config num_cameras", "path table")
+
+
+def test_pathrecovery_camera_id_beyond_the_edges_is_refused_at_its_line(tmp_path, capsys):
+    """Camera 4611686018427387904 in edges.csv made the network ask numpy for that many
+    coordinates (a raw ValueError); every camera 0..C-1 needs an outgoing edge, so no id
+    can reach the number of edges listed."""
+    edges = _edited_csv(DATA / "pathrecovery" / "edges.csv", tmp_path / "edges.csv", 3, "to",
+                        "4611686018427387904")  # fmt: skip
+    argv = ["track", "pathrecovery", str(edges), str(DATA / "pathrecovery" / "observations.csv"),
+            "-o", str(tmp_path / "out")]  # fmt: skip
+    _bad(capsys, argv, "edges.csv:3:", "camera 4611686018427387904", "edges are listed")
