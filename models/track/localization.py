@@ -31,10 +31,9 @@ INPUTS = ("an MRCLAM dataset folder (RobotN_Odometry.dat, ...), or",
 _KEYS = {"robot", "duration", "dt", "num_particles", "algorithm", "initial_pose", "start"}
 
 
-def _read(inputs: list[str], config: dict):
+def _read(inputs: list[str], robot: int):
     """The robot's data and the odometry file's path (for errors)."""
     if len(inputs) == 1 and Path(inputs[0]).is_dir():
-        robot = integer(config, "robot", 1)
         return read_mrclam_folder(inputs[0], robot), mrclam_file(inputs[0], f"Robot{robot}_Odometry")
     if len(inputs) in (3, 4):
         return read_generic(*inputs), Path(inputs[0])
@@ -49,7 +48,7 @@ def _options(config: dict) -> dict:
     initial = array(config, "initial_pose") if "initial_pose" in config else None
     if initial is not None and initial.shape != (3,):
         raise ConfigError(f"config initial_pose = {config['initial_pose']!r}: need [x, y, theta]")
-    opts = {"initial_pose": initial, "dt": number(config, "dt", 0.1),
+    opts = {"robot": integer(config, "robot", 1), "initial_pose": initial, "dt": number(config, "dt", 0.1),
             "duration": number(config, "duration") if config.get("duration") else None,
             "start": number(config, "start") if config.get("start") is not None else None,
             "num_particles": integer(config, "num_particles", 2000),
@@ -94,7 +93,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
 
     opts = _options(config)
     with ctx.timed("read"):
-        data, odometry = _read(inputs, config)
+        data, odometry = _read(inputs, opts["robot"])
         seq, data = _sequence(data, odometry, opts)
     n_part = opts["num_particles"]
     model = mrclam_model(seq)
