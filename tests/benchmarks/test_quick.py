@@ -2,7 +2,7 @@
 last stdout line is one JSON object with the contract's keys, and its ``ok`` is true.
 
 Marked ``bench`` (about three minutes in all on two cores): not in the default ``pytest``;
-``.ci/run`` runs them with ``pytest -m bench``."""
+``.ci/run`` runs them one at a time, ``pytest -m bench -n 0``."""
 
 from __future__ import annotations
 
