@@ -266,7 +266,9 @@ print("means:", np.round(rates.mean(0), 3))
 # newcomer labelled into a group counts as a joiner as soon as that is its current label
 # (`OnlineConfig.tentative_joiners`); since the fifteenth, a merge's second parent must be
 # covered by the merged region's box, not merely touch it (`NetworkConfig.merge_cover`,
-# chosen on how many links differ from the true ones on training-side data). One option
+# chosen on how many links differ from the true ones on training-side data); since the
+# twenty-first, a continuation or merge whose domain was capped before the window relabelled
+# its parents gets back the label they now pass on (`OnlineConfig.restore_successors`). One option
 # is left off after three comparisons: a split prior that prefers partitions
 # (`LabelParams.split_cover`, `network.FITTED_SPLIT_COVER`; seed 004 draws the two parts of
 # a split independently, so its prior expects a group of 4 or 5 to lose people at most

@@ -477,7 +477,15 @@ the fit sets alone as the reference that tells the most about a stroke's number 
 mean log posterior of the true count -0.992 against -1.064), on the 40 fresh seeds alone,
 landing only below -1 standard error: 0.1960 against 0.1950, paired +0.0010 (standard error
 0.0012), lower on 15 of 40; strokes of three and more 0.7817 against 0.7815 (6531 strokes);
-not landed. The next confirmation takes seeds from 385 on."""
+not landed. Seeds 385-424 served the restored successor labels of the on-line labeller
+(``OnlineConfig.restore_successors``, issue 16's twenty-first round: a continuation or
+merge whose capped domain lost the label its relabelled parents pass on gets it back, and
+the window runs again), on the 40 fresh seeds alone, landing only below -1 standard error:
+0.1925 against 0.1932, paired -0.0007 (standard error 0.0005, -1.4 SE), lower on 12 of 40
+and higher on 14; SIMULATED meetings k = 3 / 4 / 5 0.0413 / 0.0725 / 0.1467 -> 0.0382 /
+0.0688 / 0.1462, their strokes of three and more 0.112 / 0.302 / 0.434 -> 0.101 / 0.272 /
+0.432; the PETS2009 S1 crowds 0.6040 / 0.8047 -> 0.6049 / 0.8044; landed. The next
+confirmation takes seeds from 425 on."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "roots_joins",
                  "size_once": True, "palette_continued": 0.75}

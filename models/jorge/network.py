@@ -1448,6 +1448,27 @@ class LabelGraph:
             raise InputError(f"node {k}: repeated labels in the domain")
         node.domain = dom
 
+    def widen(self, k: int, labels: Iterable[Label]) -> list[Label]:
+        """Add admissible ``labels`` (given the parents' current domains) to the domain of
+        active node ``k``, after its current labels; returns those added (in order).
+
+        Raises
+        ------
+        InputError
+            ``k`` is frozen.
+        """
+        node = self.nodes[k]
+        if node.frozen is not None:
+            raise InputError(f"node {k} is frozen; its domain cannot change")
+        have = set(node.domain)
+        wanted = [lab for lab in dict.fromkeys(frozenset(x) for x in labels) if lab not in have]
+        if not wanted:
+            return []
+        admissible = set(self._admissible(k))
+        added = [lab for lab in wanted if lab in admissible]
+        node.domain = tuple(node.domain) + tuple(added)
+        return added
+
     # --- the network of a window -----------------------------------------------------------
     def window(self, active: Sequence[int]) -> WindowNet:
         """The Bayes net of the active nodes (seed 004, eq. 11 over the active window).

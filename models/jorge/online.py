@@ -16,6 +16,10 @@ Instant labelling between inferences (eq. 12)
     already labelled siblings (a label sharing an object with one has probability 0).
     It takes :math:`\arg\max_{x} p(y | x)\, p(x | x_{pa}) \prod_s p(r_{s} = 1 | x, x_s)`.
     Nodes that took part in the last inference keep their MAP label until the next one.
+    Its domain is capped at ``max_labels`` by this posterior, on the parents' beliefs of
+    the moment; when the next inference relabels the parents, a continuation or merge
+    whose domain lost the label they now pass on gets it back and the window runs again
+    (``restore_successors``, our addition; issue 16, twenty-first round).
 
 Links
     By default each new stroke is linked by the on-line link rule
@@ -119,6 +123,11 @@ class OnlineConfig:
         label is a join are joiners already (:meth:`LabelGraph.set_tentative_joiners`;
         issue 16, fourteenth round); ``False``: only once their birth node is frozen (the
         thirteenth round's behaviour).
+    restore_successors : bool
+        After every inference, give back to an active continuation or merge node the label
+        its parents' new labels pass on, when the eq. 12 cap dropped it, and if any was
+        given back run the window again (:meth:`OnlineLabeller.restore_successors`; issue
+        16, twenty-first round).
     network : NetworkConfig
     """
 
@@ -129,6 +138,7 @@ class OnlineConfig:
     marginals: bool = True
     reid_prior: float = 0.5
     tentative_joiners: bool = True
+    restore_successors: bool = True
     network: NetworkConfig = field(default_factory=NetworkConfig)
 
     def __post_init__(self) -> None:
@@ -373,6 +383,74 @@ class OnlineLabeller:
             if g.nodes[k].frozen is None:
                 g.freeze(k, self.labels[k])
         active = list(range(first_active, n))
+        win, log_prob, clique, pruned = self._window_pass(active)
+        if cfg.marginals and cfg.restore_successors and self.restore_successors(active):
+            # decide now, before later strokes are capped on the labels' zero beliefs
+            win, log_prob, clique, pruned = self._window_pass(active)
+        self._inferred.update(active)
+        if cfg.tentative_joiners:
+            g.set_tentative_joiners({k: self.labels[k] for k in active})
+        seconds = time.perf_counter() - t0
+        rec = InferenceRecord(frame, len(active), len(win.boundary),
+                              max(len(win.domains[node_name(k)]) for k in active), clique,
+                              seconds, log_prob, pruned)
+        self.records.append(rec)
+        if self.keep_windows:
+            self.windows.append(win)
+        return rec
+
+    def restore_successors(self, active: Sequence[int]) -> list[int]:
+        """Give back to each active continuation (OCCLUSION) or merge (MERGE) node the label
+        its parents' current labels pass on (the parent's label; the union of the two),
+        where its domain lacks it; :meth:`infer` then runs the window once more, so the
+        label can be chosen before later strokes are capped on its zero belief.
+
+        A node's domain is capped (``max_labels``) when its stroke starts, on its parents'
+        eq. 12 beliefs. When the next window relabels the parents, the label they now pass
+        on may be gone from the child's domain, and the window can then only give the
+        child a new object: a group's identity lost for good (issue 16, twenty-first round,
+        found on SIMULATED meetings of four). The label enters with belief 0 (the window
+        decides); at the cap it replaces the lowest-belief label other than the current one
+        and the node's own new object. In stroke order, so a restored label is passed on
+        down a chain of continuations and merges.
+
+        Returns
+        -------
+        list of int
+            The nodes given a label back.
+        """
+        g = self.graph
+        passed: dict[int, Label] = {}
+        for k in sorted(active):
+            node = g.nodes[k]
+            if node.frozen is not None or not node.parents or g.structure(k) not in ("OCCLUSION", "MERGE"):
+                continue
+            label = frozenset().union(*(passed.get(p, self.labels[p]) for p in node.parents))
+            if label in node.domain or len(label) > g.config.labels.max_group_size:
+                continue
+            if not g.widen(k, [label]):  # not admissible (cannot happen for a BN's own labels)
+                continue
+            domain = list(g.nodes[k].domain)
+            belief = np.append(self.beliefs[k], 0.0)
+            if len(domain) > self.config.max_labels:
+                fixed = {frozenset({k}), self.labels[k], label}
+                room = [i for i, lab in enumerate(domain) if lab not in fixed]
+                if not room:  # max_labels 2: the current label and the new object stay
+                    g.set_domain(k, domain[:-1])
+                    continue
+                drop = min(room, key=lambda i: belief[i])
+                g.set_domain(k, domain[:drop] + domain[drop + 1:])
+                belief = np.delete(belief, drop)
+            self.beliefs[k] = belief / belief.sum()
+            passed[k] = label
+        return sorted(passed)
+
+    def _window_pass(self, active: list[int]) -> tuple:
+        """Eq. 11 over the window of ``active``: every active node takes its MAP label and,
+        with ``marginals``, its domain pruned by its marginal and that marginal as its
+        belief. Returns (window, MAP log probability, largest clique table, largest pruned
+        mass)."""
+        g, cfg = self.graph, self.config
         win = g.window(active)
         assignment, log_prob = map_assignment(win.bn, win.evidence, win.soft_evidence)
         clique = 0
@@ -396,17 +474,7 @@ class OnlineLabeller:
                 b = marg[name][idx]
                 pruned = max(pruned, float(1.0 - b.sum()))
                 self.beliefs[k] = b / b.sum() if b.sum() > 0 else np.full(len(idx), 1.0 / len(idx))
-        self._inferred.update(active)
-        if cfg.tentative_joiners:
-            g.set_tentative_joiners({k: self.labels[k] for k in active})
-        seconds = time.perf_counter() - t0
-        rec = InferenceRecord(frame, len(active), len(win.boundary),
-                              max(len(win.domains[node_name(k)]) for k in active), clique,
-                              seconds, log_prob, pruned)
-        self.records.append(rec)
-        if self.keep_windows:
-            self.windows.append(win)
-        return rec
+        return win, log_prob, clique, pruned
 
     def finish(self, frame: int | None = None) -> dict[int, Label]:
         """Final inference at the end of the sequence, then the re-identification pass
