@@ -371,7 +371,8 @@ class OnlineLabeller:
 
     # --- eq. 11 ------------------------------------------------------------------------------
     def infer(self, frame: int) -> InferenceRecord | None:
-        """Periodic inference over the active window; freezes older nodes, prunes domains."""
+        """Periodic inference over the active window; freezes older nodes, prunes domains
+        (and with ``restore_successors``, gives back passed-on labels and solves again)."""
         g = self.graph
         n = len(g)
         if n == 0:
