@@ -387,7 +387,9 @@ class OnlineLabeller:
         win, log_prob, clique, pruned = self._window_pass(active)
         if cfg.marginals and cfg.restore_successors and self.restore_successors(active):
             # decide now, before later strokes are capped on the labels' zero beliefs
+            first = (clique, pruned)
             win, log_prob, clique, pruned = self._window_pass(active)
+            clique, pruned = max(clique, first[0]), max(pruned, first[1])
         self._inferred.update(active)
         if cfg.tentative_joiners:
             g.set_tentative_joiners({k: self.labels[k] for k in active})
@@ -429,7 +431,7 @@ class OnlineLabeller:
             label = frozenset().union(*(passed.get(p, self.labels[p]) for p in node.parents))
             if label in node.domain or len(label) > g.config.labels.max_group_size:
                 continue
-            if not g.widen(k, [label]):  # not admissible (cannot happen for a BN's own labels)
+            if not g.widen(k, [label]):  # not admissible given the parents' domains
                 continue
             domain = list(g.nodes[k].domain)
             belief = np.append(self.beliefs[k], 0.0)
