@@ -431,19 +431,20 @@ class OnlineLabeller:
             label = frozenset().union(*(passed.get(p, self.labels[p]) for p in node.parents))
             if label in node.domain or len(label) > g.config.labels.max_group_size:
                 continue
-            if not g.widen(k, [label]):  # not admissible given the parents' domains
-                continue
-            domain = list(g.nodes[k].domain)
-            belief = np.append(self.beliefs[k], 0.0)
-            if len(domain) > self.config.max_labels:
-                fixed = {frozenset({k}), self.labels[k], label}
+            domain, belief = list(node.domain), self.beliefs[k]
+            drop = None
+            if len(domain) >= self.config.max_labels:  # at the cap: make room first
+                fixed = {frozenset({k}), self.labels[k]}
                 room = [i for i, lab in enumerate(domain) if lab not in fixed]
                 if not room:  # max_labels 2: the current label and the new object stay
-                    g.set_domain(k, domain[:-1])
                     continue
                 drop = min(room, key=lambda i: belief[i])
-                g.set_domain(k, domain[:drop] + domain[drop + 1:])
+            if not g.widen(k, [label]):  # not admissible given the parents' domains
+                continue
+            if drop is not None:
+                g.set_domain(k, domain[:drop] + domain[drop + 1:] + [label])
                 belief = np.delete(belief, drop)
+            belief = np.append(belief, 0.0)
             self.beliefs[k] = belief / belief.sum()
             passed[k] = label
         return sorted(passed)
