@@ -151,7 +151,7 @@ got a grid point with joins but no new groups; on the real training sequences it
 (0.2584 with both palette tables, 0.2667 with the gain table, against the default's
 0.2721), but it labels SIMULATED meetings of 3-5 people worse (scenes 100-104: k = 4 error
 0.114 against 0.049), so, scored on both, it ties with the default and the default stays
-(:data:`models.jorge.network.FITTED_LABELS`). Tried on training and not kept: a longer
+(:data:`models.jorge.config.FITTED_LABELS`). Tried on training and not kept: a longer
 link gap or sibling window (``max_gap_frames`` 45-90, ``sibling_window`` 40-60: training
 error 0.2768-0.2826 against 0.2721, link accuracy in the crowds +0.01-0.03), and, for the
 slow points with new groups and joins, enumerating a child's labels only from the parent
@@ -164,7 +164,7 @@ pair took the shared direction). With pairs that arrive side by side the search'
 (100-104) reward joins, and the documented search replaced the default by both palette
 tables with joins, then, with the grid's missing cell added, by both tables with new
 groups at roots and joins; a joiner's palette is now known only with its whole birth
-label (:data:`models.jorge.network.FITTED_LABELS`, tenth round). I looked for such pairs
+label (:data:`models.jorge.config.FITTED_LABELS`, tenth round). I looked for such pairs
 because wk2gt (validation) was known from earlier runs to be lost on them, so the
 validation figures below are not blind to that, though nothing was chosen on them.
 Measured after choosing, seeds 0-4: validation 0.194 -> 0.130 (wk2gt 0.485 -> 0.256, S2L1
@@ -181,7 +181,7 @@ Eleventh round (issue 16): the re-identification pass in birth order, the chain 
 new group's member or a joiner who continues alone is scored on the parent stroke's
 palette) and, chosen by the full search with a new dimension, the palette counts weighed
 0.5 where a region continues with the size counted at every stroke
-(:data:`models.jorge.network.FITTED_LABELS`, eleventh round); all found and scored on the
+(:data:`models.jorge.config.FITTED_LABELS`, eleventh round); all found and scored on the
 search's own scenes. Measured after choosing, seeds 0-4: validation 0.130 -> 0.096 (wk2gt
 0.256 -> 0.141, S2L1 0.118 -> 0.099; with the true links 0.070 -> 0.050), training 0.373
 -> 0.359, 3+ strokes 0.897 -> 0.900 (0.854 -> 0.859 over groups of 3-5), ms3ggt 0.018 ->
@@ -197,7 +197,7 @@ Twelfth round (issue 16): nested links (``NetworkConfig.nested_links``: a member
 group seen alone for a moment, then the group again, linked to both strokes, with the
 restriction of eq. 5 admitting the member inside the group), the fit refitted with them,
 and the search's new choice (the size once, palette counts weighed 0.75 where a region
-continues; :data:`models.jorge.network.FITTED_LABELS`). Measured after choosing, seeds
+continues; :data:`models.jorge.config.FITTED_LABELS`). Measured after choosing, seeds
 0-4: validation 0.096 -> 0.098 (wk2gt 0.141, S2L1 0.099 -> 0.101, fra1gt 0.005), training
 0.359 -> 0.361 (S1L2-2 0.769 -> 0.795, S1L1-2 0.604 -> 0.599), 3+ strokes 0.900 -> 0.897
 (with the true links 0.836 -> 0.824), ms3ggt 0.021 -> 0.018, mws1gt 0.050 -> 0.041;
@@ -208,7 +208,7 @@ Fourteenth round (issue 16): the palette colour count given how many colours the
 known people already show (the gain table in five bins of those colours, alone: the
 marginal count table, which counted the colours twice, is off) and tentative joiners (a
 newcomer labelled into a group is a joiner before its birth node is frozen;
-:data:`models.jorge.network.FITTED_PALETTE_GAINS`). Chosen by a comparison written down
+:data:`models.jorge.config.FITTED_PALETTE_GAINS`). Chosen by a comparison written down
 before it ran, on the scoring sets of seeds 100-104 and the new
 :data:`models.jorge.fit.CONFIRM_SEEDS` (training sequences and SIMULATED meetings only);
 the full grid re-run around it keeps it. Measured after choosing, seeds 0-4: validation
@@ -231,7 +231,7 @@ meetings (scenes 0-9) 0.108 / 0.175 / 0.232 -> 0.113 / 0.168 / 0.222 and 3+ 0.25
 Sixteenth round (issue 16): no change to the default network, so no change here. Three
 comparisons written down before they ran did not land (:data:`models.jorge.fit.CONFIRM_SEEDS`:
 a fallback gap limit of the link rule, and twice a split prior that prefers partitions); the
-last is an option off by default (:data:`models.jorge.network.FITTED_SPLIT_COVER`).
+last is an option off by default (:data:`models.jorge.config.FITTED_SPLIT_COVER`).
 
 Seventeenth round (issue 16): no change to the default network, so no change here. The
 split cover option now weighs the instant labels too; a third comparison of it, on fresh

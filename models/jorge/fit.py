@@ -408,7 +408,7 @@ colour-count evidence where a region continues (``NetworkConfig.palette_continue
 0.75, 0.5; the counts of one region's strokes are not independent). The nested links of
 the link rule (``NetworkConfig.nested_links``, issue 16's twelfth round) are on at every
 point: their threshold was chosen among 1.5, 2 and 3 on the same scoring sets, and the
-grid was re-run with them (:data:`models.jorge.network.FITTED_LABELS`). Each point is
+grid was re-run with them (:data:`models.jorge.config.FITTED_LABELS`). Each point is
 scored by :func:`labelling_error` on the training split (never validation data) with every
 seed of :data:`SCORE_SEEDS`, and since issue 16's eighth round also on SIMULATED meetings
 of 3-5 people (:data:`MEETING_SIZES`, :func:`scoring_groups`); the lowest mean error among
@@ -438,7 +438,7 @@ fourteenth round). Five seeds of meetings of each size left the seed-to-seed noi
 combined error as large as the differences between candidates, and thirteen rounds had
 chosen on those same sets; the comparison and its rule (the lower combined error over the 25
 sets lands) are written down before it runs. Used once so far: the gain table given the
-known colours with tentative joiners, :data:`models.jorge.network.FITTED_PALETTE_GAINS`.
+known colours with tentative joiners, :data:`models.jorge.config.FITTED_PALETTE_GAINS`.
 Seeds 145-164 then served one comparison the same way (a part rate of its own for a merge's
 parent, worse: 0.2065 against 0.1990 pooled with the scoring seeds; not landed). Seeds
 165-184 served the merge cover test of the link rule (``NetworkConfig.merge_cover`` 0.2,
@@ -460,7 +460,7 @@ partitions; w = 0.021 by maximum likelihood on the training split, other paramet
 refitted), under the stricter rule: 0.1968 against 0.1988, paired -0.0019 (standard error
 0.0024), lower on 16 of 25; not landed (no code kept). Seeds 245-264 served the same with
 the probability that a split keeps everyone fitted per group size
-(``LabelParams.split_cover``, :data:`models.jorge.network.FITTED_SPLIT_COVER`), under the
+(``LabelParams.split_cover``, :data:`models.jorge.config.FITTED_SPLIT_COVER`), under the
 stricter rule: 0.1927 against 0.1949, paired -0.0022 (standard error 0.0025), lower on 14 of
 25; not landed. A second, larger look at it was declared before it ran, on fresh seeds
 265-304, pooled with every set it had been scored on (seeds 100-104 and 245-264, 65 sets),
@@ -489,8 +489,8 @@ confirmation takes seeds from 425 on."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "roots_joins",
                  "size_once": True, "palette_continued": 0.75}
-"""The grid point of the default network (:class:`models.jorge.network.NetworkConfig`,
-:data:`models.jorge.network.FITTED_LABELS`): the incumbent of :func:`search_settings` in
+"""The grid point of the default network (:class:`models.jorge.config.NetworkConfig`,
+:data:`models.jorge.config.FITTED_LABELS`): the incumbent of :func:`search_settings` in
 ``python -m models.jorge.fit``. Since issue 16's eighth round another point replaces it only
 if it beats it by more than one standard error of the paired per-seed differences; the
 best points are often within the seed-to-seed noise of each other, and the lowest of them
@@ -498,14 +498,14 @@ then changed with the noise (and with the load on the machine, through the speed
 Since issue 16's tenth round: both palette tables, new groups at roots and joins (joins beat
 the previous default, the gain table without them, on every seed once the SIMULATED
 meetings held pairs that arrive together; new groups at roots then beat joins alone by 1.35
-standard errors; :data:`models.jorge.network.FITTED_LABELS`). Since the eleventh round, with
+standard errors; :data:`models.jorge.config.FITTED_LABELS`). Since the eleventh round, with
 the palette counts' weight where a region continues in the grid: the same with the size
 counted at every stroke and that weight 0.5 (0.1974 against 0.2024, 1.8 standard errors;
-:data:`models.jorge.network.FITTED_LABELS`, eleventh round). Since the twelfth, with nested
+:data:`models.jorge.config.FITTED_LABELS`, eleventh round). Since the twelfth, with nested
 links: the size counted once and that weight 0.75 (0.1926 against 0.1974, 1.2 standard
-errors; :data:`models.jorge.network.FITTED_LABELS`, twelfth round). Since the fourteenth,
+errors; :data:`models.jorge.config.FITTED_LABELS`, twelfth round). Since the fourteenth,
 the gain table given the known colours alone (``"ml_gain"``; chosen on
-:data:`CONFIRM_SEEDS`, :data:`models.jorge.network.FITTED_PALETTE_GAINS`); the full grid
+:data:`CONFIRM_SEEDS`, :data:`models.jorge.config.FITTED_PALETTE_GAINS`); the full grid
 (boxes gate, 240 points) re-run around it keeps it: its lowest point, the same with the
 count table too (``"ml_both"``), 0.1998 against 0.2007, within one standard error. Re-run
 in the fifteenth round under the merge cover test of the link rule

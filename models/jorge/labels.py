@@ -835,7 +835,7 @@ def size_log_likelihood(
     .. math::
         p(a \mid k) = \mathcal{N}(a;\, \mu_1 + \beta \log k,\, \sigma^2).
 
-    The defaults of :class:`models.jorge.network.NetworkConfig` (:math:`\mu_1`,
+    The defaults of :class:`models.jorge.config.NetworkConfig` (:math:`\mu_1`,
     :math:`\beta`, :math:`\sigma`) were estimated on the CAVIAR ground truth with the
     held-out simulation seeds 20-39 (the benchmark uses 0-4): single-person strokes
     :math:`a = -0.14 \pm 0.69`, two-person strokes :math:`0.96 \pm 0.58`, so

@@ -8,7 +8,7 @@ benchmark), then the registry's on-line labeller, one stroke per protocol step, 
 final re-identification pass. Config keys: the fields of
 :class:`~models.jorge.strokes.StrokeConfig`, ``fps``, and ``split_cover`` (true or false,
 default false: the split prior that prefers partitions,
-:data:`models.jorge.network.FITTED_SPLIT_COVER`, an option off by default).
+:data:`models.jorge.config.FITTED_SPLIT_COVER`, an option off by default).
 """
 
 from __future__ import annotations
