@@ -263,6 +263,17 @@ k = 5 0.377 -> 0.315; full run: validation 0.071, training 0.352 -> 0.350, 3+ st
 0.904 -> 0.899, meetings 0.113 / 0.168 / 0.222 -> 0.114 / 0.169 / 0.209. The second window
 pass runs at about 8 of 19 inferences of PETS2009 S1L2-2: labelling the S1 crowds takes
 1.15-1.25x longer (side by side, same machine), min real-time factor quick 34.4 -> 30.0.
+
+Twenty-second round (issue 16): the split prior that prefers partitions is the default
+(``LabelParams.split_cover`` = :data:`models.jorge.config.FITTED_SPLIT_COVER`), landed on its
+fourth comparison, on fresh seeds 425-464 under a rule declared before it ran
+(:data:`models.jorge.fit.CONFIRM_SEEDS`). Quick run: validation 0.071, ms3ggt 0.000, mws1gt
+0.044 (unchanged), 3+ strokes 0.890 -> 0.899, training 0.328 -> 0.335, SIMULATED meetings
+0.186 / 0.044 / 0.315 -> 0.075 / 0.044 / 0.192 for k = 3 / 4 / 5; full run, side by side:
+validation 0.071 -> 0.073, training 0.350 -> 0.348, 3+ strokes 0.899 -> 0.892, meetings
+(scenes 0-9) 0.114 / 0.169 / 0.209 -> 0.097 / 0.159 / 0.187 and 3+ 0.28 / 0.49 / 0.53 -> 0.22 /
+0.47 / 0.47; labelling the PETS2009 S1 crowds takes up to about 1.1x longer (full min
+real-time factor 23.7 -> 21.2; quick, twice each, 29.5 / 26.1 -> 28.7 / 25.7).
 """
 
 from __future__ import annotations

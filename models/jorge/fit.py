@@ -484,8 +484,15 @@ the window runs again), on the 40 fresh seeds alone, landing only below -1 stand
 0.1925 against 0.1932, paired -0.0007 (standard error 0.0005, -1.4 SE), lower on 12 of 40
 and higher on 14; SIMULATED meetings k = 3 / 4 / 5 0.0413 / 0.0725 / 0.1467 -> 0.0382 /
 0.0688 / 0.1462, their strokes of three and more 0.112 / 0.302 / 0.434 -> 0.101 / 0.272 /
-0.432; the PETS2009 S1 crowds 0.6040 / 0.8047 -> 0.6049 / 0.8044; landed. The next
-confirmation takes seeds from 425 on."""
+0.432; the PETS2009 S1 crowds 0.6040 / 0.8047 -> 0.6049 / 0.8044; landed. Seeds 425-464
+served the split cover's fourth look (issue 16's twenty-second round), on the 40 fresh seeds
+alone, landing only below -1 standard error there and below -2 for its three independent
+looks combined (round 16's 65 sets, round 17's 40 and these 40, inverse-variance weighted):
+0.1859 against 0.1885, paired -0.0025 (standard error 0.0016, -1.6 SE), lower on 26 of 40;
+combined -0.0027 (standard error 0.0009, -2.9 SE); SIMULATED meetings k = 4 0.0863 -> 0.0658,
+their strokes of 3+ people 0.259 -> 0.179; landed
+(:data:`models.jorge.config.FITTED_SPLIT_COVER`). The next confirmation takes seeds from 465
+on."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "roots_joins",
                  "size_once": True, "palette_continued": 0.75}

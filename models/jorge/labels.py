@@ -179,8 +179,11 @@ class LabelParams:
         :math:`p_n`, probability that the two children of a group of ``n = 1, 2, ...``
         people (the last entry for larger groups) that take disjoint parts of it hold all
         of its people (:func:`split_loss_weights`, :func:`restriction_table` with the
-        parent; the instant labels weigh it given the parent's current label). ``()``, the
-        default, is seed 004's eq. 5. Our addition (issue 16, sixteenth round).
+        parent; the instant labels weigh it given the parent's current label). ``()``, this
+        class's default, is seed 004's eq. 5; the default network's
+        (:data:`models.jorge.config.FITTED_LABELS`) is
+        :data:`models.jorge.config.FITTED_SPLIT_COVER`. Our addition (issue 16, sixteenth
+        round; the default network's since the twenty-second).
     """
 
     p_new: float = 0.02

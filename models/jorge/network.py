@@ -4,8 +4,9 @@ r"""The label network of seed 004 (section 4), built with :mod:`dbn` and solved 
 Nodes: a hidden label node ``x{k}`` per stroke ``k`` (its states are the admissible labels
 :math:`L_k`, :mod:`models.jorge.labels`), a binary restriction node ``r{i}_{j}`` for every
 pair of children sharing a parent (observed :math:`r = 1`, eq. 5, hard evidence; with
-``LabelParams.split_cover``, an option off by default, the shared parent is its parent too
-and a split that loses people weighs less, :data:`FITTED_SPLIT_COVER`), and the
+``LabelParams.split_cover``, on by default since issue 16's twenty-second round, the shared
+parent is its parent too and a split that loses people weighs less,
+:data:`FITTED_SPLIT_COVER`), and the
 stroke's dominant colours as soft (virtual) evidence on ``x{k}`` (eq. 6; proper likelihood
 ratio by default, the equation as written as an option), times, where the stroke has a
 recorded region size, the size evidence on the number of people of the label

@@ -250,7 +250,7 @@ class OnlineLabeller:
         :math:`p(a_k \mid |x_k|)` the region-size evidence (1 when not recorded or off);
         where one of ``k`` and a sibling is also the other's parent (a nested link) the
         clash is :func:`~models.jorge.labels.restriction_allows`'s, nested. With
-        ``LabelParams.split_cover`` (an option, off by default), the factor of a sibling
+        ``LabelParams.split_cover`` (on in the default network), the factor of a sibling
         with one shared parent (not nested) is the window's restriction CPD given the
         parent's current label :math:`\ell_p` (:func:`~models.jorge.labels.restriction_table`):
         1 if :math:`x_k \cup \ell_s \supseteq \ell_p`, :math:`w_{|\ell_p|}` if not.

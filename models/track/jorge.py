@@ -7,8 +7,9 @@ without a break; occlusion gaps and dominant colours simulated from ``--seed``, 
 benchmark), then the registry's on-line labeller, one stroke per protocol step, and its
 final re-identification pass. Config keys: the fields of
 :class:`~models.jorge.strokes.StrokeConfig`, ``fps``, and ``split_cover`` (true or false,
-default false: the split prior that prefers partitions,
-:data:`models.jorge.config.FITTED_SPLIT_COVER`, an option off by default).
+default true: the split prior that prefers partitions,
+:data:`models.jorge.config.FITTED_SPLIT_COVER`, on by default since issue 16's
+twenty-second round; false: seed 004's eq. 5 alone).
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     if len(inputs) != 1:
         raise InputError(f"jorge needs one box file, got {len(inputs)} inputs")
     check_keys(config, set(StrokeConfig.__dataclass_fields__) | {"fps", "split_cover"})
-    split_cover = flag(config, "split_cover", False)
+    split_cover = flag(config, "split_cover", True)
     scfg = build(StrokeConfig, {k: v for k, v in config.items() if k not in ("fps", "split_cover")})
     fps = number(config, "fps") if "fps" in config else None
     if fps is not None and not fps > 0:
@@ -60,16 +61,15 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
 
 
 def _online_config(split_cover: bool):
-    """The default on-line labeller, with the split cover option on if asked."""
+    """The default on-line labeller (split cover on); without the split cover if asked."""
     from dataclasses import replace
 
-    from models.jorge.network import FITTED_LABELS, FITTED_SPLIT_COVER, NetworkConfig
+    from models.jorge.network import FITTED_LABELS, NetworkConfig
     from models.jorge.online import OnlineConfig
 
-    if not split_cover:
+    if split_cover:
         return OnlineConfig()
-    labels = replace(FITTED_LABELS, split_cover=FITTED_SPLIT_COVER)
-    return OnlineConfig(network=NetworkConfig(labels=labels))
+    return OnlineConfig(network=NetworkConfig(labels=replace(FITTED_LABELS, split_cover=())))
 
 
 def _plot(ctx: RunContext, strokes, labels) -> None:

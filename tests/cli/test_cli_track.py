@@ -258,17 +258,18 @@ def test_jorge_split_cover_option(tmp_path, capsys):
 
     d = DATA / "jorge"
     cfg = tmp_path / "cfg.json"
-    cfg.write_text('{"split_cover": true}')
+    cfg.write_text('{"split_cover": false}')
     out = _track(tmp_path, "jorge", [d / "caviar.xml"], "--config", str(cfg))
-    assert json.loads((out / "summary.json").read_text())["parameters"]["split_cover"] is True
+    assert json.loads((out / "summary.json").read_text())["parameters"]["split_cover"] is False
     _, rows = read_strokes(out / "strokes.csv")
-    strokes = build_strokes(3, load_caviar(d / "caviar.xml"))  # the batch labeller, option on
-    on = OnlineConfig(network=NetworkConfig(labels=replace(FITTED_LABELS, split_cover=FITTED_SPLIT_COVER)))
-    want = label_online(strokes, on).labels
+    strokes = build_strokes(3, load_caviar(d / "caviar.xml"))  # the batch labeller, option off
+    off = OnlineConfig(network=NetworkConfig(labels=replace(FITTED_LABELS, split_cover=())))
+    want = label_online(strokes, off).labels
     assert [r["label"] for r in rows] == list(want)
     from models.track.jorge import _online_config  # (this small file labels the same either way)
 
-    assert _online_config(True) == on and _online_config(False) == OnlineConfig()
+    assert _online_config(False) == off and _online_config(True) == OnlineConfig()
+    assert OnlineConfig().network.labels.split_cover == FITTED_SPLIT_COVER  # on by default
     cfg.write_text('{"split_cover": "yes"}')
     _bad(capsys, ["track", "jorge", str(d / "caviar.xml"), "-o", str(tmp_path / "bad"), "--config", str(cfg)],
          "split_cover")  # fmt: skip
