@@ -1,7 +1,7 @@
 r"""Settings of the label network (:class:`NetworkConfig`) and the parameters fitted for it
 on the declared training split (:mod:`models.jorge.fit`): the label CPD parameters
 (:data:`FITTED_LABELS`), the palette evidence tables (:data:`FITTED_PALETTE_COUNTS`,
-:data:`FITTED_PALETTE_GAINS`) and the split-cover option (:data:`FITTED_SPLIT_COVER`).
+:data:`FITTED_PALETTE_GAINS`) and the split-cover prior (:data:`FITTED_SPLIT_COVER`).
 
 :mod:`models.jorge.network` builds and solves the network these settings describe, and
 re-exports every name here.
@@ -27,40 +27,40 @@ __all__ = [
 
 FITTED_SPLIT_COVER = (1.0, 1.0, 0.68, 0.9871794871794872, 0.94)
 """:math:`p_n` for ``LabelParams.split_cover`` (issue 16's sixteenth round; in the default
-network, :data:`FITTED_LABELS`, since the twenty-second), the probability that the two children of a group of ``n`` people that
-take disjoint parts of it hold all of its people, fitted by
+network, :data:`FITTED_LABELS`, since the twenty-second), the probability that the two children
+of a group of ``n`` people that take disjoint parts of it hold all of its people, fitted by
 :func:`models.jorge.fit.fit_split_cover` on the declared training split (the rule's links,
-seeds 100-109; groups of 3: 16 of 23 splits, of 4: 76 of 76, of 5: 46 of 48, add-one
-smoothed). Seed 004's pieces are drawn independently and eq. 5 only forbids overlap, so
-its prior gives a partition 6 / 12, 14 / 50 and 30 / 180 of the disjoint pairs of a group
-of 3 / 4 / 5 (:func:`models.jorge.labels.split_loss_weights`). Turn it on with
-``NetworkConfig(labels=replace(FITTED_LABELS, split_cover=()))`` for seed 004's eq. 5
-alone. The window inference uses it, and since issue 16's seventeenth round the instant
-(eq. 12) labels too (:meth:`models.jorge.online.OnlineLabeller.instant_posterior`, given
-the group's current label). Refitting the default network on the training split
+seeds 100-109; groups of 3: 16 of 23 splits, of 4: 76 of 76, of 5: 46 of 48, add-one smoothed).
+Seed 004's pieces are drawn independently and eq. 5 only forbids overlap, so its prior gives a
+partition 6 / 12, 14 / 50 and 30 / 180 of the disjoint pairs of a group of 3 / 4 / 5
+(:func:`models.jorge.labels.split_loss_weights`). Turn it off, for seed 004's eq. 5 alone, with
+``NetworkConfig(labels=replace(FITTED_LABELS, split_cover=()))``. The window inference uses it,
+and since issue 16's seventeenth round the instant (eq. 12) labels too
+(:meth:`models.jorge.online.OnlineLabeller.instant_posterior`, given the group's current
+label). Refitting the default network on the training split
 (:func:`models.jorge.fit.fit_parameters`, seeds 100-109) gives these numbers again.
 
-Four comparisons, each declared before it ran. On the search's scoring sets (the training sequences and SIMULATED
-meetings) with seeds 100-104 and fresh seeds 245-264 and 265-304, 65 sets, the combined
-error fell from 0.1958 to 0.1930, paired -0.0028 with standard error 0.0014 (-1.97 SE; lower
-on 35 of 65 sets); meetings 0.093 -> 0.087, their strokes of 3+ people for k = 3 / 4 / 5
-0.149 / 0.299 / 0.393 -> 0.152 / 0.253 / 0.383, the real training sequences 0.2472 -> 0.2463.
-The rule declared before that second, larger comparison asked for -2 SE, so it did not land
-(:data:`models.jorge.fit.CONFIRM_SEEDS` records every comparison). A third look, with the
+Four comparisons, each declared before it ran. On the search's scoring sets (the training
+sequences and SIMULATED meetings) with seeds 100-104 and fresh seeds 245-264 and 265-304, 65
+sets, the combined error fell from 0.1958 to 0.1930, paired -0.0028 with standard error 0.0014
+(-1.97 SE; lower on 35 of 65 sets); meetings 0.093 -> 0.087, their strokes of 3+ people for k =
+3 / 4 / 5 0.149 / 0.299 / 0.393 -> 0.152 / 0.253 / 0.383, the real training sequences 0.2472 ->
+0.2463. The rule declared before that second, larger comparison asked for -2 SE, so it did not
+land (:data:`models.jorge.fit.CONFIRM_SEEDS` records every comparison). A third look, with the
 instant labels using it too, on 40 fresh seeds (305-344) alone: 0.1973 -> 0.1948, paired
 -0.0026 (standard error 0.0020), lower on 18 of 40; meetings of k = 3 / 4 / 5 0.065 / 0.093 /
 0.140 -> 0.069 / 0.076 / 0.126, the PETS2009 S1 crowds 0.601 / 0.795 -> 0.603 / 0.797; not
 landed (the rule asked for -2 SE). The fourth look (issue 16's twenty-second round, after a
-training-side SIMULATED meeting of four lost its group when a window let one half of a
-2 + 2 split drop a member and take an unseen joiner) asked for below -1 standard error on 40
-fresh seeds (425-464) and below -2 for the three independent looks combined (inverse
-variance), with no acceptance bar of the quick benchmark flipping: 0.1885 -> 0.1859, paired
--0.0025 (standard error 0.0016, -1.6 SE), lower on 26 of 40 (higher on 12); combined -0.0027
-(standard error 0.0009, -2.9 SE). Meetings of k = 3 / 4 / 5 0.0499 / 0.0863 / 0.1098 ->
-0.0427 / 0.0658 / 0.1058, their strokes of 3+ people 0.108 / 0.259 / 0.331 -> 0.114 / 0.179 /
-0.302; the PETS2009 S1 crowds 0.5845 / 0.7968 -> 0.5866 / 0.8037; the CAVIAR training
-sequences unchanged. Landed: the default since then. It helps groups of four and five most
-and costs the PETS2009 S1 crowds a little."""
+training-side SIMULATED meeting of four lost its group when a window let one half of a 2 + 2
+split drop a member and take an unseen joiner) asked for below -1 standard error on 40 fresh
+seeds (425-464) and below -2 for the three independent looks combined (inverse variance), with
+no acceptance bar of the quick benchmark flipping: 0.1885 -> 0.1859, paired -0.0025 (standard
+error 0.0016, -1.6 SE), lower on 26 of 40 (higher on 12); combined -0.0027 (standard error
+0.0009, -2.9 SE). Meetings of k = 3 / 4 / 5 0.0499 / 0.0863 / 0.1098 -> 0.0427 / 0.0658 /
+0.1058, their strokes of 3+ people 0.108 / 0.259 / 0.331 -> 0.114 / 0.179 / 0.302; the PETS2009
+S1 crowds 0.5845 / 0.7968 -> 0.5866 / 0.8037; the CAVIAR training sequences unchanged. Landed:
+the default since then. It helps groups of four and five most and costs the PETS2009 S1 crowds
+a little."""
 
 
 FITTED_LABELS = LabelParams(
