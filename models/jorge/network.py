@@ -450,11 +450,7 @@ class LabelGraph:
         for p in parents:
             for c in self.nodes[p].children:
                 if c != k and self.nodes[c].frozen is None and len(self.nodes[p].children) == 2:
-                    wider = self._admissible(c)
-                    have = set(self.nodes[c].domain)
-                    extra = [lab for lab in wider if lab not in have]
-                    if extra:
-                        self.nodes[c].domain = tuple(self.nodes[c].domain) + tuple(extra)
+                    if self._extend_domain(c, self._admissible(c)):
                         widened.append(c)
         return k, widened
 
@@ -859,11 +855,19 @@ class LabelGraph:
         if node.frozen is not None:
             raise InputError(f"node {k} is frozen; its domain cannot change")
         have = set(node.domain)
-        wanted = [lab for lab in dict.fromkeys(frozenset(x) for x in labels) if lab not in have]
-        if not wanted:
+        wanted = [lab for lab in (frozenset(x) for x in labels) if lab not in have]
+        if not wanted:  # nothing to add: no enumeration of the admissible labels
             return []
         admissible = set(self._admissible(k))
-        added = [lab for lab in wanted if lab in admissible]
+        return self._extend_domain(k, [lab for lab in wanted if lab in admissible])
+
+    def _extend_domain(self, k: int, labels: Iterable[Label]) -> list[Label]:
+        """Append to node ``k``'s domain those of ``labels`` it lacks (once each, in
+        order); returns them. No admissibility check: :meth:`widen` and
+        :meth:`add_stroke` pass admissible labels."""
+        node = self.nodes[k]
+        have = set(node.domain)
+        added = [lab for lab in dict.fromkeys(labels) if lab not in have]
         node.domain = tuple(node.domain) + tuple(added)
         return added
 
