@@ -499,8 +499,21 @@ evidence), declared to land below -1 standard error with no acceptance bar flipp
 but the hand-made 4- and 5-person merge/split graphs of issue 16's first deliverable were no
 longer recovered (a pair continued as the pair plus a joiner: an imperfect colour match
 is explained by the newcomer), the validation error rose 0.071 -> 0.077 and the quick
-SIMULATED meetings of four 0.044 -> 0.110; not landed, and the code was not kept. The next
-confirmation takes seeds from 505 on."""
+SIMULATED meetings of four 0.044 -> 0.110; not landed, and the code was not kept. Seeds
+505-544 and 545-584 served the split's normalised restriction (``LabelParams.split_normalise``,
+issue 16's twenty-fourth round: the restriction node given the group divides by the chance
+that two independent pieces of it are compatible, which fell with the group's size and made
+every split of a group of four cost it against a group of three plus an unseen joiner). The
+first look (505-544), declared to land below -1 standard error with no acceptance bar
+flipping: 0.1916 against 0.1927, paired -0.0011 (standard error 0.0013, -0.8 SE), lower on 21
+of 40; not landed. A second look declared after it (545-584), landing only below -1 standard
+error there and below -2 for both looks combined (inverse-variance weighted): 0.1915 against
+0.1946, paired -0.0031 (standard error 0.0009, -3.5 SE), lower on 29 of 40; combined -0.0025
+(standard error 0.0007, -3.4 SE); strokes of 3+ people 0.7383 -> 0.7251 and 0.7587 -> 0.7456,
+SIMULATED meetings of four 0.0777 -> 0.0747 and 0.0547 -> 0.0433, the PETS2009 S1 crowds
+0.6011 / 0.8193 -> 0.5984 / 0.8151 and 0.6056 / 0.8009 -> 0.5991 / 0.7938; no quick-benchmark
+bar flipped; landed (:data:`models.jorge.config.FITTED_LABELS`). The next confirmation takes
+seeds from 585 on."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "roots_joins",
                  "size_once": True, "palette_continued": 0.75}

@@ -106,6 +106,7 @@ __all__ = [
     "restriction_table",
     "restriction_allows",
     "split_loss_weights",
+    "split_pair_scale",
     "colour_log_likelihood",
     "size_log_likelihood",
     "palette_count_log_likelihood",
@@ -184,6 +185,16 @@ class LabelParams:
         (:data:`models.jorge.config.FITTED_LABELS`) is
         :data:`models.jorge.config.FITTED_SPLIT_COVER`. Our addition (issue 16, sixteenth
         round; the default network's since the twenty-second).
+    split_normalise : bool
+        Whether the restriction node of a group's two children, given the group
+        (``split_cover``; without it there is no group in the node's scope and this does
+        nothing), divides by the chance :math:`Z_n` that two pieces of a group of ``n``
+        drawn independently (eq. 9) are compatible (:func:`split_pair_scale`), so that the
+        two children's labels are a draw from the restricted law. Seed 004 observes the restriction :math:`r = 1` on independent
+        pieces, and that observation weighs the group's own label by :math:`Z_n`, which falls
+        with ``n``: every split of a group of four made it about 3.4 times less likely than
+        a group of three plus an unseen joiner. False, this class's default, is seed 004's;
+        the default network's is True. Our addition (issue 16, twenty-fourth round).
     """
 
     p_new: float = 0.02
@@ -197,6 +208,7 @@ class LabelParams:
     p_join: float = 0.0
     child_new_groups: bool = True
     split_cover: tuple = ()
+    split_normalise: bool = False
 
     def __post_init__(self) -> None:
         q = np.asarray(self.new_group_probs, dtype=np.float64)
@@ -743,7 +755,8 @@ def restriction_allows(a: Label, b: Label, nested: bool = False) -> bool:
 
 
 def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label], nested: bool = False,
-                      parent_domain: Sequence[Label] | None = None, split_cover: Sequence[float] = ()) -> np.ndarray:
+                      parent_domain: Sequence[Label] | None = None, split_cover: Sequence[float] = (),
+                      normalise: bool = False) -> np.ndarray:
     r"""CPD of structure (g), the restriction node :math:`r_{ij}` (eq. 5).
 
     ===============================  ==============  ==============
@@ -766,6 +779,11 @@ def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label], nest
     prior expected a group's split to lose people, where on the training split most
     splits are partitions. Not with ``nested``.
 
+    With ``normalise`` too (``LabelParams.split_normalise``; our addition, issue 16's
+    twenty-fourth round), each parent label's slice is multiplied by
+    :func:`split_pair_scale` of its size: observing :math:`r = 1` then no longer favours
+    smaller groups.
+
     Returns
     -------
     ndarray, shape (len(domain_i), len(domain_j), 2), or with ``parent_domain``
@@ -780,7 +798,35 @@ def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label], nest
         w = split_loss_weights(split_cover)
         loss = np.array([w[min(len(x), len(w)) - 1] if len(w) else 1.0 for x in parent_domain])[:, None, None]
         ok = ok * (cover + loss * (1.0 - cover))
+        if normalise:
+            ok = ok * split_pair_scale([len(x) for x in parent_domain], split_cover)[:, None, None]
     return np.stack([1.0 - ok, ok], axis=-1)
+
+
+def split_pair_scale(sizes: Sequence[int], split_cover: Sequence[float] = ()) -> np.ndarray:
+    r"""Scale of the restriction node given a group of each of ``sizes`` people
+    (``LabelParams.split_normalise``): :math:`Z_{min} / Z_n`, with
+
+    .. math::
+        Z_n \propto \sum_{a, b} \pi(a)\,\pi(b)\,[a \cap b = \emptyset]\,w(a, b)
+            = \frac{C_n + N_n w_n}{(2^n - 2)^2}
+
+    the chance that two proper pieces of a group of ``n`` drawn independently (eq. 9, up
+    to :math:`P_{split}^2`, the same for every ``n``) are compatible: disjoint, weighing 1
+    if they hold everyone (:math:`C_n = 2^n - 2` ordered partitions) and :math:`w_n`
+    (:func:`split_loss_weights`) if not (:math:`N_n` pairs). With the fitted cover
+    :math:`Z_n \approx 1 / (2^n - 2)`: each partition keeps its weight
+    :math:`1 / (2^n - 2)` under the restricted law, not its square. A group's full piece
+    is never disjoint from its other child's, so it adds nothing. One person's two pieces
+    are never compatible, so ``n = 1`` is scaled as ``n = 2`` (seed 004's relation
+    between a person and a pair is kept). At most 1; shape ``(len(sizes),)``.
+    """
+    w = split_loss_weights(split_cover)
+    n = np.maximum(np.asarray(sizes, dtype=np.int64).reshape(-1), 2)
+    part, lose = 2.0**n - 2.0, 3.0**n - 3.0 * 2.0**n + 3.0
+    wn = w[np.minimum(n, len(w)) - 1] if len(w) else np.ones(n.shape)
+    z = (part + lose * wn) / part**2
+    return z.min() / z if z.size else z
 
 
 def split_loss_weights(split_cover: Sequence[float]) -> np.ndarray:

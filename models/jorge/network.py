@@ -6,8 +6,9 @@ Nodes: a hidden label node ``x{k}`` per stroke ``k`` (its states are the admissi
 pair of children sharing a parent (observed :math:`r = 1`, eq. 5, hard evidence; with
 ``LabelParams.split_cover``, on by default since issue 16's twenty-second round, the shared
 parent is its parent too and a split that loses people weighs less,
-:data:`FITTED_SPLIT_COVER`), and the
-stroke's dominant colours as soft (virtual) evidence on ``x{k}`` (eq. 6; proper likelihood
+:data:`FITTED_SPLIT_COVER`, and since the twenty-fourth the node is normalised so that it
+does not weigh a large group down, ``LabelParams.split_normalise``), and the stroke's
+dominant colours as soft (virtual) evidence on ``x{k}`` (eq. 6; proper likelihood
 ratio by default, the equation as written as an option), times, where the stroke has a
 recorded region size, the size evidence on the number of people of the label
 (:func:`models.jorge.labels.size_log_likelihood`; our addition, ``size_evidence``).
@@ -969,7 +970,8 @@ class LabelGraph:
         group = self.cover_parent(i, j)
         if group is not None and node_name(group) in domains:
             p = node_name(group)
-            table = restriction_table(di, dj, False, domains[p], self.config.labels.split_cover)
+            labels = self.config.labels
+            table = restriction_table(di, dj, False, domains[p], labels.split_cover, labels.split_normalise)
             return TabularCPD(name, [p, node_name(i), node_name(j)], table)
         return TabularCPD(name, [node_name(i), node_name(j)], restriction_table(di, dj, self.nested(i, j)))
 

@@ -306,7 +306,8 @@ class OnlineLabeller:
         parent = [self.labels[group]] if group is not None and group in self.labels else None
         other = [self.labels[sib]]
         di, dj = (domain, other) if k < sib else (other, domain)
-        table = restriction_table(di, dj, g.nested(i, j), parent, g.config.labels.split_cover)
+        labels = g.config.labels
+        table = restriction_table(di, dj, g.nested(i, j), parent, labels.split_cover, labels.split_normalise)
         return table[..., 1].reshape(len(domain))
 
     def _relabel(self, k: int) -> None:

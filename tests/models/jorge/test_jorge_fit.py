@@ -95,7 +95,7 @@ def test_default_parameters_are_the_fit_on_the_training_split():
         assert getattr(fitted, name) == pytest.approx(getattr(FITTED_LABELS, name), rel=1e-9), name
     np.testing.assert_allclose(cfg.palette_count_table, FITTED_PALETTE_COUNTS, rtol=1e-9)
     np.testing.assert_allclose(cfg.palette_gain_table, FITTED_PALETTE_GAINS, rtol=1e-9)
-    # the split cover option's values (off by default) are the same fit's
+    # the split cover's values (the default network's since issue 16's twenty-second round) are the same fit's
     counts = EventCounts()
     for strokes in sets:
         count_events(strokes, base, counts)

@@ -34,7 +34,8 @@ from models.jorge.online import OnlineConfig, OnlineLabeller
 from models.jorge.strokes import StrokeSet, make_stroke
 from tests.models.jorge.test_jorge_groups import _check_window, _dense_log_joint
 
-SEED_LABELS = replace(FITTED_LABELS, new_group_probs=(1.0,), p_join=0.0, split_cover=())  # eq. 5 alone
+SEED_LABELS = replace(FITTED_LABELS, new_group_probs=(1.0,), p_join=0.0, split_cover=(),
+                      split_normalise=False)  # eq. 5 alone; the cover unscaled (test_jorge_split_normalise)
 
 
 def _cover_share(n: int, w: float) -> float:
