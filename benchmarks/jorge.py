@@ -277,7 +277,7 @@ real-time factor 23.7 -> 21.2; quick, twice each, 29.5 / 26.1 -> 28.7 / 25.7). A
 comparison, a colour score for joins, passed its error rule but made the hand-made 4- and
 5-person merge/split graphs unrecoverable; not landed (:data:`models.jorge.fit.CONFIRM_SEEDS`).
 
-Twenty-fourth round (issue 16): the split's restriction node given the group is normalised
+Twenty-third round (issue 16): the split's restriction node given the group is normalised
 (``LabelParams.split_normalise``): observing eq. 5 on two independently drawn parts weighed a
 group by the chance that they are compatible, which falls with its size, so a group of four
 that split again and again (a member stepping out and back) lost a member to a group of three

@@ -273,7 +273,7 @@ print("means:", np.round(rates.mean(0), 3))
 # `config.FITTED_SPLIT_COVER`, fitted on the training split; seed 004 draws the two parts of
 # a split independently, so its prior expects a group of 4 or 5 to lose people at most
 # splits). It helps groups of 4 and 5 in the SIMULATED meetings most; it landed on its fourth
-# comparison, each on fresh seeds (`fit.CONFIRM_SEEDS`); since the twenty-fourth, that
+# comparison, each on fresh seeds (`fit.CONFIRM_SEEDS`); since the twenty-third, that
 # restriction node divides by the chance that two independently drawn parts of the group are
 # compatible (`LabelParams.split_normalise`: observing the restriction on independent parts
 # made every split of a group of four cost it against a group of three plus an unseen joiner).

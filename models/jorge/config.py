@@ -248,7 +248,7 @@ Its lowest point, the same without the area test (``merge_area`` 0, the cover te
 ``tests/models/jorge/test_jorge_fit.py`` re-runs the fit (not the search, about 25 minutes
 on 2 cores) and checks the fitted numbers.
 Twenty-second round: ``split_cover`` is :data:`FITTED_SPLIT_COVER` (above: fitted on the
-same split, landed on fresh seeds 425-464). Twenty-fourth round: ``split_normalise`` is on
+same split, landed on fresh seeds 425-464). Twenty-third round: ``split_normalise`` is on
 (nothing fitted: the split's restriction divides by :func:`models.jorge.labels.split_pair_scale`
 of the group's size; landed on its second look, fresh seeds 545-584, combined with the first,
 505-544, under a rule declared before each ran: :data:`models.jorge.fit.CONFIRM_SEEDS`)."""

@@ -501,7 +501,7 @@ longer recovered (a pair continued as the pair plus a joiner: an imperfect colou
 is explained by the newcomer), the validation error rose 0.071 -> 0.077 and the quick
 SIMULATED meetings of four 0.044 -> 0.110; not landed, and the code was not kept. Seeds
 505-544 and 545-584 served the split's normalised restriction (``LabelParams.split_normalise``,
-issue 16's twenty-fourth round: the restriction node given the group divides by the chance
+issue 16's twenty-third round: the restriction node given the group divides by the chance
 that two independent pieces of it are compatible, which fell with the group's size and made
 every split of a group of four cost it against a group of three plus an unseen joiner). The
 first look (505-544), declared to land below -1 standard error with no acceptance bar

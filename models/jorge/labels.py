@@ -194,7 +194,7 @@ class LabelParams:
         pieces, and that observation weighs the group's own label by :math:`Z_n`, which falls
         with ``n``: every split of a group of four made it about 3.4 times less likely than
         a group of three plus an unseen joiner. False, this class's default, is seed 004's;
-        the default network's is True. Our addition (issue 16, twenty-fourth round).
+        the default network's is True. Our addition (issue 16, twenty-third round).
     """
 
     p_new: float = 0.02
@@ -780,7 +780,7 @@ def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label], nest
     splits are partitions. Not with ``nested``.
 
     With ``normalise`` too (``LabelParams.split_normalise``; our addition, issue 16's
-    twenty-fourth round), each parent label's slice is multiplied by
+    twenty-third round), each parent label's slice is multiplied by
     :func:`split_pair_scale` of its size: observing :math:`r = 1` then no longer favours
     smaller groups.
 

@@ -6,7 +6,7 @@ Nodes: a hidden label node ``x{k}`` per stroke ``k`` (its states are the admissi
 pair of children sharing a parent (observed :math:`r = 1`, eq. 5, hard evidence; with
 ``LabelParams.split_cover``, on by default since issue 16's twenty-second round, the shared
 parent is its parent too and a split that loses people weighs less,
-:data:`FITTED_SPLIT_COVER`, and since the twenty-fourth the node is normalised so that it
+:data:`FITTED_SPLIT_COVER`, and since the twenty-third the node is normalised so that it
 does not weigh a large group down, ``LabelParams.split_normalise``), and the stroke's
 dominant colours as soft (virtual) evidence on ``x{k}`` (eq. 6; proper likelihood
 ratio by default, the equation as written as an option), times, where the stroke has a

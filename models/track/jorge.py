@@ -9,7 +9,7 @@ final re-identification pass. Config keys: the fields of
 :class:`~models.jorge.strokes.StrokeConfig`, ``fps``, and ``split_cover`` (true or false,
 default true: the split prior that prefers partitions,
 :data:`models.jorge.config.FITTED_SPLIT_COVER`, on by default since issue 16's
-twenty-second round and normalised since the twenty-fourth, ``LabelParams.split_normalise``;
+twenty-second round and normalised since the twenty-third, ``LabelParams.split_normalise``;
 false: seed 004's eq. 5 alone).
 """
 

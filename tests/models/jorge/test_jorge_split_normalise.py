@@ -1,4 +1,4 @@
-"""The split's pair of pieces as a draw from the restricted law (issue 16, twenty-fourth
+"""The split's pair of pieces as a draw from the restricted law (issue 16, twenty-third
 round; ``LabelParams.split_normalise``): the restriction node of two children of one group
 divides by :math:`Z_n`, the chance that two independent pieces of a group of ``n`` are
 compatible, so observing the restriction no longer tilts the group's own label towards
