@@ -72,11 +72,15 @@ def _labels(draw_sets):
     return [frozenset(s) for s in draw_sets]
 
 
+RESTRICTION_CASES = given(  # two children's domains, their group's, and p_n (shared with test_jorge_split_normalise)
+    di=st.lists(st.sets(st.integers(0, 4), min_size=1, max_size=3), min_size=1, max_size=4),
+    dj=st.lists(st.sets(st.integers(0, 4), min_size=1, max_size=3), min_size=1, max_size=4),
+    dp=st.lists(st.sets(st.integers(0, 4), min_size=1, max_size=5), min_size=1, max_size=4),
+    cover=st.lists(st.floats(0.05, 1.0), min_size=1, max_size=5))
+
+
 @settings(max_examples=30, deadline=None)
-@given(di=st.lists(st.sets(st.integers(0, 4), min_size=1, max_size=3), min_size=1, max_size=4),
-       dj=st.lists(st.sets(st.integers(0, 4), min_size=1, max_size=3), min_size=1, max_size=4),
-       dp=st.lists(st.sets(st.integers(0, 4), min_size=1, max_size=5), min_size=1, max_size=4),
-       cover=st.lists(st.floats(0.05, 1.0), min_size=1, max_size=5))
+@RESTRICTION_CASES
 def test_the_table_is_its_definition(di, dj, dp, cover):
     di, dj, dp = _labels(di), _labels(dj), _labels(dp)
     t = restriction_table(di, dj, False, dp, cover)

@@ -19,6 +19,7 @@ from models.jorge.labels import proper_subsets, restriction_table, split_pair_sc
 from models.jorge.network import FITTED_LABELS, FITTED_SPLIT_COVER, LabelGraph, NetworkConfig
 from models.jorge.strokes import make_stroke
 from tests.models.jorge.test_jorge_groups import _check_window, _dense_log_joint
+from tests.models.jorge.test_jorge_split_cover import RESTRICTION_CASES
 
 GROUPS = [frozenset(range(n)) for n in range(1, 6)]
 PIECES = sorted({p for g in GROUPS for p in proper_subsets(g)} | set(GROUPS), key=sorted)
@@ -59,10 +60,7 @@ def test_unnormalised_larger_groups_pay_more(cover):
 
 
 @settings(max_examples=30, deadline=None)
-@given(di=st.lists(st.sets(st.integers(0, 4), min_size=1, max_size=3), min_size=1, max_size=4),
-       dj=st.lists(st.sets(st.integers(0, 4), min_size=1, max_size=3), min_size=1, max_size=4),
-       dp=st.lists(st.sets(st.integers(0, 4), min_size=1, max_size=5), min_size=1, max_size=4),
-       cover=st.lists(st.floats(0.05, 1.0), min_size=1, max_size=5))
+@RESTRICTION_CASES
 def test_the_table_is_the_cover_table_times_the_scale(di, dj, dp, cover):
     di, dj, dp = ([frozenset(s) for s in d] for d in (di, dj, dp))
     plain = restriction_table(di, dj, False, dp, cover)
