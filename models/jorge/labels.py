@@ -190,11 +190,12 @@ class LabelParams:
         (``split_cover``; without it there is no group in the node's scope and this does
         nothing), divides by the chance :math:`Z_n` that two pieces of a group of ``n``
         drawn independently (eq. 9) are compatible (:func:`split_pair_scale`), so that the
-        two children's labels are a draw from the restricted law. Seed 004 observes the restriction :math:`r = 1` on independent
-        pieces, and that observation weighs the group's own label by :math:`Z_n`, which falls
-        with ``n``: every split of a group of four made it about 3.4 times less likely than
-        a group of three plus an unseen joiner. False, this class's default, is seed 004's;
-        the default network's is True. Our addition (issue 16, twenty-third round).
+        two children's labels are a draw from the restricted law. Seed 004 observes the
+        restriction :math:`r = 1` on independent pieces, and that observation weighs the
+        group's own label by :math:`Z_n`, which falls with ``n``: every split of a group of
+        four made it about 3.4 times less likely than a group of three plus an unseen
+        joiner. False, this class's default, is seed 004's; the default network's is True.
+        Our addition (issue 16, twenty-third round).
     """
 
     p_new: float = 0.02
@@ -814,9 +815,10 @@ def split_pair_scale(sizes: Sequence[int], split_cover: Sequence[float] = ()) ->
     the chance that two proper pieces of a group of ``n`` drawn independently (eq. 9, up
     to :math:`P_{split}^2`, the same for every ``n``) are compatible: disjoint, weighing 1
     if they hold everyone (:math:`C_n = 2^n - 2` ordered partitions) and :math:`w_n`
-    (:func:`split_loss_weights`) if not (:math:`N_n` pairs). With the fitted cover
-    :math:`Z_n \approx 1 / (2^n - 2)`: each partition keeps its weight
-    :math:`1 / (2^n - 2)` under the restricted law, not its square. A group's full piece
+    (:func:`split_loss_weights`) if not (:math:`N_n` pairs). Where :math:`w_n < 1`,
+    :math:`Z_n = 1 / (p_n (2^n - 2))`, so under the restricted law a split holds everyone
+    with probability :math:`p_n` (``split_cover``) and weighs the group the same whatever
+    its size; unscaled, it also weighed the group by :math:`Z_n`. A group's full piece
     is never disjoint from its other child's, so it adds nothing. One person's two pieces
     are never compatible, so ``n = 1`` is scaled as ``n = 2`` (seed 004's relation
     between a person and a pair is kept). At most 1; shape ``(len(sizes),)``.
