@@ -970,10 +970,19 @@ class LabelGraph:
         group = self.cover_parent(i, j)
         if group is not None and node_name(group) in domains:
             p = node_name(group)
-            labels = self.config.labels
-            table = restriction_table(di, dj, False, domains[p], labels.split_cover, labels.split_normalise)
-            return TabularCPD(name, [p, node_name(i), node_name(j)], table)
-        return TabularCPD(name, [node_name(i), node_name(j)], restriction_table(di, dj, self.nested(i, j)))
+            return TabularCPD(name, [p, node_name(i), node_name(j)], self.restriction(i, j, di, dj, domains[p]))
+        return TabularCPD(name, [node_name(i), node_name(j)], self.restriction(i, j, di, dj))
+
+    def restriction(self, i: int, j: int, domain_i: Sequence[Label], domain_j: Sequence[Label],
+                    group_domain: Sequence[Label] | None = None) -> np.ndarray:
+        """Table of the restriction node of siblings ``i < j`` over these domains
+        (:func:`models.jorge.labels.restriction_table`, nested if :meth:`nested`), given the
+        labels ``group_domain`` of their group (:meth:`cover_parent`) with this network's
+        ``split_cover`` and ``split_normalise``, or without it. Shape (len(domain_i),
+        len(domain_j), 2), or with ``group_domain`` (len(group_domain), ..., 2)."""
+        labels = self.config.labels
+        return restriction_table(domain_i, domain_j, self.nested(i, j), group_domain, labels.split_cover,
+                                 labels.split_normalise)
 
 
 @dataclass(frozen=True)

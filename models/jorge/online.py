@@ -72,7 +72,6 @@ from models.jorge.labels import (
     birth_stroke,
     colour_log_likelihood,
     prune_labels,
-    restriction_table,
 )
 from models.jorge.network import LabelGraph, NetworkConfig, node_name
 from models.jorge.strokes import Stroke, StrokeSet
@@ -296,7 +295,7 @@ class OnlineLabeller:
     def _restriction_weights(self, k: int, domain: Sequence[Label], sib: int) -> np.ndarray:
         """Restriction node (eq. 5) between each label of ``domain`` for ``k`` and sibling
         ``sib``'s current label, as the window's CPD weighs it (``r = 1`` column of
-        :func:`~models.jorge.labels.restriction_table`): nested where the earlier of the two
+        :meth:`~models.jorge.network.LabelGraph.restriction`): nested where the earlier of the two
         is the later's parent; with ``LabelParams.split_cover``, given the current label of
         their group (:meth:`~models.jorge.network.LabelGraph.cover_parent`). Shape
         (len(domain),), in [0, 1]."""
@@ -306,9 +305,7 @@ class OnlineLabeller:
         parent = [self.labels[group]] if group is not None and group in self.labels else None
         other = [self.labels[sib]]
         di, dj = (domain, other) if k < sib else (other, domain)
-        labels = g.config.labels
-        table = restriction_table(di, dj, g.nested(i, j), parent, labels.split_cover, labels.split_normalise)
-        return table[..., 1].reshape(len(domain))
+        return g.restriction(i, j, di, dj, parent)[..., 1].reshape(len(domain))
 
     def _relabel(self, k: int) -> None:
         """Eq. 12 posterior of ``k``, its domain capped to ``max_labels``, its label."""
