@@ -232,6 +232,11 @@ def dbn_to_pgmpy(dbn: TwoSliceDBN):
 def dbn_from_pgmpy(model) -> TwoSliceDBN:
     """A :class:`TwoSliceDBN` from a pgmpy ``DynamicBayesianNetwork``.
 
+    The variables (and each slice's CPDs) are in the order the model's nodes were added
+    (``model.nodes()``), whatever order pgmpy keeps its CPDs in (that order changes from
+    one Python process to the next with string hashing), so the same model gives the same
+    declaration, state indexing and printout in every run.
+
     Raises
     ------
     ModelError
@@ -239,7 +244,7 @@ def dbn_from_pgmpy(model) -> TwoSliceDBN:
         make a valid two-slice template (as :class:`TwoSliceDBN`).
     """
     have = {(str(c.variable[0]), int(c.variable[1])) for c in model.get_cpds()}
-    nodes = sorted({str(n[0]) for n in model.nodes()})
+    nodes = list(dict.fromkeys(str(n[0]) for n in model.nodes()))  # insertion order
     missing = [(n, t) for n in nodes for t in (0, 1) if (n, t) not in have]
     if missing or not nodes:
         raise ModelError(
@@ -247,7 +252,8 @@ def dbn_from_pgmpy(model) -> TwoSliceDBN:
         )
     variables: dict[str, DiscreteVariable] = {}
     initial, transition = [], []
-    for cpd in model.get_cpds():
+    rank = {n: i for i, n in enumerate(nodes)}
+    for cpd in sorted(model.get_cpds(), key=lambda c: (int(c.variable[1]), rank.get(str(c.variable[0]), len(rank)))):
         child, parents, table, states = _cpd_table(cpd)
         name, t = child
         table = _renormalized(child, table, 1e-6)

@@ -27,6 +27,8 @@ def test_bn_round_trip_keeps_every_table(factories, seed: int) -> None:
 def test_dbn_round_trip_keeps_both_slices(factories, seed: int) -> None:
     dbn = factories.random_dbn(seed)
     back = pa.dbn_from_pgmpy(pa.dbn_to_pgmpy(dbn))
+    # the model's node order, not pgmpy's CPD order (which follows string hashing)
+    assert [v.name for v in back.variables] == list(dbn.names)
     assert set(back.interface) == set(dbn.interface)
     for n in dbn.names:
         for mine, theirs in [(dbn.initial_net, back.initial_net), (dbn.transition_net, back.transition_net)]:
@@ -37,6 +39,17 @@ def test_dbn_round_trip_keeps_both_slices(factories, seed: int) -> None:
                 mine.table(n),
                 atol=1e-15,
             )
+
+
+def test_dbn_from_pgmpy_keeps_the_node_order() -> None:
+    """pgmpy's DBN keeps its CPDs in an order that follows string hashing (it changed with
+    PYTHONHASHSEED); the declaration follows the order the nodes were added instead."""
+    from dbn.examples import coupled_chains
+
+    model = pa.dbn_to_pgmpy(coupled_chains(4))
+    back = pa.dbn_from_pgmpy(model)
+    assert [v.name for v in back.variables] == ["x0", "y0", "x1", "y1", "x2", "y2", "x3", "y3"]
+    assert list(back.interface) == ["x0", "x1", "x2", "x3"]
 
 
 def test_example_networks_read_offline() -> None:
