@@ -796,8 +796,7 @@ def restriction_table(domain_i: Sequence[Label], domain_j: Sequence[Label], nest
         union = [[a | b for b in domain_j] for a in domain_i]
         cover = np.array([[[x <= u for u in row] for row in union] for x in parent_domain], dtype=np.float64)
         cover = cover.reshape(len(parent_domain), len(domain_i), len(domain_j))
-        w = split_loss_weights(split_cover)
-        loss = np.array([w[min(len(x), len(w)) - 1] if len(w) else 1.0 for x in parent_domain])[:, None, None]
+        loss = _loss_weights_at(split_loss_weights(split_cover), [len(x) for x in parent_domain])[:, None, None]
         ok = ok * (cover + loss * (1.0 - cover))
         if normalise:
             ok = ok * split_pair_scale([len(x) for x in parent_domain], split_cover)[:, None, None]
@@ -823,12 +822,18 @@ def split_pair_scale(sizes: Sequence[int], split_cover: Sequence[float] = ()) ->
     are never compatible, so ``n = 1`` is scaled as ``n = 2`` (seed 004's relation
     between a person and a pair is kept). At most 1; shape ``(len(sizes),)``.
     """
-    w = split_loss_weights(split_cover)
     n = np.maximum(np.asarray(sizes, dtype=np.int64).reshape(-1), 2)
     part, lose = 2.0**n - 2.0, 3.0**n - 3.0 * 2.0**n + 3.0
-    wn = w[np.minimum(n, len(w)) - 1] if len(w) else np.ones(n.shape)
-    z = (part + lose * wn) / part**2
+    z = (part + lose * _loss_weights_at(split_loss_weights(split_cover), n)) / part**2
     return z.min() / z if z.size else z
+
+
+def _loss_weights_at(w: np.ndarray, sizes: Sequence[int] | np.ndarray) -> np.ndarray:
+    """:math:`w_n` (:func:`split_loss_weights`, ``w``) for groups of each of ``sizes`` (>= 1)
+    people: groups larger than ``len(w)`` take its last weight; 1 without a cover (empty
+    ``w``). Shape ``(len(sizes),)``."""
+    n = np.asarray(sizes, dtype=np.int64).reshape(-1)
+    return w[np.minimum(n, len(w)) - 1] if len(w) else np.ones(n.shape)
 
 
 def split_loss_weights(split_cover: Sequence[float]) -> np.ndarray:
