@@ -185,7 +185,14 @@ def count_events(strokes: StrokeSet, config: NetworkConfig | None = None, counts
 
     The strokes are linked by :class:`LabelGraph` with ``config`` (its link gate), as the
     labeller links them; the true people of each stroke stand for its label.
+
+    Raises
+    ------
+    InputError
+        ``strokes`` not a :class:`StrokeSet` (its frame rate sets the link gate).
     """
+    if not isinstance(strokes, StrokeSet):
+        raise InputError(f"count_events: expected a StrokeSet (it carries the frame rate), got {type(strokes).__name__}")
     c = EventCounts() if counts is None else counts
     g = LabelGraph(config, with_domains=False, fps=strokes.fps)
     for s in strokes:

@@ -518,8 +518,20 @@ class OnlineResult:
     labeller: OnlineLabeller
 
 
+def _frame_rate(strokes: StrokeSet | Sequence[Stroke], fps: float | None) -> float:
+    """The strokes' frame rate for :func:`label_online`: a :class:`StrokeSet`'s own, else
+    ``fps``, which a plain sequence must give (:class:`InputError` otherwise)."""
+    own = strokes.fps if isinstance(strokes, StrokeSet) else None
+    if fps is None and own is None:
+        raise InputError("label_online: a plain sequence of strokes carries no frame rate; give fps= "
+                         "(the link gates are in seconds) or pass the StrokeSet")
+    if fps is not None and own is not None and not np.isclose(float(fps), own):
+        raise InputError(f"label_online: fps={fps} differs from the StrokeSet's own fps={own}")
+    return float(own if fps is None else fps)
+
+
 def label_online(strokes: StrokeSet | Sequence[Stroke], config: OnlineConfig | None = None,
-                 fps: float = 25.0, keep_windows: bool = False,
+                 fps: float | None = None, keep_windows: bool = False,
                  links: Sequence[Iterable[int]] | None = None) -> OnlineResult:
     """Run the on-line labeller over a stroke set (seed 004, sec. 5).
 
@@ -528,7 +540,12 @@ def label_online(strokes: StrokeSet | Sequence[Stroke], config: OnlineConfig | N
     strokes : StrokeSet or sequence of Stroke
         In start order.
     config : OnlineConfig, optional
-    fps : float
+    fps : float, optional
+        Frames per second of the strokes' frame numbers: the link gates, the sibling
+        window and the inference period are set in seconds. A :class:`StrokeSet` carries
+        its own (``None`` takes it; a different value is an error); a plain sequence of
+        strokes carries none, so it must be given (a list cut from a PETS2009 stroke set,
+        7 fps, labelled at an assumed 25 fps would gate links 3.6 times too wide).
     keep_windows : bool
     links : sequence of iterable of int, optional
         Each stroke's parents (length num_strokes), e.g. :func:`true_links`; ``None``:
@@ -541,10 +558,10 @@ def label_online(strokes: StrokeSet | Sequence[Stroke], config: OnlineConfig | N
     Raises
     ------
     InputError
-        ``links`` not one entry per stroke, or a bad link.
+        ``links`` not one entry per stroke, or a bad link; ``fps`` missing for a plain
+        sequence, or not the :class:`StrokeSet`'s own.
     """
-    if isinstance(strokes, StrokeSet):
-        fps = strokes.fps
+    fps = _frame_rate(strokes, fps)
     strokes = list(strokes)
     if links is not None and len(links) != len(strokes):
         raise InputError(f"label_online: {len(links)} link sets for {len(strokes)} strokes")

@@ -77,6 +77,13 @@ def test_fit_needs_children():
         fit_parameters([lonely])
 
 
+def test_fit_needs_stroke_sets():
+    # a plain list has no frame rate to gate the links with
+    strokes = [make_stroke(0, 0, 10, (0, 0), (1, 0), [0, 1], {0}), make_stroke(1, 12, 20, (1, 0), (2, 0), [0, 1], {0})]
+    with pytest.raises(InputError, match="count_events: expected a StrokeSet"):
+        fit_parameters([strokes])
+
+
 def test_validation_is_held_out_of_training():
     assert not set(TRAIN_SEQUENCES) & set(VALIDATION_SEQUENCES)
     assert not set(TRAIN_SEEDS) & set(range(5))  # the benchmark's seeds

@@ -33,9 +33,9 @@ def test_true_links_keep_the_networks_limits():
 
 def test_given_links_replace_the_link_rule():
     s = _crossing()
-    by_rule = label_online(s)
+    by_rule = label_online(s, fps=25.0)
     assert [tuple(n.parents) for n in by_rule.labeller.graph.nodes][2:] == [(1,), (0,)]
-    given = label_online(s, links=true_links(s))
+    given = label_online(s, fps=25.0, links=true_links(s))
     parents = [tuple(n.parents) for n in given.labeller.graph.nodes]
     assert parents == [(), (), (0,), (1,)]
     assert link_accuracy(s, parents) == 1.0
@@ -67,7 +67,7 @@ def test_bad_links_are_rejected_before_any_change(parents):
 
 def test_label_online_needs_one_link_set_per_stroke():
     with pytest.raises(InputError, match="3 link sets for 4 strokes"):
-        label_online(_crossing(), links=[(), (), (0,)])
+        label_online(_crossing(), fps=25.0, links=[(), (), (0,)])
 
 
 def test_the_protocol_takes_links_and_rejects_bad_ones_before_any_change():
@@ -83,7 +83,7 @@ def test_the_protocol_takes_links_and_rejects_bad_ones_before_any_change():
         state, info = tracker.step(jax.random.key(0), state, LinkedStroke(st, parents))
     assert [tuple(n.parents) for n in state.labeller.graph.nodes] == [(), (), (0,), (1,)]
     assert info.label == tuple(sorted(state.labeller.labels[1]))
-    assert [state.labeller.labels[k] for k in range(4)] == label_online(s, links=links).labels
+    assert [state.labeller.labels[k] for k in range(4)] == label_online(s, fps=25.0, links=links).labels
     before = tracker.fingerprint(state)
     with pytest.raises(InputError, match="stroke 4"):
         tracker.step(jax.random.key(0), state, LinkedStroke(make_stroke(4, 30, 40, (0, 0), (1, 1), [1]), (9,)))

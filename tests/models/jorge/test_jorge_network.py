@@ -173,5 +173,5 @@ def test_unpruned_domains_too_large_raise_a_model_error():
     with pytest.raises(ModelError, match="node 5: its CPD table"):
         g.window(range(6))
     assert not g._cpd_memo  # refused before any table was built (node 4's holds 5e7)
-    labels = label_online([n.stroke for n in seed.nodes], OnlineConfig(network=cfg)).labels
+    labels = label_online([n.stroke for n in seed.nodes], OnlineConfig(network=cfg), fps=25.0).labels
     assert labels[3] != labels[4]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -58,10 +60,23 @@ def test_score_by_hand():
         score(s, [F({0})])
 
 
+def test_label_online_takes_the_stroke_sets_frame_rate_and_needs_one_for_a_list():
+    strokes = build_strokes(5, simulate_ground_truth(5, num_people=3, num_frames=120))
+    seven = dataclasses.replace(strokes, fps=7.0)
+    assert label_online(seven).labeller.graph.fps == 7.0
+    assert label_online(seven, fps=7.0).labeller.graph.fps == 7.0
+    with pytest.raises(InputError, match="fps=25.0 differs from the StrokeSet's own fps=7.0"):
+        label_online(seven, fps=25.0)
+    # a list cut from a stroke set has lost its rate: it must be given, not assumed
+    with pytest.raises(InputError, match="carries no frame rate"):
+        label_online(list(seven))
+    assert label_online(list(seven), fps=7.0).labels == label_online(seven).labels
+
+
 def test_colour_only_and_network_on_an_easy_case():
     s = _strokes()
     assert colour_only_labels(s) == [F({0}), F({1}), F({0}), F({1})]
-    res = label_online(s)
+    res = label_online(s, fps=25.0)
     assert res.labels == [F({0}), F({1}), F({0}), F({1})]
 
 
@@ -117,9 +132,9 @@ def test_reidentification_pass():
         make_stroke(1, 200, 210, (300, 200), (310, 200), [0, 1, 2, 3, 4], {0}),
         make_stroke(2, 205, 215, (100, 250), (110, 250), [5, 6, 7, 8, 9], {1}),
     ]
-    off = label_online(far, OnlineConfig(reid_prior=0.0))
+    off = label_online(far, OnlineConfig(reid_prior=0.0), fps=25.0)
     assert off.labels == off.network_labels == [F({0}), F({1}), F({2})]
-    on = label_online(far, OnlineConfig(reid_prior=0.5))
+    on = label_online(far, OnlineConfig(reid_prior=0.5), fps=25.0)
     assert on.network_labels == off.network_labels
     # stroke 1 is object 0 again; stroke 2 (other colours, and coexisting with 1) is not
     assert on.labels == [F({0}), F({0}), F({2})]
@@ -130,7 +145,7 @@ def test_reidentification_pass():
         make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2, 3, 4], {0}),
         make_stroke(1, 5, 15, (300, 200), (310, 200), [0, 1, 2, 3, 4], {1}),
     ]
-    assert label_online(both, OnlineConfig(reid_prior=0.5)).labels == [F({0}), F({1})]
+    assert label_online(both, OnlineConfig(reid_prior=0.5), fps=25.0).labels == [F({0}), F({1})]
     with pytest.raises(InputError):
         reidentify(on.labeller.graph, on.network_labels[:2], 0.5)
     with pytest.raises(InputError):
