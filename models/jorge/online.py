@@ -522,6 +522,9 @@ def _frame_rate(strokes: StrokeSet | Sequence[Stroke], fps: float | None) -> flo
     """The strokes' frame rate for :func:`label_online`: a :class:`StrokeSet`'s own, else
     ``fps``, which a plain sequence must give (:class:`InputError` otherwise)."""
     own = strokes.fps if isinstance(strokes, StrokeSet) else None
+    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, (int, float, np.number))
+                            or not (np.isfinite(fps) and fps > 0)):
+        raise InputError(f"label_online: fps must be a finite number > 0, got {fps!r}")
     if fps is None and own is None:
         raise InputError("label_online: a plain sequence of strokes carries no frame rate; give fps= "
                          "(the link gates are in seconds) or pass the StrokeSet")

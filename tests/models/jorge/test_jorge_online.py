@@ -71,6 +71,9 @@ def test_label_online_takes_the_stroke_sets_frame_rate_and_needs_one_for_a_list(
     with pytest.raises(InputError, match="carries no frame rate"):
         label_online(list(seven))
     assert label_online(list(seven), fps=7.0).labels == label_online(seven).labels
+    for bad in (0.0, -7.0, float("nan"), "7", True):
+        with pytest.raises(InputError, match="fps must be a finite number > 0"):
+            label_online(list(seven), fps=bad)
 
 
 def test_colour_only_and_network_on_an_easy_case():
