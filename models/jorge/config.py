@@ -391,6 +391,11 @@ class NetworkConfig:
         A stroke can become the second child of a parent only if it starts within this
         many frames of the parent's end (both children are the parts of one split);
         otherwise every stroke would stay a candidate parent until it had two children.
+        ``max_gap_frames`` 30 and ``sibling_window`` 20 (issue 4) were scored again on
+        the search's scoring sets, seeds 100-109 (issue 16, twenty-fifth round): the
+        combined error is flat around them (``sibling_window`` 10 / 15 / 30: +0.0032 /
+        -0.0009 / +0.0026, standard errors 0.0034 / 0.0019 / 0.0020; ``max_gap_frames``
+        20 / 45: +0.0002 / +0.0010, 0.0015 / 0.0024), so they stay.
     labels : LabelParams
         :math:`P_{new}, P_{merge}, P_{split}` and the maximum group size.
     colour_mode : {"hyper", "ratio", "eq6"}
@@ -437,10 +442,13 @@ class NetworkConfig:
         ``v_max_scaled`` * gap_s, with ``max_gap_frames`` and ``sibling_window`` read
         at 25 fps; 1.2 and 1.0 are the CAVIAR values in those units (people there are
         about 25 px in that size and walk about 25 px per second). ``"boxes"`` (issue
-        16): the scaled gate and, where both regions have boxes, the new stroke's first
-        box must meet the earlier stroke's last box grown by ``v_box`` * gap_s region
-        sizes on every side (``LabelGraph._boxes_near``): in crowds it keeps split parts
-        and merges and drops the neighbours the centre distance let in (true
+        16): where both regions have boxes, the new stroke's first box must meet the
+        earlier stroke's last box grown by ``v_box`` * gap_s region sizes on every side
+        (``LabelGraph._boxes_near``), in place of the centre distance; elsewhere the
+        scaled gate. So ``radius_scaled`` and ``v_max_scaled`` act only where a region
+        has no box: 0.8 / 1.6 and 0.7 / 1.5 gave the same error on every scoring set of
+        the search, seeds 100-109 (issue 16, twenty-fifth round). In crowds the box gate
+        keeps split parts and merges and drops the neighbours the centre distance let in (true
         predecessors recovered on the training split, seed 100: PETS2009 S1L1-2
         0.51 -> 0.66, S1L2-2 0.48 -> 0.64, CAVIAR 0.72-0.94 -> 0.85-0.98).
     v_box : float
