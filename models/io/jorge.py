@@ -4,7 +4,10 @@ Inputs (``docs/formats.md``): a CAVIAR CVML ground-truth file (``<frame number>`
 ``<objectlist><object id><box xc yc w h>``, ``<grouplist>``), a PETS2009 XML of the same
 frame/object/box layout, or a MOTChallenge text file ``frame,id,bb_left,bb_top,w,h[,conf,
 ...]`` (``gt.txt``, or a tracker's output; rows with ``conf = 0`` are ignored, as in
-MOT16+ ``gt.txt``; ``id = -1`` detections cannot make strokes). Any of them may be gzipped.
+MOT16+ ``gt.txt``; ``id = -1`` detections cannot make strokes). Any of them may be
+gzipped. A MOTChallenge file's frame rate is the ``frameRate`` of the ``seqinfo.ini``
+beside it or one folder up (the challenge's ``SEQ/gt/gt.txt`` and ``SEQ/seqinfo.ini``);
+without one it is assumed to be 25 fps, CAVIAR's (:func:`mot_frame_rate`).
 
 Outputs: strokes CSV ``stroke,start,end,label,truth`` (``label``: the object ids the
 stroke is labelled with, separated by spaces; ``truth``: the people in the region), with a
@@ -14,6 +17,7 @@ stroke is labelled with, separated by spaces; ``truth``: the people in the regio
 
 from __future__ import annotations
 
+import configparser
 from pathlib import Path
 
 import numpy as np
@@ -21,11 +25,55 @@ import numpy as np
 from dbn.errors import DBNError, in_file
 from models.io.table import as_float, as_int, fail, read_lines, require_file, write_rows
 
-__all__ = ["read_boxes", "read_mot", "write_strokes", "read_strokes", "write_mot_tracks"]
+__all__ = ["read_boxes", "read_mot", "mot_frame_rate", "write_strokes", "read_strokes",
+           "write_mot_tracks"]
+
+MOT_DEFAULT_FPS = 25.0
+"""Frame rate assumed for a MOTChallenge file without a ``seqinfo.ini`` (CAVIAR's)."""
+
+
+def mot_frame_rate(path: str | Path) -> tuple[float | None, Path | None]:
+    """``(frameRate, seqinfo.ini)`` of a MOTChallenge box file: the ``[Sequence]``
+    ``frameRate`` of the ``seqinfo.ini`` in the file's folder or the one above it
+    (``SEQ/gt/gt.txt`` -> ``SEQ/seqinfo.ini``), nearest first; ``(None, None)`` when
+    there is none or it has no ``frameRate``.
+
+    Raises
+    ------
+    InputError
+        A ``seqinfo.ini`` that cannot be read, or a ``frameRate`` that is not a finite
+        number > 0 (naming the file).
+    """
+    path = Path(path)
+    for folder in (path.parent, path.parent.parent):
+        ini = folder / "seqinfo.ini"
+        if ini.is_file():
+            fps = _ini_frame_rate(ini)
+            return (fps, ini) if fps is not None else (None, None)
+    return None, None
+
+
+def _ini_frame_rate(ini: Path) -> float | None:
+    parser = configparser.ConfigParser(interpolation=None)
+    try:
+        parser.read_string("".join(read_lines(ini, "seqinfo.ini")), source=str(ini))
+    except configparser.Error as exc:
+        raise fail(ini, getattr(exc, "lineno", 0) or 0, f"not an INI file ({type(exc).__name__})") from None
+    if not parser.has_option("Sequence", "frameRate"):
+        return None
+    text = parser.get("Sequence", "frameRate")
+    try:
+        fps = float(text)
+    except ValueError:
+        fps = float("nan")
+    if not (np.isfinite(fps) and fps > 0):
+        raise fail(ini, 0, f"[Sequence] frameRate = {text!r}: expected a number > 0")
+    return fps
 
 
 def read_mot(path: str | Path):
-    """A MOTChallenge box file as a :class:`models.jorge.strokes.GroundTruth`."""
+    """A MOTChallenge box file as a :class:`models.jorge.strokes.GroundTruth`; its ``fps``
+    from :func:`mot_frame_rate`, else :data:`MOT_DEFAULT_FPS`."""
     from models.jorge.strokes import _assemble
 
     path = Path(path)
@@ -54,8 +102,9 @@ def read_mot(path: str | Path):
         objs[oid] = (x + w / 2, y + h / 2, w, h)
     if not frames:
         raise fail(path, 0, "no boxes")
+    fps, _ = mot_frame_rate(path)
     try:
-        return _assemble(path.name, sorted(frames.items()), [])
+        return _assemble(path.name, sorted(frames.items()), [], fps=MOT_DEFAULT_FPS if fps is None else fps)
     except DBNError as exc:
         raise in_file(exc, path) from None
 

@@ -48,6 +48,10 @@ class RunContext:
         return tqdm(iterable, total=total, desc=desc or self.name, disable=self.quiet,
                     leave=False, mininterval=1.0)  # fmt: skip
 
+    def note(self, message: str) -> None:
+        """Tell the user about an assumption the run made (on stderr, even when quiet)."""
+        print(f"{self.name}: {message}", file=sys.stderr)
+
     @contextmanager
     def timed(self, phase: str):
         """Record the wall time of a phase in :attr:`timings`."""

@@ -6,8 +6,9 @@ tracker :func:`models.jorge.strokes.build_strokes` (regions of overlapping boxes
 without a break; occlusion gaps and dominant colours simulated from ``--seed``, as in the
 benchmark), then the registry's on-line labeller, one stroke per protocol step, and its
 final re-identification pass. Config keys: the fields of
-:class:`~models.jorge.strokes.StrokeConfig`, ``fps``, and ``split_cover`` (true or false,
-default true: the split prior that prefers partitions,
+:class:`~models.jorge.strokes.StrokeConfig`, ``fps`` (else the file's rate,
+:mod:`models.io.jorge`; ``fps_source`` in the summary says which), and ``split_cover``
+(true or false, default true: the split prior that prefers partitions,
 :data:`models.jorge.config.FITTED_SPLIT_COVER`, on by default since issue 16's
 twenty-second round and normalised since the twenty-third, ``LabelParams.split_normalise``;
 false: seed 004's eq. 5 alone).
@@ -42,6 +43,9 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     with ctx.timed("read"):
         truth = read_boxes(inputs[0])
         strokes = build_strokes(ctx.seed, truth, scfg)
+    source = "config" if fps is not None else _fps_source(inputs[0])
+    if source.startswith("assumed"):
+        ctx.note(source)
     fps = truth.fps if fps is None else fps
     tracker = models.get("jorge").make(_online_config(split_cover), fps=fps)
     k_init, keys = split_run_keys(ctx.key(), len(strokes))
@@ -54,11 +58,25 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     write_strokes(ctx.outdir / "strokes.csv", strokes, labels, ctx.seed)
     write_mot_tracks(ctx.outdir / "tracks.txt", strokes, labels)
     _plot(ctx, strokes, labels)
-    params = {"num_strokes": len(strokes), "num_groups": strokes.num_groups, "fps": fps,
+    params = {"num_strokes": len(strokes), "num_groups": strokes.num_groups, "fps": fps, "fps_source": source,
               "num_frames": truth.num_frames, "sequence": truth.name,
               "split_cover": split_cover,
               **{k: getattr(scfg, k) for k in StrokeConfig.__dataclass_fields__}}  # fmt: skip
     return {"parameters": params, "outputs": ["strokes.csv", "tracks.txt", "strokes.png"]}
+
+
+def _fps_source(path: str) -> str:
+    """Where the frame rate came from when the config gives none: the XML format's own
+    (CAVIAR 25, PETS2009 7), a MOTChallenge ``seqinfo.ini``, or the assumed 25 fps."""
+    from models.io.jorge import MOT_DEFAULT_FPS, mot_frame_rate
+
+    if path.lower().removesuffix(".gz").endswith(".xml"):
+        return "file format (CAVIAR 25 fps, PETS2009 7 fps)"
+    _, ini = mot_frame_rate(path)
+    if ini is not None:
+        return str(ini)
+    return (f"assumed {MOT_DEFAULT_FPS:g} fps: no seqinfo.ini frameRate beside the MOTChallenge file; "
+            "give config fps (the link gates are in seconds)")
 
 
 def _online_config(split_cover: bool):

@@ -275,6 +275,47 @@ def test_jorge_split_cover_option(tmp_path, capsys):
          "split_cover")  # fmt: skip
 
 
+def test_jorge_frame_rate_from_seqinfo(tmp_path, capsys):
+    from models.io.jorge import read_mot, read_strokes
+    from models.io.table import read_lines
+    from models.jorge.online import label_online
+    from models.jorge.strokes import build_strokes
+
+    seq = tmp_path / "SEQ"
+    (seq / "gt").mkdir(parents=True)
+    gt = seq / "gt" / "gt.txt"  # the MOTChallenge layout: SEQ/gt/gt.txt, SEQ/seqinfo.ini
+    gt.write_text("".join(read_lines(DATA / "jorge" / "gt.txt")))
+
+    def params(out: Path) -> dict:
+        return json.loads((out / "summary.json").read_text())["parameters"]
+
+    # no seqinfo.ini: 25 fps assumed, and the run says so
+    assert read_mot(gt).fps == 25.0
+    capsys.readouterr()
+    got = params(_track(tmp_path / "a", "jorge", [gt]))
+    assert got["fps"] == 25.0 and got["fps_source"].startswith("assumed 25 fps")
+    assert "assumed 25 fps" in capsys.readouterr().err
+    # the challenge's seqinfo.ini gives the rate; the labels are the batch labeller's at that rate
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=SEQ\nframeRate=7\nseqLength=100\n")
+    assert read_mot(gt).fps == 7.0
+    out = _track(tmp_path / "b", "jorge", [gt])
+    got = params(out)
+    assert got["fps"] == 7.0 and got["fps_source"] == str(seq / "seqinfo.ini")
+    assert "assumed" not in capsys.readouterr().err
+    strokes = build_strokes(3, read_mot(gt))
+    assert [r["label"] for r in read_strokes(out / "strokes.csv")[1]] == list(label_online(strokes).labels)
+    # the config's fps wins
+    cfg = tmp_path / "cfg.json"
+    cfg.write_text('{"fps": 12.5}')
+    got = params(_track(tmp_path / "c", "jorge", [gt], "--config", str(cfg)))
+    assert got["fps"] == 12.5 and got["fps_source"] == "config"
+    for text, needle in (("[Sequence]\nframeRate=fast\n", "frameRate = 'fast'"),
+                         ("[Sequence]\nframeRate=0\n", "frameRate = '0'"),
+                         ("garbage\n", "seqinfo.ini:1: not an INI file")):
+        (seq / "seqinfo.ini").write_text(text)
+        _bad(capsys, ["track", "jorge", str(gt), "-o", str(tmp_path / "bad")], "seqinfo.ini", needle)
+
+
 def test_jorge_formats_agree():
     from models.io.jorge import read_boxes
 
