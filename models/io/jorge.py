@@ -25,8 +25,8 @@ import numpy as np
 from dbn.errors import DBNError, in_file
 from models.io.table import as_float, as_int, fail, read_lines, require_file, write_rows
 
-__all__ = ["read_boxes", "read_mot", "mot_frame_rate", "write_strokes", "read_strokes",
-           "write_mot_tracks"]
+__all__ = ["read_boxes", "read_mot", "mot_frame_rate", "frame_rate_source", "write_strokes",
+           "read_strokes", "write_mot_tracks"]
 
 MOT_DEFAULT_FPS = 25.0
 """Frame rate assumed for a MOTChallenge file without a ``seqinfo.ini`` (CAVIAR's)."""
@@ -114,10 +114,28 @@ def read_boxes(path: str | Path):
     from models.jorge.strokes import load_ground_truth
 
     path = require_file(path, "box file")
-    name = path.name.lower().removesuffix(".gz")
-    if not name.endswith(".xml"):
+    if not _is_xml(path):
         return read_mot(path)
     return load_ground_truth(path)  # its errors name the file (and line or element)
+
+
+def frame_rate_source(path: str | Path) -> str:
+    """Where :func:`read_boxes` takes the file's frame rate from: the XML format's own
+    (CAVIAR 25, PETS2009 7), a MOTChallenge ``seqinfo.ini`` (its path), or "assumed 25
+    fps" (:data:`MOT_DEFAULT_FPS`)."""
+    path = Path(path)
+    if _is_xml(path):
+        return "file format (CAVIAR 25 fps, PETS2009 7 fps)"
+    _, ini = mot_frame_rate(path)
+    if ini is not None:
+        return str(ini)
+    return (f"assumed {MOT_DEFAULT_FPS:g} fps: no seqinfo.ini frameRate beside the MOTChallenge file; "
+            "give config fps (the link gates are in seconds)")
+
+
+def _is_xml(path: Path) -> bool:
+    """CAVIAR / PETS2009 XML (``.xml`` or ``.xml.gz``), else MOTChallenge text."""
+    return path.name.lower().removesuffix(".gz").endswith(".xml")
 
 
 def _ids(label) -> str:

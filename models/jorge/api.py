@@ -68,8 +68,7 @@ class JorgeTracker(StepTracker):
 
     def __init__(self, config: OnlineConfig | None = None, fps: float = 25.0) -> None:
         self.config = OnlineConfig() if config is None else config
-        self.fps = float(fps)
-        OnlineLabeller(self.config, self.fps)  # checks the configuration now
+        self.fps = OnlineLabeller(self.config, fps).fps  # checks the configuration and the rate now
 
     def init(self, key: jax.Array) -> JorgeState:
         """An empty labeller (deterministic: the key is not used)."""

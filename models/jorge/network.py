@@ -80,6 +80,15 @@ __all__ = [
 ]
 
 
+def check_frame_rate(fps: object, where: str, error: type[Exception] = ModelError) -> float:
+    """``fps`` as a float if it is a finite number > 0 (a bool is not a number here);
+    else ``error`` naming ``where``. The link gates and the inference period are in
+    seconds, so every entry point that takes a frame rate checks it with this."""
+    if isinstance(fps, bool) or not isinstance(fps, int | float | np.number) or not (np.isfinite(fps) and fps > 0):
+        raise error(f"{where}: fps must be a finite number > 0, got {fps!r}")
+    return float(fps)
+
+
 def node_name(k: int) -> str:
     """Name of the hidden label node of stroke ``k``."""
     return f"x{k}"
@@ -133,9 +142,7 @@ class LabelGraph:
     def __init__(self, config: NetworkConfig | None = None, with_domains: bool = True,
                  fps: float = 25.0) -> None:
         self.config = NetworkConfig() if config is None else config
-        if not fps > 0:
-            raise ModelError(f"LabelGraph: fps must be > 0, got {fps}")
-        self.fps = float(fps)
+        self.fps = check_frame_rate(fps, "LabelGraph")
         self.with_domains = with_domains
         self.nodes: list[_Node] = []
         n0 = 16

@@ -73,7 +73,7 @@ from models.jorge.labels import (
     colour_log_likelihood,
     prune_labels,
 )
-from models.jorge.network import LabelGraph, NetworkConfig, node_name
+from models.jorge.network import LabelGraph, NetworkConfig, check_frame_rate, node_name
 from models.jorge.strokes import Stroke, StrokeSet
 
 __all__ = [
@@ -214,10 +214,8 @@ class OnlineLabeller:
     def __init__(self, config: OnlineConfig | None = None, fps: float = 25.0,
                  keep_windows: bool = False) -> None:
         self.config = OnlineConfig() if config is None else config
-        if not fps > 0:
-            raise ModelError(f"fps must be > 0, got {fps}")
-        self.fps = float(fps)
-        self.graph = LabelGraph(self.config.network, fps=fps)
+        self.graph = LabelGraph(self.config.network, fps=fps)  # checks fps
+        self.fps = self.graph.fps
         self.labels: dict[int, Label] = {}
         self.beliefs: dict[int, np.ndarray] = {}
         self.records: list[InferenceRecord] = []
@@ -522,13 +520,12 @@ def _frame_rate(strokes: StrokeSet | Sequence[Stroke], fps: float | None) -> flo
     """The strokes' frame rate for :func:`label_online`: a :class:`StrokeSet`'s own, else
     ``fps``, which a plain sequence must give (:class:`InputError` otherwise)."""
     own = strokes.fps if isinstance(strokes, StrokeSet) else None
-    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, (int, float, np.number))
-                            or not (np.isfinite(fps) and fps > 0)):
-        raise InputError(f"label_online: fps must be a finite number > 0, got {fps!r}")
+    if fps is not None:
+        fps = check_frame_rate(fps, "label_online", InputError)
     if fps is None and own is None:
         raise InputError("label_online: a plain sequence of strokes carries no frame rate; give fps= "
                          "(the link gates are in seconds) or pass the StrokeSet")
-    if fps is not None and own is not None and not np.isclose(float(fps), own):
+    if fps is not None and own is not None and not np.isclose(fps, own):
         raise InputError(f"label_online: fps={fps} differs from the StrokeSet's own fps={own}")
     return float(own if fps is None else fps)
 

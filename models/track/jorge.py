@@ -19,7 +19,13 @@ from __future__ import annotations
 import numpy as np
 
 from dbn.errors import ConfigError, InputError
-from models.io.jorge import read_boxes, read_strokes, write_mot_tracks, write_strokes
+from models.io.jorge import (
+    frame_rate_source,
+    read_boxes,
+    read_strokes,
+    write_mot_tracks,
+    write_strokes,
+)
 from models.track.context import RunContext
 from models.track.options import build, check_keys, flag, number
 
@@ -43,7 +49,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     with ctx.timed("read"):
         truth = read_boxes(inputs[0])
         strokes = build_strokes(ctx.seed, truth, scfg)
-    source = "config" if fps is not None else _fps_source(inputs[0])
+    source = "config" if fps is not None else frame_rate_source(inputs[0])
     if source.startswith("assumed"):
         ctx.note(source)
     fps = truth.fps if fps is None else fps
@@ -63,20 +69,6 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
               "split_cover": split_cover,
               **{k: getattr(scfg, k) for k in StrokeConfig.__dataclass_fields__}}  # fmt: skip
     return {"parameters": params, "outputs": ["strokes.csv", "tracks.txt", "strokes.png"]}
-
-
-def _fps_source(path: str) -> str:
-    """Where the frame rate came from when the config gives none: the XML format's own
-    (CAVIAR 25, PETS2009 7), a MOTChallenge ``seqinfo.ini``, or the assumed 25 fps."""
-    from models.io.jorge import MOT_DEFAULT_FPS, mot_frame_rate
-
-    if path.lower().removesuffix(".gz").endswith(".xml"):
-        return "file format (CAVIAR 25 fps, PETS2009 7 fps)"
-    _, ini = mot_frame_rate(path)
-    if ini is not None:
-        return str(ini)
-    return (f"assumed {MOT_DEFAULT_FPS:g} fps: no seqinfo.ini frameRate beside the MOTChallenge file; "
-            "give config fps (the link gates are in seconds)")
 
 
 def _online_config(split_cover: bool):

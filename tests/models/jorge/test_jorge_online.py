@@ -7,7 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from dbn.errors import InputError, TimeOrderError
+from dbn.errors import InputError, ModelError, TimeOrderError
+from models.jorge.api import make
 from models.jorge.network import LabelGraph, NetworkConfig
 from models.jorge.online import (
     OnlineConfig,
@@ -74,6 +75,11 @@ def test_label_online_takes_the_stroke_sets_frame_rate_and_needs_one_for_a_list(
     for bad in (0.0, -7.0, float("nan"), "7", True):
         with pytest.raises(InputError, match="fps must be a finite number > 0"):
             label_online(list(seven), fps=bad)
+        # the streaming labeller and the registry's tracker check the rate the same way
+        with pytest.raises(ModelError, match="fps must be a finite number > 0"):
+            OnlineLabeller(fps=bad)
+        with pytest.raises(ModelError, match="fps must be a finite number > 0"):
+            make(fps=bad)
 
 
 def test_colour_only_and_network_on_an_easy_case():
