@@ -68,6 +68,7 @@ from models.jorge.strokes import StrokeSet
 __all__ = [
     "TRAIN_SEQUENCES",
     "VALIDATION_SEQUENCES",
+    "SIMULATED_VIEW_SEQUENCES",
     "TRAIN_SEEDS",
     "EventCounts",
     "count_events",
@@ -103,16 +104,25 @@ VALIDATION_SEQUENCES = (
 )
 """Held-out part of the training data: scored, never fitted on."""
 
+SIMULATED_VIEW_SEQUENCES = (("eth", "obsmat.txt.gz"),)
+"""Real motion seen through a SIMULATED camera (:mod:`models.jorge.eth`: ETH ``seq_eth``
+has ground positions, no boxes): scored by the benchmark on its own, never fitted on,
+never pooled with the real views, and nothing is chosen on it."""
+
 TRAIN_SEEDS = tuple(range(100, 110))
 """Simulation seeds (occlusion gaps, colours) of the fit; the benchmark scores seeds 0-4."""
 
 
 def load_sequence(folder: str, name: str):
-    """Ground truth of one sequence of ``../shared/data`` (``FileNotFoundError`` if absent)."""
+    """Ground truth of one sequence of ``../shared/data`` (``FileNotFoundError`` if absent);
+    ETH through the default SIMULATED :class:`~models.jorge.eth.ObliqueView`."""
     from models import datasets
+    from models.jorge.eth import load_eth
     from models.jorge.strokes import load_caviar, load_pets2009
 
     path = datasets.require(folder, name)
+    if folder == "eth":
+        return load_eth(path, name="ETH-seq_eth")
     return load_caviar(path) if folder == "caviar" else load_pets2009(path)
 
 

@@ -65,6 +65,7 @@ __all__ = [
     "load_ground_truth",
     "pairwise_iou",
     "regions",
+    "region_labels",
     "gap_mask",
     "build_strokes",
     "make_stroke",
@@ -551,8 +552,55 @@ def pairwise_iou(boxes: np.ndarray) -> np.ndarray:
     return np.nan_to_num(iou, nan=0.0)
 
 
+def region_labels(boxes: np.ndarray, iou_threshold: float) -> np.ndarray:
+    """Region of each person per frame: people joined by overlapping boxes (transitively).
+
+    One graph over (frame, person) nodes whose edges are the overlaps, its connected
+    components found at once (scipy); the overlaps are computed in blocks of frames over
+    the people seen in the block, so memory stays bounded when a long sequence has
+    hundreds of ids (the dense frames x ids^2 closure it replaces did not).
+
+    Parameters
+    ----------
+    boxes : ndarray, shape (num_frames, num_ids, 4)
+        ``(xc, yc, w, h)``, NaN where absent.
+    iou_threshold : float
+        Two boxes with IoU above it are joined.
+
+    Returns
+    -------
+    ndarray of int64, shape (num_frames, num_ids)
+        The lowest column (id index) of the person's region, -1 where the person is absent.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    boxes = np.asarray(boxes, dtype=np.float64)
+    num_frames, num_ids = boxes.shape[:2]
+    if boxes.size == 0:
+        return np.full((num_frames, num_ids), -1, dtype=np.int64)
+    visible = ~np.isnan(boxes[..., 0])
+    node = np.arange(num_frames * num_ids).reshape(num_frames, num_ids)
+    src, dst = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+    for a in range(0, num_frames, _REGION_CHUNK):
+        cols = np.flatnonzero(visible[a:a + _REGION_CHUNK].any(0))  # ids seen in the chunk
+        f, i, j = np.nonzero(np.triu(pairwise_iou(boxes[a:a + _REGION_CHUNK][:, cols]) > iou_threshold, 1))
+        src.append(node[a + f, cols[i]])
+        dst.append(node[a + f, cols[j]])
+    src_a, dst_a = np.concatenate(src), np.concatenate(dst)
+    graph = coo_matrix((np.ones(src_a.size), (src_a, dst_a)), shape=(node.size, node.size))
+    _, comp = connected_components(graph, directed=False)
+    lowest = np.full(comp.max() + 1, num_ids, dtype=np.int64)
+    np.minimum.at(lowest, comp, np.tile(np.arange(num_ids), num_frames))
+    return np.where(visible, lowest[comp].reshape(num_frames, num_ids), -1)
+
+
+_REGION_CHUNK = 64
+"""Frames per block of :func:`region_labels`' pairwise overlaps (memory chunk x ids^2)."""
+
+
 def regions(boxes: np.ndarray, iou_threshold: float) -> np.ndarray:
-    """Region membership per frame: people joined by overlapping boxes (transitively).
+    """Region membership per frame as a dense relation (:func:`region_labels`, expanded).
 
     Parameters
     ----------
@@ -563,17 +611,11 @@ def regions(boxes: np.ndarray, iou_threshold: float) -> np.ndarray:
     -------
     ndarray of bool, shape (num_frames, num_ids, num_ids)
         ``same[f, i, j]``: i and j are both visible and in one region at frame f
-        (``same[f, i, i]`` is visibility).
+        (``same[f, i, i]`` is visibility). Memory frames x ids^2: for short sequences and
+        tests; :func:`build_strokes` uses the labels.
     """
-    visible = ~np.isnan(boxes[..., 0])
-    adj = pairwise_iou(boxes) > iou_threshold
-    n = boxes.shape[1]
-    adj |= np.eye(n, dtype=bool)[None]
-    adj &= visible[:, :, None] & visible[:, None]
-    reach = adj.astype(np.int64)
-    for _ in range(max(1, int(np.ceil(np.log2(max(n, 2)))))):
-        reach = (reach @ reach > 0).astype(np.int64)
-    return reach.astype(bool)
+    lab = region_labels(boxes, iou_threshold)
+    return (lab[:, :, None] == lab[:, None]) & (lab >= 0)[:, :, None]
 
 
 def gap_mask(seed, visible: np.ndarray, config: StrokeConfig) -> np.ndarray:
@@ -655,10 +697,9 @@ def build_strokes(seed, truth: GroundTruth, config: StrokeConfig | None = None) 
     boxes = truth.boxes
     visible = ~np.isnan(boxes[..., 0])
     hidden = gap_mask(np.random.default_rng(gap_seed), visible, config)
-    same = regions(boxes, config.iou_threshold)
     num_ids = truth.ids.size
     # the lowest-id member of each person's region decides whether the region is hidden
-    first_member = np.where(same.any(-1), np.argmax(same, axis=-1), -1)  # (F, I)
+    first_member = region_labels(boxes, config.iou_threshold)  # (F, I), -1 absent
     is_head = first_member == np.arange(num_ids)[None]
     region_hidden = np.take_along_axis(hidden, np.clip(first_member, 0, None), axis=1)
     shown_head = is_head & visible & ~region_hidden
@@ -671,7 +712,7 @@ def build_strokes(seed, truth: GroundTruth, config: StrokeConfig | None = None) 
     for f in range(truth.num_frames):
         here = {}
         for h in np.flatnonzero(shown_head[f]):
-            cols = np.flatnonzero(same[f, h])
+            cols = np.flatnonzero(first_member[f] == h)
             key = frozenset(int(ids[c]) for c in cols)
             rlo, rhi = lo[f, cols].min(0), hi[f, cols].max(0)
             here[key] = (0.5 * (rlo + rhi), rhi - rlo)
