@@ -4,8 +4,9 @@ Inputs (``docs/formats.md``): a CAVIAR CVML ground-truth file (``<frame number>`
 ``<objectlist><object id><box xc yc w h>``, ``<grouplist>``), a PETS2009 XML of the same
 frame/object/box layout, or a MOTChallenge text file ``frame,id,bb_left,bb_top,w,h[,conf,
 ...]`` (``gt.txt``, or a tracker's output; rows with ``conf = 0`` are ignored, as in
-MOT16+ ``gt.txt``; ``id = -1`` detections cannot make strokes). Any of them may be
-gzipped. A MOTChallenge file's frame rate is the ``frameRate`` of the ``seqinfo.ini``
+MOT16+ ``gt.txt``; ``id = -1`` detections cannot make strokes). An ETH / UCY ``obsmat.txt`` (tracks in
+world metres, :mod:`models.jorge.eth`) is read through a SIMULATED oblique camera. Any of
+them may be gzipped. A MOTChallenge file's frame rate is the ``frameRate`` of the ``seqinfo.ini``
 beside it or one folder up (the challenge's ``SEQ/gt/gt.txt`` and ``SEQ/seqinfo.ini``);
 without one it is assumed to be 25 fps, CAVIAR's (:func:`mot_frame_rate`).
 
@@ -25,7 +26,7 @@ import numpy as np
 from dbn.errors import DBNError, in_file
 from models.io.table import as_float, as_int, fail, read_lines, require_file, write_rows
 
-__all__ = ["read_boxes", "read_mot", "mot_frame_rate", "frame_rate_source", "write_strokes",
+__all__ = ["read_boxes", "read_mot", "mot_frame_rate", "frame_rate_source", "is_obsmat", "write_strokes",
            "read_strokes", "write_mot_tracks"]
 
 MOT_DEFAULT_FPS = 25.0
@@ -110,10 +111,15 @@ def read_mot(path: str | Path):
 
 
 def read_boxes(path: str | Path):
-    """A :class:`~models.jorge.strokes.GroundTruth` from CAVIAR / PETS2009 XML or MOT text."""
+    """A :class:`~models.jorge.strokes.GroundTruth` from CAVIAR / PETS2009 XML, MOT text,
+    or an ETH / UCY ``obsmat`` file (named ``obsmat*``: world metres seen through the
+    default SIMULATED camera, :func:`models.jorge.eth.load_eth`)."""
+    from models.jorge.eth import load_eth
     from models.jorge.strokes import load_ground_truth
 
     path = require_file(path, "box file")
+    if is_obsmat(path):
+        return load_eth(path)
     if not _is_xml(path):
         return read_mot(path)
     return load_ground_truth(path)  # its errors name the file (and line or element)
@@ -124,6 +130,8 @@ def frame_rate_source(path: str | Path) -> str:
     (CAVIAR 25, PETS2009 7), a MOTChallenge ``seqinfo.ini`` (its path), or "assumed 25
     fps" (:data:`MOT_DEFAULT_FPS`)."""
     path = Path(path)
+    if is_obsmat(path):
+        return "file format (ETH / UCY obsmat, 2.5 annotations per second)"
     if _is_xml(path):
         return "file format (CAVIAR 25 fps, PETS2009 7 fps)"
     _, ini = mot_frame_rate(path)
@@ -131,6 +139,11 @@ def frame_rate_source(path: str | Path) -> str:
         return str(ini)
     return (f"assumed {MOT_DEFAULT_FPS:g} fps: no seqinfo.ini frameRate beside the MOTChallenge file; "
             "give config fps (the link gates are in seconds)")
+
+
+def is_obsmat(path: str | Path) -> bool:
+    """An ETH / UCY ``obsmat`` file (its name starts with ``obsmat``: tracks in metres)."""
+    return Path(path).name.lower().startswith("obsmat")
 
 
 def _is_xml(path: Path) -> bool:

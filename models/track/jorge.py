@@ -1,7 +1,9 @@
 """``dbntrack track jorge BOXES``: group/person labels of the strokes of a video (seed 004;
 formats in :mod:`models.io.jorge`).
 
-The boxes (CAVIAR / PETS2009 XML or MOTChallenge) go through the simulated low-level
+The boxes (CAVIAR / PETS2009 XML or MOTChallenge; an ETH / UCY ``obsmat`` file's tracks in
+metres through the default SIMULATED :class:`~models.jorge.eth.ObliqueView`, which the
+run notes and ``simulated_view`` in the summary records) go through the simulated low-level
 tracker :func:`models.jorge.strokes.build_strokes` (regions of overlapping boxes followed
 without a break; occlusion gaps and dominant colours simulated from ``--seed``, as in the
 benchmark), then the registry's on-line labeller, one stroke per protocol step, and its
@@ -21,15 +23,17 @@ import numpy as np
 from dbn.errors import ConfigError, InputError
 from models.io.jorge import (
     frame_rate_source,
+    is_obsmat,
     read_boxes,
     read_strokes,
     write_mot_tracks,
     write_strokes,
 )
+from models.jorge.eth import ObliqueView
 from models.track.context import RunContext
 from models.track.options import build, check_keys, flag, number
 
-INPUTS = ("BOXES: CAVIAR CVML .xml, PETS2009 .xml or MOTChallenge gt.txt (may be .gz)",)
+INPUTS = ("BOXES: CAVIAR CVML .xml, PETS2009 .xml, MOTChallenge gt.txt or ETH/UCY obsmat.txt (may be .gz)",)
 
 
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
@@ -52,6 +56,9 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     source = "config" if fps is not None else frame_rate_source(inputs[0])
     if source.startswith("assumed"):
         ctx.note(source)
+    view = repr(ObliqueView()) if is_obsmat(inputs[0]) else None
+    if view:
+        ctx.note(f"tracks in metres: boxes from a SIMULATED camera, {view}")
     fps = truth.fps if fps is None else fps
     tracker = models.get("jorge").make(_online_config(split_cover), fps=fps)
     k_init, keys = split_run_keys(ctx.key(), len(strokes))
@@ -65,7 +72,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     write_mot_tracks(ctx.outdir / "tracks.txt", strokes, labels)
     _plot(ctx, strokes, labels)
     params = {"num_strokes": len(strokes), "num_groups": strokes.num_groups, "fps": fps, "fps_source": source,
-              "num_frames": truth.num_frames, "sequence": truth.name,
+              "num_frames": truth.num_frames, "sequence": truth.name, "simulated_view": view,
               "split_cover": split_cover,
               **{k: getattr(scfg, k) for k in StrokeConfig.__dataclass_fields__}}  # fmt: skip
     return {"parameters": params, "outputs": ["strokes.csv", "tracks.txt", "strokes.png"]}

@@ -316,6 +316,35 @@ def test_jorge_frame_rate_from_seqinfo(tmp_path, capsys):
         _bad(capsys, ["track", "jorge", str(gt), "-o", str(tmp_path / "bad")], "seqinfo.ini", needle)
 
 
+def test_jorge_tracks_in_metres(tmp_path, capsys):
+    """An ETH / UCY obsmat file runs through the SIMULATED camera, says so, and evaluates."""
+    from models.io.jorge import read_strokes
+    from models.jorge.eth import load_eth
+    from models.jorge.online import label_online
+    from models.jorge.strokes import build_strokes
+
+    rows = []
+    for k in range(40):  # two people meet, walk together 1 m apart in depth, part
+        gap = 1.0 if 10 <= k < 30 else 4.0
+        rows += [f"{780 + 6 * k} 1 {0.5 * k} 0 0 0.5 0 0", f"{780 + 6 * k} 2 {0.5 * k} 0 {gap} 0.5 0 0"]
+    rows.append(f"{780 + 6 * 40} 3 1 0 8 0 0 0")
+    obs = tmp_path / "obsmat.txt"
+    obs.write_text("\n".join(rows) + "\n")
+    capsys.readouterr()
+    out = _track(tmp_path, "jorge", [obs])
+    got = json.loads((out / "summary.json").read_text())["parameters"]
+    assert got["fps"] == 2.5 and got["fps_source"].startswith("file format (ETH")
+    assert got["simulated_view"].startswith("ObliqueView(") and "SIMULATED camera" in capsys.readouterr().err
+    strokes = build_strokes(3, load_eth(obs))
+    assert {len(s.truth) for s in strokes} == {1, 2}  # the pair 1 m apart in depth overlaps
+    assert [r["label"] for r in read_strokes(out / "strokes.csv")[1]] == list(label_online(strokes).labels)
+    assert main(["eval", "jorge", str(out / "strokes.csv"), str(obs)]) == 0
+    bad = tmp_path / "bad" / "obsmat.txt"
+    bad.parent.mkdir()
+    bad.write_text("780 1 0 0 0\n786 1 0 0\n")
+    _bad(capsys, ["track", "jorge", str(bad), "-o", str(tmp_path / "b")], "obsmat.txt:2:", "4 columns")
+
+
 def test_jorge_formats_agree():
     from models.io.jorge import read_boxes
 
