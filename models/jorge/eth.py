@@ -161,12 +161,22 @@ def load_eth(path: str | Path, view: ObliqueView | None = None, fps: float = ETH
 
     ``frames`` are annotation indices (video frame / step, so consecutive annotations are
     consecutive frames, and frames nobody is in are kept empty), ``fps`` the annotation
-    rate (:data:`ETH_FPS`), ``name`` the file's stem unless given, ``groups`` empty (the file of who walks together is not the
-    overlap of boxes the stroke builder uses). Errors name the file (and line).
+    rate (:data:`ETH_FPS`), ``name`` the file's stem unless given, ``groups`` empty (the
+    file of who walks together is not the overlap of boxes the stroke builder uses).
+
+    Raises
+    ------
+    InputError
+        ``view`` not an :class:`ObliqueView`, ``fps`` not a finite number > 0 (before the
+        file is read); a bad file, naming it and the line (:func:`read_obsmat`).
     """
     from models.jorge.strokes import _assemble
 
     view = ObliqueView() if view is None else view
+    if not isinstance(view, ObliqueView):
+        raise InputError(f"load_eth: view must be an ObliqueView, got {type(view).__name__}")
+    if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not (math.isfinite(fps) and fps > 0):
+        raise InputError(f"load_eth: fps must be a finite number > 0, got {fps!r}")
     path = Path(path)
     frames, ids, ground = read_obsmat(path)
     uniq = np.unique(frames)

@@ -86,6 +86,13 @@ def test_read_obsmat_names_file_and_line(tmp_path, text, line, what):
     assert err.value.line == line and err.value.file == str(path)
 
 
+@pytest.mark.parametrize("kwargs, what", [({"view": "45"}, "view"), ({"fps": 0.0}, "fps"),
+                                          ({"fps": float("nan")}, "fps"), ({"fps": True}, "fps")])
+def test_load_eth_rejects_bad_arguments(tmp_path, kwargs, what):
+    with pytest.raises(InputError, match=f"load_eth: {what}"):
+        load_eth(_write(tmp_path, ROWS), **kwargs)
+
+
 def test_read_obsmat_empty_and_missing(tmp_path):
     with pytest.raises(FileFormatError, match="no rows"):
         read_obsmat(_write(tmp_path, "# nothing\n"))
