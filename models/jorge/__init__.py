@@ -6,5 +6,6 @@ Modules: :mod:`strokes` (ground-truth loaders and the simulated low-level tracke
 :mod:`config` (the network's settings and the parameters fitted on the training split),
 :mod:`network` (the Bayes net and its exact MAP / marginals), :mod:`online` (periodic
 inference with bounded memory, eq. 12 labelling, scoring and the colour-only baseline),
-:mod:`simulate` (a synthetic sequence when the real ground truth is absent).
+:mod:`simulate` (a synthetic sequence when the real ground truth is absent),
+:mod:`eth` (tracks in world metres, ETH / UCY ``obsmat``, through a SIMULATED camera).
 """
