@@ -120,8 +120,8 @@ def read_obsmat(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             continue
         if len(fields) < 5:
             raise fail(path, line_no, f"{len(fields)} columns, need frame id x z y [vx vz vy]")
-        frame = _integral(fields[0], path, line_no, "frame")
-        pid = _integral(fields[1], path, line_no, "id")
+        frame = as_int(fields[0], path, line_no, "frame")  # "7.8000000e+02" is 780
+        pid = as_int(fields[1], path, line_no, "id")
         x, y = as_float(fields[2], path, line_no, "x"), as_float(fields[4], path, line_no, "y")
         if (frame, pid) in seen:
             raise fail(path, line_no, f"id {pid} appears twice in frame {frame}")
@@ -133,19 +133,11 @@ def read_obsmat(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return table[:, 0].astype(np.int64), table[:, 1].astype(np.int64), table[:, 2:]
 
 
-def _integral(text: str, path, line_no: int, name: str) -> int:
-    """An integer field that may be written as a float (``7.8000000e+02``)."""
-    value = as_float(text, path, line_no, name)
-    if value != round(value):
-        raise fail(path, line_no, f"{name} = {text!r} is not an integer")
-    return as_int(str(int(round(value))), path, line_no, name)
-
-
-def _frame_index(frames: np.ndarray) -> np.ndarray:
-    """Annotation index of each distinct frame, in order: consecutive annotated frames
-    ``d`` video frames apart are ``max(1, round(d / step))`` indices apart, ``step`` the
-    most common such ``d`` (a gap in the annotation stays a gap of empty frames)."""
-    uniq = np.unique(frames)
+def _frame_index(uniq: np.ndarray) -> np.ndarray:
+    """Annotation index of each of the distinct, sorted frames ``uniq``: consecutive
+    annotated frames ``d`` video frames apart are ``max(1, round(d / step))`` indices
+    apart, ``step`` the most common such ``d`` (a gap in the annotation stays a gap of
+    empty frames)."""
     if uniq.size == 1:
         return np.zeros(1, np.int64)
     diffs, counts = np.unique(np.diff(uniq), return_counts=True)
@@ -170,17 +162,17 @@ def load_eth(path: str | Path, view: ObliqueView | None = None, fps: float = ETH
         ``view`` not an :class:`ObliqueView`, ``fps`` not a finite number > 0 (before the
         file is read); a bad file, naming it and the line (:func:`read_obsmat`).
     """
+    from models.jorge.network import check_frame_rate
     from models.jorge.strokes import _assemble
 
     view = ObliqueView() if view is None else view
     if not isinstance(view, ObliqueView):
         raise InputError(f"load_eth: view must be an ObliqueView, got {type(view).__name__}")
-    if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not (math.isfinite(fps) and fps > 0):
-        raise InputError(f"load_eth: fps must be a finite number > 0, got {fps!r}")
+    fps = check_frame_rate(fps, "load_eth", InputError)
     path = Path(path)
     frames, ids, ground = read_obsmat(path)
     uniq = np.unique(frames)
-    index = _frame_index(frames)
+    index = _frame_index(uniq)
     row_of = dict(zip(uniq.tolist(), index.tolist()))
     boxes = view.boxes(ground)
     per_frame: list[tuple[int, dict]] = [(k, {}) for k in range(int(index[-1]) + 1)]
