@@ -153,7 +153,7 @@ for k in ours.errors:
 # Grey nodes are frozen, white ones active; small squares are restriction nodes.
 
 # %%
-lab = OnlineLabeller(OnlineConfig())
+lab = OnlineLabeller(OnlineConfig(), fps=strokes.fps)
 for s in strokes:
     if s.start > 12 * truth.fps:
         break

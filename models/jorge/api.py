@@ -60,13 +60,14 @@ def _label(lab) -> tuple:
 
 
 class JorgeTracker(StepTracker):
-    """Protocol adapter over :class:`OnlineLabeller` (one stroke per step)."""
+    """Protocol adapter over :class:`OnlineLabeller` (one stroke per step); ``fps``, the
+    strokes' frame rate, is required (no rate is assumed)."""
 
     name = "jorge"
     score_field = "log_prob"
     can_save = False
 
-    def __init__(self, config: OnlineConfig | None = None, fps: float = 25.0) -> None:
+    def __init__(self, config: OnlineConfig | None = None, fps: float | None = None) -> None:
         self.config = OnlineConfig() if config is None else config
         self.fps = OnlineLabeller(self.config, fps).fps  # checks the configuration and the rate now
 
@@ -114,8 +115,8 @@ class JorgeTracker(StepTracker):
         )
 
 
-def make(config: OnlineConfig | None = None, fps: float = 25.0) -> JorgeTracker:
-    """The adapter for an :class:`OnlineConfig` and a frame rate."""
+def make(config: OnlineConfig | None = None, fps: float | None = None) -> JorgeTracker:
+    """The adapter for an :class:`OnlineConfig` and the strokes' frame rate (required)."""
     return JorgeTracker(config, fps)
 
 

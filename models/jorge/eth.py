@@ -162,8 +162,7 @@ def load_eth(path: str | Path, view: ObliqueView | None = None, fps: float = ETH
         ``view`` not an :class:`ObliqueView`, ``fps`` not a finite number > 0 (before the
         file is read); a bad file, naming it and the line (:func:`read_obsmat`).
     """
-    from models.jorge.network import check_frame_rate
-    from models.jorge.strokes import _assemble
+    from models.jorge.strokes import _assemble, check_frame_rate
 
     view = ObliqueView() if view is None else view
     if not isinstance(view, ObliqueView):

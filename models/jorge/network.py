@@ -61,7 +61,7 @@ from models.jorge.labels import (
     union_rows,
 )
 from models.jorge.memo import ChainMemo, EvidenceMemo, TableMemo
-from models.jorge.strokes import Stroke, _check_colours
+from models.jorge.strokes import Stroke, _check_colours, check_frame_rate
 
 __all__ = [
     "NetworkConfig",
@@ -78,15 +78,6 @@ __all__ = [
     "colour_name",
     "solve",
 ]
-
-
-def check_frame_rate(fps: object, where: str, error: type[Exception] = ModelError) -> float:
-    """``fps`` as a float if it is a finite number > 0 (a bool is not a number here);
-    else ``error`` naming ``where``. The link gates and the inference period are in
-    seconds, so every entry point that takes a frame rate checks it with this."""
-    if isinstance(fps, bool) or not isinstance(fps, int | float | np.number) or not (np.isfinite(fps) and fps > 0):
-        raise error(f"{where}: fps must be a finite number > 0, got {fps!r}")
-    return float(fps)
 
 
 def node_name(k: int) -> str:
@@ -136,11 +127,12 @@ class LabelGraph:
     with_domains : bool
         Compute label domains (``False``: links only, for counting training events).
     fps : float
-        Frame rate of the strokes (the ``"scaled"`` link gate works in seconds).
+        Frame rate of the strokes (the ``"scaled"`` link gate works in seconds). Required:
+        no rate is assumed.
     """
 
     def __init__(self, config: NetworkConfig | None = None, with_domains: bool = True,
-                 fps: float = 25.0) -> None:
+                 fps: float | None = None) -> None:
         self.config = NetworkConfig() if config is None else config
         self.fps = check_frame_rate(fps, "LabelGraph")
         self.with_domains = with_domains

@@ -196,7 +196,8 @@ class OnlineLabeller:
     ----------
     config : OnlineConfig
     fps : float
-        Frame rate (to turn ``period_s`` into frames).
+        Frame rate of the strokes (turns ``period_s`` and the link gates' seconds into
+        frames). Required: no rate is assumed (:class:`ModelError` without it).
     keep_windows : bool
         Keep every window net (for cross-checks; costs memory).
 
@@ -211,7 +212,7 @@ class OnlineLabeller:
         ``max_labels`` labels.
     """
 
-    def __init__(self, config: OnlineConfig | None = None, fps: float = 25.0,
+    def __init__(self, config: OnlineConfig | None = None, fps: float | None = None,
                  keep_windows: bool = False) -> None:
         self.config = OnlineConfig() if config is None else config
         self.graph = LabelGraph(self.config.network, fps=fps)  # checks fps

@@ -48,6 +48,7 @@ from dbn.errors import (
     DBNError,
     FileFormatError,
     InputError,
+    ModelError,
     NonFiniteError,
     ShapeError,
     TimeOrderError,
@@ -70,6 +71,7 @@ __all__ = [
     "build_strokes",
     "make_stroke",
     "PETS2009_FPS",
+    "check_frame_rate",
 ]
 
 
@@ -326,6 +328,19 @@ class StrokeConfig:
             raise InputError(f"StrokeConfig.match_prob must be in (0, 1], got {self.match_prob}")
 
 
+def check_frame_rate(fps: object, where: str, error: type[Exception] = ModelError) -> float:
+    """``fps`` as a float if it is a finite number > 0 (a bool is not a number here);
+    else ``error`` naming ``where``. The link gates and the inference period are in
+    seconds, so every entry point that takes a frame rate checks it with this, and none
+    of them assumes one (``None``: the error says to give it)."""
+    if fps is None:
+        raise error(f"{where}: fps is required (the strokes' frame rate, e.g. StrokeSet.fps): "
+                    "the link gates and the inference period are in seconds")
+    if isinstance(fps, bool) or not isinstance(fps, int | float | np.number) or not (np.isfinite(fps) and fps > 0):
+        raise error(f"{where}: fps must be a finite number > 0, got {fps!r}")
+    return float(fps)
+
+
 @dataclass(frozen=True)
 class Stroke:
     """One stroke: a region followed without a break.
@@ -502,14 +517,17 @@ class StrokeSet:
         return self.num_frames / self.fps
 
     @classmethod
-    def from_strokes(cls, strokes, pool_size: int = 12, fps: float = 25.0, name: str = "") -> StrokeSet:
-        """Wrap hand-made strokes (e.g. from :func:`make_stroke`), checking them.
+    def from_strokes(cls, strokes, pool_size: int = 12, fps: float | None = None, name: str = "") -> StrokeSet:
+        """Wrap hand-made strokes (e.g. from :func:`make_stroke`) at frame rate ``fps``
+        (required), checking them.
 
         Raises
         ------
         InputError
-            Indices that are not ``0..n-1`` in start order, or bad colours.
+            ``fps`` missing or not a finite number > 0; indices that are not ``0..n-1``
+            in start order, or bad colours.
         """
+        fps = check_frame_rate(fps, "StrokeSet.from_strokes", InputError)
         strokes = tuple(strokes)
         for k, s in enumerate(strokes):
             if s.index != k:

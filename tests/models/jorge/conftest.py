@@ -43,7 +43,7 @@ def _random_window(data, with_sizes: bool = False, max_configs: int = 20000):
     from hypothesis import strategies as st
 
     n = data.draw(st.integers(3, 6))
-    g = LabelGraph(NetworkConfig(labels=LabelParams(max_group_size=2)))
+    g = LabelGraph(NetworkConfig(labels=LabelParams(max_group_size=2)), fps=25.0)
     start = 0
     for k in range(n):
         start += data.draw(st.integers(0, 4))

@@ -33,7 +33,7 @@ def _crowd(with_sizes: bool = True):
 
 def _parents(gate: str, strokes) -> list[tuple]:
     # the gate alone: without the merge test, which would also drop the spurious merge
-    g = LabelGraph(replace(NetworkConfig(), gate=gate, merge_area=0.0, merge_cover=0.0))
+    g = LabelGraph(replace(NetworkConfig(), gate=gate, merge_area=0.0, merge_cover=0.0), fps=25.0)
     for st in strokes:
         g.add_stroke(st)
     return [g.nodes[k].parents for k in range(len(strokes))]

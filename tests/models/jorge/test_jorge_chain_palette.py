@@ -47,7 +47,7 @@ def pair_leaves():
 
 
 def _graph(cfg=CFG):
-    g = LabelGraph(cfg)
+    g = LabelGraph(cfg, fps=25.0)
     for s in pair_leaves():
         g.add_stroke(s)
     return g
@@ -81,7 +81,7 @@ def test_the_correction_is_the_evidence_with_the_parent_stroke_frozen_alone():
 def test_lone_newcomers_keep_their_birth_palette():
     """A person born alone has a palette of their own from birth: no correction (the
     members of the pair stroke 0 might have been are corrected)."""
-    g = LabelGraph(CFG)
+    g = LabelGraph(CFG, fps=25.0)
     for s in [_stroke(0, 0, 10, 100, 100, {0}), _stroke(1, 12, 20, 95, 80, {0}),
               _stroke(2, 23, 30, 78, 60, {0})]:
         g.add_stroke(s)
@@ -128,7 +128,7 @@ def test_reidentification_examines_objects_in_birth_order():
     time (stroke 4, another missed link). Both later objects are person 0; in id order
     the lone newcomer of stroke 4 came before the pair's member born at stroke 1, took
     person 0's object first and left the member nothing to continue."""
-    g = LabelGraph(CFG, with_domains=False)
+    g = LabelGraph(CFG, with_domains=False, fps=25.0)
     strokes = [
         (_stroke(0, 0, 10, 300, 310, {0}), ()),
         (_stroke(1, 20, 30, 100, 100, {0, 1}), ()),

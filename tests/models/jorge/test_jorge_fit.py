@@ -38,7 +38,7 @@ def test_event_counts_of_a_hand_made_merge_and_split():
         make_stroke(4, 22, 30, (30, 0), (40, 0), [3, 4, 5], {1}, size=(20, 50)),
         make_stroke(5, 32, 40, (0, 0), (0, 0), [0, 1, 9], {0, 3}, size=(40, 50)),
         make_stroke(6, 40, 50, (300, 300), (300, 300), [6, 7, 8], {2}, size=(20, 50)),
-    ])
+    ], fps=25.0)
     c = count_events(ss, NetworkConfig(gate="pixels"))
     # children: 2 (merge of 0 and 1), 3 and 4 (split parts of 2), 5 (0 and a newcomer)
     assert c.children == 4 and c.new == 0 and c.non_new == 4
@@ -57,7 +57,7 @@ def test_fit_is_add_one_smoothed_frequencies():
         make_stroke(2, 12, 20, (20, 0), (20, 0), [0, 1, 3], {0, 1}, size=(40, 50)),
         make_stroke(3, 22, 30, (10, 0), (0, 0), [0, 1, 2], {0}, size=(20, 50)),
         make_stroke(4, 22, 30, (30, 0), (40, 0), [3, 4, 5], {1}, size=(20, 50)),
-    ])
+    ], fps=25.0)
     cfg = fit_parameters([ss], NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels"))
     L = cfg.labels
     assert L.p_new == pytest.approx((0 + 1) / (3 + 2))
@@ -72,7 +72,7 @@ def test_fit_is_add_one_smoothed_frequencies():
 
 
 def test_fit_needs_children():
-    lonely = StrokeSet.from_strokes([make_stroke(0, 0, 10, (0, 0), (1, 0), [0, 1], {0})])
+    lonely = StrokeSet.from_strokes([make_stroke(0, 0, 10, (0, 0), (1, 0), [0, 1], {0})], fps=25.0)
     with pytest.raises(InputError):
         fit_parameters([lonely])
 

@@ -83,7 +83,7 @@ def merge_split_strokes(k: int):
 
 
 def _graph(strokes, cfg=CFG):
-    g = LabelGraph(cfg)
+    g = LabelGraph(cfg, fps=25.0)
     for s in strokes:
         g.add_stroke(s)
     return g
@@ -138,7 +138,7 @@ def _check_window(win):
 def _online(strokes, cfg=CFG) -> OnlineLabeller:
     """The on-line labeller over the strokes (inference every frame, every node kept
     active, domains pruned as usual, no re-identification pass)."""
-    lab = OnlineLabeller(OnlineConfig(network=cfg, period_s=0.04, max_active=64, reid_prior=0.0))
+    lab = OnlineLabeller(OnlineConfig(network=cfg, period_s=0.04, max_active=64, reid_prior=0.0), fps=25.0)
     for s in strokes:
         lab.add_stroke(s)
     lab.finish()

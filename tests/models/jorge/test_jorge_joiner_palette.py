@@ -40,7 +40,7 @@ def join_strokes() -> list:
 
 
 def _graph():
-    g = LabelGraph(CFG)
+    g = LabelGraph(CFG, fps=25.0)
     for s in join_strokes():
         g.add_stroke(s)
     return g
@@ -89,7 +89,7 @@ def test_the_fit_counts_a_joiner_as_unknown_until_seen_alone():
     at stroke 2 person 1 (the joiner) is not known (m = 1, nothing known, all 5 colours
     new); at stroke 3 the person seen alone is known with 5 colours and adds none; at
     stroke 4 both are known, person 1 with the palette of stroke 2."""
-    g = LabelGraph(CFG)
+    g = LabelGraph(CFG, fps=25.0)
     for s in join_strokes():
         g.add_stroke(s)
     c = EventCounts()

@@ -46,7 +46,7 @@ def test_given_links_replace_the_link_rule():
 @pytest.mark.parametrize("parents", [(4,), (1, 1), (0, 1, 2), (-1,), (3,), ("a",), 3])
 def test_bad_links_are_rejected_before_any_change(parents):
     s = _crossing()
-    lab = OnlineLabeller()
+    lab = OnlineLabeller(fps=25.0)
     for st in s[:2]:
         lab.add_stroke(st)
     lab.add_stroke(make_stroke(2, 11, 12, (10, 0), (10, 0), [0, 1, 2], {0}), (0,))
@@ -77,7 +77,7 @@ def test_the_protocol_takes_links_and_rejects_bad_ones_before_any_change():
 
     s = _crossing()
     links = true_links(s)
-    tracker = make()
+    tracker = make(fps=25.0)
     state = tracker.init(jax.random.key(0))
     for st, parents in zip(s, links):
         state, info = tracker.step(jax.random.key(0), state, LinkedStroke(st, parents))

@@ -28,7 +28,7 @@ def _scene(new_x: float, new_size=(44, 50)):
 
 
 def _graph(merge_cover: float, strokes) -> LabelGraph:
-    g = LabelGraph(replace(NetworkConfig(), merge_cover=merge_cover))
+    g = LabelGraph(replace(NetworkConfig(), merge_cover=merge_cover), fps=25.0)
     for s in strokes:
         g.add_stroke(s)
     return g
@@ -49,7 +49,7 @@ def test_a_region_that_only_touches_a_neighbour_keeps_its_nearest_parent():
     assert _graph(0.0, scene).nodes[-1].parents == (0, 1)  # the area test alone: a merge
     assert _graph(0.2, scene).nodes[-1].parents == (0,)
     # the cover test holds without the area test too
-    g = LabelGraph(replace(NetworkConfig(), merge_area=0.0, merge_cover=0.2))
+    g = LabelGraph(replace(NetworkConfig(), merge_area=0.0, merge_cover=0.2), fps=25.0)
     for s in scene:
         g.add_stroke(s)
     assert g.nodes[-1].parents == (0,)

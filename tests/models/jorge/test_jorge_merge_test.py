@@ -26,7 +26,7 @@ def _scene(new_size):
 
 def _parents(merge_area: float, strokes) -> tuple:
     # the area test alone (the cover test, ``merge_cover``, has its own file)
-    g = LabelGraph(replace(NetworkConfig(), merge_area=merge_area, merge_cover=0.0))
+    g = LabelGraph(replace(NetworkConfig(), merge_area=merge_area, merge_cover=0.0), fps=25.0)
     for st in strokes:
         g.add_stroke(st)
     return g.nodes[-1].parents

@@ -50,7 +50,7 @@ def merge_back():
 
 
 def _graph(cfg):
-    g = LabelGraph(cfg)
+    g = LabelGraph(cfg, fps=25.0)
     for s in merge_back():
         g.add_stroke(s)
     return g
@@ -76,7 +76,7 @@ def test_a_lone_walker_gets_no_nested_link():
     """A person's stroke continued twice with the same box: the first is superseded by
     the second (the part test fails: equal boxes)."""
     strokes = [_stroke(0, 0, 10, 90, 100, {0}), _stroke(1, 12, 14, 102, 104, {0}), _stroke(2, 16, 30, 106, 120, {0})]
-    g = LabelGraph(CFG)
+    g = LabelGraph(CFG, fps=25.0)
     for s in strokes:
         g.add_stroke(s)
     assert g.nodes[2].parents == (1,)
@@ -104,7 +104,7 @@ def test_the_group_comes_back_whole_on_line():
 def test_the_instant_posterior_admits_the_member_inside_the_group():
     """Eq. 12 when stroke 4 starts, stroke 3 labelled person 0 alone: the pair keeps its
     mass (the seed's restriction would zero every label holding person 0)."""
-    lab = OnlineLabeller(OnlineConfig(network=CFG, period_s=1e3, reid_prior=0.0))
+    lab = OnlineLabeller(OnlineConfig(network=CFG, period_s=1e3, reid_prior=0.0), fps=25.0)
     for s in merge_back()[:4]:
         lab.add_stroke(s)
     lab.labels.update({0: F({0}), 1: F({1}), 2: F({0, 1}), 3: F({0})})
@@ -122,6 +122,6 @@ def test_the_instant_posterior_admits_the_member_inside_the_group():
 def test_the_fit_counts_the_nested_piece_as_a_proper_part():
     """Stroke 4 takes person 1 from the pair (stroke 2, which splits) and person 0 from
     stroke 3: a merge of structure e, the pair handing a proper part, as stroke 3's was."""
-    c = count_events(StrokeSet.from_strokes(merge_back()), CFG)
+    c = count_events(StrokeSet.from_strokes(merge_back(), fps=25.0), CFG)
     assert (c.merge[1], c.two_parent[1]) == (1, 1)
     assert (c.split_part, c.split_total) == (2, 2)

@@ -23,7 +23,7 @@ GROUP_LABELS = replace(FITTED_LABELS, new_group_probs=(0.67, 0.18, 0.07, 0.04, 0
 
 def _graph(colour_mode: str = "ratio") -> LabelGraph:
     """Two people merge (s2), the group splits (s3, s4), s3 goes on (s5)."""
-    g = LabelGraph(NetworkConfig(colour_mode=colour_mode, labels=SEED_LABELS))
+    g = LabelGraph(NetworkConfig(colour_mode=colour_mode, labels=SEED_LABELS), fps=25.0)
     strokes = [
         make_stroke(0, 0, 10, (0, 10), (10, 10), [0, 1, 2, 3, 4], {0}),
         make_stroke(1, 0, 10, (0, 40), (10, 40), [5, 6, 7, 8, 9], {1}),
@@ -167,7 +167,7 @@ def test_unpruned_domains_too_large_raise_a_model_error():
 
     seed = _graph()
     cfg = NetworkConfig(colour_mode="ratio", labels=GROUP_LABELS)
-    g = LabelGraph(cfg)
+    g = LabelGraph(cfg, fps=25.0)
     for node in seed.nodes:
         g.add_stroke(node.stroke)
     with pytest.raises(ModelError, match="node 5: its CPD table"):

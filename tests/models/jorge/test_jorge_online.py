@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from dbn.errors import InputError, ModelError, TimeOrderError
+from dbn.errors import DBNError, InputError, ModelError, TimeOrderError
 from models.jorge.api import make
 from models.jorge.network import LabelGraph, NetworkConfig
 from models.jorge.online import (
@@ -24,7 +24,7 @@ from models.jorge.online import (
     true_predecessors,
 )
 from models.jorge.simulate import simulate_ground_truth
-from models.jorge.strokes import build_strokes, load_caviar, make_stroke
+from models.jorge.strokes import StrokeSet, build_strokes, load_caviar, make_stroke
 
 F = frozenset
 
@@ -80,6 +80,11 @@ def test_label_online_takes_the_stroke_sets_frame_rate_and_needs_one_for_a_list(
             OnlineLabeller(fps=bad)
         with pytest.raises(ModelError, match="fps must be a finite number > 0"):
             make(fps=bad)
+    # and none of them assumes a rate (a 7 fps sequence at an assumed 25 fps would gate
+    # its links 3.6 times too wide)
+    for build in (OnlineLabeller, make, LabelGraph, lambda: StrokeSet.from_strokes(list(seven))):
+        with pytest.raises(DBNError, match="fps is required"):
+            build()
 
 
 def test_colour_only_and_network_on_an_easy_case():
@@ -110,7 +115,7 @@ def test_bounded_memory_on_a_long_simulated_sequence():
 
 
 def test_rejected_stroke_leaves_labeller_unchanged():
-    lab = OnlineLabeller()
+    lab = OnlineLabeller(fps=25.0)
     for s in _strokes():
         lab.add_stroke(s)
     before = (dict(lab.labels), len(lab.graph), len(lab.records))
@@ -165,7 +170,7 @@ def _joined_graph(alone_colours):
     """A (colours 0-4) is lost after frame 10; B (5-9) walks on; a region of B and a
     newcomer starts at frame 20 (linked to B only: A's link was missed), then splits into
     the newcomer alone (``alone_colours``) and B alone."""
-    g = LabelGraph(NetworkConfig(), with_domains=False)
+    g = LabelGraph(NetworkConfig(), with_domains=False, fps=25.0)
     for stroke, parents in [
         (make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2, 3, 4], {0}), ()),
         (make_stroke(1, 0, 10, (300, 0), (310, 0), [5, 6, 7, 8, 9], {1}), ()),

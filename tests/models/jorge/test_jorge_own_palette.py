@@ -52,7 +52,7 @@ def pair_strokes(second: tuple[int, int]) -> list:
 
 
 def _graph(strokes):
-    g = LabelGraph(CFG)
+    g = LabelGraph(CFG, fps=25.0)
     for s in strokes:
         g.add_stroke(s)
     return g
@@ -93,7 +93,7 @@ def test_the_second_split_follows_the_colours(second):
     last inference freezes the first split and solves the merge and the second split."""
     strokes = pair_strokes(second)
     cfg = OnlineConfig(period_s=0.5, max_active=3, reid_prior=0.0, network=CFG)
-    labels = label_online(StrokeSet.from_strokes(strokes, pool_size=POOL), cfg, fps=25.0).labels
+    labels = label_online(StrokeSet.from_strokes(strokes, pool_size=POOL, fps=25.0), cfg, fps=25.0).labels
     assert labels[2] == labels[5] == new_objects(2, 2)
     person = {next(iter(strokes[k].truth)): labels[k] for k in (3, 4)}
     assert labels[3] != labels[4]
@@ -103,7 +103,7 @@ def test_the_second_split_follows_the_colours(second):
 def test_the_fit_counts_a_member_seen_alone_as_known():
     """The gain table's counts mirror the network: once seen alone, each member of the pair
     is known with that stroke's palette."""
-    strokes = StrokeSet.from_strokes(pair_strokes((1, 0)), pool_size=POOL)
+    strokes = StrokeSet.from_strokes(pair_strokes((1, 0)), pool_size=POOL, fps=25.0)
     p = np.exp(np.array(fit_parameters([strokes], CFG).palette_gain_table))
     assert p.shape == (4, 5, 2 * POOL + 1)  # m, bin of the known colours u, e
     # (m, u, e) per stroke: walkers (1, 0, 5) twice; pair (2, 0, 5); first split (1, 0, 5)

@@ -43,7 +43,7 @@ def test_fitted_palette_table_is_smoothed_frequencies():
             make_stroke(1, 0, 10, (40, 0), (30, 0), [3, 4, 5], {1}, size=(20, 50)),
             make_stroke(2, 12, 20, (20, 0), (20, 0), [0, 1, 3, 4], {0, 1}, size=(40, 50)),
             make_stroke(3, 22, 30, (10, 0), (0, 0), [0, 1, 2], {0}, size=(20, 50)),
-        ]
+        ], fps=25.0
     )
     cfg = fit_parameters([ss], NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels"))
     p = np.exp(np.array(cfg.palette_count_table))
@@ -62,7 +62,7 @@ def _root_label(num_palette: int, table: np.ndarray) -> frozenset:
     )
     stroke = make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2])
     stroke = replace(stroke, palette=np.arange(num_palette))
-    lab = OnlineLabeller(OnlineConfig(network=cfg))
+    lab = OnlineLabeller(OnlineConfig(network=cfg), fps=25.0)
     return lab.add_stroke(stroke)
 
 
@@ -79,7 +79,7 @@ def test_palette_count_tells_a_new_group_from_a_new_person():
             palette_count_table=(),
             palette_gain_table=(),
             size_evidence=False,
-        )
+        ), fps=25.0
     )
     stroke = replace(make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2]), palette=np.arange(6))
     graph.add_stroke(stroke)

@@ -84,7 +84,7 @@ def _merge(palettes=((0, 1, 2, 3, 4), (5, 6, 7, 8, 9))) -> StrokeSet:
         ),
     ]
     strokes[2] = replace(strokes[2], palette=np.array(sorted(set(a) | set(b))))
-    return StrokeSet.from_strokes(strokes)
+    return StrokeSet.from_strokes(strokes, fps=25.0)
 
 
 def test_fitted_gain_table_is_smoothed_frequencies():
@@ -125,7 +125,7 @@ def _merge_label(gain: bool) -> frozenset:
         palette_count_table=() if gain else tuple(map(tuple, count)),
         palette_gain_table=tuple(map(tuple, gains)) if gain else (),
     )
-    lab = OnlineLabeller(OnlineConfig(network=cfg, reid_prior=0.0))
+    lab = OnlineLabeller(OnlineConfig(network=cfg, reid_prior=0.0), fps=25.0)
     for s in _merge():
         out = lab.add_stroke(s)
     return out
@@ -144,7 +144,7 @@ def test_size_once_drops_the_size_evidence_of_an_occlusion_child_only():
     ]
     for once in (False, True):
         g = LabelGraph(
-            NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels", size_once=once)
+            NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels", size_once=once), fps=25.0
         )
         for s in strokes:
             g.add_stroke(s)
@@ -165,7 +165,7 @@ def test_palette_continued_weighs_the_count_evidence_of_an_occlusion_child_only(
     ]
     graphs = {}
     for w in (1.0, 0.5, 0.0):
-        g = LabelGraph(NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels", palette_continued=w))
+        g = LabelGraph(NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels", palette_continued=w), fps=25.0)
         for s in strokes:
             g.add_stroke(s)
         graphs[w] = g

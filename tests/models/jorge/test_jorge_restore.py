@@ -30,7 +30,7 @@ def _labeller() -> OnlineLabeller:
     net = NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels", size_evidence=False,
                         palette_count_table=(), palette_gain_table=())
     cfg = OnlineConfig(network=net, period_s=100.0, reid_prior=0.0, restore_successors=True)
-    lab = OnlineLabeller(cfg)
+    lab = OnlineLabeller(cfg, fps=25.0)
     for s in STROKES:
         lab.add_stroke(s)
     assert lab.graph.structure(2) == "MERGE" and lab.graph.structure(3) == "OCCLUSION"

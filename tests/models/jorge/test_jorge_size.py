@@ -134,7 +134,7 @@ def _graph(size_evidence: bool = True, group_size=PAIR, child_size=SINGLE) -> La
     """Two people merge (s2), the group splits (s3, s4), s3 goes on (s5); sizes given."""
     # the seed's label model (no new groups or joins), whatever the default: with them the
     # unpruned domains are too many to enumerate (test_jorge_network.py)
-    g = LabelGraph(NetworkConfig(colour_mode="ratio", size_evidence=size_evidence, labels=SEED_LABELS))
+    g = LabelGraph(NetworkConfig(colour_mode="ratio", size_evidence=size_evidence, labels=SEED_LABELS), fps=25.0)
     strokes = [
         make_stroke(0, 0, 10, (0, 10), (10, 10), [0, 1, 2, 3, 4], {0}, size=SINGLE),
         make_stroke(1, 0, 10, (0, 40), (10, 40), [5, 6, 7, 8, 9], {1}, size=SINGLE),
@@ -155,12 +155,12 @@ def test_relative_log_area_is_against_a_quantile_of_the_strokes_seen():
     for k in range(6):
         assert g.rel_log_area(k) == pytest.approx(areas[k] - ref)
     # too few strokes seen: no evidence
-    g3 = LabelGraph(CFG)
+    g3 = LabelGraph(CFG, fps=25.0)
     for k in range(CFG.size_min_reference):
         g3.add_stroke(make_stroke(k, 0, 10, (0, 30 * k), (10, 30 * k), [0, 1, 2], size=SINGLE))
         assert np.isnan(g3.rel_log_area(k))
     # a stroke without a size: no evidence, and it does not enter the reference
-    g2 = LabelGraph(CFG)
+    g2 = LabelGraph(CFG, fps=25.0)
     g2.add_stroke(make_stroke(0, 0, 10, (0, 10), (10, 10), [0, 1, 2]))
     for k in range(1, 5):
         g2.add_stroke(make_stroke(k, 0, 10, (0, 40 * k), (10, 40 * k), [5, 6, 7], size=SINGLE))
@@ -205,7 +205,7 @@ def test_a_single_sized_child_of_a_group_moves_mass_to_single_labels():
         # 4357 and 7071 at the default 5: 0.03 s against 9 s, the same masses to 1e-8)
         g = LabelGraph(NetworkConfig(colour_mode="ratio", size_evidence=size_evidence, size_mu_single=0.0,
                                      size_slope=1.0 / np.log(2.0), size_sigma=0.68, size_once=False,
-                                     labels=replace(FITTED_LABELS, max_group_size=3)))
+                                     labels=replace(FITTED_LABELS, max_group_size=3)), fps=25.0)
         g.add_stroke(make_stroke(0, 0, 10, (0, 10), (10, 10), [0, 1, 2, 3, 4], size=SINGLE))
         g.add_stroke(make_stroke(1, 0, 10, (0, 40), (10, 40), [5, 6, 7, 8, 9], size=SINGLE))
         g.add_stroke(make_stroke(2, 12, 20, (12, 25), (20, 25), [0, 1, 5, 6, 10], size=PAIR))

@@ -100,7 +100,7 @@ def test_the_table_is_its_definition(di, dj, dp, cover):
 def _split_graph(split_cover) -> LabelGraph:
     """Three people walk in together (stroke 0, a new group), the group splits into strokes 1
     and 2."""
-    g = LabelGraph(NetworkConfig(labels=_split_labels(split_cover)))
+    g = LabelGraph(NetworkConfig(labels=_split_labels(split_cover)), fps=25.0)
     for s in _split_strokes():
         g.add_stroke(s)
     return g
@@ -162,7 +162,7 @@ def _two_splits():
 
 
 def test_fit_counts_partitions_per_group_size():
-    g = LabelGraph(NetworkConfig(labels=replace(SEED_LABELS, max_group_size=3)))
+    g = LabelGraph(NetworkConfig(labels=replace(SEED_LABELS, max_group_size=3)), fps=25.0)
     for s in _two_splits():
         g.add_stroke(s)
     assert [g.nodes[k].parents for k in (1, 2, 4, 5)] == [(0,), (0,), (3,), (3,)]
@@ -173,7 +173,7 @@ def test_fit_counts_partitions_per_group_size():
 
 
 def test_fit_parameters_fits_it_only_where_it_is_on():
-    sets = [StrokeSet.from_strokes(_two_splits())]
+    sets = [StrokeSet.from_strokes(_two_splits(), fps=25.0)]
     on = NetworkConfig(labels=replace(SEED_LABELS, max_group_size=3, split_cover=(1.0,)))
     assert fit_parameters(sets, on).labels.split_cover == (1.0, 1.0, 0.5)
     off = NetworkConfig(labels=replace(SEED_LABELS, max_group_size=3))
@@ -220,7 +220,7 @@ def _known_people_split() -> list:
 
 @pytest.mark.parametrize("split_cover", [(), (1.0, 1.0, 0.9), (1.0, 1.0, 0.2)])
 def test_instant_labels_weigh_the_split_as_the_window_does(split_cover):
-    lab = OnlineLabeller(OnlineConfig(network=NetworkConfig(labels=_split_labels(split_cover))))
+    lab = OnlineLabeller(OnlineConfig(network=NetworkConfig(labels=_split_labels(split_cover))), fps=25.0)
     for s, parents in _known_people_split():
         lab.add_stroke(s, parents)
     assert len(lab.labels[4]) == 3 and len(lab.labels[5]) == 1  # the group, the one who left

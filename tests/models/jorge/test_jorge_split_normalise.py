@@ -78,7 +78,7 @@ def _four_in_four_out(normalise: bool) -> LabelGraph:
     """Four people walk in together (stroke 0, a new group); one steps out (stroke 1) while the
     other three go on (stroke 2)."""
     labels = replace(FITTED_LABELS, split_normalise=normalise)
-    g = LabelGraph(NetworkConfig(labels=labels))
+    g = LabelGraph(NetworkConfig(labels=labels), fps=25.0)
     for s in [make_stroke(0, 0, 10, (50, 50), (60, 50), list(range(8)), {0, 1, 2, 3}, size=(80, 50)),
               make_stroke(1, 12, 20, (30, 50), (20, 50), [0, 1], {0}, size=(20, 50)),
               make_stroke(2, 12, 20, (70, 50), (80, 50), list(range(2, 8)), {1, 2, 3}, size=(60, 50))]:
@@ -109,7 +109,7 @@ def test_without_the_split_cover_it_does_nothing():
     # eq. 5 alone has no group in the restriction's scope, so there is nothing to scale
     def table(normalise):
         labels = replace(FITTED_LABELS, split_cover=(), split_normalise=normalise)
-        g = LabelGraph(NetworkConfig(labels=labels))
+        g = LabelGraph(NetworkConfig(labels=labels), fps=25.0)
         for s in _four_in_four_out(True).nodes:
             g.add_stroke(s.stroke)
         return g.window([0, 1, 2]).bn.cpd("r1_2")

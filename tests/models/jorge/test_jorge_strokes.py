@@ -93,7 +93,7 @@ def test_bad_inputs():
     s0 = make_stroke(0, 5, 9, (0, 0), (1, 1), [1, 2])
     s1 = make_stroke(1, 0, 9, (0, 0), (1, 1), [1, 2])
     with pytest.raises(TimeOrderError):
-        StrokeSet.from_strokes([s0, s1])
+        StrokeSet.from_strokes([s0, s1], fps=25.0)
 
 
 def test_loader_rejects_frames_out_of_order(tmp_path):

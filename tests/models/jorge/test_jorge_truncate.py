@@ -53,7 +53,7 @@ def test_children_are_single_new_objects_when_new_groups_are_at_roots_only():
     params = LabelParams(p_new=0.05, max_group_size=3, new_group_probs=(0.5, 0.3, 0.2), child_new_groups=False)
     net = replace(CFG, labels=params)
     strokes = merge_split_strokes(3)
-    g = LabelGraph(net)
+    g = LabelGraph(net, fps=25.0)
     for s in strokes:
         g.add_stroke(s)
     for k, node in enumerate(g.nodes):
@@ -67,7 +67,7 @@ SMALL = replace(CFG, labels=replace(CFG.labels, new_group_probs=(1.0,), p_join=0
 
 def _pruned_graph():
     strokes = merge_split_strokes(3)
-    g = LabelGraph(SMALL)
+    g = LabelGraph(SMALL, fps=25.0)
     for s in strokes:
         g.add_stroke(s)
     return g, strokes
