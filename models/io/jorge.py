@@ -11,23 +11,28 @@ beside it or one folder up (the challenge's ``SEQ/gt/gt.txt`` and ``SEQ/seqinfo.
 without one it is assumed to be 25 fps, CAVIAR's (:func:`mot_frame_rate`).
 
 Outputs: strokes CSV ``stroke,start,end,label,truth`` (``label``: the object ids the
-stroke is labelled with, separated by spaces; ``truth``: the people in the region), with a
-``# seed=S`` first line; MOTChallenge tracks ``frame,id,bb_left,bb_top,w,h,1,-1,-1,-1``
+stroke is labelled with, separated by spaces; ``truth``: the people in the region), after
+the header lines ``# seed=S``, ``# strokes={...}`` (the
+:class:`~models.jorge.strokes.StrokeConfig` the strokes were built with, JSON) and, for an
+obsmat file, ``# view={...}`` (its :class:`~models.jorge.eth.ObliqueView`): what
+``dbntrack eval`` needs to rebuild the same strokes; MOTChallenge tracks ``frame,id,bb_left,bb_top,w,h,1,-1,-1,-1``
 (one row per frame and per object of a stroke's label, the region's box).
 """
 
 from __future__ import annotations
 
 import configparser
+import dataclasses
+import json
 from pathlib import Path
 
 import numpy as np
 
-from dbn.errors import DBNError, in_file
+from dbn.errors import DBNError, InputError, in_file
 from models.io.table import as_float, as_int, fail, read_lines, require_file, write_rows
 
 __all__ = ["read_boxes", "read_mot", "mot_frame_rate", "frame_rate_source", "is_obsmat", "write_strokes",
-           "read_strokes", "write_mot_tracks"]
+           "read_strokes", "read_strokes_header", "write_mot_tracks"]
 
 MOT_DEFAULT_FPS = 25.0
 """Frame rate assumed for a MOTChallenge file without a ``seqinfo.ini`` (CAVIAR's)."""
@@ -110,16 +115,27 @@ def read_mot(path: str | Path):
         raise in_file(exc, path) from None
 
 
-def read_boxes(path: str | Path):
+def read_boxes(path: str | Path, view=None):
     """A :class:`~models.jorge.strokes.GroundTruth` from CAVIAR / PETS2009 XML, MOT text,
     or an ETH / UCY ``obsmat`` file (named ``obsmat*``: world metres seen through the
-    default SIMULATED camera, :func:`models.jorge.eth.load_eth`)."""
+    SIMULATED camera ``view``, an :class:`~models.jorge.eth.ObliqueView`, default
+    ``ObliqueView()``; :func:`models.jorge.eth.load_eth`).
+
+    Raises
+    ------
+    InputError
+        A ``view`` for a file that is not an obsmat file (its boxes are the file's own);
+        a bad file, naming it (and the line or element).
+    """
     from models.jorge.eth import load_eth
     from models.jorge.strokes import load_ground_truth
 
     path = require_file(path, "box file")
     if is_obsmat(path):
-        return load_eth(path)
+        return load_eth(path, view)
+    if view is not None:
+        raise InputError(f"{path}: a camera view applies only to an ETH / UCY obsmat file "
+                         "(tracks in metres); this file has image boxes")  # fmt: skip
     if not _is_xml(path):
         return read_mot(path)
     return load_ground_truth(path)  # its errors name the file (and line or element)
@@ -155,23 +171,65 @@ def _ids(label) -> str:
     return " ".join(str(int(o)) for o in sorted(label))
 
 
-def write_strokes(path, strokes, labels, seed: int) -> Path:
-    """``# seed=S`` then ``stroke,start,end,label,truth`` rows."""
+def write_strokes(path, strokes, labels, seed: int, view=None) -> Path:
+    """The header (``# seed=S``, ``# strokes={StrokeConfig fields}`` from
+    ``strokes.config``, and ``# view={ObliqueView fields}`` where ``view`` is given) then
+    ``stroke,start,end,label,truth`` rows."""
     path = Path(path)
     rows = [(s.index, s.start, s.end, _ids(lab), _ids(s.truth)) for s, lab in zip(strokes, labels)]
     write_rows(path, ("stroke", "start", "end", "label", "truth"), rows)
-    path.write_text(f"# seed={int(seed)}\n" + path.read_text(encoding="utf-8"), encoding="utf-8")
+    head = [f"# seed={int(seed)}", "# strokes=" + json.dumps(dataclasses.asdict(strokes.config))]
+    if view is not None:
+        head.append("# view=" + json.dumps(dataclasses.asdict(view)))
+    path.write_text("\n".join(head) + "\n" + path.read_text(encoding="utf-8"), encoding="utf-8")
     return path
 
 
+_HEADER_KEYS = {"seed": int, "strokes": dict, "view": dict}
+
+
+def read_strokes_header(path: str | Path) -> dict:
+    """The header of a strokes CSV (:func:`write_strokes`): ``seed`` (int), ``strokes``
+    (the :class:`~models.jorge.strokes.StrokeConfig` fields) and ``view`` (the
+    :class:`~models.jorge.eth.ObliqueView` fields), each where the file has it (files of
+    earlier versions carry only the seed).
+
+    Raises
+    ------
+    InputError
+        A ``# seed=`` line that is not an integer, a ``# strokes=`` or ``# view=`` line
+        that is not a JSON object, or one of them twice (naming the file and line).
+        Other leading ``#`` lines are comments.
+    """
+    path = require_file(path, "strokes CSV")
+    out: dict = {}
+    for line_no, line in enumerate(read_lines(path, "strokes CSV"), start=1):
+        if not line.startswith("#"):
+            break
+        key, eq, value = line[1:].strip().partition("=")
+        key = key.strip()
+        if not eq or key not in _HEADER_KEYS:
+            continue  # another comment
+        if key in out:
+            raise fail(path, line_no, f"a second '# {key}=' header line")
+        try:
+            parsed = int(value) if key == "seed" else json.loads(value)
+        except ValueError:
+            parsed = None
+        if not isinstance(parsed, _HEADER_KEYS[key]) or isinstance(parsed, bool):
+            raise fail(path, line_no, f"{key} = {value.strip()!r}: expected "
+                       f"{'an integer' if key == 'seed' else 'a JSON object'}")  # fmt: skip
+        out[key] = parsed
+    return out
+
+
 def read_strokes(path: str | Path) -> tuple[int | None, list[dict]]:
-    """``(seed, rows)`` of a strokes CSV; each row: ``stroke``, ``start``, ``end``,
-    ``label`` and ``truth`` (frozensets of ints)."""
+    """``(seed, rows)`` of a strokes CSV (the whole header: :func:`read_strokes_header`);
+    each row: ``stroke``, ``start``, ``end``, ``label`` and ``truth`` (frozensets of
+    ints)."""
     from models.io.table import read_rows
 
-    path = require_file(path, "strokes CSV")
-    first = path.read_text(encoding="utf-8").split("\n", 1)[0]
-    seed = int(first.split("=", 1)[1]) if first.startswith("# seed=") else None
+    seed = read_strokes_header(path).get("seed")
     _, rows = read_rows(path, ("stroke", "start", "end", "label"), "strokes CSV")
     out = []
     for r in rows:

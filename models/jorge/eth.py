@@ -61,6 +61,7 @@ class ObliqueView:
                 raise InputError(f"ObliqueView.{name} must be a finite number, got {value!r}")
             if value <= 0:
                 raise InputError(f"ObliqueView.{name} must be > 0, got {value!r}")
+            object.__setattr__(self, name, float(value))  # 90 and 90.0: one view, one repr
         if self.tilt_deg > 90:
             raise InputError(f"ObliqueView.tilt_deg must be in (0, 90], got {self.tilt_deg!r}")
 

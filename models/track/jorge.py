@@ -2,8 +2,8 @@
 formats in :mod:`models.io.jorge`).
 
 The boxes (CAVIAR / PETS2009 XML or MOTChallenge; an ETH / UCY ``obsmat`` file's tracks in
-metres through the default SIMULATED :class:`~models.jorge.eth.ObliqueView`, which the
-run notes and ``simulated_view`` in the summary records) go through the simulated low-level
+metres through a SIMULATED :class:`~models.jorge.eth.ObliqueView`, the default one or the
+config's ``view``, which the run notes and ``simulated_view`` in the summary records) go through the simulated low-level
 tracker :func:`models.jorge.strokes.build_strokes` (regions of overlapping boxes followed
 without a break; occlusion gaps and dominant colours simulated from ``--seed``, as in the
 benchmark), then the registry's on-line labeller, one stroke per protocol step, and its
@@ -13,10 +13,16 @@ final re-identification pass. Config keys: the fields of
 (true or false, default true: the split prior that prefers partitions,
 :data:`models.jorge.config.FITTED_SPLIT_COVER`, on by default since issue 16's
 twenty-second round and normalised since the twenty-third, ``LabelParams.split_normalise``;
-false: seed 004's eq. 5 alone).
+false: seed 004's eq. 5 alone), and for an obsmat file ``view`` (an object of
+:class:`~models.jorge.eth.ObliqueView` fields, e.g. ``{"tilt_deg": 60}``).
+
+``strokes.csv``'s header keeps the seed, the stroke settings and the view, so
+``dbntrack eval`` (and ``--truth``) rebuilds the same strokes from the box file.
 """
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 
@@ -26,6 +32,7 @@ from models.io.jorge import (
     is_obsmat,
     read_boxes,
     read_strokes,
+    read_strokes_header,
     write_mot_tracks,
     write_strokes,
 )
@@ -44,21 +51,21 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
 
     if len(inputs) != 1:
         raise InputError(f"jorge needs one box file, got {len(inputs)} inputs")
-    check_keys(config, set(StrokeConfig.__dataclass_fields__) | {"fps", "split_cover"})
+    check_keys(config, set(StrokeConfig.__dataclass_fields__) | {"fps", "split_cover", "view"})
     split_cover = flag(config, "split_cover", True)
-    scfg = build(StrokeConfig, {k: v for k, v in config.items() if k not in ("fps", "split_cover")})
+    scfg = build(StrokeConfig, {k: v for k, v in config.items() if k not in ("fps", "split_cover", "view")})
+    view = _view(config, inputs[0])
     fps = number(config, "fps") if "fps" in config else None
     if fps is not None and not fps > 0:
         raise ConfigError(f"config fps = {fps!r}: expected a number > 0")
     with ctx.timed("read"):
-        truth = read_boxes(inputs[0])
+        truth = read_boxes(inputs[0], view)
         strokes = build_strokes(ctx.seed, truth, scfg)
     source = "config" if fps is not None else frame_rate_source(inputs[0])
     if source.startswith("assumed"):
         ctx.note(source)
-    view = repr(ObliqueView()) if is_obsmat(inputs[0]) else None
-    if view:
-        ctx.note(f"tracks in metres: boxes from a SIMULATED camera, {view}")
+    if view is not None:
+        ctx.note(f"tracks in metres: boxes from a SIMULATED camera, {view!r}")
     fps = truth.fps if fps is None else fps
     tracker = models.get("jorge").make(_online_config(split_cover), fps=fps)
     k_init, keys = split_run_keys(ctx.key(), len(strokes))
@@ -68,14 +75,32 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
             state, _ = tracker.step(k, state, s)
         final = state.labeller.finish()  # the re-identification pass (the batch's last step)
     labels = [final[k] for k in range(len(strokes))]
-    write_strokes(ctx.outdir / "strokes.csv", strokes, labels, ctx.seed)
+    write_strokes(ctx.outdir / "strokes.csv", strokes, labels, ctx.seed, view)
     write_mot_tracks(ctx.outdir / "tracks.txt", strokes, labels)
     _plot(ctx, strokes, labels)
     params = {"num_strokes": len(strokes), "num_groups": strokes.num_groups, "fps": fps, "fps_source": source,
-              "num_frames": truth.num_frames, "sequence": truth.name, "simulated_view": view,
+              "num_frames": truth.num_frames, "sequence": truth.name,
+              "simulated_view": None if view is None else repr(view),
               "split_cover": split_cover,
               **{k: getattr(scfg, k) for k in StrokeConfig.__dataclass_fields__}}  # fmt: skip
     return {"parameters": params, "outputs": ["strokes.csv", "tracks.txt", "strokes.png"]}
+
+
+def _view(config: dict, path: str) -> ObliqueView | None:
+    """The SIMULATED camera of an obsmat file (the config's ``view`` fields, else the
+    default); ``None`` for image boxes, where a ``view`` key is a :class:`ConfigError`."""
+    if not is_obsmat(path):
+        if "view" in config:
+            raise ConfigError("config view: applies only to an ETH / UCY obsmat file (tracks in metres)")
+        return None
+    fields = config.get("view", {})
+    if not isinstance(fields, dict):
+        raise ConfigError(f"config view = {fields!r}: expected an object of ObliqueView fields")
+    try:
+        check_keys(fields, ObliqueView.__dataclass_fields__)
+        return build(ObliqueView, fields)
+    except ConfigError as exc:
+        raise ConfigError(f"config view: {exc}") from None
 
 
 def _online_config(split_cover: bool):
@@ -127,12 +152,18 @@ def iou_distance(a: np.ndarray, b: np.ndarray, max_distance: float = 0.5) -> np.
 
 
 def _mot(result: str, truth: str) -> dict:
-    """MOTA, IDF1, ... of MOTChallenge tracks against the truth boxes (motmetrics, IoU)."""
+    """MOTA, IDF1, ... of MOTChallenge tracks against the truth boxes (motmetrics, IoU);
+    an obsmat truth is seen through the view in the header of the ``strokes.csv`` beside
+    the tracks (the same run's), else the default one."""
     import motmetrics as mm
 
     from models.io.jorge import read_mot
 
-    pred, ref = read_mot(result), read_boxes(truth)
+    view = None
+    beside = Path(result).with_name("strokes.csv")  # the same run's view, for an obsmat truth
+    if is_obsmat(truth) and beside.is_file():
+        view = _settings(str(beside))[1]
+    pred, ref = read_mot(result), read_boxes(truth, view)
     acc = mm.MOTAccumulator(auto_id=True)
     pf = {int(f): i for i, f in enumerate(pred.frames)}
 
@@ -151,6 +182,20 @@ def _mot(result: str, truth: str) -> dict:
     return {k: float(s[k].iloc[0]) for k in s.columns}
 
 
+def _settings(result: str):
+    """The :class:`StrokeConfig` and view a strokes CSV's header records (defaults where a
+    file of an earlier version has none); an :class:`InputError` naming the file."""
+    from models.jorge.strokes import StrokeConfig
+
+    head = read_strokes_header(result)
+    try:
+        scfg = build(StrokeConfig, head.get("strokes", {}))
+        view = build(ObliqueView, head["view"]) if "view" in head else None
+    except ConfigError as exc:
+        raise InputError(f"{result}: header: {exc}") from None
+    return scfg, view
+
+
 def evaluate(result: str, truth: str) -> dict:
     """``strokes.csv``: label error rate LE / NT (seed 004, Table 3; objects matched to
     people one to one, as the benchmark's ``error_rate``) against the truth boxes' strokes
@@ -165,10 +210,16 @@ def evaluate(result: str, truth: str) -> dict:
     seed, rows = read_strokes(result)
     if seed is None:
         raise InputError(f"{result}:1: no '# seed=S' line (written by dbntrack track jorge)")
-    strokes = build_strokes(seed, read_boxes(truth))
+    scfg, view = _settings(result)
+    strokes = build_strokes(seed, read_boxes(truth, view), scfg)
     if len(strokes) != len(rows):
         raise InputError(f"{result}: {len(rows)} strokes, but {truth} gives {len(strokes)} "
-                         f"with seed {seed}")  # fmt: skip
+                         f"with seed {seed} and the file's stroke settings")  # fmt: skip
+    for r, s in zip(rows, strokes):
+        if (r["start"], r["end"]) != (s.start, s.end):
+            raise InputError(f"{result}: stroke {r['stroke']} spans frames {r['start']}-{r['end']}, but "
+                             f"{truth} gives {s.start}-{s.end} with seed {seed}: not the boxes "
+                             "(or settings) this result was made from")  # fmt: skip
     shown = [SimpleNamespace(index=r["stroke"], truth=s.truth) for r, s in zip(rows, strokes)]
     sc = score(shown, [r["label"] for r in rows])
     return {"error_rate": sc.error_rate, "label_errors": sc.label_errors,

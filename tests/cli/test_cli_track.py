@@ -316,6 +316,18 @@ def test_jorge_frame_rate_from_seqinfo(tmp_path, capsys):
         _bad(capsys, ["track", "jorge", str(gt), "-o", str(tmp_path / "bad")], "seqinfo.ini", needle)
 
 
+def _obsmat(tmp_path: Path) -> Path:
+    """Two people meet, walk together 1 m apart in depth, part; a third stands apart."""
+    rows = []
+    for k in range(40):
+        gap = 1.0 if 10 <= k < 30 else 4.0
+        rows += [f"{780 + 6 * k} 1 {0.5 * k} 0 0 0.5 0 0", f"{780 + 6 * k} 2 {0.5 * k} 0 {gap} 0.5 0 0"]
+    rows.append(f"{780 + 6 * 40} 3 1 0 8 0 0 0")
+    obs = tmp_path / "obsmat.txt"
+    obs.write_text("\n".join(rows) + "\n")
+    return obs
+
+
 def test_jorge_tracks_in_metres(tmp_path, capsys):
     """An ETH / UCY obsmat file runs through the SIMULATED camera, says so, and evaluates."""
     from models.io.jorge import read_strokes
@@ -323,13 +335,7 @@ def test_jorge_tracks_in_metres(tmp_path, capsys):
     from models.jorge.online import label_online
     from models.jorge.strokes import build_strokes
 
-    rows = []
-    for k in range(40):  # two people meet, walk together 1 m apart in depth, part
-        gap = 1.0 if 10 <= k < 30 else 4.0
-        rows += [f"{780 + 6 * k} 1 {0.5 * k} 0 0 0.5 0 0", f"{780 + 6 * k} 2 {0.5 * k} 0 {gap} 0.5 0 0"]
-    rows.append(f"{780 + 6 * 40} 3 1 0 8 0 0 0")
-    obs = tmp_path / "obsmat.txt"
-    obs.write_text("\n".join(rows) + "\n")
+    obs = _obsmat(tmp_path)
     capsys.readouterr()
     out = _track(tmp_path, "jorge", [obs])
     got = json.loads((out / "summary.json").read_text())["parameters"]
@@ -343,6 +349,85 @@ def test_jorge_tracks_in_metres(tmp_path, capsys):
     bad.parent.mkdir()
     bad.write_text("780 1 0 0 0\n786 1 0 0\n")
     _bad(capsys, ["track", "jorge", str(bad), "-o", str(tmp_path / "b")], "obsmat.txt:2:", "4 columns")
+
+
+def test_jorge_eval_rebuilds_the_strokes_of_the_runs_settings(tmp_path, capsys):
+    """Stroke settings from the config reach ``--truth`` and ``eval`` through the strokes
+    CSV's header; strokes that are not the file's are refused, not scored."""
+    import dataclasses
+
+    from models.io.jorge import read_strokes_header
+    from models.jorge.online import label_online, score
+    from models.jorge.strokes import StrokeConfig, build_strokes, load_caviar
+
+    xml = DATA / "jorge" / "caviar.xml"
+    cfg = tmp_path / "cfg.json"
+    cfg.write_text('{"gap_min": 20, "gap_max": 30, "gaps_per_100": 8}')
+    out = _track(tmp_path, "jorge", [xml], "--config", str(cfg), "--truth", str(xml))
+    settings = StrokeConfig(gap_min=20, gap_max=30, gaps_per_100=8.0)
+    strokes = build_strokes(3, load_caviar(xml), settings)
+    default = build_strokes(3, load_caviar(xml))
+    # as many strokes as the default settings give, on other frames: a count check alone
+    # would have scored these labels against the wrong strokes
+    assert len(strokes) == len(default) and [s.start for s in strokes] != [s.start for s in default]
+    csv = out / "strokes.csv"
+    assert read_strokes_header(csv) == {"seed": 3, "strokes": dataclasses.asdict(settings)}
+    want = score(strokes, label_online(strokes).labels).error_rate
+    assert json.loads((out / "summary.json").read_text())["metrics"]["error_rate"] == pytest.approx(want)
+    capsys.readouterr()
+    assert main(["eval", "jorge", str(csv), str(xml), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["error_rate"] == pytest.approx(want)
+    lines = csv.read_text().splitlines()
+    old = tmp_path / "old.csv"  # an earlier version's file (seed only): default settings
+    old.write_text("\n".join([lines[0], *lines[2:]]) + "\n")
+    _bad(capsys, ["eval", "jorge", str(old), str(xml)], "old.csv: stroke 0 spans frames 62-87", "gives 62-89",
+         "not the boxes (or settings) this result was made from")  # fmt: skip
+    for line, needle in (("# strokes=[20]", "old.csv:2: strokes = '[20]': expected a JSON object"),
+                         ('# strokes={"gap_min": 0}', "old.csv: header: config"),
+                         ("# seed=three", "old.csv:1: seed = 'three': expected an integer")):
+        head = [line, lines[1]] if line.startswith("# seed") else [lines[0], line]
+        old.write_text("\n".join([*head, *lines[2:]]) + "\n")
+        _bad(capsys, ["eval", "jorge", str(old), str(xml)], needle)
+
+
+def test_jorge_view_option(tmp_path, capsys):
+    """The config's ``view`` sets an obsmat file's SIMULATED camera; eval sees the same."""
+    from models.io.jorge import read_strokes, read_strokes_header
+    from models.jorge.eth import ObliqueView, load_eth
+    from models.jorge.online import label_online
+    from models.jorge.strokes import build_strokes
+
+    obs = _obsmat(tmp_path)
+    cfg = tmp_path / "cfg.json"
+    cfg.write_text('{"view": {"tilt_deg": 90}}')  # straight down: people are discs
+    capsys.readouterr()
+    out = _track(tmp_path, "jorge", [obs], "--config", str(cfg), "--truth", str(obs))
+    view = ObliqueView(tilt_deg=90.0)
+    assert repr(view) in capsys.readouterr().err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["parameters"]["simulated_view"] == repr(view)
+    assert read_strokes_header(out / "strokes.csv")["view"]["tilt_deg"] == 90.0
+    strokes = build_strokes(3, load_eth(obs, view))
+    assert {len(s.truth) for s in strokes} == {1}  # seen from above, the pair 1 m apart never overlaps
+    assert [r["label"] for r in read_strokes(out / "strokes.csv")[1]] == list(label_online(strokes).labels)
+    assert summary["metrics"]["error_rate"] == 0.0
+    assert main(["eval", "jorge", str(out / "tracks.txt"), str(obs), "--json"]) == 0
+    mota = json.loads(capsys.readouterr().out)["mota"]  # below 1: the simulated occlusion gaps
+    alone = tmp_path / "alone"  # without the run's strokes.csv beside it: the default view
+    alone.mkdir()
+    (alone / "tracks.txt").write_text((out / "tracks.txt").read_text())
+    assert main(["eval", "jorge", str(alone / "tracks.txt"), str(obs), "--json"]) == 0
+    assert mota > 0.8 and json.loads(capsys.readouterr().out)["mota"] < 0.0  # boxes of another view
+    _bad(capsys, ["eval", "jorge", str(out / "strokes.csv"), str(DATA / "jorge" / "caviar.xml")],
+         "caviar.xml: a camera view applies only to an ETH / UCY obsmat file")  # fmt: skip
+    for text, needles in (('{"view": {"tilt_deg": 120}}', ("config view", "tilt_deg")),
+                          ('{"view": {"zoom": 2}}', ("config view", "zoom")),
+                          ('{"view": 3}', ("config view = 3",))):
+        cfg.write_text(text)
+        _bad(capsys, ["track", "jorge", str(obs), "-o", str(tmp_path / "b"), "--config", str(cfg)], *needles)
+    cfg.write_text('{"view": {"tilt_deg": 60}}')
+    _bad(capsys, ["track", "jorge", str(DATA / "jorge" / "caviar.xml"), "-o", str(tmp_path / "c"),
+                  "--config", str(cfg)], "config view", "obsmat")  # fmt: skip
 
 
 def test_jorge_formats_agree():
