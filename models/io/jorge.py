@@ -15,8 +15,9 @@ stroke is labelled with, separated by spaces; ``truth``: the people in the regio
 the header lines ``# seed=S``, ``# strokes={...}`` (the
 :class:`~models.jorge.strokes.StrokeConfig` the strokes were built with, JSON) and, for an
 obsmat file, ``# view={...}`` (its :class:`~models.jorge.eth.ObliqueView`): what
-``dbntrack eval`` needs to rebuild the same strokes; MOTChallenge tracks ``frame,id,bb_left,bb_top,w,h,1,-1,-1,-1``
-(one row per frame and per object of a stroke's label, the region's box).
+``dbntrack eval`` needs to rebuild the same strokes; MOTChallenge tracks
+``frame,id,bb_left,bb_top,w,h,1,-1,-1,-1`` (one row per frame and per object of a stroke's
+label, the region's box).
 """
 
 from __future__ import annotations
@@ -172,9 +173,9 @@ def _ids(label) -> str:
 
 
 def write_strokes(path, strokes, labels, seed: int, view=None) -> Path:
-    """The header (``# seed=S``, ``# strokes={StrokeConfig fields}`` from
-    ``strokes.config``, and ``# view={ObliqueView fields}`` where ``view`` is given) then
-    ``stroke,start,end,label,truth`` rows."""
+    """The header (``# seed=S``, ``# strokes={StrokeConfig fields}`` from the
+    :class:`~models.jorge.strokes.StrokeSet` ``strokes``' config, and ``# view={ObliqueView
+    fields}`` where ``view`` is given) then ``stroke,start,end,label,truth`` rows."""
     path = Path(path)
     rows = [(s.index, s.start, s.end, _ids(lab), _ids(s.truth)) for s, lab in zip(strokes, labels)]
     write_rows(path, ("stroke", "start", "end", "label", "truth"), rows)

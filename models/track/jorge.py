@@ -3,13 +3,13 @@ formats in :mod:`models.io.jorge`).
 
 The boxes (CAVIAR / PETS2009 XML or MOTChallenge; an ETH / UCY ``obsmat`` file's tracks in
 metres through a SIMULATED :class:`~models.jorge.eth.ObliqueView`, the default one or the
-config's ``view``, which the run notes and ``simulated_view`` in the summary records) go through the simulated low-level
-tracker :func:`models.jorge.strokes.build_strokes` (regions of overlapping boxes followed
-without a break; occlusion gaps and dominant colours simulated from ``--seed``, as in the
-benchmark), then the registry's on-line labeller, one stroke per protocol step, and its
-final re-identification pass. Config keys: the fields of
+config's ``view``, which the run notes and ``simulated_view`` in the summary records) go
+through the simulated low-level tracker :func:`models.jorge.strokes.build_strokes`
+(regions of overlapping boxes followed without a break; occlusion gaps and dominant colours
+simulated from ``--seed``, as in the benchmark), then the registry's on-line labeller, one
+stroke per protocol step, and its final re-identification pass. Config keys: the fields of
 :class:`~models.jorge.strokes.StrokeConfig`, ``fps`` (else the file's rate,
-:mod:`models.io.jorge`; ``fps_source`` in the summary says which), and ``split_cover``
+:mod:`models.io.jorge`; ``fps_source`` in the summary says which), ``split_cover``
 (true or false, default true: the split prior that prefers partitions,
 :data:`models.jorge.config.FITTED_SPLIT_COVER`, on by default since issue 16's
 twenty-second round and normalised since the twenty-third, ``LabelParams.split_normalise``;
