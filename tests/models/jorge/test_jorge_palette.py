@@ -43,7 +43,8 @@ def test_fitted_palette_table_is_smoothed_frequencies():
             make_stroke(1, 0, 10, (40, 0), (30, 0), [3, 4, 5], {1}, size=(20, 50)),
             make_stroke(2, 12, 20, (20, 0), (20, 0), [0, 1, 3, 4], {0, 1}, size=(40, 50)),
             make_stroke(3, 22, 30, (10, 0), (0, 0), [0, 1, 2], {0}, size=(20, 50)),
-        ], fps=25.0
+        ],
+        fps=25.0,
     )
     cfg = fit_parameters([ss], NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels"))
     p = np.exp(np.array(cfg.palette_count_table))
@@ -79,7 +80,8 @@ def test_palette_count_tells_a_new_group_from_a_new_person():
             palette_count_table=(),
             palette_gain_table=(),
             size_evidence=False,
-        ), fps=25.0
+        ),
+        fps=25.0,
     )
     stroke = replace(make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2]), palette=np.arange(6))
     graph.add_stroke(stroke)
