@@ -441,12 +441,13 @@ def _meeting_sim(cfg: OnlineConfig, seeds: list, scenes: int) -> dict:
 
 def _view_keys(rows: list) -> dict:
     """Pooled keys of the SIMULATED-view sequences (NaN without their data)."""
+    group_rate, group_strokes = _rate(rows, lo=3)
     return {
         "error_rate_simulated_view": _rate(rows)[0],
         "error_rate_simulated_view_colour_only": _rate(rows, "wrong_col")[0],
         "error_rate_simulated_view_true_links": _rate(rows, "wrong_links")[0],
-        "error_rate_simulated_view_group_3plus": _rate(rows, lo=3)[0],
-        "strokes_simulated_view_group_3plus": _rate(rows, lo=3)[1],
+        "error_rate_simulated_view_group_3plus": group_rate,
+        "strokes_simulated_view_group_3plus": group_strokes,
     }
 
 

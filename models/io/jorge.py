@@ -176,14 +176,11 @@ def write_strokes(path, strokes, labels, seed: int, view=None) -> Path:
     """The header (``# seed=S``, ``# strokes={StrokeConfig fields}`` from the
     :class:`~models.jorge.strokes.StrokeSet` ``strokes``' config, and ``# view={ObliqueView
     fields}`` where ``view`` is given) then ``stroke,start,end,label,truth`` rows."""
-    path = Path(path)
     rows = [(s.index, s.start, s.end, _ids(lab), _ids(s.truth)) for s, lab in zip(strokes, labels)]
-    write_rows(path, ("stroke", "start", "end", "label", "truth"), rows)
-    head = [f"# seed={int(seed)}", "# strokes=" + json.dumps(dataclasses.asdict(strokes.config))]
+    head = [f"seed={int(seed)}", "strokes=" + json.dumps(dataclasses.asdict(strokes.config))]
     if view is not None:
-        head.append("# view=" + json.dumps(dataclasses.asdict(view)))
-    path.write_text("\n".join(head) + "\n" + path.read_text(encoding="utf-8"), encoding="utf-8")
-    return path
+        head.append("view=" + json.dumps(dataclasses.asdict(view)))
+    return write_rows(path, ("stroke", "start", "end", "label", "truth"), rows, head)
 
 
 _HEADER_KEYS = {"seed": int, "strokes": dict, "view": dict}

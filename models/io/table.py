@@ -165,11 +165,14 @@ def read_rows(
     return header, rows
 
 
-def write_rows(path: str | Path, header: Sequence[str], rows: Iterable[Sequence]) -> Path:
-    """Write a CSV file with a header line; floats with full precision (``repr``)."""
+def write_rows(path: str | Path, header: Sequence[str], rows: Iterable[Sequence],
+               comments: Sequence[str] = ()) -> Path:
+    """Write a CSV file with a header line; floats with full precision (``repr``).
+    ``comments`` go first, one ``# `` line each (:func:`read_rows` skips them)."""
     path = Path(path)
     with open(path, "w", newline="", encoding="utf-8") as f:
         w = csv.writer(f)
+        f.writelines(f"# {c}{w.dialect.lineterminator}" for c in comments)
         w.writerow(header)
         for r in rows:
             w.writerow([repr(float(x)) if isinstance(x, float) else x for x in r])

@@ -97,10 +97,16 @@ def _view(config: dict, path: str) -> ObliqueView | None:
     if not isinstance(fields, dict):
         raise ConfigError(f"config view = {fields!r}: expected an object of ObliqueView fields")
     try:
-        check_keys(fields, ObliqueView.__dataclass_fields__)
-        return build(ObliqueView, fields)
+        return _oblique_view(fields)
     except ConfigError as exc:
         raise ConfigError(f"config view: {exc}") from None
+
+
+def _oblique_view(fields: dict) -> ObliqueView:
+    """An :class:`ObliqueView` from a config's or a strokes CSV header's fields (a
+    :class:`ConfigError` naming an unknown or bad one)."""
+    check_keys(fields, ObliqueView.__dataclass_fields__)
+    return build(ObliqueView, fields)
 
 
 def _online_config(split_cover: bool):
@@ -190,7 +196,7 @@ def _settings(result: str):
     head = read_strokes_header(result)
     try:
         scfg = build(StrokeConfig, head.get("strokes", {}))
-        view = build(ObliqueView, head["view"]) if "view" in head else None
+        view = _oblique_view(head["view"]) if "view" in head else None
     except ConfigError as exc:
         raise InputError(f"{result}: header: {exc}") from None
     return scfg, view
