@@ -24,6 +24,10 @@ Contract (checked for every registered tracker by ``tests/models/test_protocol.p
   then one ``step`` per observation with keys split from the rest; ``states[i]`` and
   ``infos[i]`` follow observation ``i``. (Trackers keep their own faster batch entry
   points, e.g. ``ZajdelADF.run``; ``run`` here is the reference semantics.)
+* ``fold(key, observations) -> (state, infos)``: ``run`` keeping only the last state (the
+  same keys, the same final state and infos). An adapter whose ``step`` copies its state
+  may step one state in place there, as nobody else holds it (``jorge``: a long ``run``
+  copies quadratically, a ``fold`` stays linear).
 * ``Info`` carries the model's one-step score where it has one, under the attribute
   named by :attr:`Tracker.score_field` (e.g. ``"loglik"``: the one-step log-likelihood
   ``log p(y_k | y_1..y_{k-1})``), or ``None`` where the model has no such number.
@@ -33,7 +37,7 @@ Contract (checked for every registered tracker by ``tests/models/test_protocol.p
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 import jax
@@ -80,6 +84,9 @@ class Tracker(Protocol):
     def step(self, key: jax.Array, state: Any, obs: Any) -> tuple[Any, Any]: ...
 
     def run(self, key: jax.Array, observations: Sequence[Any]) -> tuple[list, list]: ...
+
+    def fold(self, key: jax.Array, observations: Sequence[Any],
+             progress: Callable[[Iterable, int], Iterable] | None = None) -> tuple[Any, list]: ...
 
 
 def seed_from_key(key: jax.Array) -> int:
@@ -154,15 +161,46 @@ class StepTracker:
         -------
         (states, infos) : lists of length ``len(observations)``
         """
-        observations = list(observations)
-        k_init, keys = split_run_keys(key, len(observations))
-        state = self.init(k_init)
+        state, steps = self._start(key, list(observations), None)
         states, infos = [], []
-        for k, obs in zip(list(keys), observations, strict=False):  # list(): one unstack
+        for k, obs in steps:
             state, info = self.step(k, state, obs)
             states.append(state)
             infos.append(info)
         return states, infos
+
+    def fold(self, key: jax.Array, observations: Sequence[Any],
+             progress: Callable[[Iterable, int], Iterable] | None = None) -> tuple[Any, list]:
+        """:meth:`run` keeping only the last state (a long run's states need not all be held).
+
+        Parameters
+        ----------
+        key : PRNG key
+            Split as :meth:`run` splits it.
+        observations : sequence of per-step observations (the format of :meth:`step`)
+        progress : callable ``(iterable, total) -> iterable``, optional
+            Wraps the steps (e.g. a tqdm bar).
+
+        Returns
+        -------
+        (state, infos)
+            ``run``'s last state (the ``init`` state when there are no observations) and
+            its infos, a list of length ``len(observations)``.
+        """
+        state, steps = self._start(key, list(observations), progress)
+        infos = []
+        for k, obs in steps:
+            state, info = self.step(k, state, obs)
+            infos.append(info)
+        return state, infos
+
+    def _start(self, key: jax.Array, observations: list,
+               progress: Callable[[Iterable, int], Iterable] | None) -> tuple[Any, Iterable]:
+        """``init``'s state and the ``(key, observation)`` pairs of :meth:`run` (wrapped in
+        ``progress`` if given)."""
+        k_init, keys = split_run_keys(key, len(observations))
+        steps: Iterable = zip(list(keys), observations, strict=False)  # list(): one unstack
+        return self.init(k_init), steps if progress is None else progress(steps, len(observations))
 
     def fingerprint(self, state: Any) -> Any:
         """A pytree of arrays/scalars that determines ``state`` (for equality checks).

@@ -47,7 +47,6 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     """Label the strokes; write ``strokes.csv``, ``tracks.txt`` and ``strokes.png``."""
     import models
     from models.jorge.strokes import StrokeConfig, build_strokes
-    from models.protocol import split_run_keys
 
     if len(inputs) != 1:
         raise InputError(f"jorge needs one box file, got {len(inputs)} inputs")
@@ -68,11 +67,8 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
         ctx.note(f"tracks in metres: boxes from a SIMULATED camera, {view!r}")
     fps = truth.fps if fps is None else fps
     tracker = models.get("jorge").make(_online_config(split_cover), fps=fps)
-    k_init, keys = split_run_keys(ctx.key(), len(strokes))
-    with ctx.timed("label"):
-        state = tracker.init(k_init)
-        for k, s in ctx.progress(zip(keys, strokes), len(strokes), "strokes"):
-            state, _ = tracker.step(k, state, s)
+    with ctx.timed("label"):  # fold: one labeller stepped in place (run's copies are quadratic)
+        state, _ = tracker.fold(ctx.key(), strokes, lambda steps, n: ctx.progress(steps, n, "strokes"))
         final = state.labeller.finish()  # the re-identification pass (the batch's last step)
     labels = [final[k] for k in range(len(strokes))]
     write_strokes(ctx.outdir / "strokes.csv", strokes, labels, ctx.seed, view)

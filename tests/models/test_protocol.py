@@ -1,7 +1,7 @@
 """Conformance of every registered tracker to the protocol of :mod:`models.protocol`.
 
 Parametrised over ``models.available()``: each entry's tiny SIMULATED example is run
-through ``init`` / ``step`` / ``run``; same key, same result; a rejected observation
+through ``init`` / ``step`` / ``run`` / ``fold``; same key, same result; a rejected observation
 raises a :mod:`dbn.errors` class and leaves the state exactly as before; save/load round
 trip where offered; Info carries the one-step score where the model has one.
 """
@@ -197,3 +197,25 @@ def test_float64_trackers_need_no_global_x64(name: str) -> None:
     ]
     assert floats and all(x.dtype == np.float64 for x in floats)
     assert not jax.config.jax_enable_x64
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_fold_is_run_keeping_the_last_state(name: str) -> None:
+    ex = _example(name)
+    tr = ex.tracker
+    obs = ex.observations[:3]
+    states, infos = tr.run(jax.random.key(1), obs)
+    totals: list = []
+
+    def bar(steps, total):
+        totals.append(total)
+        return steps
+
+    state, fold_infos = tr.fold(jax.random.key(1), obs, bar)
+    assert totals == [len(obs)]
+    _assert_same(tr.fingerprint(state), tr.fingerprint(states[-1]))
+    _assert_same(fold_infos, infos)
+    # no observations: the init state of run's key split
+    empty, none = tr.fold(jax.random.key(1), [])
+    assert none == []
+    _assert_same(tr.fingerprint(empty), tr.fingerprint(tr.init(split_run_keys(jax.random.key(1), 0)[0])))

@@ -118,8 +118,8 @@ def _stroke_stream():
 
 @pytest.mark.slow
 def test_long_run_jorge_proportional() -> None:
-    """The labeller the protocol wraps (its copy-on-step would make a protocol run
-    quadratic: :mod:`models.jorge.api`), 2,000 strokes. The labeller keeps its whole
+    """The labeller the protocol wraps, stepped in place as the protocol's ``fold`` steps it
+    (``run`` copies it at every step, quadratic: :mod:`models.jorge.api`), 2,000 strokes. The labeller keeps its whole
     label graph by design (every stroke is a node with its positions, domain, belief;
     one inference record per period): it grows linearly, measured 0.5-0.65 kB pickled
     and ~1.6 kB allocated (tracemalloc, last 400) per stroke; 2,000 strokes ran in 109 s
