@@ -128,10 +128,10 @@ def test_region_labels_match_a_graph_search(seed, frames, ids):
     rng = np.random.default_rng(seed)
     boxes = np.concatenate([rng.uniform(0, 20, (frames, ids, 2)), rng.uniform(1, 6, (frames, ids, 2))], -1)
     boxes[rng.random((frames, ids)) < 0.3] = np.nan
-    lab = region_labels(boxes, 0.05)
-    np.testing.assert_array_equal(lab, _closure_labels(boxes, 0.05))
-    same = regions(boxes, 0.05)  # the dense relation agrees with the labels
-    np.testing.assert_array_equal(same, (lab[:, :, None] == lab[:, None]) & (lab >= 0)[:, :, None])
+    oracle = _closure_labels(boxes, 0.05)
+    np.testing.assert_array_equal(region_labels(boxes, 0.05), oracle)
+    same = regions(boxes, 0.05)  # the dense relation: two present boxes of one oracle region
+    np.testing.assert_array_equal(same, (oracle[:, :, None] == oracle[:, None]) & (oracle >= 0)[:, :, None])
 
 
 def test_region_labels_across_chunks(monkeypatch):
