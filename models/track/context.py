@@ -8,7 +8,7 @@ import math
 import platform
 import sys
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from importlib import metadata
@@ -47,6 +47,11 @@ class RunContext:
 
         return tqdm(iterable, total=total, desc=desc or self.name, disable=self.quiet,
                     leave=False, mininterval=1.0)  # fmt: skip
+
+    def bar(self, desc: str) -> Callable[[Iterable, int], Iterable]:
+        """A ``progress`` for :meth:`models.protocol.StepTracker.fold`: its steps in a
+        :meth:`progress` bar counting ``desc``."""
+        return lambda steps, total: self.progress(steps, total, desc)
 
     def note(self, message: str) -> None:
         """Tell the user about an assumption the run made (on stderr, even when quiet)."""

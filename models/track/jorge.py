@@ -68,7 +68,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     fps = truth.fps if fps is None else fps
     tracker = models.get("jorge").make(_online_config(split_cover), fps=fps)
     with ctx.timed("label"):  # fold: one labeller stepped in place (run's copies are quadratic)
-        state, _ = tracker.fold(ctx.key(), strokes, lambda steps, n: ctx.progress(steps, n, "strokes"))
+        state, _ = tracker.fold(ctx.key(), strokes, ctx.bar("strokes"))
         final = state.labeller.finish()  # the re-identification pass (the batch's last step)
     labels = [final[k] for k in range(len(strokes))]
     write_strokes(ctx.outdir / "strokes.csv", strokes, labels, ctx.seed, view)

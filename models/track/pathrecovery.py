@@ -47,7 +47,6 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     from models.pathrecovery.api import PathObservation
     from models.pathrecovery.filter import FilterConfig, KBestLists, make_model
     from models.pathrecovery.recover import recover_path
-    from models.protocol import split_run_keys
 
     if len(inputs) not in (2, 3):
         raise InputError(f"pathrecovery needs EDGES.csv OBSERVATIONS.csv [CAMERAS.csv], "
@@ -66,14 +65,10 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     model = make_model(net, c0, f0, sigma, fcfg)
     tracker = models.get("pathrecovery").make(model=model)
     T = odb.time_ptr.size - 1
-    k_init, keys = split_run_keys(ctx.key(), T - 1)
-    state, infos = tracker.init(k_init), []
+    bounds = [(t, int(odb.time_ptr[t]), int(odb.time_ptr[t + 1])) for t in range(1, T)]
+    steps = [PathObservation(odb.cam[lo:hi], odb.feat[lo:hi], lo, t) for t, lo, hi in bounds]
     with ctx.timed("filter"):
-        for t in ctx.progress(range(1, T), T - 1, "steps"):
-            lo, hi = int(odb.time_ptr[t]), int(odb.time_ptr[t + 1])
-            state, info = tracker.step(keys[t - 1], state,
-                                       PathObservation(odb.cam[lo:hi], odb.feat[lo:hi], lo, t))  # fmt: skip
-            infos.append(info)
+        _, infos = tracker.fold(ctx.key(), steps, ctx.bar("steps"))
     lists = KBestLists(*(np.stack([getattr(i, f) for i in infos])
                          for f in ("kind", "cam", "ta", "obs", "mass", "num_tracked_cameras")),
                        step_seconds=np.zeros(T - 1))  # fmt: skip

@@ -22,7 +22,6 @@ import numpy as np
 
 from dbn.errors import ConfigError, InputError
 from models.io.zajdel import read_labels, read_observations, write_labels, write_partition
-from models.protocol import split_run_keys
 from models.track.context import RunContext
 from models.track.options import array, build, check_keys, integer, number, text
 
@@ -84,7 +83,6 @@ def _split_config(config: dict, cls) -> tuple[dict, object]:
 
 def _run_adf(ctx: RunContext, table, start, config: dict, fields: dict, cfg):
     import models
-    from models.protocol import split_run_keys
     from models.zajdel.api import one_per_step
     from models.zajdel.params import ZajdelParams, default_prior
     from models.zajdel.tracker import RunResult
@@ -94,12 +92,7 @@ def _run_adf(ctx: RunContext, table, start, config: dict, fields: dict, cfg):
     between = number(config, "between_std", np.sqrt(v / 2))
     params = ZajdelParams(default_prior(start.mean, within, between), start.path, start.p_new)
     tracker = models.get("zajdel_adf").make(params=params, config=cfg)
-    steps = one_per_step(table.obs)
-    k_init, keys = split_run_keys(ctx.key(), len(steps))
-    state, infos = tracker.init(k_init), []
-    for k, obs in ctx.progress(zip(keys, steps), len(steps), "observations"):
-        state, info = tracker.step(k, state, obs)
-        infos.append(info)
+    _, infos = tracker.fold(ctx.key(), one_per_step(table.obs), ctx.bar("observations"))
     stacked = [np.stack([np.asarray(x[i]) for x in infos]) for i in range(len(infos[0]))]
     res = RunResult(*stacked, counter=None, first_index=0)
     decode = text(config, "decode", "chain")
@@ -134,12 +127,10 @@ def _run_learnsearch_stream(ctx: RunContext, table, start, config: dict, fields,
     window, close_z = integer(config, "stream_window"), number(config, "close_z", 5.0)
     tracker = models.get("zajdel_learnsearch").make(start, cfg, window=window, close_z=close_z)
     o = table.obs
-    k_init, keys = split_run_keys(ctx.key(), o.num_obs)
-    state, parts = tracker.init(k_init), []
-    for i in ctx.progress(range(o.num_obs), total=o.num_obs, desc="passes"):
-        state, info = tracker.step(keys[i], state, take(o, slice(i, i + 1)))
-        parts.append(info.committed)
-    labels = canonical_labels(np.concatenate(parts + [info.window_labels]))
+    steps = [take(o, slice(i, i + 1)) for i in range(o.num_obs)]
+    _, infos = tracker.fold(ctx.key(), steps, ctx.bar("passes"))
+    info = infos[-1]
+    labels = canonical_labels(np.concatenate([i.committed for i in infos] + [info.window_labels]))
     onehot = np.eye(int(labels.max()) + 1)[labels]
     extra = {**fields, "stream_window": window, "close_z": close_z}
     return labels, onehot, {**extra, "best_window_log_score": float(info.log_score)}
