@@ -33,7 +33,7 @@ from dbn.errors import DBNError, InputError, in_file
 from models.io.table import as_float, as_int, fail, read_lines, require_file, write_rows
 
 __all__ = ["read_boxes", "read_mot", "mot_frame_rate", "frame_rate_source", "is_obsmat", "write_strokes",
-           "read_strokes", "read_strokes_header", "write_mot_tracks"]
+           "read_stroke_rows", "read_strokes", "read_strokes_header", "write_mot_tracks"]
 
 MOT_DEFAULT_FPS = 25.0
 """Frame rate assumed for a MOTChallenge file without a ``seqinfo.ini`` (CAVIAR's)."""
@@ -222,12 +222,24 @@ def read_strokes_header(path: str | Path) -> dict:
 
 
 def read_strokes(path: str | Path) -> tuple[int | None, list[dict]]:
-    """``(seed, rows)`` of a strokes CSV (the whole header: :func:`read_strokes_header`);
-    each row: ``stroke``, ``start``, ``end``, ``label`` and ``truth`` (frozensets of
-    ints)."""
+    """``(seed, rows)`` of a strokes CSV: the header's seed (the whole header:
+    :func:`read_strokes_header`) and :func:`read_stroke_rows`."""
+    return read_strokes_header(path).get("seed"), read_stroke_rows(path)
+
+
+def read_stroke_rows(path: str | Path) -> list[dict]:
+    """The rows of a strokes CSV (:func:`write_strokes`), each ``stroke``, ``start``,
+    ``end`` (ints), ``label`` and ``truth`` (frozensets of ints; ``truth`` empty where
+    the file has no such column).
+
+    Raises
+    ------
+    InputError
+        A missing column, a label or truth that is not ints separated by spaces, or an
+        empty label (naming the file and line).
+    """
     from models.io.table import read_rows
 
-    seed = read_strokes_header(path).get("seed")
     _, rows = read_rows(path, ("stroke", "start", "end", "label"), "strokes CSV")
     out = []
     for r in rows:
@@ -241,7 +253,7 @@ def read_strokes(path: str | Path) -> tuple[int | None, list[dict]]:
             raise r.fail("empty label")
         out.append({"stroke": r.int("stroke"), "start": r.int("start"), "end": r.int("end"),
                     "label": label, "truth": truth})  # fmt: skip
-    return seed, out
+    return out
 
 
 def write_mot_tracks(path, strokes, labels) -> Path:

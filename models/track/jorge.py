@@ -31,7 +31,7 @@ from models.io.jorge import (
     frame_rate_source,
     is_obsmat,
     read_boxes,
-    read_strokes,
+    read_stroke_rows,
     read_strokes_header,
     write_mot_tracks,
     write_strokes,
@@ -164,7 +164,7 @@ def _mot(result: str, truth: str) -> dict:
     view = None
     beside = Path(result).with_name("strokes.csv")  # the same run's view, for an obsmat truth
     if is_obsmat(truth) and beside.is_file():
-        view = _settings(str(beside))[1]
+        view = _settings(str(beside), read_strokes_header(beside))[1]
     pred, ref = read_mot(result), read_boxes(truth, view)
     acc = mm.MOTAccumulator(auto_id=True)
     pf = {int(f): i for i, f in enumerate(pred.frames)}
@@ -184,12 +184,12 @@ def _mot(result: str, truth: str) -> dict:
     return {k: float(s[k].iloc[0]) for k in s.columns}
 
 
-def _settings(result: str):
-    """The :class:`StrokeConfig` and view a strokes CSV's header records (defaults where a
-    file of an earlier version has none); an :class:`InputError` naming the file."""
+def _settings(result: str, head: dict):
+    """The :class:`StrokeConfig` and view that the header ``head`` of the strokes CSV
+    ``result`` records (:func:`read_strokes_header`; defaults where a file of an earlier
+    version has none); an :class:`InputError` naming the file."""
     from models.jorge.strokes import StrokeConfig
 
-    head = read_strokes_header(result)
     try:
         scfg = build(StrokeConfig, head.get("strokes", {}))
         view = _oblique_view(head["view"]) if "view" in head else None
@@ -209,10 +209,12 @@ def evaluate(result: str, truth: str) -> dict:
 
     if not str(result).endswith(".csv"):
         return _mot(result, truth)
-    seed, rows = read_strokes(result)
+    head = read_strokes_header(result)
+    seed = head.get("seed")
     if seed is None:
         raise InputError(f"{result}:1: no '# seed=S' line (written by dbntrack track jorge)")
-    scfg, view = _settings(result)
+    rows = read_stroke_rows(result)
+    scfg, view = _settings(result, head)
     strokes = build_strokes(seed, read_boxes(truth, view), scfg)
     if len(strokes) != len(rows):
         raise InputError(f"{result}: {len(rows)} strokes, but {truth} gives {len(strokes)} "

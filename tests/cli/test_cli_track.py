@@ -388,6 +388,10 @@ def test_jorge_eval_rebuilds_the_strokes_of_the_runs_settings(tmp_path, capsys):
         head = [line, lines[1]] if line.startswith("# seed") else [lines[0], line]
         old.write_text("\n".join([*head, *lines[2:]]) + "\n")
         _bad(capsys, ["eval", "jorge", str(old), str(xml)], needle)
+    first = lines[3].split(",")  # the first row, after the two header lines and the columns
+    for label, needle in (("1 x", "label '1 x' / truth"), ("", "empty label")):
+        old.write_text("\n".join([*lines[:3], ",".join([*first[:3], label, *first[4:]]), *lines[4:]]) + "\n")
+        _bad(capsys, ["eval", "jorge", str(old), str(xml)], "old.csv:4:", needle)
 
 
 def test_jorge_view_option(tmp_path, capsys):
