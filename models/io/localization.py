@@ -35,19 +35,25 @@ def read_dat(path: str | Path, num_columns: int) -> np.ndarray:
 
 def _read_dat(path: Path, num_columns: int) -> tuple[np.ndarray, list[int]]:
     """:func:`read_dat` and the file line number of each row."""
-    rows, lines = [], []
+    texts, lines = [], []
     for line_no, line in enumerate(read_lines(path, "MRCLAM .dat file"), start=1):
         fields = line.split("#", 1)[0].split()
         if not fields:
             continue
         if len(fields) < num_columns:
             raise fail(path, line_no, f"{len(fields)} fields, expected {num_columns}")
-        rows.append([as_float(x, path, line_no, f"column {k + 1}")
-                     for k, x in enumerate(fields[:num_columns])])  # fmt: skip
+        texts.append(fields[:num_columns])
         lines.append(line_no)
-    if not rows:
+    if not texts:
         raise fail(path, 0, "no data rows")
-    return np.asarray(rows, dtype=np.float64), lines
+    try:  # numpy parses numbers as float() does, at once
+        data = np.array(texts, dtype=np.float64)
+    except ValueError:
+        data = None
+    if data is None or not np.isfinite(data).all():  # field by field, naming the bad one
+        data = np.array([[as_float(x, path, line_no, f"column {k + 1}") for k, x in enumerate(fields)]
+                         for fields, line_no in zip(texts, lines)])  # fmt: skip
+    return data, lines
 
 
 def mrclam_file(folder: str | Path, stem: str) -> Path:

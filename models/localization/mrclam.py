@@ -13,17 +13,12 @@ landmark measurements whose time is nearest to the step's end (padded to the lar
 
 from __future__ import annotations
 
-import gzip
 import math
-import re
-import warnings
-import zlib
-from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
-from dbn.errors import FileFormatError, InputError, TimeOrderError
+from dbn.errors import InputError
 from models import datasets
 from models.localization.model import RangeBearingObservation, relative_pose, wrap_angle
 
@@ -60,79 +55,26 @@ class MRCLAMRobot(NamedTuple):
     barcode_to_subject: dict
 
 
-def _read(path: Path, num_columns: int) -> tuple[np.ndarray, np.ndarray]:
-    """A whitespace-separated numeric file as ``(rows, num_columns)`` float64 (extra
-    columns dropped) and the file line number of each row ``(rows,)``; a missing,
-    unreadable, truncated, ragged, non-numeric, non-finite or empty file is a
-    :class:`FileFormatError` naming the file (and the line)."""
-    line_no = np.zeros(0, dtype=int)
-    try:
-        with gzip.open(path, "rt") if path.suffix == ".gz" else open(path) as f:
-            text = f.read().splitlines()
-        line_no = np.array([i for i, ln in enumerate(text, 1) if ln.split("#", 1)[0].strip()])
-        with warnings.catch_warnings():  # an empty file: reported below
-            warnings.simplefilter("ignore", UserWarning)
-            data = np.loadtxt([text[i - 1] for i in line_no], comments="#", ndmin=2)
-    except (OSError, EOFError, ValueError, UnicodeDecodeError, zlib.error) as exc:
-        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        m = re.search(r"at row (\d+)", msg)  # numpy counts data rows from 0 (or 1)
-        line = int(line_no[min(int(m[1]), line_no.size - 1)]) if m and line_no.size else None
-        raise FileFormatError(path, f"not a numeric table ({msg})", line) from None
-    if data.shape[0] == 0:
-        raise FileFormatError(path, "no data rows")
-    if data.shape[1] < num_columns:
-        raise FileFormatError(path, f"{data.shape[1]} columns, expected {num_columns}",
-                              int(line_no[0]))  # fmt: skip
-    bad = np.flatnonzero(~np.all(np.isfinite(data[:, :num_columns]), axis=1))
-    if bad.size:
-        raise FileFormatError(path, "value is not finite", int(line_no[bad[0]]))
-    return (data[:, :num_columns] if data.shape[1] > num_columns else data), line_no
-
-
-def _check_time(t: np.ndarray, name: str, line_no: np.ndarray | None = None) -> None:
-    """A :class:`TimeOrderError` ``NAME:LINE: ...`` (file and line, when ``line_no``
-    gives the line of each entry) where ``t`` goes back."""
-    back = np.flatnonzero(np.diff(t) < 0)
-    if back.size:
-        i = int(back[0])
-        where = f"{name}:{int(line_no[i + 1])}" if line_no is not None else name
-        raise TimeOrderError(f"{where}: timestamp[{i + 1}] = {t[i + 1]} goes back from {t[i]}")
-
-
 def load_robot(robot: int = 1) -> MRCLAMRobot:
-    """Load robot ``robot`` (1 or 2) of MRCLAM dataset 6 from the shared data folder.
+    """Load robot ``robot`` (1 or 2) of MRCLAM dataset 6 from the shared data folder, with
+    the checks of any MRCLAM folder (:func:`models.io.localization.read_mrclam_folder`).
 
     Raises
     ------
     FileNotFoundError
         When the data folder is absent (tests skip, the demo falls back to simulation).
+    InputError
+        A robot other than 1 and 2; a file that is missing, not numeric, ragged, or with
+        an id that is not an integer (naming the file and line).
     TimeOrderError
         When a file's timestamps go backwards.
     """
+    # imported here: models.io.localization reads into this module's MRCLAMRobot
+    from models.io.localization import read_mrclam_folder
+
     if robot not in (1, 2):
         raise InputError(f"robot = {robot!r}: only robots 1 and 2 are in the shared data")
-    files = {}
-    for key, name, cols in (
-        ("odometry", f"Robot{robot}_Odometry.dat.gz", 3),
-        ("measurements", f"Robot{robot}_Measurement.dat.gz", 4),
-        ("groundtruth", f"Robot{robot}_Groundtruth.dat.gz", 4),
-        ("landmarks", "Landmark_Groundtruth.dat.gz", 3),
-        ("barcodes", "Barcodes.dat.gz", 2),
-    ):
-        path = datasets.require("mrclam6", name)
-        files[key], line_no = _read(path, cols)
-        if key in ("odometry", "measurements", "groundtruth"):
-            _check_time(files[key][:, 0], str(path), line_no)
-    barcodes = {int(b): int(s) for s, b in files["barcodes"][:, :2]}
-    lm = files["landmarks"]
-    return MRCLAMRobot(
-        files["odometry"],
-        files["measurements"],
-        files["groundtruth"],
-        lm[:, 1:3].copy(),
-        lm[:, 0].astype(int),
-        barcodes,
-    )
+    return read_mrclam_folder(datasets.require("mrclam6"), robot)
 
 
 def integrate_odometry(odometry: np.ndarray, times: np.ndarray) -> np.ndarray:

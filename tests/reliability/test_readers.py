@@ -264,12 +264,10 @@ def test_mot_text(data) -> None:
 @given(data=st.data())
 def test_mrclam_dat(name, cols, data) -> None:
     from models.io.localization import read_dat
-    from models.localization.mrclam import _read
 
     raw = (DATA / "localization" / "mrclam" / name).read_bytes()
     mutated = data.draw(mutations(raw))
     check_reader(lambda p: read_dat(p, cols), finite, mutated, name)
-    check_reader(lambda p: _read(p, cols)[0], finite, mutated, name)
 
 
 @FAST

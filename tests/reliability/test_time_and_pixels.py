@@ -110,26 +110,44 @@ def _backwards(src: Path, dst: Path) -> int:
     return data[2] + 1
 
 
-def test_mrclam_loader_names_file_and_line(tmp_path) -> None:
-    from models.localization.mrclam import _check_time, _read
+def test_mrclam_loader_names_file_and_line(tmp_path, monkeypatch) -> None:
+    """``load_robot`` reads the shared folder with the checks of any MRCLAM folder."""
+    from models.localization.mrclam import load_robot
 
-    path = tmp_path / "Robot1_Odometry.dat"
-    line = _backwards(DATA / "localization" / "mrclam" / "Robot1_Odometry.dat", path)
-    data, line_no = _read(path, 3)
-    with pytest.raises(TimeOrderError, match=rf"Robot1_Odometry\.dat:{line}: timestamp"):
-        _check_time(data[:, 0], str(path), line_no)
+    folder = tmp_path / "mrclam6"  # a stand-in for the shared data (the test files)
+    shutil.copytree(DATA / "localization" / "mrclam", folder)
+    monkeypatch.setenv("DBNTRACK_DATA", str(tmp_path))
+    robot = load_robot(1)
+    assert robot.odometry.shape[1] == 3 and robot.barcode_to_subject
+    odo = folder / "Robot1_Odometry.dat"
+    good = odo.read_text()
+    line = _backwards(odo, odo)
+    with pytest.raises(TimeOrderError, match=rf"Robot1_Odometry\.dat:{line}: time goes back"):
+        load_robot(1)
+    odo.write_text(good)
+    codes = folder / "Barcodes.dat"
+    rows = codes.read_text().splitlines(keepends=True)
+    k = [i for i, ln in enumerate(rows) if ln.split("#", 1)[0].strip()][0]
+    rows[k] = rows[k].split()[0] + " 5.5\n"  # a barcode that is not an integer
+    codes.write_text("".join(rows))
+    with pytest.raises(FileFormatError, match=rf"Barcodes\.dat:{k + 1}: barcode 5.5 is not an integer"):
+        load_robot(1)
 
 
 def test_mrclam_numeric_error_names_the_file_line(tmp_path) -> None:
-    from models.localization.mrclam import _read
+    from models.io.localization import read_dat
 
     src = DATA / "localization" / "mrclam" / "Robot1_Odometry.dat"
     lines = src.read_text().splitlines(keepends=True)
     k = [i for i, ln in enumerate(lines) if ln.split("#", 1)[0].strip()][3]
     lines[k] = "1.0 x 2.0\n"
     (tmp_path / "o.dat").write_text("".join(lines))
-    with pytest.raises(FileFormatError, match=rf"o\.dat:{k + 1}: not a numeric"):
-        _read(tmp_path / "o.dat", 3)
+    with pytest.raises(FileFormatError, match=rf"o\.dat:{k + 1}: column 2 = 'x' is not a number"):
+        read_dat(tmp_path / "o.dat", 3)
+    lines[k] = "1.0 inf 2.0\n"  # parsed, but not finite
+    (tmp_path / "o.dat").write_text("".join(lines))
+    with pytest.raises(FileFormatError, match=rf"o\.dat:{k + 1}: column 2 = 'inf' is not finite"):
+        read_dat(tmp_path / "o.dat", 3)
 
 
 def test_mrclam_folder_and_csv_name_file_and_line(tmp_path) -> None:

@@ -159,12 +159,15 @@ def test_mrclam_filter_beats_dead_reckoning(shared_data) -> None:
     np.testing.assert_array_equal(before[0], _snapshot(loc)[0])
 
 
-def test_time_order_is_checked() -> None:
-    from models.localization.mrclam import _check_time
+def test_equal_times_are_in_order(tmp_path) -> None:
+    from models.io.localization import read_poses
 
-    _check_time(np.array([0.0, 1.0, 1.0, 2.0]), "ok")
-    with pytest.raises(TimeOrderError, match=r"timestamp\[2\] = 0.5"):
-        _check_time(np.array([0.0, 1.0, 0.5]), "Robot1 odometry")
+    csv = tmp_path / "poses.csv"
+    csv.write_text("t,x,y,theta\n0,0,0,0\n1,0,0,0\n1,1,0,0\n2,1,0,0\n")
+    np.testing.assert_array_equal(read_poses(csv)[0], [0.0, 1.0, 1.0, 2.0])
+    csv.write_text("t,x,y,theta\n0,0,0,0\n1,0,0,0\n0.5,1,0,0\n")
+    with pytest.raises(TimeOrderError, match=r"poses\.csv:4: time goes back \(0.5 after 1.0\)"):
+        read_poses(csv)
 
 
 def test_mrclam_event_alignment(shared_data) -> None:
