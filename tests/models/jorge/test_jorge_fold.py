@@ -10,7 +10,6 @@ from __future__ import annotations
 import copy
 
 import jax
-import numpy as np
 import pytest
 
 from dbn.errors import InputError
@@ -18,6 +17,7 @@ from models.jorge import api
 from models.jorge.online import OnlineConfig, OnlineLabeller, label_online
 from models.jorge.simulate import simulate_ground_truth
 from models.jorge.strokes import build_strokes
+from tests.models.test_protocol import _assert_same
 
 
 @pytest.fixture(scope="module")
@@ -54,17 +54,8 @@ def test_fold_labels_as_the_batch_labeller_without_copying(strokes, monkeypatch)
     # the same state as the protocol's run, which copies at every step
     states, run_infos = tracker.run(jax.random.key(0), strokes)
     assert len(calls) == len(strokes)
-    _assert_same_state(tracker.fingerprint(states[-1]), tracker.fingerprint(tracker.fold(jax.random.key(0), strokes)[0]))
-    assert [i[:3] for i in run_infos] == [i[:3] for i in infos]
-    np.testing.assert_array_equal([i[3] for i in run_infos], [i[3] for i in infos])  # NaN: no inference
-
-
-def _assert_same_state(a: tuple, b: tuple) -> None:
-    """Two fingerprints (labels, beliefs, domains, inference log, next inference) equal."""
-    labels, beliefs, *rest = a
-    assert labels == b[0] and rest == list(b[2:])
-    assert beliefs.keys() == b[1].keys()
-    assert all(np.array_equal(beliefs[k], b[1][k]) for k in beliefs)
+    _assert_same(tracker.fingerprint(states[-1]), tracker.fingerprint(tracker.fold(jax.random.key(0), strokes)[0]))
+    _assert_same(run_infos, infos)  # NaN equal to NaN: a step without inference
 
 
 def test_fold_raises_on_a_bad_stroke(strokes) -> None:
