@@ -276,7 +276,10 @@ print("means:", np.round(rates.mean(0), 3))
 # comparison, each on fresh seeds (`fit.CONFIRM_SEEDS`); since the twenty-third, that
 # restriction node divides by the chance that two independently drawn parts of the group are
 # compatible (`LabelParams.split_normalise`: observing the restriction on independent parts
-# made every split of a group of four cost it against a group of three plus an unseen joiner).
+# made every split of a group of four cost it against a group of three plus an unseen joiner);
+# since the thirtieth, a new node's domain is capped on a posterior that leaves out the
+# siblings' instant labels all the way up its chain (`OnlineConfig.clash_free_rank`: a label
+# that a parent's sibling excluded for the moment is no longer dropped from the children).
 # Seed 004's eq. 5 alone: `NetworkConfig(labels=replace(FITTED_LABELS, split_cover=()))`. Here we
 # refit on fewer seeds and score the validation part with the default network and the
 # colour-only baseline.

@@ -529,8 +529,18 @@ error there and below -2 for both looks combined (inverse-variance weighted): 0.
 (standard error 0.0007, -3.4 SE); strokes of 3+ people 0.7383 -> 0.7251 and 0.7587 -> 0.7456,
 SIMULATED meetings of four 0.0777 -> 0.0747 and 0.0547 -> 0.0433, the PETS2009 S1 crowds
 0.6011 / 0.8193 -> 0.5984 / 0.8151 and 0.6056 / 0.8009 -> 0.5991 / 0.7938; no quick-benchmark
-bar flipped; landed (:data:`models.jorge.config.FITTED_LABELS`). The next confirmation takes
-seeds from 585 on."""
+bar flipped; landed (:data:`models.jorge.config.FITTED_LABELS`). Seeds 600-639 (SIMULATED
+meetings only) served issue 16's thirtieth round's diagnosis; seeds 640-679 then served the
+clash-free rank of the on-line labeller's domain cap (``OnlineConfig.clash_free_rank``: a
+child's domain is ranked on its parents' eq. 12 beliefs without their siblings' clash, so a
+label a sibling's instant guess excluded is not dropped from the children), on the 40 fresh
+seeds alone, declared to land only below -1 standard error with no quick-benchmark bar
+flipping and the hand-made merge/split graphs still recovered: 0.1934 against 0.1911, paired
+-0.0024 (standard error 0.0015, -1.6 SE), lower on 21 of 40 (higher on 15); SIMULATED meetings
+of k = 3 / 4 / 5 0.0569 / 0.0395 / 0.1666 -> 0.0544 / 0.0382 / 0.1497, their strokes of 3+
+people 0.133 / 0.087 / 0.460 -> 0.152 / 0.087 / 0.431; the PETS2009 S1 crowds 0.6020 / 0.8161
+-> 0.6034 / 0.8164, the CAVIAR training sequences 0.0149 -> 0.0144 (mean of four); landed.
+The next confirmation takes seeds from 680 on."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "roots_joins",
                  "size_once": True, "palette_continued": 0.75}

@@ -19,7 +19,13 @@ Instant labelling between inferences (eq. 12)
     Its domain is capped at ``max_labels`` by this posterior, on the parents' beliefs of
     the moment; when the next inference relabels the parents, a continuation or merge
     whose domain lost the label they now pass on gets it back and the window runs again
-    (``restore_successors``, our addition; issue 16, twenty-first round).
+    (``restore_successors``, our addition; issue 16, twenty-first round). The cap ranks
+    the labels without the siblings' clash, the node's own and, through the parents'
+    clash-free beliefs, its ancestors' since the last inference (``clash_free_rank``, our
+    addition; issue 16, thirtieth round): a sibling's instant label is a point guess the
+    window may revise, and a label it excludes would otherwise reach the children with
+    belief 0 and be the first the cap drops (a member leaving a group of four was then
+    labelled a new person while the group kept them: two objects for one person).
 
 Links
     By default each new stroke is linked by the on-line link rule
@@ -127,6 +133,13 @@ class OnlineConfig:
         its parents' new labels pass on, when the eq. 12 cap dropped it, and if any was
         given back run the window again (:meth:`OnlineLabeller.restore_successors`; issue
         16, twenty-first round).
+    clash_free_rank : bool
+        Cap a new node's domain (``max_labels``) on its eq. 12 posterior without the
+        siblings' clash at every step up its chain: its parents' beliefs too leave out the
+        clash with their own siblings' instant labels (:attr:`OnlineLabeller.free_beliefs`).
+        ``False``: only its own clash is left out, and a label a parent's sibling excludes
+        (belief 0) is the first the cap drops from the children, for good (issue 16,
+        thirtieth round).
     network : NetworkConfig
     """
 
@@ -138,6 +151,7 @@ class OnlineConfig:
     reid_prior: float = 0.5
     tentative_joiners: bool = True
     restore_successors: bool = True
+    clash_free_rank: bool = True
     network: NetworkConfig = field(default_factory=NetworkConfig)
 
     def __post_init__(self) -> None:
@@ -210,6 +224,10 @@ class OnlineLabeller:
     instant_pruned_mass : list of float
         Posterior mass dropped each time a new node's eq. 12 posterior was capped to
         ``max_labels`` labels.
+    free_beliefs : dict int -> ndarray
+        With ``clash_free_rank``: the eq. 12 posterior without the siblings' clash, up the
+        chain, of each node created since the last inference where it differs from its
+        belief (the cap's ranking; dropped at the next inference).
     """
 
     def __init__(self, config: OnlineConfig | None = None, fps: float | None = None,
@@ -219,6 +237,7 @@ class OnlineLabeller:
         self.fps = self.graph.fps
         self.labels: dict[int, Label] = {}
         self.beliefs: dict[int, np.ndarray] = {}
+        self.free_beliefs: dict[int, np.ndarray] = {}
         self.records: list[InferenceRecord] = []
         self.windows: list = []
         self.keep_windows = keep_windows
@@ -228,12 +247,13 @@ class OnlineLabeller:
         self.instant_pruned_mass: list[float] = []
 
     # --- eq. 12 ------------------------------------------------------------------------------
-    def belief_of(self, k: int) -> np.ndarray:
+    def belief_of(self, k: int, free: bool = False) -> np.ndarray:
         """Current belief over node ``k``'s current domain: its marginal at the last
-        inference, its eq. 12 posterior if created since, a point mass if frozen."""
+        inference, its eq. 12 posterior if created since (``free``: without the siblings'
+        clash, :attr:`free_beliefs`, where it has one), a point mass if frozen."""
         if self.graph.nodes[k].frozen is not None:
             return np.ones(1)
-        return self.beliefs[k]
+        return self.free_beliefs.get(k, self.beliefs[k]) if free else self.beliefs[k]
 
     def instant_posterior(self, k: int, siblings: bool = True) -> np.ndarray:
         r"""Eq. 12 posterior of node ``k`` over its domain.
@@ -259,9 +279,10 @@ class OnlineLabeller:
         """
         return self._posterior(k, self._log_score(k), siblings)
 
-    def _log_score(self, k: int) -> np.ndarray:
+    def _log_score(self, k: int, free: bool = False) -> np.ndarray:
         """Unnormalised log of eq. 12 without the siblings' clash: evidence plus the log
-        prior through the CPD, shape (num_labels,)."""
+        prior through the CPD (``free``: on the parents' :attr:`free_beliefs`), shape
+        (num_labels,)."""
         g = self.graph
         node = g.nodes[k]
         score = g.evidence_loglik(k)
@@ -270,7 +291,7 @@ class OnlineLabeller:
             corr = g.chain_log_ratio(k)
             if corr is not None:  # NetworkConfig.chain_palette: the parent's view alone
                 table = table * np.exp(corr)
-            beliefs = [self.belief_of(p) for p in node.parents]
+            beliefs = [self.belief_of(p, free) for p in node.parents]
             prior = np.einsum("i,ik->k", beliefs[0], table) if len(beliefs) == 1 else \
                 np.einsum("i,j,ijk->k", beliefs[0], beliefs[1], table)
             with np.errstate(divide="ignore"):
@@ -306,6 +327,14 @@ class OnlineLabeller:
         di, dj = (domain, other) if k < sib else (other, domain)
         return g.restriction(i, j, di, dj, parent)[..., 1].reshape(len(domain))
 
+    def _free_posterior(self, k: int, score: np.ndarray) -> np.ndarray:
+        """Eq. 12 posterior of ``k`` without the siblings' clash, on its parents'
+        :attr:`free_beliefs` (``score``: :meth:`_log_score` on their beliefs, reused where
+        no parent has a free belief of its own), shape (num_labels,)."""
+        if any(p in self.free_beliefs for p in self.graph.nodes[k].parents):
+            score = self._log_score(k, free=True)
+        return self._posterior(k, score, siblings=False)
+
     def _relabel(self, k: int) -> None:
         """Eq. 12 posterior of ``k``, its domain capped to ``max_labels``, its label."""
         g = self.graph
@@ -317,7 +346,11 @@ class OnlineLabeller:
         # guesses the next inference may revise, and a label they exclude (posterior 0)
         # would otherwise be the first the cap drops, for good (issue 16: the two parts of
         # a split swapped once new groups and joins widened the domains past the cap)
-        rank = self._posterior(k, score, siblings=False) if len(domain) > self.config.max_labels else post
+        free = self._free_posterior(k, score) if self.config.clash_free_rank else None
+        if free is not None:
+            rank = free
+        else:
+            rank = self._posterior(k, score, siblings=False) if len(domain) > self.config.max_labels else post
         kept = prune_labels(domain, rank, 0.0, keep=keep + [domain[int(np.argmax(post))]],
                             max_labels=self.config.max_labels)
         if len(kept) < len(domain):
@@ -325,7 +358,12 @@ class OnlineLabeller:
             g.set_domain(k, kept)
             self.instant_pruned_mass.append(float(1.0 - post[idx].sum()))
             post = post[idx] / post[idx].sum()
+            free = None if free is None else free[idx] / free[idx].sum()
         self.beliefs[k] = post
+        if free is not None and not np.array_equal(free, post):
+            self.free_beliefs[k] = free
+        else:
+            self.free_beliefs.pop(k, None)
         self.labels[k] = g.nodes[k].domain[int(np.argmax(post))]
         if self.config.tentative_joiners:
             g.set_tentative_joiners({k: self.labels[k]})
@@ -380,6 +418,7 @@ class OnlineLabeller:
         for k in range(first_active):
             if g.nodes[k].frozen is None:
                 g.freeze(k, self.labels[k])
+            self.free_beliefs.pop(k, None)
         active = list(range(first_active, n))
         win, log_prob, clique, pruned = self._window_pass(active)
         if cfg.marginals and cfg.restore_successors and self.restore_successors(active):
@@ -443,6 +482,7 @@ class OnlineLabeller:
                 belief = np.delete(belief, drop)
             belief = np.append(belief, 0.0)
             self.beliefs[k] = belief / belief.sum()
+            self.free_beliefs.pop(k, None)  # its domain changed; the window runs next
             passed[k] = label
         return sorted(passed)
 
@@ -475,6 +515,7 @@ class OnlineLabeller:
                 b = marg[name][idx]
                 pruned = max(pruned, float(1.0 - b.sum()))
                 self.beliefs[k] = b / b.sum() if b.sum() > 0 else np.full(len(idx), 1.0 / len(idx))
+                self.free_beliefs.pop(k, None)  # the window's marginal: no instant clash
         return win, log_prob, clique, pruned
 
     def finish(self, frame: int | None = None) -> dict[int, Label]:
