@@ -221,6 +221,21 @@ def test_search_scores_simulated_meetings_beside_the_training_sequences():
     assert len(scoring_groups((100,), meetings=False)[0]) == len(real)
 
 
+def test_meetings_at_a_lower_frame_rate_are_the_same_scenes_resampled():
+    """``meeting_strokes(fps=7)``: the scenes of the 25-fps meetings at PETS2009's rate
+    (:func:`models.jorge.strokes.resample`), the same people in fewer frames; 25 is the
+    scenes' own rate, left as it is."""
+    from models.jorge.fit import MEETING_SIZES, meeting_strokes
+
+    fast, slow = meeting_strokes((100,)), meeting_strokes((100,), fps=7.0)
+    assert [m.fps for m in slow] == [7.0] * len(MEETING_SIZES)
+    for a, b in zip(fast, slow):
+        assert max(s.end for s in b) < max(s.end for s in a)
+        assert set().union(*(s.truth for s in b)) == set().union(*(s.truth for s in a))
+    same = meeting_strokes((100,), fps=25.0)
+    assert [[(s.start, s.end, s.truth) for s in m] for m in same] == [[(s.start, s.end, s.truth) for s in m] for m in fast]
+
+
 def test_the_incumbent_stays_unless_beaten_by_more_than_one_standard_error():
     """The search's rule (``fit._kept``) on hand-made rows (settings, mean, per-seed errors,
     slowest real-time factor): a point lower by less than one standard error of the
