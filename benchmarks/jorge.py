@@ -363,7 +363,7 @@ from models.jorge.online import (
     score,
     true_links,
 )
-from models.jorge.strokes import PETS2009_FPS, build_strokes, resample
+from models.jorge.strokes import PETS2009_FPS, build_strokes
 
 
 def _compare_with_pgmpy(windows, max_windows: int, max_joint: float) -> dict:
@@ -457,8 +457,8 @@ MEETING_SIZES = (3, 4, 5)
 
 def _meeting_sim(cfg: OnlineConfig, seeds: list, scenes: int, fps: float | None = None) -> dict:
     """The default pipeline on SIMULATED CAVIAR-like meetings (issue 16): for each group
-    size k, scenes ``simulate_meeting(i, k)``, ``i < scenes`` (25 fps; with ``fps``,
-    :func:`models.jorge.strokes.resample` to that rate), each built into strokes with
+    size k, scenes ``simulate_meeting(i, k, fps=fps)``, ``i < scenes`` (25 fps; with
+    ``fps``, resampled to that rate), each built into strokes with
     the seeds ``[s, i]`` (``s`` the benchmark's seeds: gaps and colours differ per scene);
     pooled LE / NT, over all strokes and over the strokes of three or more people.
     Nothing here is real data or fitted on."""
@@ -467,7 +467,7 @@ def _meeting_sim(cfg: OnlineConfig, seeds: list, scenes: int, fps: float | None 
     for k in MEETING_SIZES:
         wrong, sizes = [], []
         for i in range(scenes):
-            truth = simulate_meeting(i, k) if fps is None else resample(simulate_meeting(i, k), fps)
+            truth = simulate_meeting(i, k, fps=fps)
             for s in seeds:
                 strokes = build_strokes([s, i], truth)
                 bad = set(score(strokes, label_online(strokes, cfg).labels).errors)

@@ -604,16 +604,12 @@ def meeting_strokes(seeds: Sequence[int] = SCORE_SEEDS, sizes: Sequence[int] = M
                     fps: float | None = None) -> list[StrokeSet]:
     """Stroke sets of SIMULATED meetings (:func:`models.jorge.meeting.simulate_meeting`),
     one per seed and group size: scene ``seed``, stroke seed ``seed``, at the scene's 25 fps
-    or, with another ``fps``, resampled to it (:func:`models.jorge.strokes.resample`). The
+    or, with another ``fps``, resampled to it (``simulate_meeting``'s ``fps``). The
     search's seeds (100-104) are other scenes than the benchmark's (0-9)."""
     from models.jorge.meeting import simulate_meeting
-    from models.jorge.strokes import build_strokes, resample
+    from models.jorge.strokes import build_strokes
 
-    def scene(s: int, k: int):
-        truth = simulate_meeting(s, k)
-        return truth if fps is None or fps == truth.fps else resample(truth, fps)
-
-    return [build_strokes(s, scene(s, k)) for s in seeds for k in sizes]
+    return [build_strokes(s, simulate_meeting(s, k, fps=fps)) for s in seeds for k in sizes]
 
 
 def scoring_groups(seeds: Sequence[int] = SCORE_SEEDS, meetings: bool = True) -> list[list[StrokeSet]]:

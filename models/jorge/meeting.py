@@ -51,11 +51,12 @@ from __future__ import annotations
 import numpy as np
 
 from dbn.errors import InputError
-from models.jorge.strokes import GroundTruth
+from models.jorge.strokes import GroundTruth, check_frame_rate, resample
 
 __all__ = ["simulate_meeting"]
 
 WIDTH, HEIGHT = 384.0, 288.0
+FPS = 25.0  #: the scene's frame rate (CAVIAR's)
 
 
 def _edge_point(centre: np.ndarray, angle: float) -> np.ndarray:
@@ -117,6 +118,7 @@ def simulate_meeting(
     num_walkers: int = 2,
     pair_prob: float = 0.3,
     num_frames: int | None = None,
+    fps: float | None = None,
 ) -> GroundTruth:
     """SIMULATED boxes of a CAVIAR-like meeting of ``group_size`` people (module docstring).
 
@@ -131,20 +133,31 @@ def simulate_meeting(
     pair_prob : float
         Probability that the first two members arrive together.
     num_frames : int, optional
-        Length; by default long enough for the whole meeting (every member gone).
+        Length at the scene's :data:`FPS`; by default long enough for the whole meeting
+        (every member gone).
+    fps : float, optional
+        Frame rate of the returned boxes, at most :data:`FPS` (default: :data:`FPS`). A
+        lower rate gives the same scene as a slower camera records it
+        (:func:`models.jorge.strokes.resample`; issue 16, thirty-first round: PETS2009's
+        7 fps).
 
     Returns
     -------
     GroundTruth
-        ``boxes`` of shape ``(num_frames, group_size + num_walkers, 4)`` (members first),
-        NaN where a person is absent; ``name = "simulated meeting k=<group_size>"``;
-        ``groups`` lists, per frame, the members standing in the group (two or more).
+        ``boxes`` of shape ``(num_frames, group_size + num_walkers, 4)`` (members first;
+        about ``num_frames * fps / FPS`` frames at a lower ``fps``), NaN where a person is
+        absent; ``name = "simulated meeting k=<group_size>"``; ``groups`` lists, per
+        frame, the members standing in the group (two or more).
     """
     if group_size < 2 or num_walkers < 0 or not 0.0 <= pair_prob <= 1.0:
         raise InputError(
             f"simulate_meeting: need group_size >= 2, num_walkers >= 0 and pair_prob in "
             f"[0, 1], got {group_size}, {num_walkers}, {pair_prob}"
         )
+    if fps is not None:
+        fps = check_frame_rate(fps, "simulate_meeting", InputError)
+        if fps > FPS:
+            raise InputError(f"simulate_meeting: fps {fps:g} is above the scene's {FPS:g}")
     rng = np.random.default_rng(seed)
     k = group_size
     n = k + num_walkers
@@ -196,11 +209,7 @@ def simulate_meeting(
         else ()
         for f in range(total)
     )
-    return GroundTruth(
-        f"simulated meeting k={k}",
-        np.arange(total),
-        np.flatnonzero(keep),
-        boxes[:, keep],
-        groups,
-        25.0,
+    truth = GroundTruth(
+        f"simulated meeting k={k}", np.arange(total), np.flatnonzero(keep), boxes[:, keep], groups, FPS
     )
+    return truth if fps is None or fps == FPS else resample(truth, fps)

@@ -11,7 +11,7 @@ import pytest
 from dbn.errors import InputError
 from models.jorge.meeting import simulate_meeting
 from models.jorge.online import OnlineConfig, label_online, score
-from models.jorge.strokes import build_strokes, regions
+from models.jorge.strokes import build_strokes, regions, resample
 
 
 @pytest.mark.parametrize("k", [3, 4, 5])
@@ -62,6 +62,21 @@ def test_same_seed_same_scene_and_bad_input():
         simulate_meeting(0, 1)
     with pytest.raises(InputError, match="num_frames"):
         simulate_meeting(0, 3, num_frames=5)
+
+
+def test_a_lower_frame_rate_is_the_same_scene_resampled():
+    """``fps=7`` gives what :func:`resample` makes of the 25-fps scene; ``fps=25`` the
+    scene itself; a bad rate is refused naming ``simulate_meeting``, before simulating."""
+    full, slow = simulate_meeting(5, 4), simulate_meeting(5, 4, fps=7.0)
+    ref = resample(full, 7.0)
+    assert slow.fps == 7.0 and slow.num_frames < full.num_frames
+    np.testing.assert_array_equal(slow.boxes, ref.boxes)
+    np.testing.assert_array_equal(slow.ids, ref.ids)
+    assert slow.groups == ref.groups
+    np.testing.assert_array_equal(simulate_meeting(5, 4, fps=25.0).boxes, full.boxes)
+    for bad in (0.0, float("nan"), "7", 30.0):
+        with pytest.raises(InputError, match="simulate_meeting"):
+            simulate_meeting(5, 4, fps=bad)
 
 
 def _errors(k: int, scenes) -> tuple[float, float, int]:
