@@ -337,6 +337,17 @@ confirmation (7-fps meetings 0.275 -> 0.220) but slowed the slowest sequence to 
 and raised the quick validation 0.074 -> 0.080 (details under ``NetworkConfig``'s
 ``sibling_window``). So the real 7-fps sequence and the SIMULATED 7-fps meetings disagree on
 the gate; the real one was kept.
+
+Thirty-second round (issue 16): no change to the default network, so no change here. Diagnosis
+on training-side data (PETS2009 S1L1-2 and the 7-fps meetings, seeds 100-104): strokes of one
+or two people whose long-gap link is missed are mostly recovered by the re-identification pass
+(7-fps meetings 128 of 157 right, 28 without it), strokes of three or more never are (21 of
+21, and 37 of 38 in S1L1-2), and in the crowds a long-gap link is right only about half the
+time. So a fallback for groups alone was tried (both regions group-sized by the size
+evidence): it passed its confirmation on fresh seeds 800-839 (7-fps meetings 0.280 -> 0.232)
+and kept the quick run's speed and validation, but the full run's held-out validation rose
+0.0737 -> 0.0999 (PETS2009 S2L1 0.103 -> 0.140; 7-fps meetings, full run, 3+ strokes 0.69 /
+0.86 / 0.89 -> 0.45 / 0.68 / 0.69), so it did not land (:data:`models.jorge.fit.CONFIRM_SEEDS`).
 """
 
 from __future__ import annotations

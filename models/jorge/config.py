@@ -412,7 +412,13 @@ class NetworkConfig:
         within 60 frames) passed its confirmation too (fresh seeds 760-799: 7-fps meetings
         0.275 -> 0.220, the 25-fps sets unchanged) and was not landed either: the quick
         run's slowest sequence ran at 0.76-0.93x the default's speed and the held-out
-        validation rose (0.074 -> 0.080).
+        validation rose (0.074 -> 0.080). Thirty-second round: the same fallback for groups
+        alone (both regions group-sized by the size evidence; single people left to the
+        re-identification pass, which recovers most of them, while nothing recovers a
+        group's label) passed its confirmation (fresh seeds 800-839: 7-fps meetings 0.280 ->
+        0.232, the 25-fps sets unchanged) and kept the quick run's speed, but the full run's
+        held-out validation rose 0.0737 -> 0.0999 (PETS2009 S2L1 0.103 -> 0.140): not
+        landed. Three long-gap rules now agree that the real 7-fps sequence loses by them.
     labels : LabelParams
         :math:`P_{new}, P_{merge}, P_{split}` and the maximum group size.
     colour_mode : {"hyper", "ratio", "eq6"}

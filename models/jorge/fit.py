@@ -563,7 +563,16 @@ run's held-out validation no worse: 0.2112 -> 0.1978, paired -0.0135 (standard e
 -5.1 SE), lower on 30 of 40; the 9 sets of this function 0.1899 -> 0.1902, the 7-fps meetings
 0.2751 -> 0.2203. Not landed: side by side, the quick run's slowest sequence ran at 0.93x and
 0.76x the default's speed, and its held-out validation rose 0.074 -> 0.080 (PETS2009 S2L1 0.107
--> 0.115). The next confirmation takes seeds from 800 on."""
+-> 0.115). Seeds 800-839 served the thirty-second round's long-gap link of a group (only a
+group-sized stroke the rule leaves without a parent may continue a group-sized stroke without a
+child within 60 frames at 25 fps; single people are left to the re-identification pass, which
+recovers most of them, while nothing recovers a group's label; parameters refitted), under the
+same four conditions, declared before it ran: 0.2167 -> 0.2050, paired -0.0117 (standard error
+0.0033, -3.5 SE), lower on 27 of 40; the 9 sets of this function 0.1957 -> 0.1960, the 7-fps
+meetings 0.2796 -> 0.2319. The quick benchmark side by side kept its speed (1.00x and 1.31x)
+and its validation (0.0741). Not landed: the full run's held-out validation rose 0.0737 ->
+0.0999 (PETS2009 S2L1 0.103 -> 0.140, though its links were right more often, 0.58 -> 0.67).
+The next confirmation takes seeds from 840 on."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "roots_joins",
                  "size_once": True, "palette_continued": 0.75}
