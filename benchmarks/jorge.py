@@ -363,6 +363,7 @@ from models.jorge.fit import (
     VALIDATION_SEQUENCES,
     load_sequence,
 )
+from models.jorge.meeting import FPS as MEETING_FPS
 from models.jorge.meeting import simulate_meeting
 from models.jorge.network import node_name
 from models.jorge.online import (
@@ -466,7 +467,7 @@ MEETING_SIZES = (3, 4, 5)
 """Group sizes of the SIMULATED meetings (:mod:`models.jorge.meeting`)."""
 
 
-def _meeting_sim(cfg: OnlineConfig, seeds: list, scenes: int, fps: float | None = None) -> dict:
+def _meeting_sim(cfg: OnlineConfig, seeds: list, scenes: int, fps: float = MEETING_FPS) -> dict:
     """The default pipeline on SIMULATED CAVIAR-like meetings (issue 16): for each group
     size k, scenes ``simulate_meeting(i, k, fps=fps)``, ``i < scenes`` (25 fps; with
     ``fps``, resampled to that rate), each built into strokes with
@@ -474,7 +475,7 @@ def _meeting_sim(cfg: OnlineConfig, seeds: list, scenes: int, fps: float | None 
     pooled LE / NT, over all strokes and over the strokes of three or more people.
     Nothing here is real data or fitted on."""
     out: dict = {"simulated": "SIMULATED meetings (models.jorge.meeting), not real data", "scenes_per_size": scenes,
-                 "fps": 25.0 if fps is None else fps}
+                 "fps": fps}
     for k in MEETING_SIZES:
         wrong, sizes = [], []
         for i in range(scenes):

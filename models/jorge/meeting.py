@@ -51,7 +51,7 @@ from __future__ import annotations
 import numpy as np
 
 from dbn.errors import InputError
-from models.jorge.strokes import GroundTruth, check_frame_rate, resample
+from models.jorge.strokes import GroundTruth, check_lower_rate, resample
 
 __all__ = ["simulate_meeting"]
 
@@ -155,9 +155,7 @@ def simulate_meeting(
             f"[0, 1], got {group_size}, {num_walkers}, {pair_prob}"
         )
     if fps is not None:
-        fps = check_frame_rate(fps, "simulate_meeting", InputError)
-        if fps > FPS:
-            raise InputError(f"simulate_meeting: fps {fps:g} is above the scene's {FPS:g}")
+        fps = check_lower_rate(fps, FPS, "simulate_meeting")
     rng = np.random.default_rng(seed)
     k = group_size
     n = k + num_walkers

@@ -65,6 +65,7 @@ __all__ = [
     "load_pets2009",
     "load_ground_truth",
     "resample",
+    "check_lower_rate",
     "pairwise_iou",
     "regions",
     "region_labels",
@@ -306,13 +307,20 @@ def resample(truth: GroundTruth, fps: float) -> GroundTruth:
     InputError
         ``fps`` not a positive finite number, or above ``truth.fps``.
     """
-    fps = check_frame_rate(fps, "resample", InputError)
-    if fps > truth.fps:
-        raise InputError(f"resample: fps {fps:g} is above the ground truth's {truth.fps:g}")
+    fps = check_lower_rate(fps, truth.fps, "resample")
     keep = np.unique(np.round(np.arange(0.0, truth.num_frames, truth.fps / fps)).astype(np.int64))
     keep = keep[keep < truth.num_frames]
     groups = tuple(truth.groups[i] for i in keep) if truth.groups else ()
     return GroundTruth(truth.name, np.arange(keep.size), truth.ids, truth.boxes[keep], groups, fps)
+
+
+def check_lower_rate(fps: object, source_fps: float, where: str) -> float:
+    """``fps`` as a float, checked as a rate to resample to (:func:`resample`): a positive
+    finite number at most ``source_fps``; an :class:`InputError` naming ``where`` else."""
+    fps = check_frame_rate(fps, where, InputError)
+    if fps > source_fps:
+        raise InputError(f"{where}: fps {fps:g} is above the source's {source_fps:g}")
+    return fps
 
 
 # --------------------------------------------------------------------------------------
