@@ -348,6 +348,16 @@ evidence): it passed its confirmation on fresh seeds 800-839 (7-fps meetings 0.2
 and kept the quick run's speed and validation, but the full run's held-out validation rose
 0.0737 -> 0.0999 (PETS2009 S2L1 0.103 -> 0.140; 7-fps meetings, full run, 3+ strokes 0.69 /
 0.86 / 0.89 -> 0.45 / 0.68 / 0.69), so it did not land (:data:`models.jorge.fit.CONFIRM_SEEDS`).
+
+Thirty-third round (issue 16): no change to the default network, so no change here. Real
+positions, not the simulated colours, as evidence at splits: on the training split (the true
+links, stroke seed 100), where two people of a group of three or more came in by different
+strokes and leave by different strokes, each one's end position carried on at their velocity
+is nearer their own exit for 133 of 137 such pairs in PETS2009 S1L2-2 (none the other way) and
+32 of 50 in S1L1-2 (12 the other way, 6 too close to call). As an observed node on
+(arrival, split child) it did not lower the error on fresh seeds 840-879 (paired -0.0002,
+standard error 0.0014; SIMULATED meetings of five at 25 fps worse, 0.111 -> 0.124), so it did
+not land (:data:`models.jorge.fit.CONFIRM_SEEDS`).
 """
 
 from __future__ import annotations
