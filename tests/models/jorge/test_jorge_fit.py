@@ -107,15 +107,12 @@ def test_default_parameters_are_the_fit_on_the_training_split():
     for strokes in sets:
         count_events(strokes, base, counts)
     assert fit_split_cover(counts.splits, 5) == pytest.approx(FITTED_SPLIT_COVER, rel=1e-12)
-    # the search's incumbent is the default network itself, refitted as the search does
-    from dataclasses import replace
+    # the search's incumbent is the default network itself, refitted as the search (and a
+    # confirmation, models.jorge.confirm) does
+    from models.jorge.confirm import refit
 
-    from models.jorge.fit import DEFAULT_POINT, _grid_point
-
-    point = DEFAULT_POINT
-    gated = replace(NetworkConfig(), gate=point["gate"], merge_area=point["merge_area"])
-    ours = _grid_point(gated, fit_parameters(sets, gated), point["parameters"], point["new_groups"])
-    assert replace(ours, size_once=point["size_once"], palette_continued=point["palette_continued"]) == NetworkConfig()
+    assert refit() == NetworkConfig()
+    assert refit({"max_gap_frames": 45}).max_gap_frames == 45
 
 
 @pytest.mark.heavy  # ~20-35 s: 480 labellings; CI runs it (pytest -m heavy)
