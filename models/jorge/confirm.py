@@ -72,7 +72,7 @@ class Comparison(NamedTuple):
 
     def summary(self) -> dict:
         """The figures a closing note quotes (JSON-ready; the standard error None with one seed)."""
-        return {"seeds": [self.seeds[0], self.seeds[-1]], "num_seeds": len(self.seeds),
+        return {"seeds": list(self.seeds), "num_seeds": len(self.seeds),
                 "incumbent": float(np.mean(self.incumbent)), "candidate": float(np.mean(self.candidate)),
                 "difference": self.difference,
                 "standard_error": None if np.isnan(self.standard_error) else self.standard_error,

@@ -452,8 +452,9 @@ CONFIRM_SEEDS = tuple(range(125, 145))
 meetings) a change the grid cannot express (new evidence, a new rule of the on-line
 labeller) is confirmed on, pooled with :data:`SCORE_SEEDS`, before it lands (issue 16's
 fourteenth round; since the thirty-third round :mod:`models.jorge.confirm` runs the
-comparison, on fresh seeds alone with the 7-fps meetings added). Five seeds of meetings of each size left the seed-to-seed noise of the
-combined error as large as the differences between candidates, and thirteen rounds had
+comparison, on fresh seeds alone with the 7-fps meetings added). Five seeds of meetings of
+each size left the seed-to-seed noise of the combined error as large as the differences
+between candidates, and thirteen rounds had
 chosen on those same sets; the comparison and its rule (the lower combined error over the 25
 sets lands) are written down before it runs. Used once so far: the gain table given the
 known colours with tentative joiners, :data:`models.jorge.config.FITTED_PALETTE_GAINS`.
