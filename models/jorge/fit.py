@@ -585,8 +585,8 @@ fps of k = 3 / 4 / 5 0.0496 / 0.0674 / 0.1112 -> 0.0466 / 0.0645 / 0.1243 (their
 wrong 44 / 105 / 233 -> 47 / 118 / 261), the CAVIAR training sequences 0.0180 -> 0.0171 (mean
 of four), the PETS2009 S1 crowds 0.6040 / 0.8092 -> 0.6026 / 0.8061. Not landed (removed). A
 first run of it counted the evidence twice by mistake (0.2146 -> 0.2155, paired +0.0010,
-standard error 0.0017). On seeds 100-105, before declaring, meetings of four at 25 fps had gone
-0.140 -> 0.074: a few scenes, not the rule. The next confirmation takes seeds from 880 on."""
+standard error 0.0017). On seeds 100-104, before declaring, meetings of four at 25 fps had gone
+0.162 -> 0.081: a few scenes, not the rule. The next confirmation takes seeds from 880 on."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "roots_joins",
                  "size_once": True, "palette_continued": 0.75}
