@@ -195,9 +195,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     import argparse
 
     ap = argparse.ArgumentParser(prog="python -m models.jorge.confirm", description=main.__doc__)
-    ap.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE", dest="changes")
-    ap.add_argument("--seeds", nargs=2, type=int, required=True, metavar=("FIRST", "STOP"))
-    ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE", dest="changes",
+                    help="a NetworkConfig field of the candidate, VALUE in JSON (repeat for several)")
+    ap.add_argument("--seeds", nargs=2, type=int, required=True, metavar=("FIRST", "STOP"),
+                    help="fresh seeds FIRST .. STOP - 1 (models.jorge.fit.CONFIRM_SEEDS says which are fresh)")
+    ap.add_argument("--workers", type=int, default=1, help="processes labelling in parallel")
     args = ap.parse_args(argv)
     changes = dict(_parse_change(c) for c in args.changes)
     if args.seeds[1] <= args.seeds[0]:
