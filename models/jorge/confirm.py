@@ -94,8 +94,8 @@ def refit(changes: Mapping[str, object] | None = None) -> NetworkConfig:
     from models.jorge.fit import (
         DEFAULT_POINT,
         TRAIN_SEEDS,
-        _grid_point,
         fit_parameters,
+        point_config,
         training_strokes,
     )
 
@@ -108,12 +108,9 @@ def refit(changes: Mapping[str, object] | None = None) -> NetworkConfig:
     sets = training_strokes(seeds=TRAIN_SEEDS)
     if not sets:
         raise FileNotFoundError("refit: no training sequence found (set DBNTRACK_DATA to the shared data folder)")
-    point = DEFAULT_POINT
-    at_point = {"gate": point["gate"], "merge_area": point["merge_area"]}
-    base = dataclasses.replace(NetworkConfig(), **{**at_point, **changes})
-    cfg = _grid_point(base, fit_parameters(sets, base), point["parameters"], point["new_groups"])
-    after = {"size_once": point["size_once"], "palette_continued": point["palette_continued"]}
-    return dataclasses.replace(cfg, **{**after, **{k: v for k, v in changes.items() if k in after}})
+    point = {**DEFAULT_POINT, **{k: v for k, v in changes.items() if k in DEFAULT_POINT}}
+    gated = dataclasses.replace(NetworkConfig(), **{**changes, "gate": point["gate"], "merge_area": point["merge_area"]})
+    return point_config(gated, fit_parameters(sets, gated), point)
 
 
 def confirmation_sets(seed: int) -> list[StrokeSet]:
@@ -130,12 +127,10 @@ def _set_name(strokes: StrokeSet) -> str:
 
 def _label_one(job: tuple) -> tuple[str, float, float]:
     """(set name, incumbent's error rate, candidate's) of one set."""
-    from models.jorge.online import OnlineConfig, label_online, score
+    from models.jorge.fit import _error_and_speed
 
     incumbent, candidate, strokes = job
-    errs = [score(strokes, label_online(strokes, OnlineConfig(network=cfg)).labels).error_rate
-            for cfg in (incumbent, candidate)]
-    return _set_name(strokes), errs[0], errs[1]
+    return _set_name(strokes), _error_and_speed((incumbent, strokes))[0], _error_and_speed((candidate, strokes))[0]
 
 
 def compare(candidate: NetworkConfig, seeds: Sequence[int], incumbent: NetworkConfig | None = None,

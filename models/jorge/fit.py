@@ -85,6 +85,7 @@ __all__ = [
     "scoring_groups",
     "REALTIME_BAR",
     "search_settings",
+    "point_config",
 ]
 
 TRAIN_SEQUENCES = (
@@ -693,9 +694,9 @@ def search_settings(fit_sets: Sequence[StrokeSet], score_groups: Sequence[Sequen
                 SEARCH_GRID["parameters"] if parameters is None else parameters,
                 SEARCH_GRID["new_groups"] if new_groups is None else new_groups,
                 SEARCH_GRID["size_once"], SEARCH_GRID["palette_continued"]):
-            cfg = replace(_grid_point(gated, fitted, params, news), size_once=once, palette_continued=cont)
-            points.append(({"gate": gate, "merge_area": merge, "parameters": params,
-                            "new_groups": news, "size_once": once, "palette_continued": cont}, cfg))
+            settings = {"gate": gate, "merge_area": merge, "parameters": params,
+                        "new_groups": news, "size_once": once, "palette_continued": cont}
+            points.append((settings, point_config(gated, fitted, settings)))
     jobs = [(cfg, strokes) for _, cfg in points for group in score_groups for strokes in group]
     scores = _map(_error_and_speed, jobs, workers)
     table, i = [], 0
@@ -743,6 +744,14 @@ def _map(fn, jobs: list, workers: int) -> list:
 
     with ProcessPoolExecutor(workers) as pool:
         return list(pool.map(fn, jobs, chunksize=4))
+
+
+def point_config(gated: NetworkConfig, fitted: NetworkConfig, point: dict) -> NetworkConfig:
+    """The network of one grid point (a :data:`SEARCH_GRID` settings dict, e.g.
+    :data:`DEFAULT_POINT`): ``gated`` (the point's gate and merge test set) with the
+    parameters ``fitted`` under that gate, as the point uses them."""
+    cfg = _grid_point(gated, fitted, point["parameters"], point["new_groups"])
+    return replace(cfg, size_once=point["size_once"], palette_continued=point["palette_continued"])
 
 
 def _grid_point(base: NetworkConfig, fitted: NetworkConfig, params: str, new_groups: str) -> NetworkConfig:
