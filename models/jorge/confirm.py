@@ -93,6 +93,7 @@ def refit(changes: Mapping[str, object] | None = None) -> NetworkConfig:
     """
     from models.jorge.fit import (
         DEFAULT_POINT,
+        FITTED_FIELDS,
         TRAIN_SEEDS,
         fit_parameters,
         point_config,
@@ -101,10 +102,10 @@ def refit(changes: Mapping[str, object] | None = None) -> NetworkConfig:
 
     changes = dict(changes or {})
     names = {f.name for f in dataclasses.fields(NetworkConfig)}
-    fitted = {"labels", "size_mu_single", "size_slope", "size_sigma", "palette_count_table", "palette_gain_table"}
-    bad = sorted(set(changes) - (names - fitted))
+    bad = sorted(set(changes) - (names - FITTED_FIELDS))
     if bad:
-        raise InputError(f"refit: {bad} are not NetworkConfig fields a change may set (the fit sets {sorted(fitted)})")
+        raise InputError(f"refit: {bad} are not NetworkConfig fields a change may set "
+                         f"(the fit sets {sorted(FITTED_FIELDS)})")
     sets = training_strokes(seeds=TRAIN_SEEDS)
     if not sets:
         raise FileNotFoundError("refit: no training sequence found (set DBNTRACK_DATA to the shared data folder)")

@@ -73,6 +73,7 @@ __all__ = [
     "EventCounts",
     "count_events",
     "fit_parameters",
+    "FITTED_FIELDS",
     "load_sequence",
     "training_strokes",
     "labelling_error",
@@ -287,6 +288,12 @@ def _rate(num: float, den: float) -> float:
     return (num + 1.0) / (den + 2.0)  # add-one smoothing of a Bernoulli rate
 
 
+FITTED_FIELDS = frozenset({"labels", "size_mu_single", "size_slope", "size_sigma", "palette_count_table",
+                           "palette_gain_table"})
+"""The :class:`NetworkConfig` fields :func:`fit_parameters` sets (the rest are settings it
+keeps); :func:`models.jorge.confirm.refit` refuses a change to any of them."""
+
+
 def fit_parameters(stroke_sets: Iterable[StrokeSet], config: NetworkConfig | None = None) -> NetworkConfig:
     """Maximum-likelihood (add-one smoothed) parameters from training stroke sets.
 
@@ -335,11 +342,14 @@ def fit_parameters(stroke_sets: Iterable[StrokeSet], config: NetworkConfig | Non
     design = np.stack([np.ones_like(k), np.log(k)], axis=1)
     coef, *_ = np.linalg.lstsq(design, a, rcond=None)
     sigma = float(np.std(a - design @ coef)) if a.size > 2 else config.size_sigma
-    return replace(config, labels=labels, size_mu_single=float(coef[0]), size_slope=float(coef[1]),
-                   size_sigma=max(sigma, 1e-3),
-                   palette_count_table=_palette_count_table(c.palette_counts, gmax, config.pool_size),
-                   palette_gain_table=_palette_gain_table(c.palette_gains, gmax, config.pool_size,
-                                                          config.palette_gain_bins))
+    fitted = dict(labels=labels, size_mu_single=float(coef[0]), size_slope=float(coef[1]),
+                  size_sigma=max(sigma, 1e-3),
+                  palette_count_table=_palette_count_table(c.palette_counts, gmax, config.pool_size),
+                  palette_gain_table=_palette_gain_table(c.palette_gains, gmax, config.pool_size,
+                                                         config.palette_gain_bins))
+    if fitted.keys() != FITTED_FIELDS:  # a fitted field added here must be named there
+        raise RuntimeError(f"fit_parameters: sets {sorted(fitted)}, FITTED_FIELDS names {sorted(FITTED_FIELDS)}")
+    return replace(config, **fitted)
 
 
 def _palette_gain_table(triples: list, gmax: int, pool_size: int, bins: Sequence[int]) -> tuple:

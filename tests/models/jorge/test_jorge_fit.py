@@ -4,11 +4,14 @@ default network's parameters reproduced by the fit on the real data."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from dbn.errors import InputError
 from models.jorge.fit import (
+    FITTED_FIELDS,
     TRAIN_SEEDS,
     TRAIN_SEQUENCES,
     VALIDATION_SEQUENCES,
@@ -69,6 +72,22 @@ def test_fit_is_add_one_smoothed_frequencies():
     # sizes: log area grows by log 2 from one person to two, exactly
     assert cfg.size_slope == pytest.approx(1.0, abs=1e-9)
     assert cfg.size_sigma == pytest.approx(1e-3, abs=1e-3)
+
+
+def test_the_fit_sets_exactly_the_fitted_fields_and_keeps_the_settings():
+    ss = StrokeSet.from_strokes([
+        make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2], {0}, size=(20, 50)),
+        make_stroke(1, 0, 10, (40, 0), (30, 0), [3, 4, 5], {1}, size=(20, 50)),
+        make_stroke(2, 12, 20, (20, 0), (20, 0), [0, 1, 3], {0, 1}, size=(40, 50)),
+        make_stroke(3, 22, 30, (10, 0), (0, 0), [0, 1, 2], {0}, size=(20, 50)),
+    ], fps=25.0)
+    base = NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels", size_sigma=7.0, size_slope=-3.0)
+    cfg = fit_parameters([ss], base)
+    names = {f.name for f in dataclasses.fields(NetworkConfig)}
+    assert FITTED_FIELDS <= names
+    changed = {n for n in names if getattr(cfg, n) != getattr(base, n)}
+    assert changed <= FITTED_FIELDS and {"size_sigma", "size_slope", "labels"} <= changed
+    assert cfg.labels.max_group_size == 3 and cfg.gate == "pixels"  # settings kept
 
 
 def test_fit_needs_children():
