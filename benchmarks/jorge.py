@@ -64,7 +64,14 @@ Summary keys: ``error_rate_validation`` (pooled LE / NT over the validation sequ
 oracle-link diagnosis pooled), ``error_rate_group_3plus`` (strokes whose true group has three or
 more people, pooled over the sequences that have such strokes) and its colour-only
 baseline, ``error_rate_group_3to5`` (the same for groups the network can represent,
-``max_group_size`` = 5), ``min_realtime_factor`` (over sequences) and
+``max_group_size`` = 5), its split by the crowds (diagnosis, nothing chosen on it:
+``strokes_group_3plus_beyond_cap``, strokes of more than ``max_group_size`` people, which no
+label holds; ``strokes_group_3to5_after_crowd`` and ``error_rate_group_3to5_after_crowd``,
+strokes of 3-5 people one of whom was earlier in such a crowd, whose label therefore
+descends from one that could not hold everyone, :func:`models.jorge.online.after_crowd`;
+``strokes_group_3to5_clean``, ``error_rate_group_3to5_clean`` and its ``_true_links``, the
+other 3-5 strokes, the groups your held-out sequences of two to four people are made of),
+``min_realtime_factor`` (over sequences) and
 ``min_realtime_factor_if_25fps`` (the same were every sequence 25 fps, as issue 4 timed
 PETS2009),
 ``error_rate`` (mean over ms3ggt and mws1gt, the issue-4 figure),
@@ -378,6 +385,7 @@ from models.jorge.meeting import simulate_meeting
 from models.jorge.network import node_name
 from models.jorge.online import (
     OnlineConfig,
+    after_crowd,
     colour_only_labels,
     first_errors,
     label_online,
@@ -431,7 +439,7 @@ def _run_one(strokes, cfg: OnlineConfig, keep_windows: bool) -> tuple[dict, list
     links = link_accuracy(strokes, [n.parents for n in res.labeller.graph.nodes])
     first = len(first_errors(strokes, sc.errors))
     row = {"strokes": len(strokes), "sizes": sizes, "wrong": wrong, "wrong_col": wrong_col,
-           "wrong_links": wrong_links,
+           "wrong_links": wrong_links, "after_crowd": after_crowd(strokes, gmax),
            "duration": strokes.duration_s, "seconds": res.seconds, "fps": strokes.fps,
            "max_inf": max(r.seconds for r in res.records), "ok": ok,
            "pruned": max([r.pruned_mass for r in res.records] + res.labeller.instant_pruned_mass),
@@ -442,9 +450,14 @@ def _run_one(strokes, cfg: OnlineConfig, keep_windows: bool) -> tuple[dict, list
     return row, (res.labeller.windows if keep_windows else [])
 
 
-def _rate(rows, key="wrong", lo=1, hi=10**9) -> tuple[float, int]:
-    n = sum(int(((r["sizes"] >= lo) & (r["sizes"] <= hi)).sum()) for r in rows)
-    e = sum(int((r[key] & (r["sizes"] >= lo) & (r["sizes"] <= hi)).sum()) for r in rows)
+def _rate(rows, key="wrong", lo=1, hi=10**9, crowd: bool | None = None) -> tuple[float, int]:
+    """Pooled error rate and stroke count over strokes of ``lo..hi`` people (``crowd``:
+    only those after a crowd, ``True``, or only the others, ``False``)."""
+    def sel(r):
+        m = (r["sizes"] >= lo) & (r["sizes"] <= hi)
+        return m if crowd is None else m & (r["after_crowd"] == crowd)
+    n = sum(int(sel(r).sum()) for r in rows)
+    e = sum(int((r[key] & sel(r)).sum()) for r in rows)
     return (e / n if n else float("nan")), n
 
 
@@ -581,6 +594,12 @@ def run(quick: bool, seed: int) -> dict:
         "error_rate_group_3to5": _rate(real_rows, lo=3, hi=gmax)[0],
         "error_rate_group_3to5_colour_only": _rate(real_rows, "wrong_col", lo=3, hi=gmax)[0],
         "error_rate_validation_group_3plus": _rate(val_rows, lo=3)[0],
+        "strokes_group_3plus_beyond_cap": _rate(real_rows, lo=gmax + 1)[1],
+        "strokes_group_3to5_after_crowd": _rate(real_rows, lo=3, hi=gmax, crowd=True)[1],
+        "error_rate_group_3to5_after_crowd": _rate(real_rows, lo=3, hi=gmax, crowd=True)[0],
+        "strokes_group_3to5_clean": _rate(real_rows, lo=3, hi=gmax, crowd=False)[1],
+        "error_rate_group_3to5_clean": _rate(real_rows, lo=3, hi=gmax, crowd=False)[0],
+        "error_rate_group_3to5_clean_true_links": _rate(real_rows, "wrong_links", lo=3, hi=gmax, crowd=False)[0],
         **_view_keys(view_rows),
         "min_realtime_factor": float(min(p["realtime_factor"] for p in per.values())),
         "min_realtime_factor_if_25fps": float(min(p["realtime_factor"] * p["fps"] / 25.0 for p in per.values())),

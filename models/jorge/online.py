@@ -93,6 +93,7 @@ __all__ = [
     "colour_only_labels",
     "reidentify",
     "first_errors",
+    "after_crowd",
     "true_predecessors",
     "true_links",
     "link_accuracy",
@@ -865,6 +866,36 @@ def first_errors(strokes: Sequence[Stroke], errors: Iterable[int]) -> tuple:
         raise InputError(f"first_errors: error indices {unknown} outside 0..{len(strokes) - 1}")
     preds = true_predecessors(strokes)
     return tuple(k for k in sorted(bad) if not preds[k] & bad)
+
+
+def after_crowd(strokes: Sequence[Stroke], max_group_size: int) -> np.ndarray:
+    """Strokes one of whose people was earlier in a crowd: a stroke of more than
+    ``max_group_size`` people that ended before this one starts.
+
+    A label holds at most ``max_group_size`` objects, so a crowd's label leaves some of its
+    people out, and a later stroke of one of them inherits a label that does not hold
+    them (a diagnosis of the benchmark; nothing is chosen on it).
+
+    Parameters
+    ----------
+    strokes : sequence of Stroke, length num_strokes
+        With their true sets.
+    max_group_size : int
+        The label network's ``labels.max_group_size``.
+
+    Returns
+    -------
+    ndarray of bool, shape (num_strokes,)
+    """
+    if isinstance(max_group_size, bool) or not isinstance(max_group_size, int | np.integer) or max_group_size < 1:
+        raise InputError(f"after_crowd: max_group_size must be an int >= 1, got {max_group_size!r}")
+    strokes = list(strokes)
+    first_crowd_end: dict[int, int] = {}  # person -> end frame of their first crowd stroke
+    for s in strokes:
+        if len(s.truth) > max_group_size:
+            for p in s.truth:
+                first_crowd_end[p] = min(first_crowd_end.get(p, s.end), s.end)
+    return np.array([any(first_crowd_end.get(p, s.start) < s.start for p in s.truth) for s in strokes], dtype=bool)
 
 
 def true_predecessors(strokes: Sequence[Stroke]) -> list[frozenset]:

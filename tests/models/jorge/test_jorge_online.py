@@ -13,6 +13,7 @@ from models.jorge.network import LabelGraph, NetworkConfig
 from models.jorge.online import (
     OnlineConfig,
     OnlineLabeller,
+    after_crowd,
     colour_only_labels,
     first_errors,
     label_online,
@@ -201,6 +202,19 @@ def test_first_errors_by_hand():
     assert first_errors(s, []) == ()
     with pytest.raises(InputError):
         first_errors(s, [6])
+
+
+def test_after_crowd_by_hand():
+    s = [make_stroke(0, 0, 10, (0, 0), (1, 0), [0, 1], {0, 1, 2}),
+         make_stroke(1, 0, 20, (50, 0), (51, 0), [0, 1], {7, 8}),
+         make_stroke(2, 12, 20, (0, 0), (1, 0), [0, 1], {0, 3}),   # person 0 was in the crowd 0
+         make_stroke(3, 12, 20, (9, 0), (9, 0), [0, 1], {4, 5}),   # never
+         make_stroke(4, 10, 20, (5, 0), (5, 0), [0, 1], {2, 6}),   # the crowd ends at 10, not before
+         make_stroke(5, 25, 30, (5, 0), (5, 0), [0, 1], {2, 7})]   # person 2, later
+    assert after_crowd(s, 2).tolist() == [False, False, True, False, False, True]
+    assert not after_crowd(s, 3).any()  # no stroke of more than three people
+    with pytest.raises(InputError, match="max_group_size"):
+        after_crowd(s, 0)
 
 
 def test_link_accuracy_by_hand():
