@@ -32,13 +32,19 @@ from models.jorge.network import (
 from models.jorge.strokes import StrokeSet, make_stroke
 
 
-def test_event_counts_of_a_hand_made_merge_and_split():
-    ss = StrokeSet.from_strokes([
+def _meet_and_part() -> list:
+    """Persons 0 and 1 walk alone (strokes 0, 1), together (2) and apart again (3, 4)."""
+    return [
         make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2], {0}, size=(20, 50)),
         make_stroke(1, 0, 10, (40, 0), (30, 0), [3, 4, 5], {1}, size=(20, 50)),
         make_stroke(2, 12, 20, (20, 0), (20, 0), [0, 1, 3], {0, 1}, size=(40, 50)),
         make_stroke(3, 22, 30, (10, 0), (0, 0), [0, 1, 2], {0}, size=(20, 50)),
         make_stroke(4, 22, 30, (30, 0), (40, 0), [3, 4, 5], {1}, size=(20, 50)),
+    ]
+
+
+def test_event_counts_of_a_hand_made_merge_and_split():
+    ss = StrokeSet.from_strokes(_meet_and_part() + [
         make_stroke(5, 32, 40, (0, 0), (0, 0), [0, 1, 9], {0, 3}, size=(40, 50)),
         make_stroke(6, 40, 50, (300, 300), (300, 300), [6, 7, 8], {2}, size=(20, 50)),
     ], fps=25.0)
@@ -54,13 +60,7 @@ def test_event_counts_of_a_hand_made_merge_and_split():
 
 
 def test_fit_is_add_one_smoothed_frequencies():
-    ss = StrokeSet.from_strokes([
-        make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2], {0}, size=(20, 50)),
-        make_stroke(1, 0, 10, (40, 0), (30, 0), [3, 4, 5], {1}, size=(20, 50)),
-        make_stroke(2, 12, 20, (20, 0), (20, 0), [0, 1, 3], {0, 1}, size=(40, 50)),
-        make_stroke(3, 22, 30, (10, 0), (0, 0), [0, 1, 2], {0}, size=(20, 50)),
-        make_stroke(4, 22, 30, (30, 0), (40, 0), [3, 4, 5], {1}, size=(20, 50)),
-    ], fps=25.0)
+    ss = StrokeSet.from_strokes(_meet_and_part(), fps=25.0)
     cfg = fit_parameters([ss], NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels"))
     L = cfg.labels
     assert L.p_new == pytest.approx((0 + 1) / (3 + 2))
@@ -75,12 +75,7 @@ def test_fit_is_add_one_smoothed_frequencies():
 
 
 def test_the_fit_sets_exactly_the_fitted_fields_and_keeps_the_settings():
-    ss = StrokeSet.from_strokes([
-        make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2], {0}, size=(20, 50)),
-        make_stroke(1, 0, 10, (40, 0), (30, 0), [3, 4, 5], {1}, size=(20, 50)),
-        make_stroke(2, 12, 20, (20, 0), (20, 0), [0, 1, 3], {0, 1}, size=(40, 50)),
-        make_stroke(3, 22, 30, (10, 0), (0, 0), [0, 1, 2], {0}, size=(20, 50)),
-    ], fps=25.0)
+    ss = StrokeSet.from_strokes(_meet_and_part()[:4], fps=25.0)
     base = NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels", size_sigma=7.0, size_slope=-3.0)
     cfg = fit_parameters([ss], base)
     names = {f.name for f in dataclasses.fields(NetworkConfig)}
