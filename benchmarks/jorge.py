@@ -365,6 +365,23 @@ is nearer their own exit for 133 of 137 such pairs in PETS2009 S1L2-2 (none the 
 (arrival, split child) it did not lower the error on fresh seeds 840-879 (paired -0.0002,
 standard error 0.0014; SIMULATED meetings of five at 25 fps worse, 0.111 -> 0.124), so it did
 not land (:data:`models.jorge.fit.CONFIRM_SEEDS`).
+
+Thirty-fourth round (issue 16): the 3-5 strokes split by the crowds (the ``_after_crowd``
+and ``_clean`` keys; a diagnosis). Quick run, seed 0, before the change: of the 109 strokes of
+three or more, 25 hold more people than any label, 31 more descend from such a crowd (error
+0.806), and the clean 53 are wrong at 0.868 (0.774 with the true links), so the crowds are
+not the whole miss. On the training split a nearly unique colour per person (a pool of 200
+instead of 12, refitted) with the true links takes PETS2009 S1L1-2's clean 3-5 strokes from
+66 to 29 wrong of 121 (seeds 100-102): the simulated colours and the links both limit them.
+Then the default network gained the missing-colour evidence (``NetworkConfig.palette_missing``:
+the known colours a label expects and the stroke's palette lacks; the gain table sees only the
+net gain, blind to a swapped member), confirmed on fresh seeds 880-919 under a rule declared
+before it ran (paired -0.0127, standard error 0.0015, lower on 37 of 40;
+:data:`models.jorge.fit.CONFIRM_SEEDS`). Quick run side by side: validation 0.074 -> 0.046,
+strokes of three or more 0.881 -> 0.853, ms3ggt / mws1gt 0.000 / 0.044 -> 0.000 / 0.029,
+minimum real-time factor 52.0 -> 48.7. Full run (seeds 0-4): validation 0.0737 -> 0.0279
+(PETS2009 S2L1 0.103 -> 0.039), strokes of three or more 0.882 -> 0.872, clean 3-5 strokes
+0.793 -> 0.770 (true links 0.659 -> 0.633), ETH through the SIMULATED view 0.512 -> 0.478.
 """
 
 from __future__ import annotations

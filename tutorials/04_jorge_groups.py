@@ -279,7 +279,11 @@ print("means:", np.round(rates.mean(0), 3))
 # made every split of a group of four cost it against a group of three plus an unseen joiner);
 # since the thirtieth, a new node's domain is capped on a posterior that leaves out the
 # siblings' instant labels all the way up its chain (`OnlineConfig.clash_free_rank`: a label
-# that a parent's sibling excluded for the moment is no longer dropped from the children).
+# that a parent's sibling excluded for the moment is no longer dropped from the children);
+# since the thirty-fourth, the palette evidence also counts the colours of the label's known
+# people that the stroke's palette lacks (`NetworkConfig.palette_missing`,
+# `config.FITTED_PALETTE_MISSING`): the gain table alone saw only the net gain, the same for
+# the true label and for one that swaps a member for someone else.
 # Seed 004's eq. 5 alone: `NetworkConfig(labels=replace(FITTED_LABELS, split_cover=()))`. Here we
 # refit on fewer seeds and score the validation part with the default network and the
 # colour-only baseline.

@@ -113,6 +113,7 @@ __all__ = [
     "gain_bins_rise",
     "palette_gain_bin",
     "palette_gain_log_likelihood",
+    "palette_missing_log_likelihood",
     "prune_labels",
     "NEW_STRIDE",
     "new_objects",
@@ -1041,6 +1042,56 @@ def palette_gain_log_likelihood(count: int, known: np.ndarray, new: np.ndarray, 
     if edges.size:
         return table[rows, palette_gain_bin(edges, known), cols]
     return table[rows, cols].copy()
+
+
+def palette_missing_log_likelihood(missing: np.ndarray, known: np.ndarray, new: np.ndarray,
+                                   table: np.ndarray, bins: Sequence[int]) -> np.ndarray:
+    r"""Soft evidence of the known colours a stroke's palette lacks (issue 16, thirty-fourth
+    round, our addition; beside :func:`palette_gain_log_likelihood`).
+
+    A label's known objects :math:`A` (as there) hold the colours
+    :math:`U = igcup_{o \in A} \pi_o`, :math:`u = |U|`; the stroke's palette :math:`P`
+    lacks :math:`d = |U \setminus P|` of them. The gain :math:`e = |P| - u` counts
+    :math:`|P \setminus U| - d`, so a label that swaps a member for someone else (the
+    colours of one lost, of the other gained) has :math:`e = 0`, as the true label has; the
+    true label's :math:`d` is 0 where its objects' palettes are their own. The likelihood
+    is the table :math:`p(d \mid m, b(u))`, fitted on the training split
+    (:func:`models.jorge.fit.fit_parameters` with ``NetworkConfig.palette_missing``).
+
+    Parameters
+    ----------
+    missing : ndarray of int, shape (num_labels,)
+        :math:`d` per label.
+    known : ndarray of int, shape (num_labels,)
+        :math:`u` per label.
+    new : ndarray of int, shape (num_labels,)
+        :math:`m` per label (objects born at this stroke).
+    table : ndarray, shape (max_m + 1, len(bins), pool_size + 1)
+        :math:`\log p(d \mid m, b)`; ``m`` above ``max_m`` uses the last row, ``d`` above
+        ``pool_size`` the last column. Empty: no evidence.
+    bins : sequence of int
+        Increasing lower edges of the bins of :math:`u`, the first 0
+        (:func:`palette_gain_bin`).
+
+    Returns
+    -------
+    ndarray, shape (num_labels,)
+    """
+    missing, known, new = (np.asarray(a, dtype=np.int64) for a in (missing, known, new))
+    table = np.asarray(table, dtype=np.float64)
+    if table.size == 0:
+        return np.zeros(missing.shape, dtype=np.float64)
+    edges = np.asarray(bins, dtype=np.int64)
+    if table.ndim != 3 or table.shape[1] != edges.size or not gain_bins_rise(edges):
+        raise ModelError(f"palette_missing_log_likelihood: table must be 3-D with one entry of axis 1 per "
+                         f"bin of u {tuple(bins)} (rising from 0), got shape {table.shape}")
+    if not (missing.shape == known.shape == new.shape and missing.ndim == 1) or np.any(missing < 0) \
+            or np.any(known < 0) or np.any(new < 0) or np.any(missing > known):
+        raise InputError(f"palette_missing_log_likelihood: missing {missing}, known {known} and new {new} "
+                         f"must be 1-D non-negative ints of one length, missing at most known")
+    rows = np.minimum(new, table.shape[0] - 1)
+    cols = np.minimum(missing, table.shape[2] - 1)
+    return table[rows, palette_gain_bin(edges, known), cols]
 
 
 def colour_log_likelihood(

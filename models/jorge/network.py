@@ -39,6 +39,7 @@ from models.jorge.config import (
     FITTED_LABELS,
     FITTED_PALETTE_COUNTS,
     FITTED_PALETTE_GAINS,
+    FITTED_PALETTE_MISSING,
     FITTED_SPLIT_COVER,
     NetworkConfig,
 )
@@ -54,6 +55,7 @@ from models.jorge.labels import (
     label_objects,
     palette_count_log_likelihood,
     palette_gain_log_likelihood,
+    palette_missing_log_likelihood,
     restriction_table,
     root_table,
     size_log_likelihood,
@@ -68,6 +70,7 @@ __all__ = [
     "FITTED_LABELS",
     "FITTED_PALETTE_COUNTS",
     "FITTED_PALETTE_GAINS",
+    "FITTED_PALETTE_MISSING",
     "FITTED_SPLIT_COVER",
     "LabelGraph",
     "WindowNet",
@@ -156,6 +159,7 @@ class LabelGraph:
         self._gain_table = np.asarray(self.config.palette_gain_table, dtype=np.float64)
         self._gain_bins = self.config.palette_gain_bins if self._gain_table.ndim == 3 else ()
         self._count_table = np.asarray(self.config.palette_count_table, dtype=np.float64)
+        self._missing_table = np.asarray(self.config.palette_missing_table, dtype=np.float64)
 
     # --- growth --------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -588,8 +592,10 @@ class LabelGraph:
         (:func:`models.jorge.labels.palette_count_log_likelihood`) plus, with
         ``palette_gain_table`` (the default, alone), the gain given the known objects'
         palettes (:func:`models.jorge.labels.palette_gain_log_likelihood`, in the bin of
-        ``palette_gain_bins`` of the colours they hold for a 3-D table); zeros without
-        either; times ``palette_continued`` at an OCCLUSION node.
+        ``palette_gain_bins`` of the colours they hold for a 3-D table) and, with
+        ``palette_missing_table``, the known colours the palette lacks
+        (:func:`models.jorge.labels.palette_missing_log_likelihood`); zeros without any;
+        times ``palette_continued`` at an OCCLUSION node.
 
         Returns
         -------
@@ -599,11 +605,15 @@ class LabelGraph:
         count = int(np.unique(self.nodes[k].stroke.palette).size)
         sizes = np.array([len(lab) for lab in domain], dtype=np.int64)
         out = palette_count_log_likelihood(count, sizes, self._count_table)
-        if self._gain_table.size:
+        if self._gain_table.size or self._missing_table.size:
             obj = label_objects(domain, k, self._own, self._joiners) if objects is None else objects
-            u = union_rows(self._palettes, obj.known_strokes, obj.known_counts).sum(axis=1)
-            out = out + palette_gain_log_likelihood(count, u, sizes - obj.known_counts,
-                                                    self._gain_table, self._gain_bins)
+            known = union_rows(self._palettes, obj.known_strokes, obj.known_counts)
+            u, new = known.sum(axis=1), sizes - obj.known_counts
+            out = out + palette_gain_log_likelihood(count, u, new, self._gain_table, self._gain_bins)
+            if self._missing_table.size:
+                missing = (known & ~self._palettes[k]).sum(axis=1)
+                out = out + palette_missing_log_likelihood(missing, u, new, self._missing_table,
+                                                           self.config.palette_gain_bins)
         return self._palette_weight(k) * out
 
     def _palette_weight(self, k: int) -> float:

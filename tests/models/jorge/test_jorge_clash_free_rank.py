@@ -32,7 +32,7 @@ ONE = frozenset({1})
 def _labeller(clash_free_rank: bool) -> OnlineLabeller:
     labels = LabelParams(max_group_size=3, p_join=0.1, p_part=0.3)
     net = NetworkConfig(labels=labels, gate="pixels", size_evidence=False, palette_count_table=(),
-                        palette_gain_table=())
+                        palette_gain_table=(), palette_missing_table=())
     cfg = OnlineConfig(network=net, period_s=100.0, reid_prior=0.0, clash_free_rank=clash_free_rank)
     lab = OnlineLabeller(cfg, fps=25.0)
     for s, parents in STROKES[:5]:

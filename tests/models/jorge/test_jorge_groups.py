@@ -19,11 +19,12 @@ POOL = 40
 PARAMS = LabelParams(max_group_size=5, new_group_probs=(0.6, 0.1, 0.1, 0.1, 0.1), p_join=0.02)
 CFG = NetworkConfig(pool_size=POOL, labels=PARAMS, size_min_reference=2, size_reference_neighbours=0,
                     size_reference_quantile=0.0, size_mu_single=0.0, size_slope=1.0, size_sigma=0.3,
-                    palette_count_table=(), palette_gain_table=())
+                    palette_count_table=(), palette_gain_table=(), palette_missing_table=())
 """Region sizes are exact here (width 20 per person): the reference is the smallest
-region (one person) and the log area grows by log k. No palette colour-count or gain evidence:
-these strokes' palettes are their five colours, not their people's palettes (the table
-fitted on simulated palettes of a 12-colour pool does not apply)."""
+region (one person) and the log area grows by log k. No palette colour-count, gain or
+missing-colour evidence: these strokes' palettes are their five colours, not their
+people's palettes (the tables fitted on simulated palettes of a 12-colour pool do not
+apply)."""
 
 
 def _palette(p: int) -> list[int]:

@@ -25,7 +25,7 @@ STROKES = [
 def test_the_cap_ranks_labels_without_the_sibling_clash():
     labels = LabelParams(max_group_size=3, p_join=0.1, p_part=0.3)
     net = NetworkConfig(labels=labels, gate="pixels", size_evidence=False, palette_count_table=(),
-                        palette_gain_table=())
+                        palette_gain_table=(), palette_missing_table=())
     lab = OnlineLabeller(OnlineConfig(network=net, period_s=100.0, reid_prior=0.0), fps=25.0)
     for s in STROKES:
         lab.add_stroke(s)

@@ -22,8 +22,10 @@ GROUP_LABELS = replace(FITTED_LABELS, new_group_probs=(0.67, 0.18, 0.07, 0.04, 0
 
 
 def _graph(colour_mode: str = "ratio") -> LabelGraph:
-    """Two people merge (s2), the group splits (s3, s4), s3 goes on (s5)."""
-    g = LabelGraph(NetworkConfig(colour_mode=colour_mode, labels=SEED_LABELS), fps=25.0)
+    """Two people merge (s2), the group splits (s3, s4), s3 goes on (s5). The palettes are
+    the strokes' noisy colours (``make_stroke``'s default), not their people's palettes, so
+    no missing-colour evidence (it reads a palette as a clean estimate)."""
+    g = LabelGraph(NetworkConfig(colour_mode=colour_mode, labels=SEED_LABELS, palette_missing_table=()), fps=25.0)
     strokes = [
         make_stroke(0, 0, 10, (0, 10), (10, 10), [0, 1, 2, 3, 4], {0}),
         make_stroke(1, 0, 10, (0, 40), (10, 40), [5, 6, 7, 8, 9], {1}),

@@ -17,9 +17,10 @@ POOL = 40
 PARAMS = LabelParams(max_group_size=3, new_group_probs=(0.7, 0.3), p_join=0.0, child_new_groups=False)
 CFG = NetworkConfig(pool_size=POOL, labels=PARAMS, size_min_reference=2, size_reference_neighbours=0,
                     size_reference_quantile=0.0, size_mu_single=0.0, size_slope=1.0, size_sigma=0.3,
-                    palette_count_table=(), palette_gain_table=())
+                    palette_count_table=(), palette_gain_table=(), palette_missing_table=())
 """New groups at roots only (the search's ``"roots"``), exact region sizes (20 wide per
-person), no palette count or gain evidence: colours alone tell the members apart."""
+person), no palette count, gain or missing-colour evidence: colours alone tell the members
+apart."""
 
 
 def _colours(people) -> list[int]:

@@ -59,7 +59,7 @@ def _root_label(num_palette: int, table: np.ndarray) -> frozenset:
     labels = LabelParams(max_group_size=3, new_group_probs=(0.5, 0.5))
     cfg = NetworkConfig(
         labels=labels, palette_count_table=tuple(map(tuple, table)), size_evidence=False,
-        palette_gain_table=(),
+        palette_gain_table=(), palette_missing_table=(),
     )
     stroke = make_stroke(0, 0, 10, (0, 0), (10, 0), [0, 1, 2])
     stroke = replace(stroke, palette=np.arange(num_palette))
@@ -79,6 +79,7 @@ def test_palette_count_tells_a_new_group_from_a_new_person():
             labels=LabelParams(max_group_size=3, new_group_probs=(0.5, 0.5)),
             palette_count_table=(),
             palette_gain_table=(),
+            palette_missing_table=(),
             size_evidence=False,
         ),
         fps=25.0,

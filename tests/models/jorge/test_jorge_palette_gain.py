@@ -68,7 +68,9 @@ def test_gain_likelihood_given_known_colours_reads_the_bin_of_u():
     cfg = tuple(tuple(map(tuple, block)) for block in table)
     with pytest.raises(ModelError, match="palette_gain_table"):
         NetworkConfig(palette_gain_table=cfg)  # default bins: five
-    assert NetworkConfig(palette_gain_table=cfg, palette_gain_bins=bins).palette_gain_bins == bins
+    # the missing-colour table shares the bins (its default has five: left out here)
+    assert NetworkConfig(palette_gain_table=cfg, palette_gain_bins=bins,
+                         palette_missing_table=()).palette_gain_bins == bins
     with pytest.raises(ModelError, match="palette_gain_bins"):
         NetworkConfig(palette_gain_bins=(0, 3, 3, 8, 10))
 
@@ -102,7 +104,8 @@ def test_fitted_gain_table_is_smoothed_frequencies():
     np.testing.assert_allclose(p[0, :4], 1 / 25)
     # one bin: the table given m alone, p(e | m)
     one = fit_parameters([_merge()], NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels",
-                                                   palette_gain_table=(), palette_gain_bins=(0,)))
+                                                   palette_gain_table=(), palette_gain_bins=(0,),
+                                                   palette_missing_table=()))
     p1 = np.exp(np.array(one.palette_gain_table))
     assert p1.shape == (4, 1, 25)
     assert p1[0, 0, 12] == pytest.approx((1 + 1) / (1 + 25))

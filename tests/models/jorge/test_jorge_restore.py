@@ -28,7 +28,7 @@ STROKES = [
 
 def _labeller() -> OnlineLabeller:
     net = NetworkConfig(labels=LabelParams(max_group_size=3), gate="pixels", size_evidence=False,
-                        palette_count_table=(), palette_gain_table=())
+                        palette_count_table=(), palette_gain_table=(), palette_missing_table=())
     cfg = OnlineConfig(network=net, period_s=100.0, reid_prior=0.0, restore_successors=True)
     lab = OnlineLabeller(cfg, fps=25.0)
     for s in STROKES:
@@ -113,9 +113,11 @@ def test_a_simulated_meeting_of_four_keeps_its_group_through_a_short_split(scene
     default split cover, which came later, also finds scene 403's union without the
     restore; and without the clash-free rank of the cap (``clash_free_rank`` off, the default
     until issue 16's thirtieth round): with it, the pieces' children keep the union in their
-    capped domains, and both scenes keep it without the restore."""
+    capped domains, and both scenes keep it without the restore; and without the
+    missing-colour evidence (``palette_missing_table`` empty, the default until the
+    thirty-fourth round), with which both merges keep the union without the restore."""
     strokes = build_strokes(scene, simulate_meeting(scene, 4))
-    network = NetworkConfig(labels=replace(FITTED_LABELS, split_cover=()))
+    network = NetworkConfig(labels=replace(FITTED_LABELS, split_cover=()), palette_missing_table=())
     for restore in (False, True):
         cfg = OnlineConfig(network=network, restore_successors=restore, clash_free_rank=False)
         res = label_online(strokes, cfg)
