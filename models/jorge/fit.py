@@ -364,11 +364,8 @@ def _palette_gain_table(triples: list, gmax: int, pool_size: int, bins: Sequence
     ``e = -pool_size..pool_size`` (column ``e + pool_size``) per number of newcomers
     ``m = 0..gmax`` (more counted as ``gmax``) and bin of the known colours ``u`` (lower
     edges ``bins``), shape ``(gmax + 1, len(bins), 2 * pool_size + 1)``."""
-    counts = np.ones((gmax + 1, len(bins), 2 * pool_size + 1))
-    for m, u, e in triples:
-        counts[min(m, gmax), int(palette_gain_bin(bins, u)), int(np.clip(e, -pool_size, pool_size)) + pool_size] += 1.0
-    table = np.log(counts / counts.sum(axis=2, keepdims=True))
-    return tuple(tuple(tuple(float(v) for v in row) for row in block) for block in table)
+    cols = [(m, u, int(np.clip(e, -pool_size, pool_size)) + pool_size) for m, u, e in triples]
+    return _given_newcomers_and_known(cols, gmax, bins, 2 * pool_size + 1)
 
 
 def _palette_missing_table(triples: list, gmax: int, pool_size: int, bins: Sequence[int]) -> tuple:
@@ -377,9 +374,17 @@ def _palette_missing_table(triples: list, gmax: int, pool_size: int, bins: Seque
     (more counted as ``gmax``) and bin of the known colours ``u`` (lower edges ``bins``),
     shape ``(gmax + 1, len(bins), pool_size + 1)``
     (:func:`models.jorge.labels.palette_missing_log_likelihood`)."""
-    counts = np.ones((gmax + 1, len(bins), pool_size + 1))
-    for m, u, d in triples:
-        counts[min(m, gmax), int(palette_gain_bin(bins, u)), min(int(d), pool_size)] += 1.0
+    cols = [(m, u, min(int(d), pool_size)) for m, u, d in triples]
+    return _given_newcomers_and_known(cols, gmax, bins, pool_size + 1)
+
+
+def _given_newcomers_and_known(triples: list, gmax: int, bins: Sequence[int], width: int) -> tuple:
+    """Log of add-one smoothed frequencies of a column ``0..width-1`` per newcomers ``m``
+    (more counted as ``gmax``) and bin of ``u``, from ``(m, u, column)`` triples, as nested
+    tuples for :class:`NetworkConfig`, shape ``(gmax + 1, len(bins), width)``."""
+    counts = np.ones((gmax + 1, len(bins), width))
+    for m, u, col in triples:
+        counts[min(m, gmax), int(palette_gain_bin(bins, u)), col] += 1.0
     table = np.log(counts / counts.sum(axis=2, keepdims=True))
     return tuple(tuple(tuple(float(v) for v in row) for row in block) for block in table)
 
