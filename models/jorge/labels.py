@@ -1050,7 +1050,7 @@ def palette_missing_log_likelihood(missing: np.ndarray, known: np.ndarray, new: 
     round, our addition; beside :func:`palette_gain_log_likelihood`).
 
     A label's known objects :math:`A` (as there) hold the colours
-    :math:`U = igcup_{o \in A} \pi_o`, :math:`u = |U|`; the stroke's palette :math:`P`
+    :math:`U = \bigcup_{o \in A} \pi_o`, :math:`u = |U|`; the stroke's palette :math:`P`
     lacks :math:`d = |U \setminus P|` of them. The gain :math:`e = |P| - u` counts
     :math:`|P \setminus U| - d`, so a label that swaps a member for someone else (the
     colours of one lost, of the other gained) has :math:`e = 0`, as the true label has; the

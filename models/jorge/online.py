@@ -890,7 +890,7 @@ def after_crowd(strokes: Sequence[Stroke], max_group_size: int) -> np.ndarray:
     if isinstance(max_group_size, bool) or not isinstance(max_group_size, int | np.integer) or max_group_size < 1:
         raise InputError(f"after_crowd: max_group_size must be an int >= 1, got {max_group_size!r}")
     strokes = list(strokes)
-    first_crowd_end: dict[int, int] = {}  # person -> end frame of their first crowd stroke
+    first_crowd_end: dict[int, int] = {}  # person -> the earliest end of a crowd stroke holding them
     for s in strokes:
         if len(s.truth) > max_group_size:
             for p in s.truth:
