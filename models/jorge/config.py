@@ -428,6 +428,15 @@ seeds (diagnosis before declaring, seeds 100-104: -0.0073, SE 0.0053); no bar of
 benchmark flipped, and the full run's held-out validation was 0.0280."""
 
 
+def _as_table(value) -> np.ndarray:
+    """A palette table as a float array; a ragged or non-numeric one as an empty array, which
+    every shape check of :class:`NetworkConfig` refuses, naming the field."""
+    try:
+        return np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        return np.zeros(0)
+
+
 @dataclass(frozen=True)
 class NetworkConfig:
     """Structure, CPD and colour-model settings of the label network.
@@ -726,7 +735,7 @@ class NetworkConfig:
                 f"{self.radius_scaled} / {self.v_max_scaled}"
             )
         if self.palette_count_table:
-            t = np.asarray(self.palette_count_table, dtype=np.float64)
+            t = _as_table(self.palette_count_table)
             if t.ndim != 2 or t.shape[1] < 2 or not np.all(t <= 0):
                 raise ModelError(
                     f"NetworkConfig.palette_count_table must be a 2-D table of log "
@@ -736,7 +745,7 @@ class NetworkConfig:
         if not gain_bins_rise(bins):
             raise ModelError(f"NetworkConfig.palette_gain_bins must rise from 0, got {self.palette_gain_bins}")
         if self.palette_gain_table:
-            t = np.asarray(self.palette_gain_table, dtype=np.float64)
+            t = _as_table(self.palette_gain_table)
             if t.ndim not in (2, 3) or t.shape[-1] % 2 != 1 or not np.all(t <= 0) or (
                     t.ndim == 3 and t.shape[1] != bins.size):
                 raise ModelError(
@@ -747,10 +756,7 @@ class NetworkConfig:
         if not isinstance(self.palette_missing, bool):
             raise ModelError(f"NetworkConfig.palette_missing must be a bool, got {self.palette_missing!r}")
         if self.palette_missing_table:
-            try:
-                t = np.asarray(self.palette_missing_table, dtype=np.float64)
-            except (TypeError, ValueError):
-                t = np.zeros(0)
+            t = _as_table(self.palette_missing_table)
             if t.ndim != 3 or t.shape[1] != bins.size or t.shape[2] < 2 or not np.all(t <= 0):
                 raise ModelError(
                     f"NetworkConfig.palette_missing_table must be a table of log probabilities "

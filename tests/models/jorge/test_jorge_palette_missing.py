@@ -109,3 +109,9 @@ def test_a_swapped_member_pays_for_the_colours_the_palette_lacks():
     assert told[0] - blind[0] == pytest.approx(table[0, 3, 0])
     assert told[1] - blind[1] == pytest.approx(table[0, 3, 4])
     assert told[0] - told[1] > 4.0
+
+
+@pytest.mark.parametrize("field", ["palette_count_table", "palette_gain_table", "palette_missing_table"])
+def test_a_ragged_palette_table_is_refused_naming_its_field(field):
+    with pytest.raises(ModelError, match=field):
+        NetworkConfig(**{field: ((-0.1,), (-0.2, -0.3))})
