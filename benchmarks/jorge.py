@@ -15,16 +15,16 @@ Per sequence (``per_sequence``): ``split`` (train / validation), ``strokes`` (NT
 people one to one as IDF1 does), ``error_rate_colour_only`` (the baseline without the
 network: best colour match among all labels up to the maximum group size),
 ``error_rate_true_links`` (diagnosis, not a tracker: the same network given the true
-predecessors as links, :func:`models.jorge.online.true_links`, so the gap to
+predecessors as links, :func:`models.jorge.scoring.true_links`, so the gap to
 ``error_rate`` is what the on-line link rule costs),
 ``error_by_group_size`` (error rate of the strokes whose true region holds k people, and
 their count), ``fps`` (CAVIAR 25, PETS2009 7: its cameras' rate), ``realtime_factor``
 (sequence duration at that rate / labelling time, summed over seeds; the simulated
 low-level tracker is not timed), ``max_inference_ms``, ``max_domain`` and ``max_clique_entries``
 (the per-window cost bound), ``link_accuracy`` (share of strokes whose network parents
-are exactly their true predecessors, :func:`models.jorge.online.link_accuracy`),
+are exactly their true predecessors, :func:`models.jorge.scoring.link_accuracy`),
 ``first_error_share`` (first mistakes / errors: the rest are carried along links,
-:func:`models.jorge.online.first_errors`) and ``max_pruned_mass`` / ``mean_pruned_mass`` (what the
+:func:`models.jorge.scoring.first_errors`) and ``max_pruned_mass`` / ``mean_pruned_mass`` (what the
 domain pruning that bounds it costs: the largest, and the mean per inference of the
 largest, posterior mass of the labels a node's pruning removed, i.e. the probability
 under the window posterior that the true labelling was among them).
@@ -68,7 +68,7 @@ baseline, ``error_rate_group_3to5`` (the same for groups the network can represe
 ``strokes_group_3plus_beyond_cap``, strokes of more than ``max_group_size`` people, which no
 label holds; ``strokes_group_3to5_after_crowd`` and ``error_rate_group_3to5_after_crowd``,
 strokes of 3-5 people one of whom was earlier in such a crowd, whose label therefore
-descends from one that could not hold everyone, :func:`models.jorge.online.after_crowd`;
+descends from one that could not hold everyone, :func:`models.jorge.scoring.after_crowd`;
 ``strokes_group_3to5_clean``, ``error_rate_group_3to5_clean`` and its ``_true_links``, the
 other 3-5 strokes, the groups your held-out sequences of two to four people are made of),
 ``min_realtime_factor`` (over sequences) and
@@ -400,12 +400,11 @@ from models.jorge.fit import (
 from models.jorge.meeting import FPS as MEETING_FPS
 from models.jorge.meeting import simulate_meeting
 from models.jorge.network import node_name
-from models.jorge.online import (
-    OnlineConfig,
+from models.jorge.online import OnlineConfig, label_online
+from models.jorge.scoring import (
     after_crowd,
     colour_only_labels,
     first_errors,
-    label_online,
     link_accuracy,
     score,
     true_links,

@@ -44,14 +44,8 @@ from inference.exact import map_assignment
 from models.jorge.demo import load_or_simulate
 from models.jorge.labels import format_label
 from models.jorge.network import NetworkConfig, solve
-from models.jorge.online import (
-    OnlineConfig,
-    OnlineLabeller,
-    colour_only_labels,
-    label_online,
-    optimal_people,
-    score,
-)
+from models.jorge.online import OnlineConfig, OnlineLabeller, label_online
+from models.jorge.scoring import colour_only_labels, optimal_people, score
 from models.jorge.strokes import build_strokes
 
 QUICK = os.environ.get("DBNTRACK_QUICK") == "1"

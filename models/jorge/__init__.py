@@ -5,7 +5,13 @@ Modules: :mod:`strokes` (ground-truth loaders and the simulated low-level tracke
 :mod:`labels` (admissible label sets and the CPDs of the basic structures),
 :mod:`config` (the network's settings and the parameters fitted on the training split),
 :mod:`network` (the Bayes net and its exact MAP / marginals), :mod:`online` (periodic
-inference with bounded memory, eq. 12 labelling, scoring and the colour-only baseline),
+inference with bounded memory, eq. 12 labelling), :mod:`reid` (the final
+re-identification pass), :mod:`scoring` (label errors, the true stroke graph and the
+colour-only baseline),
+:mod:`memo` (what a node remembers of its CPD and evidence between inferences),
+:mod:`api` (the labeller under the tracker protocol), :mod:`fit` (the parameters learned
+on the declared training split), :mod:`confirm` (a change compared on fresh seeds),
 :mod:`simulate` (a synthetic sequence when the real ground truth is absent),
+:mod:`meeting` (SIMULATED meetings of 3-5 people), :mod:`demo` (``dbntrack demo``'s part),
 :mod:`eth` (tracks in world metres, ETH / UCY ``obsmat``, through a SIMULATED camera).
 """

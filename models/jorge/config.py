@@ -146,7 +146,7 @@ Scored on both (each set weighs the same): both tables with joins 0.20397, the g
 without size once 0.20401, this default 0.20415, the gain table with joins 0.2099; the lowest
 beats the default by 0.0002 with one standard error 0.0087, so the default and its
 parameters stay.
-Ninth round (issue 16): the re-identification pass (:func:`models.jorge.online.reidentify`)
+Ninth round (issue 16): the re-identification pass (:func:`models.jorge.reid.reidentify`)
 also asks of an object born inside a group (a newcomer who joined, or a member of a new
 group) whether it is a lost object, once it has a stroke alone; labels with new groups off
 and no joins (this default) are unchanged. The search again (boxes gate, seeds 100-104,
@@ -194,7 +194,7 @@ error of the paired differences, 0.0044; the rows without joins, which the fix t
 through the refitted gain table, were 0.04 behind and not re-run).
 Eleventh round (issue 16): three faults found on the search's own meeting scenes (seeds
 100-104); the CPD parameters and tables are unchanged. (1) The re-identification pass
-(:func:`models.jorge.online.reidentify`) examined the objects in id order, which puts a
+(:func:`models.jorge.reid.reidentify`) examined the objects in id order, which puts a
 new group's members after every lone newcomer: a later newcomer took the earlier object
 first and the member it should continue was left with no candidate (scoring sets 0.2084 ->
 0.2052). (2) Inside the window a member of a new group or a joiner leaving alone was scored,

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 from models import datasets
 from models.jorge.labels import format_label
-from models.jorge.online import colour_only_labels, label_online, score
+from models.jorge.online import label_online
+from models.jorge.scoring import colour_only_labels, score
 from models.jorge.simulate import simulate_ground_truth
 from models.jorge.strokes import build_strokes, load_caviar
 

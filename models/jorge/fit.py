@@ -777,7 +777,8 @@ def _kept(table: list, incumbent: dict | None = None) -> int:
 
 def _error_and_speed(job: tuple) -> tuple[float, float]:
     """Error rate of one stroke set and its real-time factor (duration / labelling time)."""
-    from models.jorge.online import OnlineConfig, label_online, score
+    from models.jorge.online import OnlineConfig, label_online
+    from models.jorge.scoring import score
 
     cfg, strokes = job
     res = label_online(strokes, OnlineConfig(network=cfg))

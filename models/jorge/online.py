@@ -31,55 +31,45 @@ Links
     By default each new stroke is linked by the on-line link rule
     (:meth:`models.jorge.network.LabelGraph.candidate_parents`). A low-level tracker that
     knows its merges and splits can give the links instead (``add_stroke(stroke,
-    parents)``, ``label_online(..., links=...)``); :func:`true_links` gives the true
-    predecessors, the oracle with which the benchmark measures what the link rule costs.
+    parents)``, ``label_online(..., links=...)``);
+    :func:`models.jorge.scoring.true_links` gives the true predecessors, the oracle with
+    which the benchmark measures what the link rule costs.
 
-Object re-identification (final off-line pass; our addition)
-    In the seed's net a label only travels along links, so once a person's stroke takes a
-    new label (a missed link, or a wrong MAP at a split) every later stroke of that person
-    inherits the new object and the identity stays broken for the rest of the sequence.
-    After the last inference, :func:`reidentify` asks of each object ``b`` born as a new
-    label whether it is an earlier object ``a`` seen again: ``a`` must be finished before
-    ``b`` appears (every stroke labelled with ``a`` ends before the first stroke labelled
-    with ``b`` starts, so the two never coexist), and the colours (eq. 6, the configured
-    colour model) of ``b``'s palette and of its later one-object strokes must favour
-    ``a`` (an object born inside a group, by a join or in a new group, is asked too once
-    it has a stroke alone; issue 16, ninth round), with prior probability ``reid_prior``
-    that a new-looking object is a lost one (shared equally among the candidates; default
-    0.5, no preference: chosen on CAVIAR ground truth with held-out simulation seeds 20-39
-    and on simulated sequences). Objects are renamed in birth order; the network itself
-    (domains, frozen labels) is not changed. ``reid_prior = 0`` turns it off.
-
-Scoring
-    An object id ``o`` is the object first seen in stroke ``o``. Objects are matched one to
-    one with people, by default with the matching that maximises co-occurrences (as IDF1
-    matches identities); with ``mapping="first_seen"`` an object stands for the person of
-    the stroke where it was first seen, if that stroke held one person not already
-    claimed. A stroke is a labelling error (LE) when the people its label stands for
-    differ from its true set. Identity switches: over each person's
-    one-person strokes in time order, the number of consecutive pairs given different
-    labels.
+Object re-identification and scoring
+    After the last inference, :func:`models.jorge.reid.reidentify` renames objects born
+    new that are earlier objects seen again (``reid_prior``; 0 turns it off). Scoring,
+    the true stroke graph and the colour-only baseline are in
+    :mod:`models.jorge.scoring`; their names are also importable from here, as before.
 """
 
 from __future__ import annotations
 
-import itertools
 import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from dbn.errors import InputError, ModelError
 from inference.exact import JunctionTree, map_assignment
 from models.jorge.labels import (
     Label,
-    birth_stroke,
-    colour_log_likelihood,
     prune_labels,
 )
 from models.jorge.network import LabelGraph, NetworkConfig, check_frame_rate, node_name
+from models.jorge.reid import reidentify
+from models.jorge.scoring import (  # re-exported: these lived here before they had a module
+    Score,
+    after_crowd,
+    colour_only_labels,
+    first_errors,
+    link_accuracy,
+    object_people,
+    optimal_people,
+    score,
+    true_links,
+    true_predecessors,
+)
 from models.jorge.strokes import Stroke, StrokeSet
 
 __all__ = [
@@ -122,8 +112,8 @@ class OnlineConfig:
         nothing but the MAP (not recommended).
     reid_prior : float
         Prior probability that an object born as a new label is an earlier, finished
-        object seen again (final re-identification pass, :func:`reidentify`); 0 turns
-        the pass off.
+        object seen again (final re-identification pass,
+        :func:`models.jorge.reid.reidentify`); 0 turns the pass off.
     tentative_joiners : bool
         After every relabel and inference, the newcomers of an unfrozen node whose current
         label is a join are joiners already (:meth:`LabelGraph.set_tentative_joiners`;
@@ -521,7 +511,8 @@ class OnlineLabeller:
 
     def finish(self, frame: int | None = None) -> dict[int, Label]:
         """Final inference at the end of the sequence, then the re-identification pass
-        (:func:`reidentify`, when ``reid_prior > 0``); returns every node's label.
+        (:func:`models.jorge.reid.reidentify`, when ``reid_prior > 0``); returns every
+        node's label.
 
         ``self.labels`` keeps the network's own labels (before re-identification)."""
         last = frame if frame is not None else max((nd.stroke.end for nd in self.graph.nodes), default=0)
@@ -618,393 +609,3 @@ def label_online(strokes: StrokeSet | Sequence[Stroke], config: OnlineConfig | N
     seconds = time.perf_counter() - t0
     return OnlineResult([final[k] for k in range(len(final))], [lab.labels[k] for k in range(len(final))],
                         instant, lab.records, seconds, lab)
-
-
-def reidentify(graph: LabelGraph, labels: Sequence[Label], prior: float) -> list[Label]:
-    r"""Final off-line pass: rename objects born as new labels that are earlier objects
-    seen again (module docstring; our addition to seed 004).
-
-    For each object :math:`b` in birth order with at least one stroke labelled exactly
-    :math:`\{b\}` (the set :math:`S_b`), the candidates :math:`a` are the earlier objects
-    (after renaming) whose every stroke ends before the first stroke of :math:`b` starts.
-    The evidence is :math:`b`'s palette :math:`\pi_b`, taken as one more observation of the
-    object's colours, and the colours of the other strokes of :math:`S_b`. :math:`\pi_b` is
-    the palette of the first stroke of :math:`S_b`: the colours :math:`b` got at birth
-    (seed 004 sec. 4.1) when it was born alone; for an object born inside a group (a
-    newcomer who joined, or a member of a new group, whose birth palette holds the others'
-    colours too; asked since issue 16's ninth round) the first stroke where it is alone.
-    With :math:`\ell(c \mid \pi)` the colour log-likelihood ratio of eq. 6 (the network's
-    colour model),
-
-    .. math::
-        \Lambda_a = \log\frac{\rho / |A|}{1 - \rho} + \ell(\pi_b \mid \pi_a)
-          + \sum_{s \in S_b} \ell(c_s \mid \pi_a) - \ell(c_s \mid \pi_b)
-
-    (under "b is new" its palette is a chance palette, :math:`\ell = 0`, and given
-    :math:`\pi_b` the stroke it came from says nothing more), and :math:`b` is
-    renamed to the best :math:`a` when :math:`\Lambda_a > 0`. Passes over all objects
-    are repeated until no object is renamed.
-
-    Parameters
-    ----------
-    graph : LabelGraph
-        The labelled graph (strokes and the palettes objects got at birth).
-    labels : sequence of Label, length num_strokes
-    prior : float
-        :math:`\rho` in (0, 1).
-
-    Returns
-    -------
-    list of Label
-        The labels with renamed objects (a renamed object takes the id of the object it
-        continues).
-    """
-    labels = list(labels)
-    if len(labels) != len(graph):
-        raise InputError(f"reidentify: {len(labels)} labels for {len(graph)} nodes")
-    if not 0.0 < prior < 1.0:
-        raise InputError(f"reidentify: prior must be in (0, 1), got {prior}")
-    if not labels:
-        return []
-    # one pass can miss a renaming because a candidate set was larger when the object was
-    # examined than after later renamings; repeat until nothing changes (each pass only
-    # merges objects, so at most num_objects passes)
-    while True:
-        renamed = _reidentify_pass(graph, labels, prior)
-        if renamed == labels:
-            return renamed
-        labels = renamed
-
-
-def _reidentify_pass(graph: LabelGraph, labels: list, prior: float) -> list:
-    cfg = graph.config
-    starts = np.array([nd.stroke.start for nd in graph.nodes])
-    ends = np.array([nd.stroke.end for nd in graph.nodes])
-    # in birth order (a new group's members have ids past every lone newcomer's,
-    # ``models.jorge.labels.NEW_STRIDE``: sorting by id examined them last; issue 16,
-    # eleventh round)
-    objects = sorted(set().union(*labels), key=lambda o: (birth_stroke(o), o))
-    member = np.array([[o in lab for lab in labels] for o in objects])  # (num_objects, num_strokes)
-    first = {o: int(starts[member[i]].min()) for i, o in enumerate(objects)}
-    last = {o: int(ends[member[i]].max()) for i, o in enumerate(objects)}
-    alias: dict[int, int] = {}
-    roots: list[int] = []
-    pal = graph.palettes([frozenset({o}) for o in objects])
-    row = {o: i for i, o in enumerate(objects)}
-    for i, b in enumerate(objects):
-        cands = [a for a in roots if last[a] < first[b]]
-        singles = [int(k) for k in np.flatnonzero(member[i]) if labels[k] == frozenset({b})] if cands else []
-        if not singles:  # no candidate, or never seen alone: kept as is
-            roots.append(b)
-            continue
-        # b's palette: that of its first stroke alone (its birth stroke if born alone;
-        # a newcomer who joined a group, or a member of a new group, was born with the
-        # others' colours too)
-        own = singles[0]
-        palettes = np.zeros((len(cands) + 1, pal.shape[1]), dtype=bool)
-        palettes[:-1] = pal[[row[a] for a in cands]]
-        palettes[-1, graph.nodes[own].stroke.palette] = True
-        score = np.full(len(cands), np.log(prior / len(cands)) - np.log1p(-prior))
-        # b's palette as one more observation of the object
-        score += colour_log_likelihood(np.flatnonzero(palettes[-1]), palettes[:-1], np.zeros(len(cands), dtype=bool),
-                                       cfg.match_prob, cfg.pool_size, cfg.colour_mode)
-        for k in singles:
-            if k == own:
-                continue  # given b's palette, the stroke it came from says nothing more
-            ll = colour_log_likelihood(graph.nodes[k].stroke.colours, palettes, np.zeros(len(cands) + 1, dtype=bool),
-                                       cfg.match_prob, cfg.pool_size, cfg.colour_mode)
-            score += ll[:-1] - ll[-1]
-        best = int(np.argmax(score))
-        if score[best] > 0:
-            a = cands[best]
-            alias[b] = a
-            last[a] = max(last[a], last[b])
-        else:
-            roots.append(b)
-    return [frozenset(alias.get(o, o) for o in lab) for lab in labels]
-
-
-# --------------------------------------------------------------------------------------------
-# scoring
-# --------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Score:
-    """Labelling errors (seed 004, Table 3) and identity switches.
-
-    Attributes
-    ----------
-    label_errors : int
-        LE, strokes whose label stands for a set of people other than the true set.
-    num_strokes : int
-        NT.
-    error_rate : float
-        LE / NT.
-    id_switches : int
-    errors : tuple of int
-        Indices of the mislabelled strokes.
-    """
-
-    label_errors: int
-    num_strokes: int
-    error_rate: float
-    id_switches: int
-    errors: tuple
-
-
-def object_people(strokes: Sequence[Stroke]) -> dict[int, int | None]:
-    """Who each object id stands for (module docstring): ``o -> person`` or ``None``."""
-    out: dict[int, int | None] = {}
-    claimed: set[int] = set()
-    for s in strokes:
-        if len(s.truth) == 1:
-            (p,) = tuple(s.truth)
-            if p not in claimed:
-                out[s.index] = p
-                claimed.add(p)
-                continue
-        out[s.index] = None
-    return out
-
-
-def optimal_people(strokes: Sequence[Stroke], labels: Sequence[Label]) -> dict[int, int | None]:
-    """Who each object id stands for under the best one-to-one matching of objects and
-    people (as IDF1 does for identities): the matching maximises the number of strokes in
-    which object and person occur together (Hungarian algorithm); unmatched objects stand
-    for nobody."""
-    objects = sorted({o for lab in labels for o in lab})
-    persons = sorted({p for s in strokes for p in s.truth})
-    out: dict[int, int | None] = {o: None for o in objects}
-    if not objects or not persons:
-        return out
-    oi = {o: i for i, o in enumerate(objects)}
-    pi = {p: j for j, p in enumerate(persons)}
-    weight = np.zeros((len(objects), len(persons)))
-    for s, lab in zip(strokes, labels):
-        rows = [oi[o] for o in lab]
-        cols = [pi[p] for p in s.truth]
-        weight[np.ix_(rows, cols)] += 1.0
-    r, c = linear_sum_assignment(weight, maximize=True)
-    for i, j in zip(r, c):
-        if weight[i, j] > 0:
-            out[objects[i]] = persons[j]
-    return out
-
-
-def score(strokes: Sequence[Stroke], labels: Sequence[Label], mapping: str = "optimal") -> Score:
-    """LE, LE / NT and identity switches of a labelling.
-
-    Parameters
-    ----------
-    strokes : sequence of Stroke, length num_strokes
-        With their true sets.
-    labels : sequence of Label, length num_strokes
-        Label of each stroke (sets of object ids, object ``o`` = first seen in stroke ``o``).
-    mapping : {"optimal", "first_seen"}
-        How object ids are matched to people: the best one-to-one matching
-        (:func:`optimal_people`, default) or the person of the stroke where the object was
-        first seen, if not already claimed (:func:`object_people`, stricter: one early
-        mistake makes every later stroke of that person an error).
-
-    Returns
-    -------
-    Score
-    """
-    strokes = list(strokes)
-    labels = list(labels)
-    if len(labels) != len(strokes):
-        raise InputError(f"score: {len(labels)} labels for {len(strokes)} strokes")
-    known = {s.index for s in strokes}
-    for s, lab in zip(strokes, labels):
-        unknown = [o for o in lab if birth_stroke(o) not in known]
-        if unknown or not lab:
-            raise InputError(f"score: stroke {s.index} has label {set(lab)} with unknown object ids {unknown}")
-    if mapping == "optimal":
-        people = optimal_people(strokes, labels)
-    elif mapping == "first_seen":
-        people = object_people(strokes)
-    else:
-        raise InputError(f"score: mapping must be 'optimal' or 'first_seen', got {mapping!r}")
-    errors = []
-    for s, lab in zip(strokes, labels):
-        meant = {people[o] if people.get(o) is not None else ("nobody", o) for o in lab}
-        if meant != set(s.truth):
-            errors.append(s.index)
-    switches = 0
-    last: dict[int, Label] = {}
-    for s, lab in zip(strokes, labels):
-        if len(s.truth) == 1:
-            (p,) = tuple(s.truth)
-            if p in last and last[p] != lab:
-                switches += 1
-            last[p] = lab
-    n = len(strokes)
-    return Score(len(errors), n, len(errors) / n if n else 0.0, switches, tuple(errors))
-
-
-def first_errors(strokes: Sequence[Stroke], errors: Iterable[int]) -> tuple:
-    """The labelling errors that are first mistakes: strokes in error none of whose true
-    predecessors (for each of its people, the latest earlier stroke holding that person,
-    ended before it starts) is in error. The other errors are carried: a wrong label
-    inherited along the links.
-
-    Parameters
-    ----------
-    strokes : sequence of Stroke, length num_strokes
-        In start order, with their true sets.
-    errors : iterable of int
-        Indices of the mislabelled strokes (:attr:`Score.errors`).
-
-    Returns
-    -------
-    tuple of int
-        The first mistakes, in index order.
-    """
-    strokes = list(strokes)
-    bad = set(int(e) for e in errors)
-    unknown = sorted(e for e in bad if not 0 <= e < len(strokes))
-    if unknown:
-        raise InputError(f"first_errors: error indices {unknown} outside 0..{len(strokes) - 1}")
-    preds = true_predecessors(strokes)
-    return tuple(k for k in sorted(bad) if not preds[k] & bad)
-
-
-def after_crowd(strokes: Sequence[Stroke], max_group_size: int) -> np.ndarray:
-    """Strokes one of whose people was earlier in a crowd: a stroke of more than
-    ``max_group_size`` people that ended before this one starts.
-
-    A label holds at most ``max_group_size`` objects, so a crowd's label leaves some of its
-    people out, and a later stroke of one of them inherits a label that does not hold
-    them (a diagnosis of the benchmark; nothing is chosen on it).
-
-    Parameters
-    ----------
-    strokes : sequence of Stroke, length num_strokes
-        With their true sets.
-    max_group_size : int
-        The label network's ``labels.max_group_size``.
-
-    Returns
-    -------
-    ndarray of bool, shape (num_strokes,)
-    """
-    if isinstance(max_group_size, bool) or not isinstance(max_group_size, int | np.integer) or max_group_size < 1:
-        raise InputError(f"after_crowd: max_group_size must be an int >= 1, got {max_group_size!r}")
-    strokes = list(strokes)
-    first_crowd_end: dict[int, int] = {}  # person -> the earliest end of a crowd stroke holding them
-    for s in strokes:
-        if len(s.truth) > max_group_size:
-            for p in s.truth:
-                first_crowd_end[p] = min(first_crowd_end.get(p, s.end), s.end)
-    return np.array([any(first_crowd_end.get(p, s.start) < s.start for p in s.truth) for s in strokes], dtype=bool)
-
-
-def true_predecessors(strokes: Sequence[Stroke]) -> list[frozenset]:
-    """For each stroke, its true predecessors: for each of its people, the latest earlier
-    stroke holding that person that ended before it starts (the links a perfect stroke
-    graph would have; :func:`first_errors` uses the same rule).
-
-    Returns
-    -------
-    list of frozenset of int, length num_strokes
-    """
-    strokes = list(strokes)
-    latest: dict[int, list[int]] = {}
-    out = []
-    for k, s in enumerate(strokes):
-        preds = set()
-        for p in s.truth:
-            earlier = [i for i in latest.get(p, []) if strokes[i].end < s.start]
-            if earlier:
-                preds.add(max(earlier, key=lambda i: strokes[i].end))
-        out.append(frozenset(preds))
-        for p in s.truth:
-            latest.setdefault(p, []).append(k)
-    return out
-
-
-def true_links(strokes: Sequence[Stroke], max_parents: int = 2, max_children: int = 2) -> list[tuple]:
-    """The true predecessors (:func:`true_predecessors`) as links the label network can
-    hold: at most ``max_parents`` per stroke (the latest-ending first) and
-    ``max_children`` per parent (first come), for :func:`label_online` ``links=`` (the
-    oracle that measures what the on-line link rule costs; issue 16 diagnosis).
-
-    Returns
-    -------
-    list of tuple of int, length num_strokes
-    """
-    strokes = list(strokes)
-    children: dict[int, int] = {}
-    out = []
-    for preds in true_predecessors(strokes):
-        kept = [p for p in sorted(preds, key=lambda i: (-strokes[i].end, i))
-                if children.get(p, 0) < max_children][:max_parents]
-        for p in kept:
-            children[p] = children.get(p, 0) + 1
-        out.append(tuple(sorted(kept)))
-    return out
-
-
-def link_accuracy(strokes: Sequence[Stroke], parents: Sequence[Iterable[int]]) -> float:
-    """Share of strokes whose parents in the label network are exactly their true
-    predecessors (:func:`true_predecessors`): how well the on-line link rule recovers
-    the stroke graph (issue 16 diagnosis; about 0.5 in the PETS2009 S1 crowds, 0.7-0.95
-    on CAVIAR).
-
-    Raises
-    ------
-    InputError
-        ``parents`` not one entry per stroke.
-    """
-    strokes = list(strokes)
-    if len(parents) != len(strokes):
-        raise InputError(f"link_accuracy: {len(parents)} parent sets for {len(strokes)} strokes")
-    if not strokes:
-        return float("nan")
-    truth = true_predecessors(strokes)
-    return float(np.mean([frozenset(int(p) for p in par) == t for par, t in zip(parents, truth)]))
-
-
-def colour_only_labels(strokes: Iterable[Stroke], max_group_size: int = 3, match_prob: float = 0.8,
-                       pool_size: int = 12, mode: str = "ratio") -> list[Label]:
-    """Baseline without the network: each stroke takes the label whose palette matches
-    its colours best (eq. 6 alone), among the objects seen so far, their groups of up to
-    ``max_group_size``, and a new object (log-likelihood ratio 0 in the default mode).
-
-    Parameters
-    ----------
-    strokes : iterable of Stroke
-        In start order.
-    max_group_size : int
-    match_prob : float
-    pool_size : int
-    mode : {"ratio", "eq6"}
-
-    Returns
-    -------
-    list of Label
-        One per stroke; a stroke labelled new founds object ``stroke.index``.
-    """
-    objects: list[int] = []
-    palettes: dict[int, np.ndarray] = {}
-    out: list[Label] = []
-    for s in strokes:
-        new = frozenset({s.index})
-        own = np.zeros(pool_size, dtype=bool)
-        own[s.palette] = True
-        cands: list[Label] = [new]
-        blocks = [own[None]]
-        obj_pal = np.array([palettes[o] for o in objects]).reshape(len(objects), pool_size)
-        for r in range(1, min(max_group_size, len(objects)) + 1):
-            idx = np.array(list(itertools.combinations(range(len(objects)), r)), dtype=np.int64)
-            cands += [frozenset(objects[i] for i in row) for row in idx]
-            blocks.append(obj_pal[idx].any(axis=1))
-        pal = np.concatenate(blocks, axis=0)
-        is_new = np.zeros(len(cands), dtype=bool)
-        is_new[0] = True
-        ll = colour_log_likelihood(s.colours, pal, is_new, match_prob, pool_size, mode)
-        best = cands[int(np.argmax(ll))]
-        if best == new:
-            objects.append(s.index)
-            palettes[s.index] = own
-        out.append(best)
-    return out

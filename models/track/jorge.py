@@ -204,7 +204,7 @@ def evaluate(result: str, truth: str) -> dict:
     rebuilt with the file's seed. ``tracks.txt`` (MOTChallenge): MOTA, IDF1 (motmetrics)."""
     from types import SimpleNamespace
 
-    from models.jorge.online import score
+    from models.jorge.scoring import score
     from models.jorge.strokes import build_strokes
 
     if not str(result).endswith(".csv"):

@@ -229,7 +229,8 @@ def test_jorge_track_eval(tmp_path, capsys):
     d = DATA / "jorge"
     out = _track(tmp_path, "jorge", [d / "caviar.xml"], "--truth", str(d / "caviar.xml"))
     from models.io.jorge import read_mot, read_strokes
-    from models.jorge.online import label_online, score
+    from models.jorge.online import label_online
+    from models.jorge.scoring import score
     from models.jorge.strokes import build_strokes, load_caviar
 
     seed, rows = read_strokes(out / "strokes.csv")
@@ -357,7 +358,8 @@ def test_jorge_eval_rebuilds_the_strokes_of_the_runs_settings(tmp_path, capsys):
     import dataclasses
 
     from models.io.jorge import read_strokes_header
-    from models.jorge.online import label_online, score
+    from models.jorge.online import label_online
+    from models.jorge.scoring import score
     from models.jorge.strokes import StrokeConfig, build_strokes, load_caviar
 
     xml = DATA / "jorge" / "caviar.xml"

@@ -13,7 +13,7 @@ import pytest
 
 from models.jorge.labels import new_objects
 from models.jorge.network import FITTED_LABELS, LabelGraph, NetworkConfig, kept_name, node_name
-from models.jorge.online import reidentify
+from models.jorge.reid import reidentify
 from models.jorge.strokes import make_stroke
 from tests.models.jorge.test_jorge_groups import _check_window
 

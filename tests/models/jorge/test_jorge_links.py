@@ -6,7 +6,8 @@ from __future__ import annotations
 import pytest
 
 from dbn.errors import InputError
-from models.jorge.online import OnlineLabeller, label_online, link_accuracy, true_links
+from models.jorge.online import OnlineLabeller, label_online
+from models.jorge.scoring import link_accuracy, true_links
 from models.jorge.strokes import make_stroke
 
 

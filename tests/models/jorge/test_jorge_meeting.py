@@ -10,7 +10,8 @@ import pytest
 
 from dbn.errors import InputError
 from models.jorge.meeting import simulate_meeting
-from models.jorge.online import OnlineConfig, label_online, score
+from models.jorge.online import OnlineConfig, label_online
+from models.jorge.scoring import score
 from models.jorge.strokes import build_strokes, regions, resample
 
 

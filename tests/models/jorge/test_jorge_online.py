@@ -10,17 +10,15 @@ import pytest
 from dbn.errors import DBNError, InputError, ModelError, TimeOrderError
 from models.jorge.api import make
 from models.jorge.network import LabelGraph, NetworkConfig
-from models.jorge.online import (
-    OnlineConfig,
-    OnlineLabeller,
+from models.jorge.online import OnlineConfig, OnlineLabeller, label_online
+from models.jorge.reid import reidentify
+from models.jorge.scoring import (
     after_crowd,
     colour_only_labels,
     first_errors,
-    label_online,
     link_accuracy,
     object_people,
     optimal_people,
-    reidentify,
     score,
     true_predecessors,
 )
@@ -225,3 +223,14 @@ def test_link_accuracy_by_hand():
     assert link_accuracy(s, [(), (), (1,), (1,), (2,)]) == pytest.approx(3 / 5)
     with pytest.raises(InputError):
         link_accuracy(s, [()])
+
+
+def test_scoring_and_reid_names_still_importable_from_online():
+    """The scoring helpers and the re-identification pass moved to their own modules; the
+    names users imported from ``models.jorge.online`` are the same objects."""
+    from models.jorge import online, reid, scoring
+
+    for name in scoring.__all__:
+        assert getattr(online, name) is getattr(scoring, name), name
+        assert name in online.__all__, name
+    assert online.reidentify is reid.reidentify
