@@ -56,7 +56,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -130,36 +130,28 @@ def load_sequence(folder: str, name: str):
 
 @dataclass
 class EventCounts:
-    """Event counts over training strokes (module docstring); add with ``+=``."""
+    """Event counts over training strokes (module docstring); accumulate over stroke sets
+    by passing one instance to :func:`count_events` (``counts=``) for each."""
 
     children: int = 0
     new: int = 0
     non_new: int = 0
     join: int = 0
-    merge: np.ndarray = None  # type: ignore[assignment]  # (3,) merges per structure d, e, f
-    two_parent: np.ndarray = None  # type: ignore[assignment]  # (3,)
+    merge: np.ndarray = field(default_factory=lambda: np.zeros(3, np.int64))  # (3,) merges per structure d, e, f
+    two_parent: np.ndarray = field(default_factory=lambda: np.zeros(3, np.int64))  # (3,)
     split_part: int = 0
     split_total: int = 0
     part_part: int = 0
     part_total: int = 0
-    new_sizes: np.ndarray = None  # type: ignore[assignment]  # (max_group_size,)
-    sizes: list = None  # type: ignore[assignment]  # (k, rel_log_area) pairs
-    palette_counts: list = None  # type: ignore[assignment]  # (k, distinct palette colours) pairs
-    palette_gains: list = None  # type: ignore[assignment]  # (newcomers m, known colours u, gain e)
-    palette_missing: list = None  # type: ignore[assignment]  # (m, u, known colours missing d)
-    splits: list = None  # type: ignore[assignment]  # (group size n, both pieces hold everyone)
-
-    def __post_init__(self) -> None:
-        self.merge = np.zeros(3, np.int64) if self.merge is None else self.merge
-        self.two_parent = np.zeros(3, np.int64) if self.two_parent is None else self.two_parent
-        self.new_sizes = np.zeros(0, np.int64) if self.new_sizes is None else self.new_sizes
-        self.sizes = [] if self.sizes is None else self.sizes
-        self.palette_counts = [] if self.palette_counts is None else self.palette_counts
-        self.palette_gains = [] if self.palette_gains is None else self.palette_gains
-        self.palette_missing = [] if self.palette_missing is None else self.palette_missing
-        self.splits = [] if self.splits is None else self.splits
+    new_sizes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # (max_group_size,)
+    sizes: list = field(default_factory=list)  # (k, rel_log_area) pairs
+    palette_counts: list = field(default_factory=list)  # (k, distinct palette colours) pairs
+    palette_gains: list = field(default_factory=list)  # (newcomers m, known colours u, gain e)
+    palette_missing: list = field(default_factory=list)  # (m, u, known colours missing d)
+    splits: list = field(default_factory=list)  # (group size n, both pieces hold everyone)
 
     def add_new(self, m: int) -> None:
+        """Count one new stroke of ``m`` people (``new_sizes`` grows to hold ``m``)."""
         if m > self.new_sizes.size:
             self.new_sizes = np.pad(self.new_sizes, (0, m - self.new_sizes.size))
         self.new_sizes[m - 1] += 1
