@@ -15,7 +15,7 @@ seeds). This module is that comparison, so that anyone can run it again:
 * :func:`compare`: both networks label every set of every seed; per seed the mean error
   over its sets, and the paired difference's mean and standard error over the seeds.
 
-``python -m models.jorge.confirm --set max_gap_frames=60 --seeds 880 920 --workers 2``
+``python -m models.jorge.confirm --set max_gap_frames=60 --seeds 960 1000 --workers 2``
 prints the comparison as one JSON line. Only training-side data is labelled (never the
 held-out validation sequences).
 """
