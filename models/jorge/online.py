@@ -52,10 +52,7 @@ import numpy as np
 
 from dbn.errors import InputError, ModelError
 from inference.exact import JunctionTree, map_assignment
-from models.jorge.labels import (
-    Label,
-    prune_labels,
-)
+from models.jorge.labels import Label, prune_labels
 from models.jorge.network import LabelGraph, NetworkConfig, check_frame_rate, node_name
 from models.jorge.reid import reidentify
 from models.jorge.scoring import (  # re-exported: these lived here before they had a module

@@ -11,10 +11,10 @@ one-person strokes in time order, the number of consecutive pairs given differen
 labels.
 
 The true predecessors of a stroke (:func:`true_predecessors`) are, for each of its
-people, the latest earlier stroke holding that person; :func:`true_links` turns them into
-links the label network can hold, :func:`first_errors` and :func:`after_crowd` split the
-errors for the benchmark's diagnosis keys, and :func:`link_accuracy` measures the on-line
-link rule against them.
+people, the latest earlier stroke holding that person that ended before it starts;
+:func:`true_links` turns them into links the label network can hold, :func:`first_errors`
+and :func:`after_crowd` split the errors for the benchmark's diagnosis keys, and
+:func:`link_accuracy` measures the on-line link rule against them.
 """
 
 from __future__ import annotations
