@@ -3,6 +3,7 @@ with a Bayes net built on the fly (restriction nodes, merge/split labels, on-lin
 
 Modules: :mod:`strokes` (ground-truth loaders and the simulated low-level tracker),
 :mod:`labels` (admissible label sets and the CPDs of the basic structures),
+:mod:`evidence` (the colour model, eq. 6, and the size and palette evidence of a label),
 :mod:`config` (the network's settings and the parameters fitted on the training split),
 :mod:`network` (the Bayes net and its exact MAP / marginals), :mod:`online` (periodic
 inference with bounded memory, eq. 12 labelling), :mod:`reid` (the final

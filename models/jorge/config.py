@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dbn.errors import ModelError
-from models.jorge.labels import LabelParams, gain_bins_rise
+from models.jorge.evidence import gain_bins_rise
+from models.jorge.labels import LabelParams
 
 __all__ = [
     "NetworkConfig",
@@ -414,7 +415,7 @@ FITTED_PALETTE_MISSING = (
     ),
 )
 """:math:`\\log p(d \\mid m, b(u))` for ``NetworkConfig.palette_missing_table`` (issue 16,
-thirty-fourth round; :func:`models.jorge.labels.palette_missing_log_likelihood`): the known
+thirty-fourth round; :func:`models.jorge.evidence.palette_missing_log_likelihood`): the known
 colours :math:`d = 0..12` a stroke's palette lacks, per newcomers :math:`m = 0..5` and bin of
 the known colours :math:`u` (``palette_gain_bins``), fitted by
 :func:`models.jorge.fit.fit_parameters` on the declared training split (the rule's links,
@@ -491,7 +492,7 @@ class NetworkConfig:
     labels : LabelParams
         :math:`P_{new}, P_{merge}, P_{split}` and the maximum group size.
     colour_mode : {"hyper", "ratio", "eq6"}
-        Colour model (see :func:`models.jorge.labels.colour_log_likelihood`); default
+        Colour model (see :func:`models.jorge.evidence.colour_log_likelihood`); default
         ``"hyper"``: the likelihood ratio against chance matches of distinct colours.
     match_prob : float
         :math:`P` of eq. 6.
@@ -499,7 +500,7 @@ class NetworkConfig:
         Number of colours in the pool.
     size_evidence : bool
         Also use the stroke's region size as soft evidence on the number of people of
-        its label (:func:`models.jorge.labels.size_log_likelihood`; our addition, not in
+        its label (:func:`models.jorge.evidence.size_log_likelihood`; our addition, not in
         seed 004). Needs ``Stroke.extent`` (recorded by
         :func:`models.jorge.strokes.build_strokes`); strokes without it get none.
     size_mu_single, size_slope, size_sigma : float
@@ -520,7 +521,7 @@ class NetworkConfig:
     palette_count_table : tuple of tuple of float
         :math:`\\log p(c \\mid k)`, rows ``k = 1..`` people, columns ``c = 0..pool_size``
         distinct colours of the stroke's palette (the last row and column stand for
-        that many or more) (:func:`models.jorge.labels.palette_count_log_likelihood`; our addition, issue 16);
+        that many or more) (:func:`models.jorge.evidence.palette_count_log_likelihood`; our addition, issue 16);
         fitted by :func:`models.jorge.fit.fit_parameters` (:data:`FITTED_PALETTE_COUNTS`);
         default ``()``, none: since issue 16's fourteenth round the gain table given the
         colours already known (``palette_gain_bins``) holds the count evidence alone
@@ -551,7 +552,7 @@ class NetworkConfig:
         shape ``(max_m + 1, len(palette_gain_bins), 2 * pool_size + 1)``, columns ``e =
         -pool_size .. pool_size``; a 2-D table ``(max_m + 1, 2 * pool_size + 1)`` is
         :math:`\\log p(e \\mid m)` (the fourth to thirteenth rounds') and ignores the bins
-        (:func:`models.jorge.labels.palette_gain_log_likelihood`; issue 16). Added to the
+        (:func:`models.jorge.evidence.palette_gain_log_likelihood`; issue 16). Added to the
         ``palette_count_table`` evidence when both are set; fitted by
         :func:`models.jorge.fit.fit_parameters`; default :data:`FITTED_PALETTE_GAINS`;
         ``()``: none.
@@ -562,7 +563,7 @@ class NetworkConfig:
         :math:`\\log p(d \\mid m, b(u))` of the colours :math:`d` of a label's known objects'
         palettes that the stroke's palette lacks, shape ``(max_m + 1,
         len(palette_gain_bins), pool_size + 1)``
-        (:func:`models.jorge.labels.palette_missing_log_likelihood`; issue 16,
+        (:func:`models.jorge.evidence.palette_missing_log_likelihood`; issue 16,
         thirty-fourth round, our addition): the gain table sees only :math:`e = |P \\setminus
         U| - d`, blind to a member swapped for someone else. Weighted as the palette counts
         (``palette_continued``); fitted by :func:`models.jorge.fit.fit_parameters` where

@@ -61,7 +61,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from dbn.errors import InputError
-from models.jorge.labels import palette_gain_bin
+from models.jorge.evidence import palette_gain_bin
 from models.jorge.network import LabelGraph, NetworkConfig
 from models.jorge.strokes import StrokeSet
 
@@ -365,7 +365,7 @@ def _palette_missing_table(triples: list, gmax: int, pool_size: int, bins: Seque
     missing from the palette, ``d = 0..pool_size``, per number of newcomers ``m = 0..gmax``
     (more counted as ``gmax``) and bin of the known colours ``u`` (lower edges ``bins``),
     shape ``(gmax + 1, len(bins), pool_size + 1)``
-    (:func:`models.jorge.labels.palette_missing_log_likelihood`)."""
+    (:func:`models.jorge.evidence.palette_missing_log_likelihood`)."""
     cols = [(m, u, min(int(d), pool_size)) for m, u, d in triples]
     return _given_newcomers_and_known(cols, gmax, bins, pool_size + 1)
 
@@ -432,7 +432,7 @@ SEARCH_GRID = {
 """The documented search over what the likelihood alone does not settle: the CPD
 parameters as fitted by :func:`fit_parameters` (``"ml"``, with the marginal palette
 colour-count table; ``"ml_gain"``, with the count given the label's known palettes instead,
-:func:`models.jorge.labels.palette_gain_log_likelihood`; ``"ml_both"``, both) or the
+:func:`models.jorge.evidence.palette_gain_log_likelihood`; ``"ml_both"``, both) or the
 previous defaults (``"previous"``, no palette evidence: chosen in issues 4-5 by labelling
 error with simulation seeds 20-39 on ms3ggt and mws1gt, both in the training split);
 whether a stroke seen first may be a new group (``q_m`` fitted; ``"off"``: only ``m = 1``;
@@ -807,7 +807,7 @@ def point_config(gated: NetworkConfig, fitted: NetworkConfig, point: dict) -> Ne
 def _grid_point(base: NetworkConfig, fitted: NetworkConfig, params: str, new_groups: str) -> NetworkConfig:
     # "previous": the parameters before issue 16's fit, without palette evidence
     # "ml": the marginal palette count table; "ml_gain": the gain table given the known
-    # objects' palettes (labels.palette_gain_log_likelihood)
+    # objects' palettes (evidence.palette_gain_log_likelihood)
     if params == "previous":
         cfg = replace(base, palette_count_table=(), palette_gain_table=())
     else:

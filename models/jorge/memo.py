@@ -10,9 +10,9 @@ freezing), and the entries that are left are the same numbers:
   and each of its entries is summed from the parent labels' piece laws alone (a join
   label from its source's mass): an entry does not depend on which other labels the
   domains hold;
-* the colour and palette evidence of a label (:func:`~models.jorge.labels.colour_log_likelihood`,
-  :func:`~models.jorge.labels.palette_count_log_likelihood`,
-  :func:`~models.jorge.labels.palette_gain_log_likelihood`) reads only that label's
+* the colour and palette evidence of a label (:func:`~models.jorge.evidence.colour_log_likelihood`,
+  :func:`~models.jorge.evidence.palette_count_log_likelihood`,
+  :func:`~models.jorge.evidence.palette_gain_log_likelihood`) reads only that label's
   objects: their palettes and joiner records.
 
 So the table or evidence of a sub-domain is the remembered one's entries, picked out,

@@ -11,7 +11,7 @@ does not weigh a large group down, ``LabelParams.split_normalise``), and the str
 dominant colours as soft (virtual) evidence on ``x{k}`` (eq. 6; proper likelihood
 ratio by default, the equation as written as an option), times, where the stroke has a
 recorded region size, the size evidence on the number of people of the label
-(:func:`models.jorge.labels.size_log_likelihood`; our addition, ``size_evidence``).
+(:func:`models.jorge.evidence.size_log_likelihood`; our addition, ``size_evidence``).
 
 Links (seed 004, sec. 4): ``i -> j`` when stroke ``j`` starts after ``i`` ends and the gap
 is physically possible. A region's centre jumps when regions merge or split, so we admit
@@ -43,6 +43,13 @@ from models.jorge.config import (
     FITTED_SPLIT_COVER,
     NetworkConfig,
 )
+from models.jorge.evidence import (
+    colour_log_likelihood,
+    palette_count_log_likelihood,
+    palette_gain_log_likelihood,
+    palette_missing_log_likelihood,
+    size_log_likelihood,
+)
 from models.jorge.labels import (
     Label,
     LabelObjects,
@@ -50,15 +57,10 @@ from models.jorge.labels import (
     birth_stroke,
     child_table,
     cohort_size,
-    colour_log_likelihood,
     format_label,
     label_objects,
-    palette_count_log_likelihood,
-    palette_gain_log_likelihood,
-    palette_missing_log_likelihood,
     restriction_table,
     root_table,
-    size_log_likelihood,
     structure_of,
     union_rows,
 )
@@ -570,7 +572,7 @@ class LabelGraph:
 
     def size_loglik(self, k: int, domain: Sequence[Label] | None = None) -> np.ndarray:
         """Region-size log-likelihood of stroke ``k`` for each label of ``domain``
-        (:func:`models.jorge.labels.size_log_likelihood`; zeros when ``size_evidence`` is
+        (:func:`models.jorge.evidence.size_log_likelihood`; zeros when ``size_evidence`` is
         off or the stroke has no recorded extent).
 
         Returns
@@ -589,12 +591,12 @@ class LabelGraph:
                              objects: LabelObjects | None = None) -> np.ndarray:
         """Palette colour-count log-likelihood of stroke ``k`` for each label of ``domain``:
         the marginal :math:`\\log p(c \\mid k)` with ``palette_count_table``
-        (:func:`models.jorge.labels.palette_count_log_likelihood`) plus, with
+        (:func:`models.jorge.evidence.palette_count_log_likelihood`) plus, with
         ``palette_gain_table`` (the default, alone), the gain given the known objects'
-        palettes (:func:`models.jorge.labels.palette_gain_log_likelihood`, in the bin of
+        palettes (:func:`models.jorge.evidence.palette_gain_log_likelihood`, in the bin of
         ``palette_gain_bins`` of the colours they hold for a 3-D table) and, with
         ``palette_missing_table``, the known colours the palette lacks
-        (:func:`models.jorge.labels.palette_missing_log_likelihood`); zeros without any;
+        (:func:`models.jorge.evidence.palette_missing_log_likelihood`); zeros without any;
         times ``palette_continued`` at an OCCLUSION node.
 
         Returns

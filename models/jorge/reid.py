@@ -24,7 +24,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from dbn.errors import InputError
-from models.jorge.labels import Label, birth_stroke, colour_log_likelihood
+from models.jorge.evidence import colour_log_likelihood
+from models.jorge.labels import Label, birth_stroke
 from models.jorge.network import LabelGraph
 
 __all__ = ["reidentify"]

@@ -27,7 +27,8 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from dbn.errors import InputError
-from models.jorge.labels import Label, birth_stroke, colour_log_likelihood
+from models.jorge.evidence import colour_log_likelihood
+from models.jorge.labels import Label, birth_stroke
 from models.jorge.strokes import Stroke
 
 __all__ = [

@@ -419,7 +419,7 @@ class Stroke:
     extent : ndarray, shape (num_points, 2), optional
         Width and height in pixels of the region's box per frame (the bounding box of its
         people's boxes), recorded by :func:`build_strokes`; the label network uses it as
-        evidence on the number of people (:func:`models.jorge.labels.size_log_likelihood`).
+        evidence on the number of people (:func:`models.jorge.evidence.size_log_likelihood`).
         ``None``: unknown (no size evidence).
     """
 

@@ -149,3 +149,13 @@ def test_cohort_size_and_known_objects():
     assert sorted(known_objects(F({5, *trio}), 9)) == sorted([5, *trio])
     assert sorted(known_objects(F({5, trio[0]}), 9)) == [5]
     assert known_objects(F({9}), 9) == []  # born at the stroke itself: no record yet
+
+
+def test_evidence_names_still_importable_from_labels():
+    """The soft-evidence likelihoods moved to ``models.jorge.evidence``; the names users
+    imported from ``models.jorge.labels`` are the same objects."""
+    from models.jorge import evidence, labels
+
+    for name in evidence.__all__:
+        assert getattr(labels, name) is getattr(evidence, name), name
+        assert name in labels.__all__, name

@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from dbn.errors import InputError, ModelError
+from models.jorge.evidence import palette_count_log_likelihood
 from models.jorge.fit import fit_parameters
-from models.jorge.labels import LabelParams, new_objects, palette_count_log_likelihood
+from models.jorge.labels import LabelParams, new_objects
 from models.jorge.network import LabelGraph, NetworkConfig
 from models.jorge.online import OnlineConfig, OnlineLabeller
 from models.jorge.strokes import StrokeSet, make_stroke

@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 from dbn.errors import InputError, ModelError
+from models.jorge.evidence import palette_missing_log_likelihood
 from models.jorge.fit import fit_parameters
-from models.jorge.labels import LabelParams, palette_missing_log_likelihood
+from models.jorge.labels import LabelParams
 from models.jorge.network import FITTED_PALETTE_MISSING, LabelGraph, NetworkConfig
 from models.jorge.strokes import StrokeSet, make_stroke
 

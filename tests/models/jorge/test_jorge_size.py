@@ -14,7 +14,7 @@ from scipy.integrate import quad
 from scipy.stats import norm
 
 from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
-from models.jorge.labels import size_log_likelihood
+from models.jorge.evidence import size_log_likelihood
 from models.jorge.network import FITTED_LABELS, LabelGraph, NetworkConfig, node_name, solve
 from models.jorge.strokes import GroundTruth, StrokeConfig, build_strokes, make_stroke
 from tests.models.jorge.test_jorge_network import _brute_force
