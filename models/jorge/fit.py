@@ -630,8 +630,8 @@ held-out validation 0.0280 (bar of the rule 0.0737). Landed
 round's :math:`P_{new}` by where the child sits (five rates instead of seed 004's one: a
 child of one parent that does not split, labelled one object or a group; the same for a
 parent that splits; two parents; add-one smoothed frequencies on the training split, where
-1 of 476 two-parent children is new and 43 of 75 second children of one-person strokes are,
-against 0.063 overall), under the same four conditions, declared before it ran: 0.1968 ->
+1 of 476 two-parent children is new and 43 of 75 children of one-person strokes that split
+are, against 0.063 overall), under the same four conditions, declared before it ran: 0.1968 ->
 0.1978, paired +0.0010 (standard error 0.0011), lower on 17 of 40; the PETS2009 S1 crowds
 0.5540 / 0.7781 -> 0.5553 / 0.7825, SIMULATED meetings at 25 fps of k = 3 / 4 / 5 0.0310 /
 0.0669 / 0.1050 -> 0.0307 / 0.0679 / 0.1021. On seeds 100-104, before declaring, it had gone
