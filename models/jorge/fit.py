@@ -272,8 +272,9 @@ def _count_palette_gains(c: EventCounts, g: LabelGraph) -> None:
             cohort[person] = newcomers | inherited
         known = [p for p in inherited if cohort[p] <= inherited]
         colours = frozenset().union(*[birth[p] for p in known])
-        c.palette_gains.append((len(s.truth) - len(known), len(colours), len(palette) - len(colours)))
-        c.palette_missing.append((len(s.truth) - len(known), len(colours), len(colours - palette)))
+        m, u = len(s.truth) - len(known), len(colours)
+        c.palette_gains.append((m, u, len(palette) - u))
+        c.palette_missing.append((m, u, len(colours - palette)))
         if len(inherited) == 1 == len(s.truth):  # seen alone: a cohort member's own palette
             (person,) = inherited
             if len(cohort[person]) > 1:
