@@ -5,10 +5,11 @@ Modules: :mod:`strokes` (ground-truth loaders and the simulated low-level tracke
 :mod:`labels` (admissible label sets and the CPDs of the basic structures),
 :mod:`evidence` (the colour model, eq. 6, and the size and palette evidence of a label),
 :mod:`config` (the network's settings and the parameters fitted on the training split),
-:mod:`network` (the Bayes net and its exact MAP / marginals), :mod:`online` (periodic
-inference with bounded memory, eq. 12 labelling), :mod:`reid` (the final
-re-identification pass), :mod:`scoring` (label errors, the true stroke graph and the
-colour-only baseline),
+:mod:`network` (the growing graph of strokes, links and label domains), :mod:`links`
+(the link rule), :mod:`window` (the Bayes net of an inference window and its exact MAP /
+marginals), :mod:`online` (periodic inference with bounded memory, eq. 12 labelling),
+:mod:`reid` (the final re-identification pass), :mod:`scoring` (label errors, the true
+stroke graph and the colour-only baseline),
 :mod:`memo` (what a node remembers of its CPD and evidence between inferences),
 :mod:`api` (the labeller under the tracker protocol), :mod:`fit` (the parameters learned
 on the declared training split), :mod:`confirm` (a change compared on fresh seeds),

@@ -13,28 +13,21 @@ ratio by default, the equation as written as an option), times, where the stroke
 recorded region size, the size evidence on the number of people of the label
 (:func:`models.jorge.evidence.size_log_likelihood`; our addition, ``size_evidence``).
 
-Links (seed 004, sec. 4): ``i -> j`` when stroke ``j`` starts after ``i`` ends and the gap
-is physically possible. A region's centre jumps when regions merge or split, so we admit
-``distance <= radius + v_max * gap`` (``radius`` is our addition; the seed gives only the
-speed bound) and ``gap <= max_gap_frames``. A node has at most 2 parents and 2 children;
-candidates are taken by increasing spatial gap (the seed's pruning preference), greedily
-in start order, as an on-line builder must.
+Links (seed 004, sec. 4): the on-line link rule and the check of given links are in
+:mod:`models.jorge.links` (:class:`~models.jorge.links.LinkRule`, a mixin of
+:class:`LabelGraph`); the Bayes net of an inference window and its exact solution in
+:mod:`models.jorge.window` (this module still exports their names).
 """
 
 from __future__ import annotations
 
 import math
-import operator
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from dbn.bayesnet import BayesNet
-from dbn.cpds import TabularCPD
-from dbn.errors import InputError, ModelError, ShapeError, TimeOrderError, UnknownVariableError
-from dbn.variables import DiscreteVariable
-from inference.exact import JunctionTree, map_assignment
+from dbn.errors import InputError, ModelError, ShapeError, TimeOrderError
 from models.jorge.config import (
     FITTED_LABELS,
     FITTED_PALETTE_COUNTS,
@@ -57,15 +50,25 @@ from models.jorge.labels import (
     birth_stroke,
     child_table,
     cohort_size,
-    format_label,
     label_objects,
     restriction_table,
     root_table,
     structure_of,
     union_rows,
 )
+from models.jorge.links import LinkRule
 from models.jorge.memo import ChainMemo, EvidenceMemo, TableMemo
 from models.jorge.strokes import Stroke, _check_colours, check_frame_rate
+from models.jorge.window import (
+    Inference,
+    WindowNet,
+    build_window,
+    colour_name,
+    kept_name,
+    node_name,
+    restriction_name,
+    solve,
+)
 
 __all__ = [
     "NetworkConfig",
@@ -85,28 +88,6 @@ __all__ = [
 ]
 
 
-def node_name(k: int) -> str:
-    """Name of the hidden label node of stroke ``k``."""
-    return f"x{k}"
-
-
-def restriction_name(i: int, j: int) -> str:
-    """Name of the restriction node of the sibling pair ``i < j``."""
-    return f"r{min(i, j)}_{max(i, j)}"
-
-
-def kept_name(k: int) -> str:
-    """Name of the observed node carrying the mass node ``k``'s pruned domain kept
-    (``NetworkConfig.truncate_pruned``), times the row sums of the chain factor
-    (``NetworkConfig.chain_palette``, :meth:`LabelGraph.chain_log_ratio`)."""
-    return f"m{k}"
-
-
-def colour_name(k: int) -> str:
-    """Name of the explicit colour node (only in :meth:`WindowNet.with_colour_nodes`)."""
-    return f"y{k}"
-
-
 @dataclass
 class _Node:
     stroke: Stroke
@@ -117,7 +98,7 @@ class _Node:
     rel_log_area: float = float("nan")
 
 
-class LabelGraph:
+class LabelGraph(LinkRule):
     """The growing graph of strokes, links and label domains (seed 004, secs. 4-5).
 
     Strokes are added in start order (:meth:`add_stroke`); each new node gets its parents
@@ -221,184 +202,6 @@ class LabelGraph:
                 raise InputError(
                     f"stroke {k}: region extent (width, height) must be in (0, {_MAX_PIXELS:g}] pixels"
                 )
-
-    def candidate_parents(self, stroke: Stroke) -> np.ndarray:
-        r"""Parents of a new stroke: ended before it starts, reachable, with a free child
-        slot; at most ``max_parents``, by increasing spatial gap (seed 004, sec. 4). A
-        candidate that is an ancestor of another is dropped (the new stroke continues the
-        descendant), unless it is kept as a nested link (``NetworkConfig.nested_links``).
-
-        A stroke ``i`` can precede ``j`` when
-        :math:`0 < t^{start}_j - t^{end}_i \le` ``max_gap_frames`` and
-        :math:`\|p^{start}_j - p^{end}_i\| \le` ``radius`` + ``v_max`` :math:`(t^{start}_j - t^{end}_i)`
-        (the other gates: ``NetworkConfig.gate``). Two parents (a merge) must pass the
-        merge test (``NetworkConfig.merge_area``, ``NetworkConfig.merge_cover``), else only
-        the nearest is kept.
-
-        Returns
-        -------
-        ndarray of int, shape (num_parents,)
-            Parent stroke indices, nearest first.
-        """
-        n = len(self.nodes)
-        if n == 0:
-            return np.zeros(0, dtype=np.int64)
-        cfg = self.config
-        gap = stroke.start - self._end[:n]
-        dist = np.linalg.norm(self._end_pos[:n] - stroke.positions[0], axis=1)
-        if cfg.gate in ("scaled", "boxes"):
-            # distances in units of the parent region's size, times in seconds; a parent
-            # without a recorded size falls back to the pixel gate
-            unit = np.where(np.isfinite(self._scale[:n]), self._scale[:n], np.nan)
-            secs = gap / self.fps
-            f25 = 25.0 / self.fps  # the frame limits were set at 25 fps
-            reach = np.where(np.isfinite(unit), unit * (cfg.radius_scaled + cfg.v_max_scaled * secs),
-                             cfg.radius + cfg.v_max * gap)
-            max_gap, window = cfg.max_gap_frames / f25, cfg.sibling_window / f25
-        else:
-            reach = cfg.radius + cfg.v_max * gap
-            max_gap, window = cfg.max_gap_frames, cfg.sibling_window
-        near = dist <= reach
-        if cfg.gate == "boxes":
-            near = self._boxes_near(stroke, self._box_slack(stroke, slice(0, n)), near)
-        ok = (gap > 0) & (gap <= max_gap) & near
-        ok &= self._nchild[:n] < cfg.max_children
-        # a second child (the other part of a split) must start within ``sibling_window``
-        # frames of the parent's end
-        ok &= (self._nchild[:n] == 0) | (gap <= window)
-        cand = np.flatnonzero(ok)
-        # a candidate that is an ancestor of another candidate is superseded by it (the
-        # new stroke continues the descendant, it is not its sibling)
-        cset = set(cand.tolist())
-        superseded = {a for c in cand.tolist() for a in self._ancestors(c, 3) if a in cset}
-        back = {a for a in superseded if self._merges_back(stroke, a, cset)} if cfg.nested_links > 0 else set()
-        cand = np.array([c for c in cand.tolist() if c not in superseded - back], dtype=np.int64)
-        order = np.lexsort((cand, dist[cand]))
-        cand = cand[order][: cfg.max_parents]
-        # a nested pair passed its own merge test in _merges_back
-        nested = len(cand) == 2 and self.nested(*sorted(int(c) for c in cand))
-        if len(cand) == 2 and not nested and not self._merge_fits(stroke, cand):
-            cand = cand[:1]
-        return cand
-
-    def _merges_back(self, stroke: Stroke, a: int, cset: set) -> bool:
-        """Nested link (``NetworkConfig.nested_links``): candidate ``a``, superseded by its
-        only child ``c`` (also a candidate), stays a parent of the new stroke when ``c``
-        looks like a part of ``a`` (``a``'s last box at least ``nested_links`` times the
-        area of ``c``'s first) and the new stroke's first box passes the merge test
-        against ``c``'s last box: the new stroke is the rest of ``a``, alone or merging
-        back with ``c`` (issue 16, twelfth round)."""
-        kids = self.nodes[a].children
-        if len(kids) != 1 or kids[0] not in cset:
-            return False
-        c = kids[0]
-        first = getattr(self.nodes[c].stroke, "extent", None)
-        if first is None or not np.all(np.isfinite(self._end_ext[a])):
-            return False
-        part = float(np.prod(self._end_ext[a])) >= self.config.nested_links * float(np.prod(first[0]))
-        return part and self._merge_fits(stroke, np.array([c]))
-
-    def _merge_fits(self, stroke: Stroke, parents: np.ndarray) -> bool:
-        """Merge test (``NetworkConfig.merge_area``, ``merge_cover``): the new stroke's
-        first box has at least ``merge_area`` times the area of each parent's last box,
-        and covers at least ``merge_cover`` of each parent's last box grown by the box
-        gate's slack (True where a box is unknown)."""
-        ext = getattr(stroke, "extent", None)
-        areas = np.prod(self._end_ext[parents], axis=1)
-        if ext is None or not np.all(np.isfinite(areas)):
-            return True
-        if not np.all(float(np.prod(ext[0])) >= self.config.merge_area * areas):
-            return False
-        return self.config.merge_cover <= 0 or bool(np.all(self._cover(stroke, parents) >= self.config.merge_cover))
-
-    def _cover(self, stroke: Stroke, parents: np.ndarray) -> np.ndarray:
-        r"""Share of each parent's last box, grown by the box gate's slack
-        (:meth:`_box_slack`), inside the new stroke's first box; shape ``(len(parents),)``.
-        A merged region covers both its parts; a neighbour that only touches it does not."""
-        half = 0.5 * stroke.extent[0]
-        lo, hi = stroke.positions[0] - half, stroke.positions[0] + half
-        slack = np.nan_to_num(self._box_slack(stroke, parents))[:, None]
-        plo = self._end_pos[parents] - 0.5 * self._end_ext[parents] - slack
-        phi = self._end_pos[parents] + 0.5 * self._end_ext[parents] + slack
-        inter = np.prod(np.clip(np.minimum(hi, phi) - np.maximum(lo, plo), 0.0, None), axis=1)
-        return inter / np.prod(phi - plo, axis=1)
-
-    def _box_slack(self, stroke: Stroke, idx) -> np.ndarray:
-        """The box gate's slack in pixels for earlier strokes ``idx``: ``v_box`` times each
-        one's scale (NaN where it has no boxes) times the seconds from its end to the new
-        stroke's start."""
-        return self._scale[idx] * self.config.v_box * (stroke.start - self._end[idx]) / self.fps
-
-    def _boxes_near(self, stroke: Stroke, slack: np.ndarray, fallback: np.ndarray) -> np.ndarray:
-        """Box gate: the new stroke's first region box meets each earlier stroke's last
-        box grown by ``slack`` pixels on every side (shape ``(n,)``); where either box is
-        unknown, ``fallback`` (the centre-distance gate).
-
-        A split part's box lies inside its group's last box and a merged region's box
-        covers its parts', wherever their centres are, while a neighbour's box in a crowd
-        is apart from it: the gate admits the first two and not the third.
-        """
-        ext = getattr(stroke, "extent", None)
-        n = len(self.nodes)
-        if ext is None:
-            return fallback
-        sep = np.abs(self._end_pos[:n] - stroke.positions[0]) - 0.5 * (self._end_ext[:n] + ext[0])
-        with np.errstate(invalid="ignore"):
-            meets = np.all(sep <= slack[:, None], axis=1)
-        known = np.all(np.isfinite(self._end_ext[:n]), axis=1) & np.isfinite(slack)
-        return np.where(known, meets, fallback)
-
-    def _ancestors(self, k: int, depth: int) -> set[int]:
-        out: set[int] = set()
-        front = set(self.nodes[k].parents)
-        for _ in range(depth):
-            out |= front
-            front = {p for f in front for p in self.nodes[f].parents} - out
-        return out
-
-    def check_links(self, stroke: Stroke, parents: Iterable[int]) -> tuple[int, ...]:
-        """Validate links given for a new stroke instead of :meth:`candidate_parents`
-        (from a low-level tracker that reports its merges and splits, or the true
-        predecessors as an oracle); nothing changes.
-
-        Parameters
-        ----------
-        stroke : Stroke
-            The next stroke (index ``len(self)``).
-        parents : iterable of int
-            Indices of earlier strokes, at most ``max_parents``, distinct, each ended
-            before ``stroke.start`` and with fewer than ``max_children`` children.
-
-        Returns
-        -------
-        tuple of int
-            The parents, sorted.
-
-        Raises
-        ------
-        InputError
-            A parent that is not an earlier stroke, repeated, not ended before the stroke
-            starts, already with ``max_children`` children, or too many parents.
-        """
-        k = len(self.nodes)
-        try:
-            links = [operator.index(p) for p in parents]
-        except TypeError as err:
-            raise InputError(f"stroke {k}: parents must be stroke indices (ints), got {parents!r}") from err
-        cfg = self.config
-        if len(set(links)) != len(links) or len(links) > cfg.max_parents:
-            raise InputError(f"stroke {k}: parents {links} must be distinct and at most "
-                             f"max_parents={cfg.max_parents}")
-        for p in links:
-            if not 0 <= p < k:
-                raise InputError(f"stroke {k}: parent {p} is not an earlier stroke (0..{k - 1})")
-            if self._end[p] >= stroke.start:
-                raise InputError(f"stroke {k}: parent {p} ends at frame {self._end[p]}, not before "
-                                 f"the stroke starts (frame {stroke.start})")
-            if self._nchild[p] >= cfg.max_children:
-                raise InputError(f"stroke {k}: parent {p} already has max_children="
-                                 f"{cfg.max_children} children")
-        return tuple(sorted(links))
 
     def add_stroke(self, stroke: Stroke, parents: Iterable[int] | None = None, *,
                    checked: bool = False) -> tuple[int, list[int]]:
@@ -751,13 +554,13 @@ class LabelGraph:
         """:meth:`cpd_table` computed afresh (:func:`~models.jorge.labels.child_table` or
         :func:`~models.jorge.labels.root_table`)."""
         node = self.nodes[k]
-        self._check_table_size(k, parent_domains)
+        self.check_table_size(k, parent_domains)
         if node.parents:
             return child_table(parent_domains, shared, node.domain,
                                frozenset({k}), self.config.labels, truncate=self.config.truncate_pruned)
         return root_table(node.domain, frozenset({k}), self.config.labels)
 
-    def _check_table_size(self, k: int, parent_domains: list[tuple[Label, ...]]) -> None:
+    def check_table_size(self, k: int, parent_domains: list[tuple[Label, ...]]) -> None:
         """Raise a :class:`ModelError` if node ``k``'s CPD table over ``parent_domains``
         would hold more than ``_MAX_TABLE_ENTRIES`` entries."""
         entries = math.prod(len(d) for d in parent_domains) * len(self.nodes[k].domain)
@@ -885,11 +688,9 @@ class LabelGraph:
 
     # --- the network of a window -----------------------------------------------------------
     def window(self, active: Sequence[int]) -> WindowNet:
-        """The Bayes net of the active nodes (seed 004, eq. 11 over the active window).
-
-        Frozen parents and frozen siblings of active nodes enter as one-state variables,
-        so the active nodes' CPDs and restriction nodes see their fixed labels; all other
-        frozen nodes are left out (they are constants).
+        """The Bayes net of the active nodes (seed 004, eq. 11 over the active window):
+        :func:`models.jorge.window.build_window` of this graph (its frozen parents and
+        siblings enter as one-state nodes).
 
         Parameters
         ----------
@@ -906,83 +707,7 @@ class LabelGraph:
             An active node's CPD table would hold more than 5e7 entries (checked for
             every node before any table is built).
         """
-        active = sorted(int(a) for a in active)
-        act = set(active)
-        for a in active:
-            if not 0 <= a < len(self.nodes):
-                raise UnknownVariableError(f"window: unknown node {a}")
-            if self.nodes[a].frozen is not None:
-                raise InputError(f"window: node {a} is frozen and cannot be active")
-        for a in active:  # every table's size checked before any is built
-            self._check_table_size(a, self.parent_domains(a))
-        boundary: set[int] = set()
-        pairs: set[tuple[int, int]] = set()
-        for a in active:
-            for p in self.nodes[a].parents:
-                if p not in act:
-                    if self.nodes[p].frozen is None:
-                        raise InputError(
-                            f"window: parent {p} of active node {a} is neither active nor frozen"
-                        )
-                    boundary.add(p)
-            for s in self.siblings(a):
-                pairs.add((min(a, s), max(a, s)))
-                if s not in act:
-                    boundary.add(s)
-        # a sibling outside the window that is not frozen yet (a later node) stays out
-        boundary = {b for b in boundary if self.nodes[b].frozen is not None}
-        pairs = {(i, j) for i, j in pairs if (i in act or i in boundary) and (j in act or j in boundary)}
-        variables, cpds = [], []
-        domains: dict[str, tuple[Label, ...]] = {}
-        for b in sorted(boundary):
-            name = node_name(b)
-            lab = self.nodes[b].frozen
-            domains[name] = (lab,)
-            variables.append(DiscreteVariable(name, 1, (format_label(lab),)))
-            cpds.append(TabularCPD(name, [], np.ones(1)))
-        soft: dict[str, np.ndarray] = {}
-        kept_nodes: list = []
-        for a in active:
-            name = node_name(a)
-            dom = self.nodes[a].domain
-            domains[name] = dom
-            variables.append(DiscreteVariable(name, len(dom), tuple(format_label(x) for x in dom)))
-            parents = [node_name(p) for p in self.nodes[a].parents]
-            table = self.cpd_table(a)
-            corr = self.chain_log_ratio(a)
-            if corr is not None:  # chain_palette: a factor on (parent, x_a), scaled to max 1,
-                table = table * np.exp(corr - corr.max())  # row sums to m_a with the kept mass
-            kept = table.sum(axis=-1)
-            cpds.append(TabularCPD(name, parents, table / kept[..., None]))
-            if parents and np.any(kept < 1.0 - 1e-12):
-                kept_nodes.append((kept_name(a), parents, kept))
-            ll = self.evidence_loglik(a)
-            soft[name] = np.exp(ll - ll.max())
-        evidence: dict[str, int] = {}
-        # p(m_k = 1 | parents) = mass kept (truncate_pruned) times the chain factor's row sums
-        for name, parents, kept in kept_nodes:
-            variables.append(DiscreteVariable(name, 2, ("0", "1")))
-            kept = np.minimum(kept, 1.0)  # rounding: a full row may sum to 1 + 1e-16
-            cpds.append(TabularCPD(name, parents, np.stack([1.0 - kept, kept], axis=-1)))
-            evidence[name] = 1
-        for i, j in sorted(pairs):
-            name = restriction_name(i, j)
-            variables.append(DiscreteVariable(name, 2, ("0", "1")))
-            cpds.append(self._restriction_cpd(name, i, j, domains))
-            evidence[name] = 1
-        bn = BayesNet(variables, cpds)
-        return WindowNet(bn, evidence, soft, domains, tuple(active), tuple(sorted(boundary)))
-
-    def _restriction_cpd(self, name: str, i: int, j: int, domains: dict) -> TabularCPD:
-        """Restriction node of siblings ``i < j`` (eq. 5); the group of :meth:`cover_parent`,
-        where there is one in the window, is its parent too
-        (:func:`models.jorge.labels.restriction_table`)."""
-        di, dj = domains[node_name(i)], domains[node_name(j)]
-        group = self.cover_parent(i, j)
-        if group is not None and node_name(group) in domains:
-            p = node_name(group)
-            return TabularCPD(name, [p, node_name(i), node_name(j)], self.restriction(i, j, di, dj, domains[p]))
-        return TabularCPD(name, [node_name(i), node_name(j)], self.restriction(i, j, di, dj))
+        return build_window(self, active)
 
     def restriction(self, i: int, j: int, domain_i: Sequence[Label], domain_j: Sequence[Label],
                     group_domain: Sequence[Label] | None = None) -> np.ndarray:
@@ -994,97 +719,6 @@ class LabelGraph:
         labels = self.config.labels
         return restriction_table(domain_i, domain_j, self.nested(i, j), group_domain, labels.split_cover,
                                  labels.split_normalise)
-
-
-@dataclass(frozen=True)
-class Inference:
-    """Result of exact inference on a window.
-
-    Attributes
-    ----------
-    labels : dict int -> Label
-        MAP label of every active node (eq. 1 / eq. 11).
-    log_prob : float
-        :math:`\\log P(x^*, r = 1)` times the colour likelihoods (scaled to max 1 per node).
-    marginals : dict int -> ndarray (num_labels,)
-        Posterior of every active node's labels.
-    log_evidence : float
-    """
-
-    labels: dict
-    log_prob: float
-    marginals: dict
-    log_evidence: float
-
-
-@dataclass(frozen=True)
-class WindowNet:
-    """A Bayes net of one inference window and its evidence.
-
-    Attributes
-    ----------
-    bn : BayesNet
-    evidence : dict name -> int
-        ``r = 1`` for every restriction node.
-    soft_evidence : dict name -> ndarray
-        Colour likelihood of every active node (scaled to max 1).
-    domains : dict name -> tuple of Label
-        States of every label node (one label for frozen boundary nodes).
-    active, boundary : tuple of int
-    """
-
-    bn: BayesNet
-    evidence: dict
-    soft_evidence: dict
-    domains: dict
-    active: tuple
-    boundary: tuple
-
-    def with_colour_nodes(self) -> tuple[BayesNet, dict]:
-        """The same model with the soft evidence (colours, and size where recorded) as
-        explicit binary children ``y{k}``
-        observed 1, ``p(y = 1 | x) = lambda(x)`` (virtual evidence as a node), for engines
-        without soft evidence (pgmpy). Its joint with the evidence equals ours exactly.
-
-        Returns
-        -------
-        bn : BayesNet
-        evidence : dict name -> int
-        """
-        variables = list(self.bn.variables.values())
-        cpds = list(self.bn.cpds.values())
-        evidence = dict(self.evidence)
-        for name, lik in self.soft_evidence.items():
-            k = int(name[1:])
-            y = colour_name(k)
-            variables.append(DiscreteVariable(y, 2, ("0", "1")))
-            cpds.append(TabularCPD(y, [name], np.stack([1.0 - lik, lik], axis=-1)))
-            evidence[y] = 1
-        return BayesNet(variables, cpds), evidence
-
-
-def solve(win: WindowNet, marginals: bool = True) -> Inference:
-    """MAP labelling and marginals of a window with :mod:`inference.exact`.
-
-    Parameters
-    ----------
-    win : WindowNet
-    marginals : bool
-        Also calibrate a junction tree for every active node's posterior.
-
-    Returns
-    -------
-    Inference
-    """
-    assignment, log_prob = map_assignment(win.bn, win.evidence, win.soft_evidence)
-    labels = {k: win.domains[node_name(k)][assignment[node_name(k)]] for k in win.active}
-    marg: dict[int, np.ndarray] = {}
-    log_ev = float("nan")
-    if marginals:
-        cal = JunctionTree(win.bn).calibrate(win.evidence, win.soft_evidence)
-        marg = {k: cal.marginals[node_name(k)] for k in win.active}
-        log_ev = cal.log_evidence
-    return Inference(labels, log_prob, marg, log_ev)
 
 
 def _linear_quantile(values: np.ndarray, q: float) -> float:

@@ -177,3 +177,18 @@ def test_unpruned_domains_too_large_raise_a_model_error():
     assert not g._cpd_memo  # refused before any table was built (node 4's holds 5e7)
     labels = label_online([n.stroke for n in seed.nodes], OnlineConfig(network=cfg), fps=25.0).labels
     assert labels[3] != labels[4]
+
+
+def test_window_and_link_names_still_importable_from_network():
+    """The window's Bayes net and its solution moved to ``models.jorge.window``, the link
+    rule to ``models.jorge.links``: the names users imported from
+    ``models.jorge.network`` are the same objects, and the graph keeps its link methods."""
+    from models.jorge import links, network, window
+
+    for name in ("WindowNet", "Inference", "solve", "node_name", "restriction_name", "kept_name",
+                 "colour_name"):
+        assert getattr(network, name) is getattr(window, name), name
+        assert name in network.__all__, name
+    assert issubclass(network.LabelGraph, links.LinkRule)
+    for name in ("candidate_parents", "check_links"):
+        assert getattr(network.LabelGraph, name) is getattr(links.LinkRule, name), name
