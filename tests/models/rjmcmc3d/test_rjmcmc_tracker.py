@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from dbn.errors import InputError, ShapeError
+from models.rjmcmc3d.chain import ADD, DELETE, LEAVE, STAY
 from models.rjmcmc3d.geometry import apply_homography, ground_homography, homography_jacobian
 from models.rjmcmc3d.metrics import evaluate
 from models.rjmcmc3d.model import TrackerParams, ground_noise_map, predict
@@ -19,7 +20,7 @@ from models.rjmcmc3d.scene import (
     render_frame,
     simulate_walkers,
 )
-from models.rjmcmc3d.tracker import ADD, DELETE, LEAVE, STAY, RJMCMCTracker
+from models.rjmcmc3d.tracker import RJMCMCTracker
 
 SMALL = TrackerParams(num_moves=500, burn_in=150)
 
@@ -229,3 +230,13 @@ def test_scalar_interaction_matches_vectorised(scene, tracker) -> None:
             np.array(uj),
         )
         assert chain._pair(si, ui, sj, uj) == pytest.approx(float(ref), abs=1e-15)
+
+
+def test_chain_names_still_importable_from_tracker():
+    """One frame's chain moved to ``models.rjmcmc3d.chain``; the names users imported from
+    ``models.rjmcmc3d.tracker`` are the same objects."""
+    from models.rjmcmc3d import chain, tracker
+
+    for name in ("FrameChain", "MOVES", "MOVE_NAMES"):
+        assert getattr(tracker, name) is getattr(chain, name), name
+        assert name in tracker.__all__, name
