@@ -31,7 +31,8 @@ __all__ = ["LinkRule"]
 
 class LinkRule:
     """Parents of a new stroke: the on-line link rule (:meth:`candidate_parents`) and the
-    check of links given from outside (:meth:`check_links`). Nothing here changes the graph.
+    check of links given from outside (:meth:`check_links`), and whether two siblings
+    are nested (:meth:`nested`). Nothing here changes the graph.
 
     A mixin: the class using it provides ``config`` (a
     :class:`~models.jorge.config.NetworkConfig`), ``fps``, ``nodes`` (each with
@@ -109,6 +110,11 @@ class LinkRule:
         if len(cand) == 2 and not nested and not self._merge_fits(stroke, cand):
             cand = cand[:1]
         return cand
+
+    def nested(self, i: int, j: int) -> bool:
+        """Whether node ``i`` (``i < j``) is a parent of node ``j``: two siblings in a nested
+        link (``NetworkConfig.nested_links``; :func:`models.jorge.labels.restriction_allows`)."""
+        return i in self.nodes[j].parents
 
     def _merges_back(self, stroke: Stroke, a: int, cset: set) -> bool:
         """Nested link (``NetworkConfig.nested_links``): candidate ``a``, superseded by its

@@ -268,11 +268,6 @@ class LabelGraph(LinkRule):
         """Current domains of node ``k``'s parents (a frozen parent: its label alone)."""
         return [self.current_domain(p) for p in self.nodes[k].parents]
 
-    def nested(self, i: int, j: int) -> bool:
-        """Whether node ``i`` (``i < j``) is a parent of node ``j``: two siblings in a nested
-        link (``NetworkConfig.nested_links``; :func:`models.jorge.labels.restriction_allows`)."""
-        return i in self.nodes[j].parents
-
     def cover_parent(self, i: int, j: int) -> int | None:
         """The group whose split the restriction node of siblings ``i < j`` weighs with
         ``LabelParams.split_cover`` (:func:`models.jorge.labels.restriction_table`): their one

@@ -1,4 +1,5 @@
-r"""On-line labelling (seed 004, section 5), scoring and the colour-only baseline.
+r"""On-line labelling (seed 004, section 5): periodic exact inference over a window of the
+most recent strokes, instant labels between inferences, and the final re-identification.
 
 Periodic inference
     Every ``period_s`` seconds (T) the active window is solved exactly (eq. 11): the

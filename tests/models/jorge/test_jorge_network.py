@@ -190,5 +190,5 @@ def test_window_and_link_names_still_importable_from_network():
         assert getattr(network, name) is getattr(window, name), name
         assert name in network.__all__, name
     assert issubclass(network.LabelGraph, links.LinkRule)
-    for name in ("candidate_parents", "check_links"):
+    for name in ("candidate_parents", "check_links", "nested"):
         assert getattr(network.LabelGraph, name) is getattr(links.LinkRule, name), name
