@@ -10,7 +10,10 @@
   images, and detector (:mod:`~models.rjmcmc3d.scene` re-exports all of these);
 - :mod:`~models.rjmcmc3d.model`: parameters, dynamics (eq. 7 with ``C(u)``), priors;
 - :mod:`~models.rjmcmc3d.likelihood`: eqs. 8-10, incremental and from scratch;
-- :mod:`~models.rjmcmc3d.tracker`: the six-move RJ-MCMC filter (eqs. 2, 5, 11);
+- :mod:`~models.rjmcmc3d.chain`: one frame's chain, its target and six moves (eqs. 2, 5-7,
+  11);
+- :mod:`~models.rjmcmc3d.tracker`: the RJ-MCMC filter over frames: the state carried
+  between frames and each frame's posterior summary;
 - :mod:`~models.rjmcmc3d.metrics`: MOTA / IDF1 / ID switches through py-motmetrics.
 """
 
