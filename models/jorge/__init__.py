@@ -13,6 +13,7 @@ stroke graph and the colour-only baseline),
 :mod:`memo` (what a node remembers of its CPD and evidence between inferences),
 :mod:`api` (the labeller under the tracker protocol), :mod:`fit` (the parameters learned
 on the declared training split), :mod:`confirm` (a change compared on fresh seeds),
+:mod:`estimate` (the error on many SIMULATED meeting scenes, with standard errors),
 :mod:`simulate` (a synthetic sequence when the real ground truth is absent),
 :mod:`meeting` (SIMULATED meetings of 3-5 people), :mod:`demo` (``dbntrack demo``'s part),
 :mod:`eth` (tracks in world metres, ETH / UCY ``obsmat``, through a SIMULATED camera).

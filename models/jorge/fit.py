@@ -636,8 +636,10 @@ are, against 0.063 overall), under the same four conditions, declared before it 
 0.1978, paired +0.0010 (standard error 0.0011), lower on 17 of 40; the PETS2009 S1 crowds
 0.5540 / 0.7781 -> 0.5553 / 0.7825, SIMULATED meetings at 25 fps of k = 3 / 4 / 5 0.0310 /
 0.0669 / 0.1050 -> 0.0307 / 0.0679 / 0.1021. On seeds 100-104, before declaring, it had gone
-0.1980 -> 0.1903 (paired -0.0077, standard error 0.0048). Not landed (removed). The next
-confirmation takes seeds from 960 on."""
+0.1980 -> 0.1903 (paired -0.0077, standard error 0.0048). Not landed (removed). Scenes
+5000-5199 of the SIMULATED meetings served the thirty-sixth round's measurement of the default
+(:mod:`models.jorge.estimate`, at 25 and 7 fps, with its own and the true links); nothing was
+chosen on them. The next confirmation takes seeds from 960 on."""
 
 DEFAULT_POINT = {"gate": "boxes", "merge_area": 1.0, "parameters": "ml_gain", "new_groups": "roots_joins",
                  "size_once": True, "palette_continued": 0.75}
