@@ -103,9 +103,10 @@ class LabelGraph(LinkRule):
 
     Strokes are added in start order (:meth:`add_stroke`); each new node gets its parents
     among the strokes that ended before it started and its admissible labels from its
-    parents' current domains. Nodes can be frozen to one label (:meth:`freeze`) and
-    domains pruned (:meth:`set_domain`); :meth:`window` turns a set of active nodes into a
-    :class:`WindowNet` for exact inference.
+    parents' current domains; the link rule is the :class:`~models.jorge.links.LinkRule`
+    it inherits. Nodes can be frozen to one label (:meth:`freeze`) and domains pruned
+    (:meth:`set_domain`); :meth:`window` turns a set of active nodes into a
+    :class:`WindowNet` for exact inference (:mod:`models.jorge.window`).
 
     Parameters
     ----------
@@ -556,8 +557,15 @@ class LabelGraph(LinkRule):
         return root_table(node.domain, frozenset({k}), self.config.labels)
 
     def check_table_size(self, k: int, parent_domains: list[tuple[Label, ...]]) -> None:
-        """Raise a :class:`ModelError` if node ``k``'s CPD table over ``parent_domains``
-        would hold more than ``_MAX_TABLE_ENTRIES`` entries."""
+        """Check, before building it, that node ``k``'s CPD table over ``parent_domains``
+        (one tuple of labels per parent) fits: at most ``_MAX_TABLE_ENTRIES`` (5e7)
+        entries. :func:`models.jorge.window.build_window` checks every active node first.
+
+        Raises
+        ------
+        ModelError
+            The table would be larger (unpruned domains grow along chains of joins).
+        """
         entries = math.prod(len(d) for d in parent_domains) * len(self.nodes[k].domain)
         if entries > _MAX_TABLE_ENTRIES:
             raise ModelError(

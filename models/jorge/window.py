@@ -3,10 +3,12 @@ r"""One inference window of seed 004's label network (eq. 11 over the active nod
 :mod:`inference.exact`.
 
 :func:`build_window` assembles the net of a :class:`models.jorge.network.LabelGraph`'s
-active nodes: a label node ``x{k}`` per active stroke (its CPD, :meth:`LabelGraph.cpd_table`),
-its frozen parents and siblings as one-state nodes, a restriction node ``r{i}_{j}`` per
-sibling pair (eq. 5, observed 1), an observed node ``m{k}`` for the mass a pruned domain
-kept, and every active node's soft evidence (colours, eq. 6, size and palette).
+active nodes: a label node ``x{k}`` per active stroke (its CPD,
+:meth:`LabelGraph.cpd_table`), its frozen parents and siblings as one-state nodes, a
+restriction node ``r{i}_{j}`` per sibling pair (eq. 5, observed 1), an observed node
+``m{k}`` for the mass a pruned domain kept times the chain factor's row sums
+(:func:`kept_name`), and every active node's soft evidence (colours, eq. 6, size and
+palette).
 :func:`solve` returns the MAP labels (eq. 1) and the marginals. Moved here from
 :mod:`models.jorge.network`, which still exports every name (issue 16, thirty-sixth
 round); no behaviour change.
