@@ -90,13 +90,9 @@ def _mean(x):
 
 
 def run(quick: bool, seed: int) -> dict:
-    from benchmarks._zajdel_numpy_loop import NumpyLoopADF
-    from models.zajdel.data import take
-    from models.zajdel.greedy import greedy_labels
-    from models.zajdel.metrics import num_objects, pairwise_prf, partition_accuracy
-    from models.zajdel.oracle import exact_filtering
+    """The benchmark (module docstring): sections 1-4 below, as one JSON-ready dict."""
     from models.zajdel.simulate import large_config, simulate_office
-    from models.zajdel.tracker import ADFConfig, ZajdelADF
+    from models.zajdel.tracker import ADFConfig
 
     checks: dict[str, bool] = {}
 
@@ -110,8 +106,56 @@ def run(quick: bool, seed: int) -> dict:
     except OSError:  # pragma: no cover
         out["load_average_1min"] = None
 
-    # -- 1. accuracy on the default office scenario (10 seeds) -----------------------
     cfg = ADFConfig(max_open=64, init_persons=128, chunk=64)
+    out.update(_office_accuracy(seed, cfg, check))
+    out.update(_against_oracle(seed, cfg, quick, check))
+
+    # -- 3. streaming the large setting --------------------------------------------
+    n_large = 2000 if quick else 10_000
+    big = simulate_office(seed, large_config(10_000))
+    stream = _take_first(big.obs, n_large)
+    lcfg = ADFConfig(max_open=256, init_persons=1024 if quick else 4096, chunk=128)
+    large, counter_mean = _stream_large(big, stream, n_large, lcfg, quick, check)
+    out.update(large)
+
+    # -- 3a. throughput against the cap, the table pruned by mass (issue 17) ---------
+    t0 = time.perf_counter()
+    out.update(_mass_pruning(big, stream, out["f1_adf"], seed, check, 3))
+    log(f"mass pruning: {time.perf_counter() - t0:.1f} s")
+
+    # -- 3b. the counter on the large setting: birth-leave prior vs the spec's -------
+    t0 = time.perf_counter()
+    out.update(_counter_large(big, counter_mean, n_large, joint=not quick))
+    if not quick:
+        errs = [out["counter_rel_err_large"]]
+        for s in (seed + 1, seed + 2):
+            errs.append(
+                _counter_large(simulate_office(s, large_config(10_000)), joint=False)[
+                    "counter_rel_err_large"
+                ]
+            )
+        out["counter_rel_err_large_seeds"] = errs
+    log(f"counter on the large setting: {time.perf_counter() - t0:.1f} s")
+
+    out.update(_against_numpy_loop(big, lcfg, quick, check))
+
+    out["failed_checks"] = [k for k, v in checks.items() if not v]
+    out["ok"] = all(checks.values())
+    out["note"] = (
+        "simulated data (models.zajdel.simulate); timings on a shared machine, see "
+        "load_average_1min"
+    )
+    return out
+
+
+def _office_accuracy(seed: int, cfg, check) -> dict:
+    """1. Accuracy on the default office scenario (10 seeds): every decoding of the ADF
+    and the greedy baseline, partition accuracy, pairwise F1 and object-count error."""
+    from models.zajdel.greedy import greedy_labels
+    from models.zajdel.metrics import num_objects, pairwise_prf, partition_accuracy
+    from models.zajdel.simulate import simulate_office
+    from models.zajdel.tracker import ZajdelADF
+
     acc: dict[str, list] = {}
     t0 = time.perf_counter()
     for s in range(10):
@@ -137,34 +181,34 @@ def run(quick: bool, seed: int) -> dict:
             acc.setdefault("f1_" + name, []).append(pairwise_prf(lab, truth)[2])
             acc.setdefault("objects_" + name, []).append(abs(num_objects(lab) - n_true))
     log(f"office accuracy: {time.perf_counter() - t0:.1f} s")
-    for key in (
-        "q_adf",
-        "f1_adf",
-        "f1_adf_online_map",
-        "f1_adf_lag3",
-        "q_greedy",
-        "f1_greedy",
-        "q_adf_lag3",
-        "f1_adf_chain_unconstrained",
-        "f1_adf_chain_greedy_order",
-    ):
-        out[key] = _mean(acc[key])
+    keys = ("q_adf", "f1_adf", "f1_adf_online_map", "f1_adf_lag3", "q_greedy", "f1_greedy", "q_adf_lag3",
+            "f1_adf_chain_unconstrained", "f1_adf_chain_greedy_order")
+    out = {key: _mean(acc[key]) for key in keys}
     out["objects_abs_err"] = _mean(acc["objects_adf"])
     out["objects_abs_err_lag3"] = _mean(acc["objects_adf_lag3"])
     out["objects_abs_err_greedy"] = _mean(acc["objects_greedy"])
     out["office_num_seeds"] = 10
+    return out
 
-    # -- 2. against the exact oracle (K = 8, 20 seeds) -------------------------------
+
+def _against_oracle(seed: int, cfg, quick: bool, check) -> dict:
+    """2. The ADF against exact filtering (K = 8 observations, 80 seeds; the plain keys
+    use the first 20): MAP link agreement, total-variation gap, counter error."""
+    from models.zajdel.oracle import exact_filtering
+    from models.zajdel.simulate import simulate_office
+    from models.zajdel.tracker import ZajdelADF
+
     t0 = time.perf_counter()
     variants = {"": cfg} if quick else {"": cfg, "_seed_update": cfg._replace(old_update="seed")}
     exact = []
     n_oracle = 80  # the keys use the first 20; the *_80 keys all 80
     for s in range(n_oracle):
         sc = simulate_office(seed + 1000 + s)
-        obs = take(sc.obs, slice(0, 8))
+        obs = _take_first(sc.obs, 8)
         ora = exact_filtering(obs, sc.params)
         check("oracle_rows_sum_to_one", np.allclose(ora.link_post.sum(1), 1.0, atol=1e-12))
         exact.append((sc.params, obs, ora))
+    out: dict = {}
     for suffix, c in variants.items():
         agree, gap, cerr = [], [], []
         for params, obs, ora in exact:
@@ -181,15 +225,18 @@ def run(quick: bool, seed: int) -> dict:
         out["oracle_counter_abs_err_80" + suffix] = _mean(np.concatenate(cerr))
     out["old_update"] = cfg.old_update
     log(f"oracle comparison: {time.perf_counter() - t0:.1f} s")
+    return out
 
-    # -- 3. streaming the large setting --------------------------------------------
-    n_large = 2000 if quick else 10_000
-    big = simulate_office(seed, large_config(10_000))
-    stream = take(big.obs, slice(0, n_large))
-    lcfg = ADFConfig(max_open=256, init_persons=1024 if quick else 4096, chunk=128)
+
+def _stream_large(big, stream, n_large: int, lcfg, quick: bool, check) -> tuple[dict, np.ndarray]:
+    """3. Streaming the first ``n_large`` observations of the large setting: compile time,
+    throughput, open tracks; returns the keys and the counter's mean per observation."""
+    from models.zajdel.tracker import ZajdelADF
+
     tr = ZajdelADF(big.params, lcfg)
+    out: dict = {}
     t0 = time.perf_counter()
-    tr.run(take(stream, slice(0, lcfg.chunk)))  # warm-up: compiles the chunk
+    tr.run(_take_first(stream, lcfg.chunk))  # warm-up: compiles the chunk
     out["compile_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     _, res = tr.run(stream, progress=not quick)
@@ -203,40 +250,27 @@ def run(quick: bool, seed: int) -> dict:
     check("large_finite", np.all(np.isfinite(res.loglik[~res.impossible])))
     check("large_link_mass_at_most_one", np.all(res.link_prob.sum(1) + res.new_prob <= 1 + 1e-9))
     log(f"large setting: {n_large} obs in {dt:.1f} s ({out['obs_per_s']:.0f} obs/s)")
+    return out, res.counter_mean
 
-    # -- 3a. throughput against the cap, the table pruned by mass (issue 17) ---------
-    t0 = time.perf_counter()
-    out.update(_mass_pruning(big, stream, out["f1_adf"], seed, check, 3))
-    log(f"mass pruning: {time.perf_counter() - t0:.1f} s")
 
-    # -- 3b. the counter on the large setting: birth-leave prior vs the spec's -------
-    t0 = time.perf_counter()
-    out.update(_counter_large(big, res.counter_mean, n_large, joint=not quick))
-    if not quick:
-        errs = [out["counter_rel_err_large"]]
-        for s in (seed + 1, seed + 2):
-            errs.append(
-                _counter_large(simulate_office(s, large_config(10_000)), joint=False)[
-                    "counter_rel_err_large"
-                ]
-            )
-        out["counter_rel_err_large_seeds"] = errs
-    log(f"counter on the large setting: {time.perf_counter() - t0:.1f} s")
+def _against_numpy_loop(big, lcfg, quick: bool, check) -> dict:
+    """4. The jax ADF against the plain numpy loop of the same ADF: speed-up and the
+    largest difference of the link matrices."""
+    from benchmarks._zajdel_numpy_loop import NumpyLoopADF
+    from models.zajdel.tracker import ZajdelADF
 
-    # -- 4. against the plain numpy loop (same ADF) ----------------------------------
     n_ref = 300 if quick else 1000
-    sub = take(big.obs, slice(0, n_ref))
+    sub = _take_first(big.obs, n_ref)
     rcfg = lcfg._replace(link_out=lcfg.max_open, init_persons=1024 if quick else 4096)
     tr = ZajdelADF(big.params, rcfg)
-    tr.run(take(sub, slice(0, rcfg.chunk)))  # warm-up (this config compiles once)
+    tr.run(_take_first(sub, rcfg.chunk))  # warm-up (this config compiles once)
     _, mine = tr.run(sub)
     t_jax = best_time(lambda: tr.run(sub), repeat=3)
     ref = NumpyLoopADF(big.params, rcfg, rcfg.init_persons)
     t0 = time.perf_counter()
     lo, lp, npr = ref.run(sub)
     t_np = time.perf_counter() - t0
-    out["speedup_vs_numpy_loop"] = t_np / t_jax
-    out["numpy_loop_obs"] = n_ref
+    out = {"speedup_vs_numpy_loop": t_np / t_jax, "numpy_loop_obs": n_ref}
     A = mine.link_matrix()
     B = np.zeros_like(A)
     kk = np.repeat(np.arange(n_ref), lo.shape[1])
@@ -246,13 +280,6 @@ def run(quick: bool, seed: int) -> dict:
     out["numpy_loop_max_abs_diff"] = float(np.abs(A - B).max())
     check("numpy_loop_equals_jax", out["numpy_loop_max_abs_diff"] < 1e-8)
     log(f"numpy loop: {t_np:.1f} s vs {t_jax:.2f} s")
-
-    out["failed_checks"] = [k for k, v in checks.items() if not v]
-    out["ok"] = all(checks.values())
-    out["note"] = (
-        "simulated data (models.zajdel.simulate); timings on a shared machine, see "
-        "load_average_1min"
-    )
     return out
 
 
