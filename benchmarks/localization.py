@@ -164,23 +164,44 @@ def particles_lib_apf(seed, x0, obs, steps, inv_bw, log_norm, num_steps):
 
 
 def run(quick: bool, seed: int) -> dict:
+    """The benchmark (module docstring): accuracy on the SIMULATED world and on MRCLAM, then
+    the jax APF's speed against its baselines, as one JSON-ready dict."""
     out: dict = {}
-    checks = []
+    checks: list = []
     t_all = time.perf_counter()
     trained = build_trained_world(seed)
     log(
         f"trained world: {len(trained.sensor.train_poses)} training poses, threshold {trained.sensor.threshold:.3f}"
     )
+    out.update(_synthetic_accuracy(seed, trained, quick, checks))
+    log(
+        f"synthetic: SIR {out['rmse_sir']:.3f} m, APF {out['rmse_apf']:.3f} m ({time.perf_counter() - t_all:.1f} s)"
+    )
+    out.update(_mrclam_accuracy(seed, quick, checks))
+    if out["mrclam_rmse_m"] is not None:
+        log(f"MRCLAM: {out['mrclam_rmse_m']:.3f} m ({time.perf_counter() - t_all:.1f} s)")
+    out.update(_speed(seed, trained, quick, checks))
+    out["timing_note"] = (
+        "best of repeats on a possibly shared machine; the _cpu figure is process CPU time"
+    )
+    out["ok"] = bool(all(bool(c) for c in checks))
+    out["total_s"] = time.perf_counter() - t_all
+    return out
 
-    # 1. accuracy on the SIMULATED world ----------------------------------------------------------
-    num_t = 120  # the same runs in --quick: cheap, and the SIR/APF gap needs the whole loop
+
+def _synthetic_accuracy(seed: int, trained, quick: bool, checks: list) -> dict:
+    """1. SIR and APF accuracy on the SIMULATED world (10 runs of 120 steps, also in
+    --quick: cheap, and the SIR/APF gap needs the whole loop); the full run adds the same
+    runs with the outlier rule switched off (occlusions reach the filter)."""
+    out: dict = {}
+    num_t = 120
     syn = synthetic_trials(seed, trained, num_runs=10, num_timesteps=num_t, num_particles=1000)
     for name in ("sir", "apf"):
         out[f"rmse_{name}"] = float(syn[name]["rmse"].mean())
         out[f"failure_rate_{name}"] = float(np.mean(syn[name]["final_error"] > 1.0))
         checks.append(np.all(np.isfinite(syn[name]["means"])))
     out["dead_reckoning_rmse_synthetic"] = float(syn["dead_reckoning_rmse"].mean())
-    if not quick:  # the same runs with the outlier rule switched off: occlusions reach the filter
+    if not quick:
         blind = copy.copy(trained.sensor)
         blind.threshold = math.inf
         syn_b = synthetic_trials(
@@ -196,25 +217,28 @@ def run(quick: bool, seed: int) -> dict:
                 np.mean(syn_b[name]["final_error"] > 1.0)
             )
     out["synthetic_steps"] = num_t
-    log(
-        f"synthetic: SIR {out['rmse_sir']:.3f} m, APF {out['rmse_apf']:.3f} m ({time.perf_counter() - t_all:.1f} s)"
-    )
+    return out
 
-    # 2. real MRCLAM -----------------------------------------------------------------------------
+
+def _mrclam_accuracy(seed: int, quick: bool, checks: list) -> dict:
+    """2. Accuracy on the real MRCLAM data (``mrclam_rmse_m`` None and the reason when the
+    data are absent)."""
     try:
         mr = mrclam_trials(seed, num_runs=2 if quick else 5, num_particles=2000, duration=300.0)
-        out["mrclam_rmse_m"] = float(mr["rmse"].mean())
-        out["mrclam_rmse_per_seed_m"] = [float(v) for v in mr["rmse"]]
-        out["mrclam_dead_reckoning_rmse_m"] = mr["dead_reckoning_rmse"]
-        out["mrclam_seeds"] = len(mr["rmse"])
-        checks.append(np.all(np.isfinite(mr["means"])))
-        log(f"MRCLAM: {out['mrclam_rmse_m']:.3f} m ({time.perf_counter() - t_all:.1f} s)")
     except FileNotFoundError as exc:
-        out["mrclam_rmse_m"] = None
-        out["mrclam_dead_reckoning_rmse_m"] = None
-        out["mrclam_skipped"] = str(exc)
+        return {"mrclam_rmse_m": None, "mrclam_dead_reckoning_rmse_m": None, "mrclam_skipped": str(exc)}
+    checks.append(np.all(np.isfinite(mr["means"])))
+    return {
+        "mrclam_rmse_m": float(mr["rmse"].mean()),
+        "mrclam_rmse_per_seed_m": [float(v) for v in mr["rmse"]],
+        "mrclam_dead_reckoning_rmse_m": mr["dead_reckoning_rmse"],
+        "mrclam_seeds": len(mr["rmse"]),
+    }
 
-    # 3. speed: APF, k-NN sensor, J = 10, N = 100,000, float32 -------------------------------------
+
+def _speed(seed: int, trained, quick: bool, checks: list) -> dict:
+    """3. Speed: the jax APF with the k-NN sensor, J = 10, N = 100,000, float32, best of
+    repeats; then the baselines on identical inputs (:func:`_baselines`)."""
     n = 100_000
     steps_t = 20 if quick else 50
     r = simulate_run(seed + 1000, trained.world, steps_t, outlier_rate=0.1)
@@ -227,6 +251,7 @@ def run(quick: bool, seed: int) -> dict:
     def go():
         return jax.block_until_ready(pf_run(key, pf, obs32, steps32, summary=None))
 
+    out: dict = {}
     t0 = time.perf_counter()
     final, infos, _ = go()
     out["compile_s"] = time.perf_counter() - t0  # first call: trace + compile (+ one run)
@@ -245,13 +270,22 @@ def run(quick: bool, seed: int) -> dict:
     log(
         f"jax APF: {out['ns_per_particle_step']:.1f} ns/particle-step (cpu {out['ns_per_particle_step_cpu']:.1f})"
     )
+    out.update(_baselines(seed, trained, model, pf, key, obs32, steps32, best_wall / steps_t, quick, checks))
+    checks.append(np.isfinite(jax_log_z) and np.all(np.isfinite(jax_mean)))
+    return out
 
-    # baselines on identical inputs: numpy reference and the `particles` library
+
+def _baselines(seed: int, trained, model, pf, key, obs32, steps32, jax_per_step: float, quick: bool,
+               checks: list) -> dict:
+    """The numpy reference APF and the ``particles`` library's AuxiliaryPF on the speed
+    run's inputs: speed-ups against ``jax_per_step`` (seconds per step), and the numpy
+    reference's log-likelihood against the jax APF's over the same first steps."""
     np_obs = jax.tree_util.tree_map(np.asarray, obs32)
     np_steps = np.asarray(steps32)
     inv_bw = (1.0 / trained.sensor.bandwidth).astype(np.float32)
     log_norm = np.float32(model._log_norm)
     x0 = np.asarray(pf.init(jax.random.key(seed + 1)).particles)
+    n = x0.shape[0]
     np_steps_n = 3 if quick else 10
     base_repeats = 1 if quick else 2  # baselines are slow: best of fewer repeats
     np_per_step = math.inf
@@ -259,7 +293,7 @@ def run(quick: bool, seed: int) -> dict:
         t0 = time.perf_counter()
         xf, lwf, np_log_z = numpy_apf(seed, x0, np_obs, np_steps[:np_steps_n], inv_bw, log_norm)
         np_per_step = min(np_per_step, (time.perf_counter() - t0) / np_steps_n)
-    out["speedup_vs_numpy"] = np_per_step / (best_wall / steps_t)
+    out: dict = {"speedup_vs_numpy": np_per_step / jax_per_step}
     # internal check: the numpy reference and the jax APF agree over the same first steps
     _, infos_short, _ = pf_run(
         key,
@@ -280,7 +314,7 @@ def run(quick: bool, seed: int) -> dict:
             particles_lib_apf(seed, x0, np_obs, np_steps, inv_bw, log_norm, pl_steps)
             for _ in range(base_repeats)
         )
-        out["speedup_vs_particles_lib"] = pl_per_step / (best_wall / steps_t)
+        out["speedup_vs_particles_lib"] = pl_per_step / jax_per_step
         out["particles_lib_ns_per_particle_step"] = pl_per_step / n * 1e9
         log(f"particles AuxiliaryPF: {pl_per_step / n * 1e9:.1f} ns/particle-step")
     except ImportError as exc:
@@ -291,10 +325,4 @@ def run(quick: bool, seed: int) -> dict:
         out["particles_lib_skipped"] = (
             f"the `particles` library failed: {type(exc).__name__}: {exc}"
         )
-    checks.append(np.isfinite(jax_log_z) and np.all(np.isfinite(jax_mean)))
-    out["timing_note"] = (
-        "best of repeats on a possibly shared machine; the _cpu figure is process CPU time"
-    )
-    out["ok"] = bool(all(bool(c) for c in checks))
-    out["total_s"] = time.perf_counter() - t_all
     return out
