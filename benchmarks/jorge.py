@@ -554,9 +554,11 @@ def _table(per: dict) -> None:
             f"{s['link_accuracy']:6.2f} {s['first_error_share']:6.2f}  {by}")
 
 
-def run(quick: bool, seed: int) -> dict:
-    seeds = [seed + i for i in range(1 if quick else 5)]
-    cfg = OnlineConfig()
+def _label_sequences(seeds: list, cfg: OnlineConfig) -> tuple[dict, dict, list, bool]:
+    """Label every sequence of the data folder (train, validation, SIMULATED view) with
+    every seed's strokes. Returns the per-sequence summaries, each sequence's (split, rows),
+    the windows kept for the pgmpy comparison (ms3ggt, first seed) and whether every run
+    passed its checks; a sequence absent from the data folder is skipped."""
     sequences = ([(f, n, "train") for f, n in TRAIN_SEQUENCES] + [(f, n, "validation") for f, n in VALIDATION_SEQUENCES]
                  + [(f, n, "simulated_view") for f, n in SIMULATED_VIEW_SEQUENCES])
     per, rows_by = {}, {}
@@ -579,6 +581,15 @@ def run(quick: bool, seed: int) -> dict:
         per[key] = _summary(key, split, rows)
         log(f"jorge: {key} ({split}) error {per[key]['error_rate']:.3f} colour-only "
             f"{per[key]['error_rate_colour_only']:.3f} {per[key]['realtime_factor']:.1f}x real time")
+    return per, rows_by, windows, ok
+
+
+def run(quick: bool, seed: int) -> dict:
+    """The benchmark (module docstring): every sequence, the pgmpy check of kept windows,
+    the SIMULATED meetings at 25 and 7 fps, as one JSON-ready dict."""
+    seeds = [seed + i for i in range(1 if quick else 5)]
+    cfg = OnlineConfig()
+    per, rows_by, windows, ok = _label_sequences(seeds, cfg)
     if not per:
         return {"ok": False, "error": "no ground truth in ../shared/data"}
     _table(per)
@@ -590,32 +601,11 @@ def run(quick: bool, seed: int) -> dict:
         log(f"jorge: SIMULATED meetings at {m['fps']:g} fps " + " ".join(
             f"k={k}: {m[str(k)]['error_rate']:.3f} (3+ {m[str(k)]['error_rate_group_3plus']:.3f})"
             for k in MEETING_SIZES))
-    all_rows = [r for _, rows in rows_by.values() for r in rows]  # cost keys: every sequence
-    real_rows = [r for split, rows in rows_by.values() if split != "simulated_view" for r in rows]
-    view_rows = [r for split, rows in rows_by.values() if split == "simulated_view" for r in rows]
-    val_rows = [r for split, rows in rows_by.values() if split == "validation" for r in rows]
-    train_rows = [r for split, rows in rows_by.values() if split == "train" for r in rows]
     gmax = cfg.network.labels.max_group_size
+    all_rows = [r for _, rows in rows_by.values() for r in rows]  # cost keys: every sequence
+    view_rows = [r for split, rows in rows_by.values() if split == "simulated_view" for r in rows]
     return {
-        "error_rate_validation": _rate(val_rows)[0],
-        "error_rate_validation_colour_only": _rate(val_rows, "wrong_col")[0],
-        "error_rate_train": _rate(train_rows)[0],
-        "error_rate_train_colour_only": _rate(train_rows, "wrong_col")[0],
-        "error_rate_validation_true_links": _rate(val_rows, "wrong_links")[0],
-        "error_rate_train_true_links": _rate(train_rows, "wrong_links")[0],
-        "error_rate_group_3plus": _rate(real_rows, lo=3)[0],
-        "error_rate_group_3plus_colour_only": _rate(real_rows, "wrong_col", lo=3)[0],
-        "strokes_group_3plus": _rate(real_rows, lo=3)[1],
-        "error_rate_group_3plus_true_links": _rate(real_rows, "wrong_links", lo=3)[0],
-        "error_rate_group_3to5": _rate(real_rows, lo=3, hi=gmax)[0],
-        "error_rate_group_3to5_colour_only": _rate(real_rows, "wrong_col", lo=3, hi=gmax)[0],
-        "error_rate_validation_group_3plus": _rate(val_rows, lo=3)[0],
-        "strokes_group_3plus_beyond_cap": _rate(real_rows, lo=gmax + 1)[1],
-        "strokes_group_3to5_after_crowd": _rate(real_rows, lo=3, hi=gmax, crowd=True)[1],
-        "error_rate_group_3to5_after_crowd": _rate(real_rows, lo=3, hi=gmax, crowd=True)[0],
-        "strokes_group_3to5_clean": _rate(real_rows, lo=3, hi=gmax, crowd=False)[1],
-        "error_rate_group_3to5_clean": _rate(real_rows, lo=3, hi=gmax, crowd=False)[0],
-        "error_rate_group_3to5_clean_true_links": _rate(real_rows, "wrong_links", lo=3, hi=gmax, crowd=False)[0],
+        **_error_keys(rows_by, gmax),
         **_view_keys(view_rows),
         "min_realtime_factor": float(min(p["realtime_factor"] for p in per.values())),
         "min_realtime_factor_if_25fps": float(min(p["realtime_factor"] * p["fps"] / 25.0 for p in per.values())),
@@ -642,4 +632,34 @@ def run(quick: bool, seed: int) -> dict:
         "simulated": "occlusion gaps and colours (the ground truth has neither); ETH's boxes "
                      "(a camera models.jorge.eth.ObliqueView assumes over its ground positions)",
         "ok": bool(ok),
+    }
+
+
+def _error_keys(rows_by: dict, gmax: int) -> dict:
+    """The pooled error keys of the real sequences: validation and training splits (own
+    links, colour-only, true links), strokes of 3+ people and of 3 to ``gmax`` people
+    (after a crowd, clean), and the validation's 3+."""
+    real_rows = [r for split, rows in rows_by.values() if split != "simulated_view" for r in rows]
+    val_rows = [r for split, rows in rows_by.values() if split == "validation" for r in rows]
+    train_rows = [r for split, rows in rows_by.values() if split == "train" for r in rows]
+    return {
+        "error_rate_validation": _rate(val_rows)[0],
+        "error_rate_validation_colour_only": _rate(val_rows, "wrong_col")[0],
+        "error_rate_train": _rate(train_rows)[0],
+        "error_rate_train_colour_only": _rate(train_rows, "wrong_col")[0],
+        "error_rate_validation_true_links": _rate(val_rows, "wrong_links")[0],
+        "error_rate_train_true_links": _rate(train_rows, "wrong_links")[0],
+        "error_rate_group_3plus": _rate(real_rows, lo=3)[0],
+        "error_rate_group_3plus_colour_only": _rate(real_rows, "wrong_col", lo=3)[0],
+        "strokes_group_3plus": _rate(real_rows, lo=3)[1],
+        "error_rate_group_3plus_true_links": _rate(real_rows, "wrong_links", lo=3)[0],
+        "error_rate_group_3to5": _rate(real_rows, lo=3, hi=gmax)[0],
+        "error_rate_group_3to5_colour_only": _rate(real_rows, "wrong_col", lo=3, hi=gmax)[0],
+        "error_rate_validation_group_3plus": _rate(val_rows, lo=3)[0],
+        "strokes_group_3plus_beyond_cap": _rate(real_rows, lo=gmax + 1)[1],
+        "strokes_group_3to5_after_crowd": _rate(real_rows, lo=3, hi=gmax, crowd=True)[1],
+        "error_rate_group_3to5_after_crowd": _rate(real_rows, lo=3, hi=gmax, crowd=True)[0],
+        "strokes_group_3to5_clean": _rate(real_rows, lo=3, hi=gmax, crowd=False)[1],
+        "error_rate_group_3to5_clean": _rate(real_rows, lo=3, hi=gmax, crowd=False)[0],
+        "error_rate_group_3to5_clean_true_links": _rate(real_rows, "wrong_links", lo=3, hi=gmax, crowd=False)[0],
     }
