@@ -8,7 +8,10 @@ Usage::
 
 Models whose particles are ragged host data (numpy) use the same machinery from
 :mod:`inference.particle.numpy_path` (log normalisation, ESS, resamplers with a numpy
-``Generator``) and :func:`k_best_states` (the k distinct states of largest mass).
+``Generator``), :mod:`inference.particle.numpy_filter` (the SIR step
+:func:`~inference.particle.numpy_filter.sir_step` over the model's predict, weight and
+move functions, and :func:`~inference.particle.numpy_filter.run_steps`) and
+:func:`k_best_states` (the k distinct states of largest mass).
 """
 
 from inference.particle.filters import (

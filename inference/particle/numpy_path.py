@@ -6,7 +6,8 @@ a ``numpy.random.Generator`` for randomness. This module gives them the same eng
 jax path of :mod:`inference.particle`: log weights normalised in log space, the effective
 sample size, and resamplers with one signature ``(rng, log_weights, n) -> ancestors``
 that follow :mod:`inference.particle.resampling` (NaN is a zero weight; all-zero weights
-fall back to uniform; an ancestor is never a zero-weight particle).
+fall back to uniform; an ancestor is never a zero-weight particle). The step and the run
+built on them are :mod:`inference.particle.numpy_filter`.
 
 Every function is float64 numpy and consumes the generator in a fixed way (systematic:
 one uniform; multinomial: ``n`` uniforms), so the same generator state gives the same

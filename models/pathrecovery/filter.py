@@ -64,18 +64,18 @@ hidden particles are neither diffused nor switched. A visible particle outside t
 ``FilterConfig.gaps=False`` disables gap modelling: every edge takes one step and no
 particle is ever hidden (the "without gap modelling" runs of sec. 7.2.1).
 
-The particle machinery is the library's (:mod:`inference.particle`, numpy path): the state
-is an :class:`inference.particle.ParticleState` whose ``particles`` are the
-:class:`PathParticles` arrays, weights are log weights normalised in log space
-(:func:`inference.particle.numpy_path.log_normalise`), resampling is
-:func:`inference.particle.numpy_path.systematic` / ``multinomial``, and the k best states
-are :func:`inference.particle.kbest.k_best_states`. This module holds only the model:
+The particle machinery is the library's (:mod:`inference.particle`, numpy path): a step is
+:func:`inference.particle.numpy_filter.sir_step` (predict, weigh, normalise in log space,
+resample with :func:`inference.particle.numpy_path.systematic` / ``multinomial``, move), a
+run is :func:`inference.particle.numpy_filter.run_steps`, the state is an
+:class:`inference.particle.ParticleState` whose ``particles`` are the
+:class:`PathParticles` arrays, and the k best states are
+:func:`inference.particle.kbest.k_best_states`. This module holds only the model:
 prediction, the support of eqs. 5-7, diffusion and feature switching.
 """
 
 from __future__ import annotations
 
-import time
 from typing import NamedTuple
 
 import numpy as np
@@ -84,8 +84,8 @@ from scipy.linalg import cholesky
 from dbn.errors import InputError, NonFiniteError, ShapeError
 from inference.particle.filters import ParticleState
 from inference.particle.kbest import k_best_states
-from inference.particle.numpy_path import ess as ess_of
-from inference.particle.numpy_path import log_normalise, multinomial, systematic
+from inference.particle.numpy_filter import run_steps, sir_step
+from inference.particle.numpy_path import multinomial, systematic
 from models.pathrecovery.model import CameraNetwork, check_cameras, propagate, whiten
 
 __all__ = [
@@ -422,6 +422,11 @@ def step(
 ) -> tuple[ParticleState, StepInfo]:
     """One step of the modified particle filter (seed 001, sec. 4.1, eqs. 5-7).
 
+    The library's SIR step (:func:`inference.particle.numpy_filter.sir_step`) with this
+    model's prediction (:func:`_predict`), weighting (:func:`_weigh`) and post-resampling
+    move (:func:`_move`); the resampler is multinomial for the faithful reading, systematic
+    otherwise.
+
     Parameters
     ----------
     rng : numpy Generator (the step's randomness; same state, same result).
@@ -450,77 +455,106 @@ def step(
     obs_feat = np.asarray(obs_feat, dtype=np.float64)
     if check:
         _check_observations(model, obs_cam, obs_feat)
-    cfg = model.config
-    net = model.network
-    n = cfg.num_particles
+    new_state, sir = sir_step(
+        rng,
+        state,
+        lambda r, p: _predict(r, model, p),
+        lambda r, p: _weigh(r, model, p, obs_cam, obs_feat),
+        resample=multinomial if model.config.faithful else systematic,
+        move=lambda r, p: _move(r, model, p, obs_cam, obs_feat),
+    )
+    assoc, num_tracked = sir.aux
+    valid = np.isfinite(sir.log_weights) & np.isfinite(sir.log_score)
+    parts, wn = sir.particles, np.exp(sir.log_weights)
+    info = _kbest(model, parts.cam, parts.ta, assoc, wn, valid, obs_offset, num_tracked, sir.ess)
+    return new_state, info._replace(log_score=sir.log_score)
 
-    # 1. prediction (sec. 4.1.1)
-    prev = state.particles
-    cam, ta, moved_from = propagate(rng, net, prev.cam, prev.ta, gaps=cfg.gaps)
+
+def _predict(rng: np.random.Generator, model: PathFilterModel, prev: PathParticles) -> PathParticles:
+    """Prediction (sec. 4.1.1): locations move (:func:`propagate`); ``src`` follows."""
+    cam, ta, moved_from = propagate(rng, model.network, prev.cam, prev.ta, gaps=model.config.gaps)
     src = np.where(moved_from >= 0, moved_from, prev.src)
-    feat = prev.feat.copy()
-    vis = ta == 0
-    vis_idx = np.flatnonzero(vis)
+    return PathParticles(cam, ta, src, prev.feat, prev.raw)
 
-    # 2. evaluation (sec. 4.1.3): only the N_fc most frequent cameras of visible particles
+
+def _tracked(cfg: FilterConfig, cam: np.ndarray, vis_idx: np.ndarray) -> tuple[np.ndarray, int]:
+    """The visible particles in the ``N_fc`` cameras holding most of them, and how many
+    cameras that is (sec. 4.1.3)."""
     ucams, counts = np.unique(cam[vis_idx], return_counts=True)
-    if ucams.size > cfg.n_fc:
-        tracked_cams = np.sort(ucams[np.argsort(-counts, kind="stable")[: cfg.n_fc]])
-        considered = vis_idx[np.isin(cam[vis_idx], tracked_cams, assume_unique=False)]
-    else:
-        tracked_cams = ucams
-        considered = vis_idx
+    if ucams.size <= cfg.n_fc:
+        return vis_idx, int(ucams.size)
+    tracked_cams = np.sort(ucams[np.argsort(-counts, kind="stable")[: cfg.n_fc]])
+    return vis_idx[np.isin(cam[vis_idx], tracked_cams, assume_unique=False)], cfg.n_fc
+
+
+def _weigh(
+    rng: np.random.Generator,
+    model: PathFilterModel,
+    parts: PathParticles,
+    obs_cam: np.ndarray,
+    obs_feat: np.ndarray,
+) -> tuple[PathParticles, np.ndarray, tuple[np.ndarray, int]]:
+    """Evaluation (sec. 4.1.3, eqs. 5-7) and the log weight of either reading (4.1.4).
+
+    Returns the particles (features updated with probability ``P_update``, ``raw`` the
+    eq. 7 weight of visible particles), the (N,) log potential, and ``(assoc, number of
+    evaluated cameras)`` with ``assoc`` (N,) the associated observation (-1 for none).
+    """
+    cfg, net = model.config, model.network
+    n = parts.cam.size
+    vis = parts.ta == 0
+    considered, num_tracked = _tracked(cfg, parts.cam, np.flatnonzero(vis))
+    feat = parts.feat.copy()
     w = np.zeros(n)
     assoc = np.full(n, -1, dtype=np.int64)
-    has, owner, item, starts = _observations_at(obs_cam, cam[considered])
+    has, owner, item, starts = _observations_at(obs_cam, parts.cam[considered])
     p_idx = considered[has]
     if p_idx.size:
         uz = _whiten(model, obs_feat[item])
-        wp = net.transition_prob(src[p_idx], cam[p_idx])[owner]
+        wp = net.transition_prob(parts.src[p_idx], parts.cam[p_idx])[owner]
         support = observation_support(model, feat[p_idx][owner], uz, wp)  # eqs. 5-6
         seg_max, best = _segment_argmax(support, owner, starts)  # eq. 7
         w[p_idx] = seg_max
         assoc[p_idx] = item[best]
         upd = rng.random(p_idx.size) < cfg.p_update
         feat[p_idx[upd]] = uz[best[upd]]
-
-    # 3. normalisation over visible and hidden (sec. 4.1.4), in log space
-    raw = np.where(vis, w, prev.raw)  # a hidden particle keeps its stale weight in ``raw``
+    raw = np.where(vis, w, parts.raw)  # a hidden particle keeps its stale weight in ``raw``
     with np.errstate(divide="ignore"):
         if cfg.faithful:
             log_g = np.log(raw)
         else:
             log_g = cfg.sharpness * np.log(np.where(vis, w, cfg.hidden_likelihood))
-    log_w = state.log_weights + log_g
-    log_wn, log_score = log_normalise(log_w)
-    wn = np.exp(log_wn)
+    return parts._replace(feat=feat, raw=raw), log_g, (assoc, num_tracked)
 
-    # output: k best distinct states (sec. 4.1.5)
-    info = _kbest(
-        model, cam, ta, assoc, wn, np.isfinite(log_w), obs_offset, int(tracked_cams.size), ess_of(log_wn)
-    )._replace(log_score=log_score)
 
-    # 4. resampling (sec. 4.1.6)
-    anc = (multinomial if cfg.faithful else systematic)(rng, log_wn, n)
-    cam, ta, src, feat, raw = cam[anc], ta[anc], src[anc], feat[anc], raw[anc]
-
-    # diffusion of visible locations by G_mcd, then feature switching
-    vis_idx = np.flatnonzero(ta == 0)
-    if vis_idx.size:
-        edges = net.sample_edges(rng, cam[vis_idx], diffusion=True)
-        cam[vis_idx] = net.indices[edges]
-        sw = vis_idx[rng.random(vis_idx.size) < cfg.p_switch]
-        has, owner, item, starts = _observations_at(obs_cam, cam[sw])
-        sw = sw[has]
-        if sw.size:
-            uz = _whiten(model, obs_feat[item])
-            d0 = model.u0 - uz
-            # draw z with probability proportional to P_s(f0, f_z): Gumbel-max per particle
-            score = -0.5 * np.einsum("ij,ij->i", d0, d0) + rng.gumbel(size=item.size)
-            _, best = _segment_argmax(score, owner, starts)
-            feat[sw] = uz[best]
-    new_state = ParticleState(PathParticles(cam, ta, src, feat, raw), np.full(n, -np.log(n)))
-    return new_state, info
+def _move(
+    rng: np.random.Generator,
+    model: PathFilterModel,
+    parts: PathParticles,
+    obs_cam: np.ndarray,
+    obs_feat: np.ndarray,
+) -> PathParticles:
+    """After resampling (sec. 4.1.6): visible locations diffuse by ``G_mcd``, then a
+    visible particle's feature switches with probability ``P_switch`` to an observation
+    of its camera drawn proportionally to ``P_s(f_0, f_z)``."""
+    vis_idx = np.flatnonzero(parts.ta == 0)
+    if not vis_idx.size:
+        return parts
+    net = model.network
+    cam, feat = parts.cam.copy(), parts.feat.copy()
+    edges = net.sample_edges(rng, cam[vis_idx], diffusion=True)
+    cam[vis_idx] = net.indices[edges]
+    sw = vis_idx[rng.random(vis_idx.size) < model.config.p_switch]
+    has, owner, item, starts = _observations_at(obs_cam, cam[sw])
+    sw = sw[has]
+    if sw.size:
+        uz = _whiten(model, obs_feat[item])
+        d0 = model.u0 - uz
+        # draw z with probability proportional to P_s(f0, f_z): Gumbel-max per particle
+        score = -0.5 * np.einsum("ij,ij->i", d0, d0) + rng.gumbel(size=item.size)
+        _, best = _segment_argmax(score, owner, starts)
+        feat[sw] = uz[best]
+    return parts._replace(cam=cam, feat=feat)
 
 
 def _kbest(
@@ -601,26 +635,16 @@ def run_filter(
     for t in range(1, T):
         lo, hi = time_ptr[t], time_ptr[t + 1]
         _check_observations(model, np.asarray(odb.cam[lo:hi]), np.asarray(odb.feat[lo:hi]))
-    k = model.config.k
-    kind = np.full((T - 1, k), NONE, dtype=np.int8)
-    cam = np.full((T - 1, k), -1, dtype=np.int64)
-    ta = np.zeros((T - 1, k), dtype=np.int64)
-    obs = np.full((T - 1, k), -1, dtype=np.int64)
-    mass = np.zeros((T - 1, k))
-    tracked = np.zeros(T - 1, dtype=np.int64)
-    secs = np.zeros(T - 1)
-    state = init(model)
-    steps = range(1, T)
-    if progress:
-        from tqdm.auto import tqdm
+    steps = [(int(time_ptr[t]), int(time_ptr[t + 1])) for t in range(1, T)]
 
-        steps = tqdm(steps, desc="path-recovery filter")
-    for t in steps:
-        lo, hi = int(time_ptr[t]), int(time_ptr[t + 1])
-        t0 = time.perf_counter()
-        state, info = step(rng, model, state, odb.cam[lo:hi], odb.feat[lo:hi], obs_offset=lo, check=False)
-        secs[t - 1] = time.perf_counter() - t0
-        i = t - 1
-        kind[i], cam[i], ta[i], obs[i], mass[i] = info.kind, info.cam, info.ta, info.obs, info.mass
-        tracked[i] = info.num_tracked_cameras
+    def one(r: np.random.Generator, state: ParticleState, lohi: tuple[int, int]):
+        lo, hi = lohi
+        return step(r, model, state, odb.cam[lo:hi], odb.feat[lo:hi], obs_offset=lo, check=False)
+
+    _, infos, secs = run_steps(
+        rng, one, init(model), steps, progress=progress, desc="path-recovery filter"
+    )
+    fields = ("kind", "cam", "ta", "obs", "mass")
+    kind, cam, ta, obs, mass = (np.stack([getattr(i, f) for i in infos]) for f in fields)
+    tracked = np.array([i.num_tracked_cameras for i in infos], dtype=np.int64)
     return KBestLists(kind, cam, ta, obs, mass, tracked, secs)

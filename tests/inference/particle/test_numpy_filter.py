@@ -1,0 +1,196 @@
+"""The numpy SIR step and run (inference.particle.numpy_filter): against an HMM's exact
+filter (checked itself by enumerating every path), replayed by hand, and on properties."""
+
+from __future__ import annotations
+
+import itertools
+from typing import NamedTuple
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.special import logsumexp
+
+from dbn.errors import InputError, ShapeError
+from inference.particle import ParticleState
+from inference.particle.numpy_filter import run_steps, sir_step, take_rows
+from inference.particle.numpy_path import NUMPY_RESAMPLERS, multinomial, systematic
+
+# a 3-state HMM with Gaussian emissions
+P0 = np.array([0.5, 0.3, 0.2])
+A = np.array([[0.8, 0.15, 0.05], [0.1, 0.7, 0.2], [0.25, 0.25, 0.5]])
+MEANS = np.array([-1.0, 0.5, 2.0])
+Y = np.array([0.3, -1.2, 1.9, 2.4, 0.1])
+
+
+def log_emission(y: float, x: np.ndarray) -> np.ndarray:
+    return -0.5 * (y - MEANS[x]) ** 2 - 0.5 * np.log(2 * np.pi)
+
+
+def exact_filter(ys: np.ndarray) -> tuple[np.ndarray, float]:
+    """Filtered marginals (T, 3) and log p(y_1:T), x_0 ~ P0 unobserved, x_t ~ A[x_{t-1}]."""
+    alpha, loglik, out = P0, 0.0, []
+    for y in ys:
+        a = (alpha @ A) * np.exp(log_emission(y, np.arange(3)))
+        loglik += np.log(a.sum())
+        alpha = a / a.sum()
+        out.append(alpha)
+    return np.array(out), loglik
+
+
+def test_exact_filter_equals_enumeration() -> None:
+    ys = Y[:4]
+    last, total = np.zeros(3), 0.0
+    for path in itertools.product(range(3), repeat=5):  # x_0 .. x_4
+        p = P0[path[0]] * np.prod([A[path[t], path[t + 1]] for t in range(4)])
+        p *= np.exp(sum(log_emission(ys[t], np.array(path[t + 1])) for t in range(4)))
+        total += p
+        last[path[-1]] += p
+    marg, loglik = exact_filter(ys)
+    assert loglik == pytest.approx(np.log(total), rel=1e-12)
+    np.testing.assert_allclose(marg[-1], last / total, rtol=1e-10)
+
+
+def predict(rng: np.random.Generator, x: np.ndarray) -> np.ndarray:
+    cdf = np.cumsum(A, axis=1)[x]
+    return np.minimum((rng.random(x.size)[:, None] >= cdf).sum(1), 2)
+
+
+def hmm_step(rng, state, y, resample=systematic):
+    return sir_step(rng, state, predict, lambda r, x: (x, log_emission(y, x), None), resample=resample)
+
+
+@pytest.mark.parametrize("name", sorted(NUMPY_RESAMPLERS))
+def test_sir_matches_the_exact_hmm_filter(name: str) -> None:
+    n = 200_000
+    rng = np.random.default_rng(0)
+    state = ParticleState(rng.choice(3, size=n, p=P0), np.full(n, -np.log(n)))
+    exact, loglik = exact_filter(Y)
+    log_score = 0.0
+    for t, y in enumerate(Y):
+        state, info = hmm_step(rng, state, y, NUMPY_RESAMPLERS[name])
+        w = np.exp(info.log_weights)
+        marg = np.bincount(info.particles, weights=w, minlength=3)
+        np.testing.assert_allclose(marg, exact[t], atol=0.008)
+        # the resampled cloud is an unweighted sample of the same marginal
+        np.testing.assert_allclose(np.bincount(state.particles, minlength=3) / n, exact[t], atol=0.01)
+        log_score += info.log_score
+    assert log_score == pytest.approx(loglik, abs=0.02)
+
+
+class Pair(NamedTuple):
+    pos: np.ndarray
+    vel: np.ndarray
+
+
+def test_step_order_replayed_by_hand_and_inputs_untouched() -> None:
+    n = 7
+    parts = Pair(np.arange(n, dtype=float), np.ones((n, 2)))
+    lw = np.log(np.array([0.1, 0.2, 0.05, 0.25, 0.1, 0.2, 0.1]))
+    state = ParticleState(parts, lw)
+    copies = (parts.pos.copy(), parts.vel.copy(), lw.copy())
+    log_g = np.array([0.0, -1.0, -np.inf, 0.5, np.nan, -2.0, 0.3])
+
+    def pred(r, p):
+        return Pair(p.pos + r.normal(size=n), p.vel * 2)
+
+    def weigh(r, p):
+        return p._replace(vel=p.vel + r.random()), log_g, "aux"
+
+    def move(r, p):
+        return p._replace(pos=p.pos + 100 * r.random(n))
+
+    new, info = sir_step(np.random.default_rng(5), state, pred, weigh, resample=multinomial, move=move)
+    # replay: predict, weigh, resample, move consume one generator in this order
+    r = np.random.default_rng(5)
+    pos = parts.pos + r.normal(size=n)
+    vel = parts.vel * 2 + r.random()
+    lw_new = lw + np.where(np.isnan(log_g), -np.inf, log_g)
+    expect_w = lw_new - logsumexp(lw_new)
+    anc = multinomial(r, expect_w, n)
+    np.testing.assert_array_equal(info.ancestors, anc)
+    np.testing.assert_allclose(info.log_weights, expect_w)
+    assert info.log_score == pytest.approx(logsumexp(lw_new)) and info.aux == "aux"
+    np.testing.assert_allclose(info.particles.pos, pos)
+    np.testing.assert_allclose(new.particles.pos, pos[anc] + 100 * r.random(n))
+    np.testing.assert_allclose(new.particles.vel, vel[anc])
+    np.testing.assert_allclose(new.log_weights, -np.log(n))
+    assert not np.isin(anc, [2, 4]).any()  # zero weights (-inf, NaN) are never ancestors
+    for before, after in zip(copies, (parts.pos, parts.vel, lw), strict=True):
+        np.testing.assert_array_equal(before, after)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.integers(1, 40),
+    st.integers(0, 2**31 - 1),
+    st.floats(0.0, 0.7),
+    st.sampled_from(sorted(NUMPY_RESAMPLERS)),
+)
+def test_weights_normalise_and_score_is_the_log_total(n, seed, p_zero, name) -> None:
+    rng = np.random.default_rng(seed)
+    lw = rng.normal(size=n) * 5 - 300
+    lw[rng.random(n) < p_zero / 2] = -np.inf
+    log_g = rng.normal(size=n) * 10
+    log_g[rng.random(n) < p_zero / 2] = -np.inf
+    parts = {"x": rng.normal(size=(n, 3)), "k": np.arange(n)}
+    state = ParticleState(parts, lw)
+    new, info = sir_step(
+        rng, state, lambda r, p: p, lambda r, p: (p, log_g, None), resample=NUMPY_RESAMPLERS[name]
+    )
+    total = logsumexp(lw + log_g)
+    assert set(new.particles) == {"x", "k"} and new.particles["x"].shape == (n, 3)
+    np.testing.assert_array_equal(new.particles["x"], parts["x"][info.ancestors])
+    if np.isfinite(total):
+        assert info.log_score == pytest.approx(total, rel=1e-12)
+        assert logsumexp(info.log_weights) == pytest.approx(0.0, abs=1e-9)
+        assert np.all(np.isfinite(info.log_weights[info.ancestors]))
+        assert 1.0 - 1e-9 <= info.ess <= n + 1e-9
+    else:  # every weight zero: uniform fallback
+        assert info.log_score == -np.inf
+        np.testing.assert_allclose(info.log_weights, -np.log(n))
+
+
+def test_bad_shapes_name_the_function() -> None:
+    n = 4
+    state = ParticleState(np.zeros(n), np.full(n, -np.log(n)))
+    ok = lambda r, p: (p, np.zeros(n), None)  # noqa: E731
+    rng = np.random.default_rng(0)
+    with pytest.raises(ShapeError, match="predict"):
+        sir_step(rng, state, lambda r, p: p[:3], ok)
+    with pytest.raises(ShapeError, match="log_g"):
+        sir_step(rng, state, lambda r, p: p, lambda r, p: (p, np.zeros(n + 1), None))
+    with pytest.raises(ShapeError, match="weight"):
+        sir_step(rng, state, lambda r, p: p, lambda r, p: (p[:2], np.zeros(n), None))
+    with pytest.raises(ShapeError, match="move"):
+        sir_step(rng, state, lambda r, p: p, ok, move=lambda r, p: p[:1])
+    with pytest.raises(ShapeError, match="state.particles"):
+        sir_step(rng, ParticleState(np.zeros(3), np.zeros(n)), lambda r, p: p, ok)
+    with pytest.raises(ShapeError, match="log_weights"):
+        sir_step(rng, ParticleState(np.zeros(0), np.zeros(0)), lambda r, p: p, ok)
+
+
+def test_run_steps_equals_stepping_by_hand() -> None:
+    n = 500
+    x0 = np.random.default_rng(1).choice(3, size=n, p=P0)
+    state = ParticleState(x0, np.full(n, -np.log(n)))
+    final, infos, secs = run_steps(np.random.default_rng(3), hmm_step, state, Y)
+    rng, s = np.random.default_rng(3), state
+    for y, info in zip(Y, infos, strict=True):
+        s, mine = hmm_step(rng, s, y)
+        np.testing.assert_array_equal(mine.particles, info.particles)
+        assert mine.log_score == info.log_score
+    np.testing.assert_array_equal(final.particles, s.particles)
+    assert secs.shape == (Y.size,) and np.all(secs >= 0)
+    _, infos_p, _ = run_steps(np.random.default_rng(3), hmm_step, state, list(Y), progress=True)
+    assert [i.log_score for i in infos_p] == [i.log_score for i in infos]
+    with pytest.raises(InputError, match="rng"):
+        run_steps(3, hmm_step, state, Y)
+
+
+def test_take_rows_keeps_the_structure() -> None:
+    p = Pair(np.arange(5), np.arange(10).reshape(5, 2))
+    out = take_rows(p, np.array([4, 4, 0]))
+    assert isinstance(out, Pair)
+    np.testing.assert_array_equal(out.vel, [[8, 9], [8, 9], [0, 1]])
