@@ -102,28 +102,31 @@ def _protocol_smoke(seed: int, scene, num_steps: int = 10) -> bool:
     return all(bool(np.all(np.diff(i.mass) <= 1e-12) and i.mass.sum() <= 1 + 1e-9) for i in infos)
 
 
-def run(quick: bool, seed: int) -> dict:
-    steps = 100 if quick else 200
-    n_scenes = 5
-    grid = manhattan_grid(seed)
-    log(f"grid: {grid.num_cameras} cameras, mean degree {grid.degrees().mean():.2f}")
+def _configs(names: tuple[str, ...]) -> list[tuple[str, FilterConfig]]:
+    """The compared filter settings, by name."""
+    every = {
+        "default": FilterConfig(num_particles=N_PARTICLES),
+        "faithful": FilterConfig(num_particles=N_PARTICLES, faithful=True),
+        "no_gaps": FilterConfig(num_particles=N_PARTICLES, gaps=False),
+        # ablation: the hidden-weight fix alone, without sharpening (best q at kappa = 1)
+        "unsharpened": FilterConfig(num_particles=N_PARTICLES, sharpness=1.0, hidden_likelihood=0.3),
+    }
+    return [(name, every[name]) for name in names]
+
+
+def _grid(seed: int, grid, steps: int, n_scenes: int) -> tuple[dict, list, list, object, bool]:
+    """Every setting on ``n_scenes`` grid scenes at CM 0.17, with a reproducibility check.
+
+    Returns (rows by setting, CMs, hidden fractions, the first scene, ok)."""
     rows = {"default": [], "faithful": [], "no_gaps": [], "unsharpened": []}
-    cms, hidden = [], []
-    ok = True
+    cms, hidden, ok, first_scene = [], [], True, None
     for i in range(n_scenes):
         scene = simulate_scene(seed + i, grid, num_objects=2000, num_timesteps=steps, cm=0.17)
-        if i == 0:
-            first_scene = scene
+        first_scene = scene if i == 0 else first_scene
         cms.append(scene.cm)
         hidden.append(scene.hidden_fraction)
         ok &= abs(scene.cm - 0.17) < 0.03
-        for name, cfg in (
-            ("default", FilterConfig(num_particles=N_PARTICLES)),
-            ("faithful", FilterConfig(num_particles=N_PARTICLES, faithful=True)),
-            ("no_gaps", FilterConfig(num_particles=N_PARTICLES, gaps=False)),
-            # ablation: the hidden-weight fix alone, without sharpening (best q at kappa = 1)
-            ("unsharpened", FilterConfig(num_particles=N_PARTICLES, sharpness=1.0, hidden_likelihood=0.3)),
-        ):
+        for name, cfg in _configs(tuple(rows)):
             res = _evaluate(1000 + seed + i, scene, cfg)
             ok &= res["ok"]
             rows[name].append(res)
@@ -137,45 +140,45 @@ def run(quick: bool, seed: int) -> dict:
             f"{f['top1']:.2f} k10 {f['kbest10']:.2f} phase2 {f['phase2']:.2f} | no gaps "
             f"{rows['no_gaps'][-1]['phase2']:.2f}"
         )
+    return rows, cms, hidden, first_scene, ok
 
-    def mean(name: str, key: str) -> float:
-        return float(np.nanmean([r[key] for r in rows[name]]))
 
-    # street at the paper's CM 0.63
+def _street(seed: int, steps: int, n_scenes: int) -> tuple[dict, bool]:
+    """Second-phase scores of the default and faithful settings on the street at the
+    paper's CM 0.63."""
     road = street(seed)
-    street_rows = {"default": [], "faithful": []}
-    for i in range(3 if quick else n_scenes):
+    street_rows, ok = {"default": [], "faithful": []}, True
+    for i in range(n_scenes):
         scene = simulate_scene(seed + 100 + i, road, num_objects=2000, num_timesteps=steps, cm=0.63)
-        for name, cfg in (
-            ("default", FilterConfig(num_particles=N_PARTICLES)),
-            ("faithful", FilterConfig(num_particles=N_PARTICLES, faithful=True)),
-        ):
+        for name, cfg in _configs(tuple(street_rows)):
             res = _evaluate(2000 + seed + i, scene, cfg)
             ok &= res["ok"]
             street_rows[name].append(res["phase2"])
     log(f"street: default {np.mean(street_rows['default']):.2f} faithful {np.mean(street_rows['faithful']):.2f}")
+    return street_rows, ok
 
-    protocol_ok = _protocol_smoke(seed, first_scene)
-    ok &= protocol_ok
 
-    # step time, 490 vs 4,931 cameras, 4 objects per camera; interleaved, best of 2
+def _scaling(seed: int, steps: int) -> tuple[float, int]:
+    """Step time on 4,931 over 490 cameras, 4 objects per camera; interleaved, best of 2.
+
+    Returns (ratio, number of cameras of the large network)."""
     t_small, t_large = [], []
     for r in range(2):
-        ts, n_small = _step_time(seed + 10 * r, 7, 7, 40 if quick else 80)
-        tl, n_large = _step_time(seed + 10 * r, 22, 21, 40 if quick else 80)
+        ts, n_small = _step_time(seed + 10 * r, 7, 7, steps)
+        tl, n_large = _step_time(seed + 10 * r, 22, 21, steps)
         t_small.append(ts)
         t_large.append(tl)
-    ratio = min(t_large) / min(t_small)
     log(f"step time: {n_small} cameras {1e3 * min(t_small):.3f} ms, {n_large} cameras {1e3 * min(t_large):.3f} ms")
+    return min(t_large) / min(t_small), n_large
+
+
+def _scores(rows: dict) -> dict:
+    """The grid's JSON keys: means over scenes of every setting's figures."""
+
+    def mean(name: str, key: str) -> float:
+        return float(np.nanmean([r[key] for r in rows[name]]))
 
     return {
-        "cm": float(np.mean(cms)),
-        "hidden_fraction": float(np.mean(hidden)),
-        "num_cameras": grid.num_cameras,
-        "num_particles": N_PARTICLES,
-        "k": K_DP,
-        "num_scenes": n_scenes,
-        "num_timesteps": steps,
         "top1": mean("default", "top1"),
         "kbest10": mean("default", "kbest10"),
         "top1_faithful": mean("faithful", "top1"),
@@ -191,11 +194,34 @@ def run(quick: bool, seed: int) -> dict:
         "score_phase2_no_gaps_visible": mean("no_gaps", "phase2_visible"),
         "score_phase2_unsharpened": mean("unsharpened", "phase2"),
         "top1_unsharpened": mean("unsharpened", "top1"),
+    }
+
+
+def run(quick: bool, seed: int) -> dict:
+    steps = 100 if quick else 200
+    n_scenes = 5
+    grid = manhattan_grid(seed)
+    log(f"grid: {grid.num_cameras} cameras, mean degree {grid.degrees().mean():.2f}")
+    rows, cms, hidden, first_scene, ok = _grid(seed, grid, steps, n_scenes)
+    street_rows, street_ok = _street(seed, steps, 3 if quick else n_scenes)
+    protocol_ok = _protocol_smoke(seed, first_scene)
+    ok = ok and street_ok and protocol_ok
+    ratio, n_large = _scaling(seed, 40 if quick else 80)
+    scores = _scores(rows)
+    return {
+        "cm": float(np.mean(cms)),
+        "hidden_fraction": float(np.mean(hidden)),
+        "num_cameras": grid.num_cameras,
+        "num_particles": N_PARTICLES,
+        "k": K_DP,
+        "num_scenes": n_scenes,
+        "num_timesteps": steps,
+        **scores,
         "score_street": float(np.mean(street_rows["default"])),
         "score_street_faithful": float(np.mean(street_rows["faithful"])),
-        "cameras_tracked_mean": mean("default", "tracked"),
-        "ms_per_step": mean("default", "ms"),
-        "ms_per_step_faithful": mean("faithful", "ms"),
+        "cameras_tracked_mean": float(np.nanmean([r["tracked"] for r in rows["default"]])),
+        "ms_per_step": float(np.nanmean([r["ms"] for r in rows["default"]])),
+        "ms_per_step_faithful": float(np.nanmean([r["ms"] for r in rows["faithful"]])),
         "step_time_ratio_5000_vs_500_cameras": ratio,
         "num_cameras_large": n_large,
         "protocol_ok": bool(protocol_ok),

@@ -29,9 +29,10 @@ A move impossible from the current state (e.g. a swap with one track) leaves it
 unchanged (counted as a rejection); this keeps detailed balance because the move-type
 probabilities are fixed and the reverse proposal probabilities above count only
 possible proposals. Acceptance: :math:`\min(1, \frac{\pi(\omega')}{\pi(\omega)}\cdot`
-ratio) (seed 003 eq. 11, the form of :mod:`inference.mcmc`; that kernel steps one opaque
-state at a time, this one is vectorised over chains so the detailed-balance test can run
-tens of thousands of chains, hence its own implementation).
+ratio) (seed 003 eq. 11), by the library's vectorised kernel
+:class:`inference.mcmc.BatchKernel` run by :func:`inference.mcmc.run_batch`: every chain
+steps at once, so the detailed-balance test can run tens of thousands of chains. This
+module holds only the moves, the target and the bookkeeping of an accepted move.
 
 Initialisation: ``"random"`` (each observation gets a uniformly random slot; seed 000's
 "purely random" start) or ``"greedy"`` (the single-hypothesis search, T = 1, under the
