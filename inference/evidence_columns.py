@@ -28,7 +28,7 @@ from dbn.errors import (
     UnknownEvidenceError,
     UnknownVariableError,
 )
-from dbn.variables import DiscreteVariable
+from dbn.variables import ContinuousVariable, DiscreteVariable
 
 __all__ = ["Columns", "check_columns", "check_query"]
 
@@ -56,6 +56,75 @@ def _length(name: str, n: int, T: int | None) -> int:
     return n
 
 
+def _discrete_column(
+    name: str, v: DiscreteVariable, col: ArrayLike, T: int | None
+) -> tuple[np.ndarray, int]:
+    """A hard evidence column of a discrete variable: (T,) int64 states, -1 unobserved;
+    and its length (which must equal ``T`` unless ``T`` is None)."""
+    arr = np.asarray(col)
+    if arr.ndim != 1:
+        raise ShapeError(f"evidence column {name!r} must be 1-D, got shape {arr.shape}")
+    if not np.issubdtype(arr.dtype, np.integer):
+        raise EvidenceError(f"evidence column {name!r} must hold integer states (-1 = unobserved)")
+    T = _length(name, arr.shape[0], T)
+    bad = (arr < -1) | (arr >= v.cardinality)
+    if bad.any():
+        t = int(np.argmax(bad))
+        raise EvidenceError(
+            f"evidence column {name!r}: state {int(arr[t])} at slice {t} out of range "
+            f"-1..{v.cardinality - 1}"
+        )
+    return arr.astype(np.int64), T
+
+
+def _continuous_column(
+    name: str, v: ContinuousVariable, col: ArrayLike, T: int | None
+) -> tuple[np.ndarray, int]:
+    """An evidence column of a continuous variable: (T, dim) float64, NaN rows unobserved;
+    and its length."""
+    arr = np.asarray(col, dtype=np.float64)
+    if arr.ndim == 1 and v.dim == 1:
+        arr = arr[:, None]
+    if arr.ndim != 2 or arr.shape[1] != v.dim:
+        raise ShapeError(
+            f"evidence column {name!r} must have shape (num_timesteps, {v.dim}), got {arr.shape}"
+        )
+    T = _length(name, arr.shape[0], T)
+    nan = np.isnan(arr)
+    partial = nan.any(axis=1) & ~nan.all(axis=1)
+    if partial.any() or np.isinf(arr).any():
+        t = int(np.argmax(partial | np.isinf(arr).any(axis=1)))
+        raise NonFiniteError(
+            f"evidence column {name!r}: row {t} is {arr[t]} (a row is all finite, "
+            "or all NaN for unobserved)"
+        )
+    return arr, T
+
+
+def _soft_column(
+    name: str, v: DiscreteVariable | ContinuousVariable, col: ArrayLike, T: int | None
+) -> tuple[np.ndarray, int]:
+    """A soft evidence column of a discrete variable: (T, cardinality) float64 likelihoods,
+    all-NaN rows (no soft evidence) read as ones; and its length."""
+    if not isinstance(v, DiscreteVariable):
+        raise EvidenceError(f"soft evidence on continuous variable {name!r}")
+    arr = np.asarray(col, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[1] != v.cardinality:
+        raise ShapeError(
+            f"soft evidence {name!r} must have shape (num_timesteps, {v.cardinality}), "
+            f"got {arr.shape}"
+        )
+    T = _length(name, arr.shape[0], T)
+    none = np.isnan(arr).all(axis=1)  # an all-NaN row: no soft evidence at that slice
+    arr = np.where(none[:, None], 1.0, arr)
+    if not np.all(np.isfinite(arr)) or np.any(arr < 0) or not np.all(arr.max(axis=1) > 0):
+        raise EvidenceError(
+            f"soft evidence {name!r}: every row must be finite, nonnegative and not all "
+            "zero (or all NaN for none)"
+        )
+    return arr, T
+
+
 def check_columns(
     dbn: TwoSliceDBN,
     evidence: Mapping[str, ArrayLike] | None,
@@ -78,64 +147,16 @@ def check_columns(
         if name not in variables:
             raise UnknownEvidenceError(f"evidence on unknown variable {name!r}")
         v = variables[name]
-        arr = np.asarray(col)
         if isinstance(v, DiscreteVariable):
-            if arr.ndim != 1:
-                raise ShapeError(f"evidence column {name!r} must be 1-D, got shape {arr.shape}")
-            if not np.issubdtype(arr.dtype, np.integer):
-                raise EvidenceError(
-                    f"evidence column {name!r} must hold integer states (-1 = unobserved)"
-                )
-            T = _length(name, arr.shape[0], T)
-            bad = (arr < -1) | (arr >= v.cardinality)
-            if bad.any():
-                t = int(np.argmax(bad))
-                raise EvidenceError(
-                    f"evidence column {name!r}: state {int(arr[t])} at slice {t} out of range "
-                    f"-1..{v.cardinality - 1}"
-                )
-            disc[name] = arr.astype(np.int64)
+            disc[name], T = _discrete_column(name, v, col, T)
         else:
-            arr = np.asarray(col, dtype=np.float64)
-            if arr.ndim == 1 and v.dim == 1:
-                arr = arr[:, None]
-            if arr.ndim != 2 or arr.shape[1] != v.dim:
-                raise ShapeError(
-                    f"evidence column {name!r} must have shape (num_timesteps, {v.dim}), "
-                    f"got {arr.shape}"
-                )
-            T = _length(name, arr.shape[0], T)
-            nan = np.isnan(arr)
-            partial = nan.any(axis=1) & ~nan.all(axis=1)
-            if partial.any() or np.isinf(arr).any():
-                t = int(np.argmax(partial | np.isinf(arr).any(axis=1)))
-                raise NonFiniteError(
-                    f"evidence column {name!r}: row {t} is {arr[t]} (a row is all finite, "
-                    "or all NaN for unobserved)"
-                )
-            cont[name] = arr
+            cont[name], T = _continuous_column(name, v, col, T)
     soft: dict[str, np.ndarray] = {}
     for name, col in (soft_evidence or {}).items():
         v = variables.get(name)
         if v is None:
             raise UnknownEvidenceError(f"soft evidence on unknown variable {name!r}")
-        if not isinstance(v, DiscreteVariable):
-            raise EvidenceError(f"soft evidence on continuous variable {name!r}")
-        arr = np.asarray(col, dtype=np.float64)
-        if arr.ndim != 2 or arr.shape[1] != v.cardinality:
-            raise ShapeError(
-                f"soft evidence {name!r} must have shape (num_timesteps, {v.cardinality}), "
-                f"got {arr.shape}"
-            )
-        T = _length(name, arr.shape[0], T)
-        none = np.isnan(arr).all(axis=1)  # an all-NaN row: no soft evidence at that slice
-        arr = np.where(none[:, None], 1.0, arr)
-        if not np.all(np.isfinite(arr)) or np.any(arr < 0) or not np.all(arr.max(axis=1) > 0):
-            raise EvidenceError(
-                f"soft evidence {name!r}: every row must be finite, nonnegative and not all "
-                "zero (or all NaN for none)"
-            )
-        soft[name] = arr
+        soft[name], T = _soft_column(name, v, col, T)
     if T is None or T < 1:
         raise ShapeError("filtering needs num_timesteps >= 1 (give an evidence column)")
     return Columns(int(T), disc, cont, soft)
