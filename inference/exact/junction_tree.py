@@ -172,6 +172,9 @@ class JunctionTree:
 
     # --- compilation --------------------------------------------------------------------
     def _structure(self, observed: frozenset[str]) -> _Structure:
+        """The clique tree for this set of observed nodes (cached): cliques of a
+        triangulation of the hidden nodes' interaction graph, each CPD's home clique, and
+        the collect and distribute schedules."""
         cached = self._cache.get(observed)
         if cached is not None:
             return cached
@@ -182,62 +185,18 @@ class JunctionTree:
         graph = interaction_graph(scopes.values())
         graph.add_nodes_from(hidden)
         order = elimination_order(graph, cards, hidden, self.heuristic)
-        g = {n: set(graph.neighbors(n)) for n in graph.nodes}
-        raw: list[frozenset[str]] = []
-        for n in order:
-            raw.append(frozenset({n} | g[n]))
-            for a in g[n]:
-                g[a] |= g[n] - {a}
-                g[a].discard(n)
-            del g[n]
-        position = {n: i for i, n in enumerate(nodes)}
-        cliques: list[tuple[str, ...]] = []
-        seen: set[frozenset[str]] = set()
-        for c in raw:
-            if c not in seen and not any(c < d for d in raw):
-                seen.add(c)
-                cliques.append(tuple(sorted(c, key=position.__getitem__)))
-        if not cliques:
-            cliques = [()]
+        cliques = _elimination_cliques(graph, order, {n: i for i, n in enumerate(nodes)})
         sets = [frozenset(c) for c in cliques]
-
-        def smallest_holding(vars_: set[str]) -> int:
-            return min(
-                (i for i, c in enumerate(sets) if vars_ <= c),
-                key=lambda i: (len(cliques[i]), i),
-            )
-
-        placements = []
-        for n in nodes:
-            full = (*bn.parents(n), n)
-            home = smallest_holding(set(scopes[n]))
-            clique = cliques[home]
-            kept = scopes[n]
-            perm = tuple(sorted(range(len(kept)), key=lambda k: clique.index(kept[k])))
-            shape = tuple(cards[v] if v in kept else 1 for v in clique)
-            index = tuple(v if v in observed else slice(None) for v in full)
-            placements.append(_Placement(n, home, index, perm, shape))
-        home = {n: smallest_holding({n}) for n in hidden}
-
-        def edge(src: int, dst: int) -> _Edge:
-            cs, cd = cliques[src], cliques[dst]
-            sep = [v for v in cs if v in cd]
-            return _Edge(
-                src,
-                dst,
-                tuple(i for i, v in enumerate(cs) if v not in cd),
-                tuple(cards[v] for v in sep),
-                tuple(sorted(range(len(sep)), key=lambda k: cd.index(sep[k]))),
-                tuple(cards[v] if v in sep else 1 for v in cd),
-            )
-
+        placements = tuple(
+            _place(n, (*bn.parents(n), n), scopes[n], cliques, sets, cards, observed) for n in nodes
+        )
         bfs = clique_tree_edges(sets)
         structure = _Structure(
             cliques=tuple(cliques),
-            placements=tuple(placements),
-            home=home,
-            collect=tuple(edge(j, i) for i, j in reversed(bfs)),
-            distribute=tuple(edge(i, j) for i, j in bfs),
+            placements=placements,
+            home={n: _smallest_holding(cliques, sets, {n}) for n in hidden},
+            collect=tuple(_edge(cliques, cards, j, i) for i, j in reversed(bfs)),
+            distribute=tuple(_edge(cliques, cards, i, j) for i, j in bfs),
             max_clique_size=max(int(np.prod([cards[v] for v in c])) for c in cliques),
         )
         self._cache[observed] = structure
@@ -263,6 +222,21 @@ class JunctionTree:
         """
         hard, soft = check_evidence(self.bn, evidence, soft_evidence)
         st = self._structure(frozenset(hard))
+        pots, log_scale = self._potentials(st, hard, soft)
+        log_scale = _hugin(st, pots, log_scale)
+        root_sum = float(pots[0].sum())
+        if root_sum <= 0.0:
+            raise EvidenceError("the evidence has probability zero")
+        log_z = log_scale + float(np.log(root_sum))
+        marg = {n: self._marginal(st, pots, hard, n) for n in self.bn.nodes}
+        tables = tuple(p / p.sum() for p in pots)
+        return Calibration(marg, log_z, st.cliques, tables)
+
+    def _potentials(
+        self, st: _Structure, hard: dict[str, int], soft: dict[str, np.ndarray]
+    ) -> tuple[list[np.ndarray], float]:
+        """Clique potentials with every CPD (sliced at the hard evidence) and the soft
+        likelihoods multiplied in, each rescaled to max 1; and the log of the scales."""
         cards = self._cards
         pots = [np.ones([cards[v] for v in c]) for c in st.cliques]
         for pl in st.placements:
@@ -290,45 +264,102 @@ class JunctionTree:
                 raise EvidenceError("the evidence has probability zero")
             pots[i] = p / top
             log_scale += float(np.log(top))
+        return pots, log_scale
 
-        # Hugin: collect (children before parents), then distribute, dividing out what the
-        # receiving child sent during collect. Messages are rescaled to max 1.
-        up: dict[int, np.ndarray] = {}
-        for e in st.collect:
-            kept = pots[e.src].sum(axis=e.sum_axes, keepdims=True)
-            top = kept.max()
-            if top <= 0.0:
-                raise EvidenceError("the evidence has probability zero")
-            kept = kept / top
-            log_scale += float(np.log(top))
-            up[e.src] = kept  # in the sender's layout: the shape its parent's reply will have
-            msg = np.transpose(kept.reshape(e.kept_shape), e.perm).reshape(e.shape)
-            pots[e.dst] = pots[e.dst] * msg
-        for e in st.distribute:
-            kept = pots[e.src].sum(axis=e.sum_axes)
-            msg = np.transpose(kept, e.perm).reshape(e.shape)
-            sent = up[e.dst]
-            ratio = np.divide(msg, sent, out=np.zeros_like(msg), where=sent > 0)
-            pots[e.dst] = pots[e.dst] * ratio
-        root_sum = float(pots[0].sum())
-        if root_sum <= 0.0:
+    def _marginal(
+        self, st: _Structure, pots: list[np.ndarray], hard: dict[str, int], n: str
+    ) -> np.ndarray:
+        """Node ``n``'s posterior marginal from the calibrated potentials."""
+        if n in hard:
+            m = np.zeros(self._cards[n])
+            m[hard[n]] = 1.0
+            return m
+        i = st.home[n]
+        others = tuple(a for a, v in enumerate(st.cliques[i]) if v != n)
+        m = pots[i].sum(axis=others) if others else pots[i]
+        return m / m.sum()
+
+
+def _hugin(st: _Structure, pots: list[np.ndarray], log_scale: float) -> float:
+    """Hugin message passing in place on ``pots``: collect (children before parents), then
+    distribute, dividing out what the receiving child sent during collect. Collect
+    messages are rescaled to max 1; returns ``log_scale`` plus the log of those scales."""
+    up: dict[int, np.ndarray] = {}
+    for e in st.collect:
+        kept = pots[e.src].sum(axis=e.sum_axes, keepdims=True)
+        top = kept.max()
+        if top <= 0.0:
             raise EvidenceError("the evidence has probability zero")
-        log_z = log_scale + float(np.log(root_sum))
+        kept = kept / top
+        log_scale += float(np.log(top))
+        up[e.src] = kept  # in the sender's layout: the shape its parent's reply will have
+        msg = np.transpose(kept.reshape(e.kept_shape), e.perm).reshape(e.shape)
+        pots[e.dst] = pots[e.dst] * msg
+    for e in st.distribute:
+        kept = pots[e.src].sum(axis=e.sum_axes)
+        msg = np.transpose(kept, e.perm).reshape(e.shape)
+        sent = up[e.dst]
+        ratio = np.divide(msg, sent, out=np.zeros_like(msg), where=sent > 0)
+        pots[e.dst] = pots[e.dst] * ratio
+    return log_scale
 
-        marg: dict[str, np.ndarray] = {}
-        for n in self.bn.nodes:
-            if n in hard:
-                m = np.zeros(cards[n])
-                m[hard[n]] = 1.0
-            else:
-                i = st.home[n]
-                c = st.cliques[i]
-                others = tuple(a for a, v in enumerate(c) if v != n)
-                m = pots[i].sum(axis=others) if others else pots[i]
-                m = m / m.sum()
-            marg[n] = m
-        tables = tuple(p / p.sum() for p in pots)
-        return Calibration(marg, log_z, st.cliques, tables)
+
+def _elimination_cliques(graph, order: Sequence[str], position: dict[str, int]) -> list[tuple[str, ...]]:
+    """The maximal cliques created by eliminating ``order`` from ``graph`` (its node and
+    neighbours at each elimination), first-seen order, each sorted by ``position``;
+    ``[()]`` when nothing is hidden."""
+    g = {n: set(graph.neighbors(n)) for n in graph.nodes}
+    raw: list[frozenset[str]] = []
+    for n in order:
+        raw.append(frozenset({n} | g[n]))
+        for a in g[n]:
+            g[a] |= g[n] - {a}
+            g[a].discard(n)
+        del g[n]
+    cliques: list[tuple[str, ...]] = []
+    seen: set[frozenset[str]] = set()
+    for c in raw:
+        if c not in seen and not any(c < d for d in raw):
+            seen.add(c)
+            cliques.append(tuple(sorted(c, key=position.__getitem__)))
+    return cliques or [()]
+
+
+def _smallest_holding(cliques: list[tuple[str, ...]], sets: list[frozenset], vars_: set[str]) -> int:
+    """Index of the smallest clique holding ``vars_`` (first on ties)."""
+    return min((i for i, c in enumerate(sets) if vars_ <= c), key=lambda i: (len(cliques[i]), i))
+
+
+def _place(
+    node: str,
+    full: tuple[str, ...],
+    kept: tuple[str, ...],
+    cliques: list[tuple[str, ...]],
+    sets: list[frozenset],
+    cards: dict[str, int],
+    observed: frozenset[str],
+) -> _Placement:
+    """Where ``node``'s CPD (axes ``full``; ``kept`` the hidden ones) goes and its layout."""
+    home = _smallest_holding(cliques, sets, set(kept))
+    clique = cliques[home]
+    perm = tuple(sorted(range(len(kept)), key=lambda k: clique.index(kept[k])))
+    shape = tuple(cards[v] if v in kept else 1 for v in clique)
+    index = tuple(v if v in observed else slice(None) for v in full)
+    return _Placement(node, home, index, perm, shape)
+
+
+def _edge(cliques: list[tuple[str, ...]], cards: dict[str, int], src: int, dst: int) -> _Edge:
+    """The message from clique ``src`` to clique ``dst``: axes summed, separator layout."""
+    cs, cd = cliques[src], cliques[dst]
+    sep = [v for v in cs if v in cd]
+    return _Edge(
+        src,
+        dst,
+        tuple(i for i, v in enumerate(cs) if v not in cd),
+        tuple(cards[v] for v in sep),
+        tuple(sorted(range(len(sep)), key=lambda k: cd.index(sep[k]))),
+        tuple(cards[v] if v in sep else 1 for v in cd),
+    )
 
 
 def marginals(
