@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+import networkx as nx
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -304,7 +305,9 @@ def _hugin(st: _Structure, pots: list[np.ndarray], log_scale: float) -> float:
     return log_scale
 
 
-def _elimination_cliques(graph, order: Sequence[str], position: dict[str, int]) -> list[tuple[str, ...]]:
+def _elimination_cliques(
+    graph: nx.Graph, order: Sequence[str], position: dict[str, int]
+) -> list[tuple[str, ...]]:
     """The maximal cliques created by eliminating ``order`` from ``graph`` (its node and
     neighbours at each elimination), first-seen order, each sorted by ``position``;
     ``[()]`` when nothing is hidden."""
@@ -325,7 +328,9 @@ def _elimination_cliques(graph, order: Sequence[str], position: dict[str, int]) 
     return cliques or [()]
 
 
-def _smallest_holding(cliques: list[tuple[str, ...]], sets: list[frozenset], vars_: set[str]) -> int:
+def _smallest_holding(
+    cliques: list[tuple[str, ...]], sets: list[frozenset], vars_: set[str]
+) -> int:
     """Index of the smallest clique holding ``vars_`` (first on ties)."""
     return min((i for i, c in enumerate(sets) if vars_ <= c), key=lambda i: (len(cliques[i]), i))
 
