@@ -403,6 +403,49 @@ def simulate_scene(
     Scene.
     """
     rng = np.random.default_rng(seed)
+    chol = _check_scene(num_objects, num_timesteps, cm, spread, feature_dim, gamma, sigma)
+    M, T, d = int(num_objects), int(num_timesteps), int(feature_dim)
+    target = int(rng.integers(M))
+    z = rng.standard_normal((M, d))
+    obj_cam, obj_ta, time_ptr, o_cam, o_obj, o_e = _walk(rng, network, M, T, d, gamma, chol)
+    is_target = o_obj == target
+    if cm is not None:
+        spread, _ = _calibrate_spread(cm, z[o_obj], o_e, z[target], is_target, chol)
+    means = spread * z @ chol.T
+    feat = means[o_obj] + o_e
+    # report the CM of the features exactly as stored
+    achieved = confusion_measure(similarity(feat, means[target], chol), is_target)
+    true_obs = np.full(T, -1, dtype=np.int64)
+    idx = np.flatnonzero(is_target)
+    true_obs[np.searchsorted(time_ptr, idx, side="right") - 1] = idx
+    return Scene(
+        network=network,
+        odb=ObservationDB(time_ptr, o_cam, feat, o_obj),
+        target=target,
+        c0=int(obj_cam[target, 0]),
+        f0=means[target].copy(),
+        sigma=np.eye(d) if sigma is None else np.asarray(sigma, dtype=np.float64),
+        spread=float(spread),
+        cm=float(achieved),
+        true_cam=obj_cam[target].copy(),
+        true_ta=obj_ta[target].copy(),
+        true_obs=true_obs,
+        obj_cam=obj_cam,
+        obj_ta=obj_ta,
+    )
+
+
+def _check_scene(
+    num_objects: int,
+    num_timesteps: int,
+    cm: float | None,
+    spread: float | None,
+    feature_dim: int,
+    gamma: float,
+    sigma: np.ndarray | None,
+) -> np.ndarray:
+    """Validate :func:`simulate_scene`'s arguments; returns the (d, d) Cholesky factor of
+    ``sigma`` (identity by default)."""
     if num_objects < 1 or num_timesteps < 2:
         raise InputError(f"need num_objects >= 1 and num_timesteps >= 2, got {num_objects}, {num_timesteps}")
     if not 0.0 < gamma < 1.0:
@@ -417,14 +460,27 @@ def simulate_scene(
     if sigma.shape != (feature_dim, feature_dim):
         raise ShapeError(f"sigma must have shape ({feature_dim}, {feature_dim}), got {sigma.shape}")
     try:
-        chol = cholesky(sigma, lower=True)
+        return cholesky(sigma, lower=True)
     except np.linalg.LinAlgError as exc:
         raise InputError("sigma is not symmetric positive definite") from exc
-    n_cam = network.num_cameras
-    M, T, d = int(num_objects), int(num_timesteps), int(feature_dim)
-    target = int(rng.integers(M))
-    z = rng.standard_normal((M, d))
-    cam = rng.integers(0, n_cam, size=M)
+
+
+def _walk(
+    rng: np.random.Generator,
+    network: CameraNetwork,
+    M: int,
+    T: int,
+    d: int,
+    gamma: float,
+    chol: np.ndarray,
+) -> tuple[np.ndarray, ...]:
+    """``M`` objects walk ``T`` steps from uniform cameras (:func:`propagate`) with
+    eq. 11's appearance noise ``e``; the visible ones are observed, sorted by camera.
+
+    Returns ``obj_cam``, ``obj_ta`` (M, T), ``time_ptr`` (T + 1,), and per observation its
+    camera, object and noise ``e`` (num_obs,), (num_obs,), (num_obs, d).
+    """
+    cam = rng.integers(0, network.num_cameras, size=M)
     ta = np.zeros(M, dtype=np.int64)
     e = np.zeros((M, d))
     obj_cam = np.empty((M, T), dtype=np.int64)
@@ -442,39 +498,5 @@ def simulate_scene(
         chunks_e.append(e[order])
         counts.append(order.size)
     time_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    o_cam = np.concatenate(chunks_cam)
-    o_obj = np.concatenate(chunks_obj)
-    o_e = np.concatenate(chunks_e)
-    is_target = o_obj == target
-    z_obs = z[o_obj]
-    if cm is not None:
-        spread, achieved = _calibrate_spread(cm, z_obs, o_e, z[target], is_target, chol)
-    else:
-        w = spread * (z_obs - z[target]) + whiten(chol, o_e)
-        achieved = confusion_measure(np.exp(-0.5 * np.einsum("ij,ij->i", w, w)), is_target)
-    means = spread * z @ chol.T
-    feat = means[o_obj] + o_e
-    # report the CM of the features exactly as stored
-    achieved = confusion_measure(similarity(feat, means[target], chol), is_target)
-    odb = ObservationDB(time_ptr, o_cam, feat, o_obj)
-    true_cam = obj_cam[target].copy()
-    true_ta = obj_ta[target].copy()
-    true_obs = np.full(T, -1, dtype=np.int64)
-    idx = np.flatnonzero(is_target)
-    t_of = np.searchsorted(time_ptr, idx, side="right") - 1
-    true_obs[t_of] = idx
-    return Scene(
-        network=network,
-        odb=odb,
-        target=target,
-        c0=int(true_cam[0]),
-        f0=means[target].copy(),
-        sigma=sigma,
-        spread=float(spread),
-        cm=float(achieved),
-        true_cam=true_cam,
-        true_ta=true_ta,
-        true_obs=true_obs,
-        obj_cam=obj_cam,
-        obj_ta=obj_ta,
-    )
+    o_cam, o_obj, o_e = (np.concatenate(c) for c in (chunks_cam, chunks_obj, chunks_e))
+    return obj_cam, obj_ta, time_ptr, o_cam, o_obj, o_e
