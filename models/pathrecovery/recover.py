@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 
 from dbn.errors import InputError, ShapeError
-from inference.exact.layered_dp import layered_shortest_path
+from inference.exact.layered_dp import LayeredPath, layered_shortest_path
 from models.pathrecovery.filter import (
     HIDDEN,
     NONE,
@@ -157,9 +157,37 @@ def recover_path(
     ------
     ShapeError, InputError on lists or features that do not fit.
     """
-    network = model.network
     faithful = model.config.faithful if faithful is None else bool(faithful)
-    gaps = model.config.gaps
+    kind, obs_feat = _check_inputs(model, lists, obs_feat, k)
+    costs = ("rank" if faithful else "logmass") if costs is None else costs
+    if costs not in ("rank", "logmass"):
+        raise InputError(f"costs must be 'rank' or 'logmass', got {costs!r}")
+    countdown = faithful if countdown is None else bool(countdown)
+    continuity = (not faithful) if continuity is None else bool(continuity)
+    steps = kind.shape[0]
+    cols = [np.flatnonzero(kind[s, :k] != NONE) for s in range(steps)]
+    layers = (
+        [np.array([VISIBLE])] + [kind[s, c] for s, c in enumerate(cols)],
+        [np.array([model.c0])] + [lists.cam[s, c] for s, c in enumerate(cols)],
+        [np.array([0])] + [lists.ta[s, c] for s, c in enumerate(cols)],
+    )
+    node_costs = [np.zeros(1)]
+    for s, c in enumerate(cols):
+        if costs == "rank":
+            node_costs.append((c + 1).astype(np.float64))
+        else:
+            node_costs.append(-np.log(np.maximum(lists.mass[s, c], _MIN_MASS)))
+    layers_w = _layer_features(model, lists, obs_feat, cols) if continuity else None
+    edge_costs = [_edge_cost(model, layers, layers_w, t, countdown) for t in range(steps)]
+    res = layered_shortest_path(node_costs, edge_costs)
+    return _path(lists, kind, cols, res)
+
+
+def _check_inputs(
+    model: PathFilterModel, lists: KBestLists, obs_feat: np.ndarray, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Validate :func:`recover_path`'s lists, ``k`` and features; returns ``lists.kind``
+    and the features as float64 arrays."""
     kind = np.asarray(lists.kind)
     if kind.ndim != 2:
         raise ShapeError(f"lists.kind must be (num_steps, K), got {kind.shape}")
@@ -174,47 +202,54 @@ def recover_path(
         raise ShapeError(f"obs_feat must be (num_obs, {model.f0.size}), got {obs_feat.shape}")
     if np.any(lists.obs >= obs_feat.shape[0]):
         raise InputError(f"lists.obs points past obs_feat (max {int(np.max(lists.obs))}, rows {obs_feat.shape[0]})")
-    costs = ("rank" if faithful else "logmass") if costs is None else costs
-    if costs not in ("rank", "logmass"):
-        raise InputError(f"costs must be 'rank' or 'logmass', got {costs!r}")
-    countdown = faithful if countdown is None else bool(countdown)
-    continuity = (not faithful) if continuity is None else bool(continuity)
-    steps = kind.shape[0]
-    cols = [np.flatnonzero(kind[s, :k] != NONE) for s in range(steps)]
-    layers_kind = [np.array([VISIBLE])] + [kind[s, c] for s, c in enumerate(cols)]
-    layers_cam = [np.array([model.c0])] + [lists.cam[s, c] for s, c in enumerate(cols)]
-    layers_ta = [np.array([0])] + [lists.ta[s, c] for s, c in enumerate(cols)]
-    node_costs = [np.zeros(1)]
+    return kind, obs_feat
+
+
+def _layer_features(
+    model: PathFilterModel, lists: KBestLists, obs_feat: np.ndarray, cols: list[np.ndarray]
+) -> list[np.ndarray]:
+    """Whitened features of every layer's listed observations (``f_0`` for the first
+    layer); NaN rows for hidden states. Only the listed rows of ``obs_feat`` are read."""
+    layers_w = [model.u0[None, :]]
     for s, c in enumerate(cols):
-        if costs == "rank":
-            node_costs.append((c + 1).astype(np.float64))
-        else:
-            node_costs.append(-np.log(np.maximum(lists.mass[s, c], _MIN_MASS)))
-    if continuity:
-        # whitened features of the listed observations only; NaN rows for hidden states
-        layers_w = [model.u0[None, :]]
-        for s, c in enumerate(cols):
-            o = lists.obs[s, c]
-            w = np.full((c.size, model.f0.size), np.nan)
-            v = o >= 0
-            if np.any(v):
-                w[v] = whiten(model.chol, obs_feat[o[v]])
-            layers_w.append(w)
-    edge_costs = []
-    for t in range(steps):
-        ok = legal_transitions(
-            network,
-            layers_kind[t], layers_cam[t], layers_ta[t],
-            layers_kind[t + 1], layers_cam[t + 1], layers_ta[t + 1],
-            faithful=countdown, gaps=gaps,
-        )
-        ec = np.where(ok, 0.0, np.inf)
-        if continuity:
-            diff = layers_w[t][:, None, :] - layers_w[t + 1][None, :, :]
-            d2 = 0.5 * np.sum(diff * diff, axis=2)  # -log P_s of consecutive observations
-            ec = ec + np.where(np.isnan(d2), 0.0, d2)
-        edge_costs.append(ec)
-    res = layered_shortest_path(node_costs, edge_costs)
+        o = lists.obs[s, c]
+        w = np.full((c.size, model.f0.size), np.nan)
+        v = o >= 0
+        if np.any(v):
+            w[v] = whiten(model.chol, obs_feat[o[v]])
+        layers_w.append(w)
+    return layers_w
+
+
+def _edge_cost(
+    model: PathFilterModel,
+    layers: tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]],
+    layers_w: list[np.ndarray] | None,
+    t: int,
+    countdown: bool,
+) -> np.ndarray:
+    """Costs between layers ``t`` and ``t + 1``: ``inf`` for an illegal transition, plus
+    ``-log P_s`` of consecutive observations when ``layers_w`` is given (continuity)."""
+    kinds, cams, tas = layers
+    ok = legal_transitions(
+        model.network,
+        kinds[t], cams[t], tas[t],
+        kinds[t + 1], cams[t + 1], tas[t + 1],
+        faithful=countdown, gaps=model.config.gaps,
+    )  # fmt: skip
+    ec = np.where(ok, 0.0, np.inf)
+    if layers_w is not None:
+        diff = layers_w[t][:, None, :] - layers_w[t + 1][None, :, :]
+        d2 = 0.5 * np.sum(diff * diff, axis=2)  # -log P_s of consecutive observations
+        ec = ec + np.where(np.isnan(d2), 0.0, d2)
+    return ec
+
+
+def _path(
+    lists: KBestLists, kind: np.ndarray, cols: list[np.ndarray], res: LayeredPath
+) -> RecoveredPath:
+    """The :class:`RecoveredPath` of a layered shortest path over the listed states."""
+    steps = kind.shape[0]
     out_kind = np.full(steps, NONE, dtype=np.int8)
     out_cam = np.full(steps, -1, dtype=np.int64)
     out_ta = np.zeros(steps, dtype=np.int64)
