@@ -132,22 +132,18 @@ def _speedup(
     return times["full"] / times["incremental"], agree, info
 
 
-def run(quick: bool, seed: int) -> dict:
-    num_frames = 25 if quick else 300
-    num_people = 6
-    seeds = [seed] if quick else [seed, seed + 1, seed + 2]
-    scene = default_scene(0)
-    params = TrackerParams(num_moves=1500, burn_in=500)
-    tracker = RJMCMCTracker(scene, params)
-    ablation = RJMCMCTracker(scene, params._replace(ground_noise=False), tracker.noise)
-    log(
-        f"rjmcmc3d: SIMULATED 3-camera scene, {num_people} people, {num_frames} frames, "
-        f"seeds {seeds}, {params.num_moves} moves/frame ({params.burn_in} burn-in)"
-    )
-    warmup = _warm_up(tracker, scene, seed + 7)
-    log(f"warm-up (numba compile or cache load): {warmup:.1f} s")
-    cov = coverage_fractions(scene, step=0.2)
-    log(f"floor seen by 0/1/2/3 cameras: {np.round(cov, 3).tolist()}")
+def _per_seed(
+    tracker: RJMCMCTracker,
+    ablation: RJMCMCTracker,
+    scene,
+    seeds: list[int],
+    num_frames: int,
+    num_people: int,
+) -> tuple[list[dict], list[dict], list[float], list[float], object]:
+    """Track every seed's SIMULATED walkers with ``C(u)`` and without (the ablation).
+
+    Returns the metrics with and without, wall and CPU ms per frame, and the first
+    frame snapshot (for :func:`_speedup`)."""
     ours, abl, walls, cpus = [], [], [], []
     snapshot = None
     for s in seeds:
@@ -166,12 +162,40 @@ def run(quick: bool, seed: int) -> dict:
         abl.append(m0)
         walls.append(wall)
         cpus.append(cpu)
+    return ours, abl, walls, cpus, snapshot
+
+
+def _speedups(
+    tracker: RJMCMCTracker, snapshot, quick: bool, seed: int
+) -> tuple[float, dict, float, dict, bool]:
+    """The incremental likelihood's speed-up over the full one, at the scene's size and at
+    768x576; returns both speed-ups, their details, and whether the two agreed."""
     speed, agree, info = _speedup(tracker, snapshot, 300 if quick else 1500, seed)
     log(f"speed-up vs full likelihood: {speed:.1f} ({info})")
     pal = default_scene(0, width=768, height=576)
     speed_pal, agree_pal, info_pal = _speedup(tracker, snapshot, 100 if quick else 500, seed, pal)
     log(f"at 768x576: speed-up {speed_pal:.1f} ({info_pal})")
-    agree = agree and agree_pal
+    return speed, info, speed_pal, info_pal, agree and agree_pal
+
+
+def run(quick: bool, seed: int) -> dict:
+    num_frames = 25 if quick else 300
+    num_people = 6
+    seeds = [seed] if quick else [seed, seed + 1, seed + 2]
+    scene = default_scene(0)
+    params = TrackerParams(num_moves=1500, burn_in=500)
+    tracker = RJMCMCTracker(scene, params)
+    ablation = RJMCMCTracker(scene, params._replace(ground_noise=False), tracker.noise)
+    log(
+        f"rjmcmc3d: SIMULATED 3-camera scene, {num_people} people, {num_frames} frames, "
+        f"seeds {seeds}, {params.num_moves} moves/frame ({params.burn_in} burn-in)"
+    )
+    warmup = _warm_up(tracker, scene, seed + 7)
+    log(f"warm-up (numba compile or cache load): {warmup:.1f} s")
+    cov = coverage_fractions(scene, step=0.2)
+    log(f"floor seen by 0/1/2/3 cameras: {np.round(cov, 3).tolist()}")
+    ours, abl, walls, cpus, snapshot = _per_seed(tracker, ablation, scene, seeds, num_frames, num_people)
+    speed, info, speed_pal, info_pal, agree = _speedups(tracker, snapshot, quick, seed)
 
     def pooled(ms: list[dict], key: str) -> float:
         return float(np.mean([m[key] for m in ms]))
