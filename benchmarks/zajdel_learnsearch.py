@@ -62,6 +62,52 @@ def _adf_lag3(scenarios) -> tuple[list[float] | None, str | None]:
         return None, f"{type(exc).__name__}: {exc}"
 
 
+def _offline_seed(s: int, sc, add) -> tuple[float, object, bool]:
+    """Learn-search with T = 1, 5, 10, 20 (learned parameters), T = 5 biased, T = 20 under
+    the true parameters, and the greedy labelling on one SIMULATED office; ``add(key,
+    value)`` records each figure. Returns the T = 10 time, the T = 20 parameters, ok."""
+    ok = True
+    p0 = initial_params(take(sc.obs, slice(0, N0)), sc.params.path, sc.params.p_new)
+    true_objects = num_objects(sc.labels)
+    for T in (1, 5, 10, 20):
+        cfg = LearnSearchConfig(num_hypotheses=T, n0=N0, batch=BATCH)
+        t0 = time.perf_counter()
+        res = learn_search(sc.obs, p0, cfg)
+        dt = time.perf_counter() - t0
+        if T == 10:
+            time_t10 = dt
+        if T == 20:
+            learned = res.params
+            add("f1_T20", pairwise_prf(res.labels, sc.labels)[2])
+            add("objects_abs_err_T20", abs(num_objects(res.labels) - true_objects))
+        ok &= res.labels.shape == sc.labels.shape
+        add(f"q_T{T}", partition_accuracy(res.labels, sc.labels))
+    res = learn_search(sc.obs, p0, LearnSearchConfig(num_hypotheses=5, biased=True))
+    add("q_T5_biased", partition_accuracy(res.labels, sc.labels))
+    pt = params_from_zajdel(sc.params)
+    res = learn_search(sc.obs, pt, LearnSearchConfig(num_hypotheses=20, learn=False))
+    check = partition_log_scores(res.hypotheses, sc.obs, pt)  # incremental == from scratch
+    ok &= bool(np.allclose(check, res.log_scores, rtol=0, atol=1e-6))
+    add("q_T20_true_params", partition_accuracy(res.labels, sc.labels))
+    add("f1_T20_true_params", pairwise_prf(res.labels, sc.labels)[2])
+    g = greedy_labels(sc.obs, sc.params)
+    add("q_greedy", partition_accuracy(g, sc.labels))
+    add("f1_greedy", pairwise_prf(g, sc.labels)[2])
+    return time_t10, learned, bool(ok)
+
+
+def _mcmc_seed(s: int, sc, th, add) -> tuple[float, bool]:
+    """The MCMC baseline (10,000 steps from the greedy start) under learned parameters
+    ``th``; returns its time and whether its best score is the recomputed one."""
+    t0 = time.perf_counter()
+    r = partition_mcmc(s, sc.obs, th, 10_000, MCMCConfig(init="greedy"), checkpoints=(1000,))
+    dt = time.perf_counter() - t0
+    add("q_mcmc_1e3", partition_accuracy(r.best_at[1000][0], sc.labels))
+    add("q_mcmc_1e4", partition_accuracy(r.best_labels, sc.labels))
+    add("objects_mcmc_1e4", num_objects(r.best_labels))
+    return dt, bool(abs(float(partition_log_scores(r.best_labels, sc.obs, th)) - r.best_score) < 1e-6)
+
+
 def run(quick: bool, seed: int, mapper=map) -> dict:
     num_seeds = 5 if quick else 10
     num_mcmc_seeds = 2 if quick else 10
@@ -76,44 +122,18 @@ def run(quick: bool, seed: int, mapper=map) -> dict:
         acc.setdefault(key, []).append(float(value))
 
     for s, sc in zip(seeds, scen):
-        p0 = initial_params(take(sc.obs, slice(0, N0)), sc.params.path, sc.params.p_new)
-        true_objects = num_objects(sc.labels)
-        for T in (1, 5, 10, 20):
-            cfg = LearnSearchConfig(num_hypotheses=T, n0=N0, batch=BATCH)
-            t0 = time.perf_counter()
-            res = learn_search(sc.obs, p0, cfg)
-            dt = time.perf_counter() - t0
-            if T == 10:
-                times_t10.append(dt)
-            if T == 20:
-                learned.append(res.params)
-                add("f1_T20", pairwise_prf(res.labels, sc.labels)[2])
-                add("objects_abs_err_T20", abs(num_objects(res.labels) - true_objects))
-            ok &= res.labels.shape == sc.labels.shape
-            add(f"q_T{T}", partition_accuracy(res.labels, sc.labels))
-        res = learn_search(sc.obs, p0, LearnSearchConfig(num_hypotheses=5, biased=True))
-        add("q_T5_biased", partition_accuracy(res.labels, sc.labels))
-        pt = params_from_zajdel(sc.params)
-        res = learn_search(sc.obs, pt, LearnSearchConfig(num_hypotheses=20, learn=False))
-        check = partition_log_scores(res.hypotheses, sc.obs, pt)  # incremental == from scratch
-        ok &= bool(np.allclose(check, res.log_scores, rtol=0, atol=1e-6))
-        add("q_T20_true_params", partition_accuracy(res.labels, sc.labels))
-        add("f1_T20_true_params", pairwise_prf(res.labels, sc.labels)[2])
-        g = greedy_labels(sc.obs, sc.params)
-        add("q_greedy", partition_accuracy(g, sc.labels))
-        add("f1_greedy", pairwise_prf(g, sc.labels)[2])
+        dt, params, seed_ok = _offline_seed(s, sc, add)
+        times_t10.append(dt)
+        learned.append(params)
+        ok &= seed_ok
         log(f"seed {s}: q_T1 {acc['q_T1'][-1]:.3f} q_T20 {acc['q_T20'][-1]:.3f} "
             f"q_greedy {acc['q_greedy'][-1]:.3f} T10 {times_t10[-1]:.2f}s")
 
     times_mcmc = []
     for s, sc, th in list(zip(seeds, scen, learned))[:num_mcmc_seeds]:
-        t0 = time.perf_counter()
-        r = partition_mcmc(s, sc.obs, th, 10_000, MCMCConfig(init="greedy"), checkpoints=(1000,))
-        times_mcmc.append(time.perf_counter() - t0)
-        ok &= bool(abs(float(partition_log_scores(r.best_labels, sc.obs, th)) - r.best_score) < 1e-6)
-        add("q_mcmc_1e3", partition_accuracy(r.best_at[1000][0], sc.labels))
-        add("q_mcmc_1e4", partition_accuracy(r.best_labels, sc.labels))
-        add("objects_mcmc_1e4", num_objects(r.best_labels))
+        dt, mcmc_ok = _mcmc_seed(s, sc, th, add)
+        times_mcmc.append(dt)
+        ok &= mcmc_ok
         log(f"seed {s}: mcmc 1e4 q {acc['q_mcmc_1e4'][-1]:.3f} in {times_mcmc[-1]:.1f}s")
 
     t0 = time.perf_counter()
