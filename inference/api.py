@@ -34,6 +34,7 @@ from dbn.errors import (
     UnknownEvidenceError,
 )
 from dbn.variables import DiscreteVariable
+from inference.evidence_columns import first_bad_row
 from inference.exact.frontier import MAX_FRONTIER_SIZE
 from inference.results import DBNFilterResult
 
@@ -92,10 +93,8 @@ def _check_evidence(
         if arr.ndim != 2 or arr.shape[1] != v.dim:
             raise ShapeError(f"evidence {name!r} must have shape (T, {v.dim}), got {arr.shape}")
         arr = arr.astype(np.float64)
-        nan = np.isnan(arr)
-        partial = nan.any(axis=1) & ~nan.all(axis=1)
-        if partial.any() or np.isinf(arr).any():
-            t = int(np.argmax(partial | np.isinf(arr).any(axis=1)))
+        t = first_bad_row(arr)
+        if t is not None:
             raise NonFiniteError(
                 f"evidence {name!r} at slice {t}: {arr[t]} (a missing row must be all NaN)"
             )

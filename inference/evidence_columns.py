@@ -30,7 +30,7 @@ from dbn.errors import (
 )
 from dbn.variables import ContinuousVariable, DiscreteVariable
 
-__all__ = ["Columns", "check_columns", "check_query"]
+__all__ = ["Columns", "check_columns", "check_query", "first_bad_row"]
 
 
 class Columns(NamedTuple):
@@ -54,6 +54,14 @@ def _length(name: str, n: int, T: int | None) -> int:
     if T is not None and n != T:
         raise ShapeError(f"evidence column {name!r} has length {n}, expected {T}")
     return n
+
+
+def first_bad_row(arr: np.ndarray) -> int | None:
+    """The first row of a (T, d) float array that holds an infinity or is partly NaN (a
+    row is all finite, or all NaN for unobserved); None when every row is good."""
+    nan = np.isnan(arr)
+    bad = (nan.any(axis=1) & ~nan.all(axis=1)) | np.isinf(arr).any(axis=1)
+    return int(np.argmax(bad)) if bad.any() else None
 
 
 def _discrete_column(
@@ -90,10 +98,8 @@ def _continuous_column(
             f"evidence column {name!r} must have shape (num_timesteps, {v.dim}), got {arr.shape}"
         )
     T = _length(name, arr.shape[0], T)
-    nan = np.isnan(arr)
-    partial = nan.any(axis=1) & ~nan.all(axis=1)
-    if partial.any() or np.isinf(arr).any():
-        t = int(np.argmax(partial | np.isinf(arr).any(axis=1)))
+    t = first_bad_row(arr)
+    if t is not None:
         raise NonFiniteError(
             f"evidence column {name!r}: row {t} is {arr[t]} (a row is all finite, "
             "or all NaN for unobserved)"
