@@ -93,6 +93,29 @@ def validate_observations(
     :class:`TimeOrderError` for quit before enter or quit times going backwards
     (also against ``last_t_quit``, the last quit time a tracker has seen).
     """
+    app, fields, ints = _as_arrays(obs)
+    if app.ndim != 2 or app.shape[1] != obs_dim:
+        raise ShapeError(f"appearance: expected shape (num_obs, {obs_dim}), got {app.shape}")
+    n = app.shape[0]
+    for name, v in {**fields, **ints}.items():
+        if v.shape != (n,):
+            raise ShapeError(f"{name}: expected shape ({n},), got {v.shape}")
+    _check_appearance_values(app)
+    for name, v in fields.items():
+        if not np.isfinite(v).all():
+            k = int(np.argmax(~np.isfinite(v)))
+            raise NonFiniteError(f"{name}[{k}] = {v[k]} is not finite")
+    limits = {"camera": num_cameras, "border_enter": num_borders, "border_quit": num_borders}
+    clean = {name: _index_column(name, v, limits[name]) for name, v in ints.items()}
+    te, tq = fields["t_enter"], fields["t_quit"]
+    _check_quit_times(te, tq, last_t_quit)
+    return Observations(app, clean["camera"], te, tq, clean["border_enter"], clean["border_quit"])
+
+
+def _as_arrays(obs: Observations) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """The observations as numpy arrays: appearance (float64, a single 1-D observation made
+    a row), the times (float64) and the indices (as given); complex or unreadable input
+    raises."""
     for name in Observations._fields:
         if np.iscomplexobj(getattr(obs, name)):
             raise InputError(f"{name}: expected real numbers, got a complex array")
@@ -113,12 +136,11 @@ def validate_observations(
         app = app[None, :]
         fields = {k: v.reshape(-1) for k, v in fields.items()}
         ints = {k: v.reshape(-1) for k, v in ints.items()}
-    if app.ndim != 2 or app.shape[1] != obs_dim:
-        raise ShapeError(f"appearance: expected shape (num_obs, {obs_dim}), got {app.shape}")
-    n = app.shape[0]
-    for name, v in {**fields, **ints}.items():
-        if v.shape != (n,):
-            raise ShapeError(f"{name}: expected shape ({n},), got {v.shape}")
+    return app, fields, ints
+
+
+def _check_appearance_values(app: np.ndarray) -> None:
+    """Every appearance entry finite and at most :data:`MAX_APPEARANCE` in magnitude."""
     bad = ~np.isfinite(app)
     if bad.any():
         k, i = np.argwhere(bad)[0]
@@ -130,25 +152,26 @@ def validate_observations(
             f"appearance[{k}, {i}] = {app[k, i]:g}: |appearance| must be <= {MAX_APPEARANCE:g}"
             " (features are expected of order 1-1000; rescale them)"
         )
-    for name, v in fields.items():
+
+
+def _index_column(name: str, v: np.ndarray, limit: int) -> np.ndarray:
+    """An index column (camera or border) as int64: integers (or integral floats) in
+    ``[0, limit)``."""
+    if v.dtype.kind == "f":
         if not np.isfinite(v).all():
             k = int(np.argmax(~np.isfinite(v)))
             raise NonFiniteError(f"{name}[{k}] = {v[k]} is not finite")
-    limits = {"camera": num_cameras, "border_enter": num_borders, "border_quit": num_borders}
-    clean_ints = {}
-    for name, v in ints.items():
-        if v.dtype.kind == "f":
-            if not np.isfinite(v).all():
-                k = int(np.argmax(~np.isfinite(v)))
-                raise NonFiniteError(f"{name}[{k}] = {v[k]} is not finite")
-            if (v != np.round(v)).any():
-                k = int(np.argmax(v != np.round(v)))
-                raise ShapeError(f"{name}[{k}] = {v[k]} is not an integer index")
-        elif v.dtype.kind not in "iu":
-            raise ShapeError(f"{name}: expected integer indices, got dtype {v.dtype}")
-        _check_index_range(name, v, limits[name])  # before the cast: 1e300 must not wrap
-        clean_ints[name] = v.astype(np.int64)
-    te, tq = fields["t_enter"], fields["t_quit"]
+        if (v != np.round(v)).any():
+            k = int(np.argmax(v != np.round(v)))
+            raise ShapeError(f"{name}[{k}] = {v[k]} is not an integer index")
+    elif v.dtype.kind not in "iu":
+        raise ShapeError(f"{name}: expected integer indices, got dtype {v.dtype}")
+    _check_index_range(name, v, limit)  # before the cast: 1e300 must not wrap
+    return v.astype(np.int64)
+
+
+def _check_quit_times(te: np.ndarray, tq: np.ndarray, last_t_quit: float) -> None:
+    """Quit after enter, and quit times non-decreasing (from ``last_t_quit`` on)."""
     if (tq < te).any():
         k = int(np.argmax(tq < te))
         raise TimeOrderError(f"t_quit[{k}] = {tq[k]} is before t_enter[{k}] = {te[k]} (quit before enter)")
@@ -159,6 +182,3 @@ def validate_observations(
             f"t_quit[{k}] = {tq[k]} is earlier than the previous observation's t_quit = {prev[k]}"
             " (observations must be ordered by quit time)"
         )
-    return Observations(
-        app, clean_ints["camera"], te, tq, clean_ints["border_enter"], clean_ints["border_quit"]
-    )
