@@ -709,6 +709,12 @@ class NetworkConfig:
     merge_cover: float = 0.2
 
     def __post_init__(self) -> None:
+        self._check_links()
+        self._check_palette()
+        self._check_size_and_colour()
+
+    def _check_links(self) -> None:
+        """The link rule's and the merge test's settings; :class:`ModelError` names the field."""
         if self.v_max <= 0 or not np.isfinite(self.v_max):
             raise ModelError(f"NetworkConfig.v_max must be > 0, got {self.v_max}")
         if self.radius < 0:
@@ -724,8 +730,6 @@ class NetworkConfig:
             raise ModelError(f"NetworkConfig.gate must be 'pixels', 'scaled' or 'boxes', got {self.gate!r}")
         if not self.v_box >= 0:
             raise ModelError(f"NetworkConfig.v_box must be >= 0, got {self.v_box}")
-        if not 0.0 <= self.palette_continued <= 1.0:
-            raise ModelError(f"NetworkConfig.palette_continued must be in [0, 1], got {self.palette_continued}")
         if not (self.merge_area >= 0 and np.isfinite(self.merge_area)):
             raise ModelError(f"NetworkConfig.merge_area must be finite and >= 0, got {self.merge_area}")
         if not 0 <= self.merge_cover <= 1:
@@ -735,6 +739,11 @@ class NetworkConfig:
                 f"NetworkConfig: radius_scaled must be >= 0 and v_max_scaled > 0, got "
                 f"{self.radius_scaled} / {self.v_max_scaled}"
             )
+
+    def _check_palette(self) -> None:
+        """The palette evidence's settings and tables (shapes, log probabilities)."""
+        if not 0.0 <= self.palette_continued <= 1.0:
+            raise ModelError(f"NetworkConfig.palette_continued must be in [0, 1], got {self.palette_continued}")
         if self.palette_count_table:
             t = _as_table(self.palette_count_table)
             if t.ndim != 2 or t.shape[1] < 2 or not np.all(t <= 0):
@@ -763,6 +772,9 @@ class NetworkConfig:
                     f"NetworkConfig.palette_missing_table must be a table of log probabilities "
                     f"(max_new + 1, {bins.size} bins of palette_gain_bins, pool_size + 1), got shape {t.shape}"
                 )
+
+    def _check_size_and_colour(self) -> None:
+        """The colour mode, the match probability and the size evidence's parameters."""
         if self.colour_mode not in ("ratio", "hyper", "eq6"):
             raise ModelError(
                 f"NetworkConfig.colour_mode must be 'hyper', 'ratio' or 'eq6', got {self.colour_mode!r}"
