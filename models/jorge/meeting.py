@@ -161,26 +161,7 @@ def simulate_meeting(
     n = k + num_walkers
     sizes = np.stack([rng.uniform(20, 45, n), rng.uniform(14, 32, n)], axis=1)
     speeds = rng.uniform(0.6, 1.3, n)
-    centre = np.array([rng.uniform(130, WIDTH - 130), rng.uniform(90, HEIGHT - 90)])
-    slots = centre + _slots(rng, k, sizes[:k])
-    # arrivals: paths in from the edges, arriving one after another
-    arrive = np.cumsum(np.concatenate([[0], rng.integers(40, 121, k - 1)]))
-    together = rng.random() < pair_prob
-    if together:
-        arrive[1] = arrive[0]
-    paths_in = []
-    angle0 = rng.uniform(0, 2 * np.pi)
-    for i in range(k):
-        pair = together and i < 2  # both walk in on parallel lines, side by side
-        ang = angle0 if pair else rng.uniform(0, 2 * np.pi)
-        speed = speeds[0] if pair else speeds[i]
-        paths_in.append(_walk(_edge_point(slots[i], ang), slots[i], speed))
-    first = int(max(p.shape[0] for p in paths_in) - arrive.min()) + 10  # everyone can walk in
-    arrive = arrive + first
-    split = int(arrive.max() + rng.integers(100, 251))
-    leave = split + (np.zeros(k, int) if rng.random() < 0.3 else np.cumsum(rng.integers(0, 61, k)))
-    away = rng.uniform(0, 2 * np.pi) + 2 * np.pi * np.arange(k) / k + rng.uniform(-0.3, 0.3, k)
-    paths_out = [_walk(slots[i], _edge_point(slots[i], away[i]), speeds[i]) for i in range(k)]
+    slots, arrive, leave, paths_in, paths_out = _plan(rng, k, sizes[:k], speeds, pair_prob)
     end = int(max(leave[i] + paths_out[i].shape[0] for i in range(k))) + 10
     total = end if num_frames is None else int(num_frames)
     if total < 10:
@@ -211,3 +192,32 @@ def simulate_meeting(
         f"simulated meeting k={k}", np.arange(total), np.flatnonzero(keep), boxes[:, keep], groups, FPS
     )
     return truth if fps is None or fps == FPS else resample(truth, fps)
+
+
+def _plan(
+    rng: np.random.Generator, k: int, sizes: np.ndarray, speeds: np.ndarray, pair_prob: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray], list[np.ndarray]]:
+    """The meeting's plan: the ``k`` members' standing slots (k, 2) around a random centre,
+    their arrival and leaving frames (k,) and their paths in and out (lists of (m, 2)
+    centre tracks); the first two arrive together with probability ``pair_prob``."""
+    centre = np.array([rng.uniform(130, WIDTH - 130), rng.uniform(90, HEIGHT - 90)])
+    slots = centre + _slots(rng, k, sizes)
+    # arrivals: paths in from the edges, arriving one after another
+    arrive = np.cumsum(np.concatenate([[0], rng.integers(40, 121, k - 1)]))
+    together = rng.random() < pair_prob
+    if together:
+        arrive[1] = arrive[0]
+    paths_in = []
+    angle0 = rng.uniform(0, 2 * np.pi)
+    for i in range(k):
+        pair = together and i < 2  # both walk in on parallel lines, side by side
+        ang = angle0 if pair else rng.uniform(0, 2 * np.pi)
+        speed = speeds[0] if pair else speeds[i]
+        paths_in.append(_walk(_edge_point(slots[i], ang), slots[i], speed))
+    first = int(max(p.shape[0] for p in paths_in) - arrive.min()) + 10  # everyone can walk in
+    arrive = arrive + first
+    split = int(arrive.max() + rng.integers(100, 251))
+    leave = split + (np.zeros(k, int) if rng.random() < 0.3 else np.cumsum(rng.integers(0, 61, k)))
+    away = rng.uniform(0, 2 * np.pi) + 2 * np.pi * np.arange(k) / k + rng.uniform(-0.3, 0.3, k)
+    paths_out = [_walk(slots[i], _edge_point(slots[i], away[i]), speeds[i]) for i in range(k)]
+    return slots, arrive, leave, paths_in, paths_out
