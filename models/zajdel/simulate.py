@@ -143,6 +143,66 @@ def _layout(rng: np.random.Generator, C: int, B: int, cfg: OfficeConfig):
     return trans, entry, mu, sd
 
 
+def _paths(
+    rng: np.random.Generator,
+    cfg: OfficeConfig,
+    passes: np.ndarray,
+    offsets: np.ndarray,
+    trans: np.ndarray,
+    entry: np.ndarray,
+    mu: np.ndarray,
+    sd: np.ndarray,
+) -> tuple[np.ndarray, ...]:
+    """Every person's passes: arrival in ``[0, arrival_window)`` at an entrance drawn from
+    ``entry``, then camera-to-camera moves by ``trans`` with truncated-normal travel times
+    and uniform dwell; sequential per person, vectorised over people step by step.
+
+    Returns (num_obs,) arrays: camera, border in, border out, enter and quit time, with
+    person ``p``'s passes at ``offsets[p] : offsets[p] + passes[p]``.
+    """
+    P, C, B = passes.size, cfg.num_cameras, cfg.num_borders
+    n = int(passes.sum())
+    cam = np.zeros(n, np.int64)
+    be = np.zeros(n, np.int64)
+    bq = np.zeros(n, np.int64)
+    te = np.zeros(n)
+    tq = np.zeros(n)
+    flat_entry = entry.ravel()
+    start = rng.uniform(0.0, cfg.arrival_window, size=P)
+    cur_cam = np.zeros(P, np.int64)
+    cur_bq = np.zeros(P, np.int64)
+    cur_tq = np.zeros(P)
+    for s in range(int(passes.max())):
+        alive = passes > s
+        idx = offsets[alive] + s
+        if s == 0:
+            e = rng.choice(flat_entry.size, size=alive.sum(), p=flat_entry)
+            c_new, b_new = e // B, e % B
+            t_new = start[alive]
+        else:
+            pc, pb = cur_cam[alive], cur_bq[alive]
+            probs = trans[pc, pb].reshape(alive.sum(), C * B)
+            u = rng.uniform(size=(alive.sum(), 1))
+            e = (probs.cumsum(1) < u).sum(1).clip(max=C * B - 1)
+            c_new, b_new = e // B, e % B
+            m, sdv = mu[pc, c_new], sd[pc, c_new]
+            travel = truncnorm.rvs(-m / sdv, np.inf, loc=m, scale=sdv, random_state=rng)
+            t_new = cur_tq[alive] + travel
+        dwell = rng.uniform(*cfg.dwell_range, size=alive.sum())
+        q_new = rng.integers(B, size=alive.sum())
+        cam[idx], be[idx], bq[idx], te[idx], tq[idx] = c_new, b_new, q_new, t_new, t_new + dwell
+        cur_cam[alive], cur_bq[alive], cur_tq[alive] = c_new, q_new, t_new + dwell
+    return cam, be, bq, te, tq
+
+
+def _peak_inside(t_in: np.ndarray, t_out: np.ndarray) -> int:
+    """Most people inside the building at once (each inside from first enter ``t_in`` to
+    last quit ``t_out``; a leaving and an arrival at the same time do not overlap)."""
+    ev = np.concatenate([t_in, t_out])
+    sign = np.concatenate([np.ones(t_in.size), -np.ones(t_out.size)])
+    return int(np.max(np.cumsum(sign[np.lexsort((-sign, ev))])))
+
+
 def simulate_office(seed: int, config: OfficeConfig | None = None) -> Scenario:
     """Simulate one office data set (SIMULATED data).
 
@@ -172,50 +232,15 @@ def simulate_office(seed: int, config: OfficeConfig | None = None) -> Scenario:
     passes[: cfg.num_obs % P] += 1
     n = int(passes.sum())
     person = np.repeat(np.arange(P), passes)
-    # paths: sequential per person, vectorised over people step by step
-    cam = np.zeros(n, np.int64)
-    be = np.zeros(n, np.int64)
-    bq = np.zeros(n, np.int64)
-    te = np.zeros(n)
-    tq = np.zeros(n)
-    flat_entry = entry.ravel()
-    start = rng.uniform(0.0, cfg.arrival_window, size=P)
     offsets = np.concatenate([[0], np.cumsum(passes)[:-1]])
-    cur_cam = np.zeros(P, np.int64)
-    cur_bq = np.zeros(P, np.int64)
-    cur_tq = np.zeros(P)
-    for s in range(int(passes.max())):
-        alive = passes > s
-        idx = offsets[alive] + s
-        if s == 0:
-            e = rng.choice(flat_entry.size, size=alive.sum(), p=flat_entry)
-            c_new, b_new = e // B, e % B
-            t_new = start[alive]
-        else:
-            pc, pb = cur_cam[alive], cur_bq[alive]
-            probs = trans[pc, pb].reshape(alive.sum(), C * B)
-            u = rng.uniform(size=(alive.sum(), 1))
-            e = (probs.cumsum(1) < u).sum(1).clip(max=C * B - 1)
-            c_new, b_new = e // B, e % B
-            m, sdv = mu[pc, c_new], sd[pc, c_new]
-            travel = truncnorm.rvs(-m / sdv, np.inf, loc=m, scale=sdv, random_state=rng)
-            t_new = cur_tq[alive] + travel
-        dwell = rng.uniform(*cfg.dwell_range, size=alive.sum())
-        q_new = rng.integers(B, size=alive.sum())
-        cam[idx], be[idx], bq[idx], te[idx], tq[idx] = c_new, b_new, q_new, t_new, t_new + dwell
-        cur_cam[alive], cur_bq[alive], cur_tq[alive] = c_new, q_new, t_new + dwell
+    cam, be, bq, te, tq = _paths(rng, cfg, passes, offsets, trans, entry, mu, sd)
     app = means[person] + bias[cam] + scales[person] * rng.normal(size=(n, r))
     order = np.argsort(tq, kind="stable")
     obs = Observations(app[order], cam[order], te[order], tq[order], be[order], bq[order])
     truth = person[order]
     _, first, inv = np.unique(truth, return_index=True, return_inverse=True)
     labels = np.argsort(np.argsort(first))[inv]
-    # people inside the building over time: from first enter to last quit
-    t_in = te[offsets]
-    t_out = tq[offsets + passes - 1]
-    ev = np.concatenate([t_in, t_out])
-    sign = np.concatenate([np.ones(P), -np.ones(P)])
-    peak = int(np.max(np.cumsum(sign[np.lexsort((-sign, ev))])))
+    peak = _peak_inside(te[offsets], tq[offsets + passes - 1])
     p_new = cfg.p_new if cfg.p_new is not None else min(P / n, 0.5)
     window = cfg.arrival_window + cfg.travel_mean_range[1]
     # the tracker's entry table: the entrances, plus 10 % spread over every camera and
