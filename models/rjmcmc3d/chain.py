@@ -235,7 +235,19 @@ class FrameChain:
         if d_prior == -math.inf:
             return -math.inf, None
         upr_new = {i: self._upr(i, rows_s[i][0], rows_s[i][1]) for i in changed}
-        # interaction energy change: rows of the changed slots (pairs counted once)
+        rows, d_e = self._interaction_rows(rows_s, upr_new, pr_new, changed)
+        d_int = -2.0 * self.p.lambda_g * d_e
+        t0 = time.perf_counter()
+        boxdata, d_lik, pending = self._likelihood_change(rows_s, pr_new, present_new, changed)
+        self.lik_time += time.perf_counter() - t0
+        commit = (S_new, present_new, changed, lp_new, upr_new, rows, boxdata, pending, d_lik)
+        return d_prior + d_int + d_lik, commit
+
+    def _interaction_rows(
+        self, rows_s: dict, upr_new: dict, pr_new: list, changed: list[int]
+    ) -> tuple[dict, float]:
+        """The changed slots' new rows of the interaction matrix ``G`` and the change of the
+        interaction energy (pairs counted once)."""
         S_l = self.S_l
         rows = {}
         d_e = 0.0
@@ -269,10 +281,16 @@ class FrameChain:
         if len(changed) == 2:
             a, b = changed
             d_e += rows[a][b] - self.G[a][b]
-        d_int = -2.0 * self.p.lambda_g * d_e
-        t0 = time.perf_counter()
-        # image geometry of the changed slots; a row that is some changed slot's current
-        # row (delete, leave: the same; switch: the other's) reuses its projection
+        return rows, d_e
+
+    def _likelihood_change(
+        self, rows_s: dict, pr_new: list, present_new: np.ndarray, changed: list[int]
+    ) -> tuple[dict, float, object]:
+        """The changed slots' image geometry, the log-likelihood change and the pending
+        incremental update (None with the full likelihood)."""
+        # a row that is some changed slot's current row (delete, leave: the same; switch:
+        # the other's) reuses its projection
+        S_l = self.S_l
         boxdata = {}
         for i in changed:
             row = rows_s[i]
@@ -290,9 +308,7 @@ class FrameChain:
             cfg = self._config_from_boxdata(bd, present_new)
             new_total = full_loglik(self.p, self.data, cfg, self.sref, self.nref)
             d_lik, pending = new_total - self.loglik, None
-        self.lik_time += time.perf_counter() - t0
-        commit = (S_new, present_new, changed, lp_new, upr_new, rows, boxdata, pending, d_lik)
-        return d_prior + d_int + d_lik, commit
+        return boxdata, d_lik, pending
 
     def _evaluate_one(self, S_new: np.ndarray, present_new: np.ndarray, c: int):
         """:meth:`_evaluate` for one changed slot ``c`` (the same arithmetic, fewer steps)."""
