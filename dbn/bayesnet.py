@@ -25,6 +25,82 @@ __all__ = ["BayesNet", "CPD", "check_evidence"]
 CPD = TabularCPD | DeterministicCPD | LinearGaussianCPD | ContinuousCPD
 
 
+def _index_variables(variables: Sequence[Variable]) -> dict[str, Variable]:
+    """Name -> variable, in declaration order; names unique."""
+    vars_: dict[str, Variable] = {}
+    for v in variables:
+        if not isinstance(v, DiscreteVariable | ContinuousVariable):
+            raise ModelError(f"not a variable: {v!r}")
+        if v.name in vars_:
+            raise DuplicateNameError(f"two variables are named {v.name!r}")
+        vars_[v.name] = v
+    return vars_
+
+
+def _index_cpds(cpds: Sequence[CPD], vars_: Mapping[str, Variable]) -> dict[str, CPD]:
+    """Name -> CPD: exactly one CPD per declared variable."""
+    cpd_map: dict[str, CPD] = {}
+    for c in cpds:
+        name = getattr(c, "variable", None)
+        if name not in vars_:
+            raise UnknownVariableError(f"CPD for unknown variable {name!r}")
+        if name in cpd_map:
+            raise DuplicateNameError(f"two CPDs are given for variable {name!r}")
+        cpd_map[name] = c
+    missing = [n for n in vars_ if n not in cpd_map]
+    if missing:
+        raise ModelError(f"no CPD for variable(s) {missing}")
+    return cpd_map
+
+
+def _acyclic_graph(vars_: Mapping[str, Variable], cpd_map: Mapping[str, CPD]) -> nx.DiGraph:
+    """The DAG parent -> child of the CPDs' parents (known names, no directed cycle)."""
+    graph = nx.DiGraph()
+    graph.add_nodes_from(vars_)
+    for name, c in cpd_map.items():
+        for p in c.parents:
+            if p not in vars_:
+                raise UnknownVariableError(f"CPD of {name!r}: unknown parent {p!r}")
+            graph.add_edge(p, name)
+    try:
+        cycle = nx.find_cycle(graph)
+    except nx.NetworkXNoCycle:
+        cycle = None
+    if cycle:
+        path = " -> ".join([u for u, _ in cycle] + [cycle[0][0]])
+        raise CycleError(f"the graph has a directed cycle: {path}")
+    return graph
+
+
+def _tables(vars_: Mapping[str, Variable], cpd_map: Mapping[str, CPD]) -> dict[str, np.ndarray]:
+    """The read-only dense table of every discrete variable's CPD, after checking that
+    CPD kinds fit their variables (discrete: tabular or deterministic with discrete
+    parents; continuous: neither, and a linear-Gaussian CPD of the variable's dimension)."""
+    tables: dict[str, np.ndarray] = {}
+    for name, c in cpd_map.items():
+        v = vars_[name]
+        if isinstance(v, DiscreteVariable):
+            if not isinstance(c, TabularCPD | DeterministicCPD):
+                raise ModelError(
+                    f"discrete variable {name!r} needs a TabularCPD or DeterministicCPD, "
+                    f"got {type(c).__name__}"
+                )
+            for p in c.parents:
+                if not isinstance(vars_[p], DiscreteVariable):
+                    raise ModelError(f"discrete variable {name!r} has a continuous parent {p!r}")
+            pcards = [vars_[p].cardinality for p in c.parents]  # type: ignore[union-attr]
+            table = np.asarray(c.to_table(pcards, v.cardinality), dtype=np.float64)
+            table.setflags(write=False)
+            tables[name] = table
+        elif isinstance(c, TabularCPD | DeterministicCPD):
+            raise ModelError(f"continuous variable {name!r} has a discrete CPD")
+        elif isinstance(c, LinearGaussianCPD) and c.dim != v.dim:
+            raise CPDShapeError(
+                f"CPD of {name!r}: dimension {c.dim}, but the variable has dim {v.dim}"
+            )
+    return tables
+
+
 class BayesNet:
     """A Bayes net on a directed acyclic graph.
 
@@ -49,64 +125,10 @@ class BayesNet:
     """
 
     def __init__(self, variables: Sequence[Variable], cpds: Sequence[CPD]) -> None:
-        vars_: dict[str, Variable] = {}
-        for v in variables:
-            if not isinstance(v, DiscreteVariable | ContinuousVariable):
-                raise ModelError(f"not a variable: {v!r}")
-            if v.name in vars_:
-                raise DuplicateNameError(f"two variables are named {v.name!r}")
-            vars_[v.name] = v
-        cpd_map: dict[str, CPD] = {}
-        for c in cpds:
-            name = getattr(c, "variable", None)
-            if name not in vars_:
-                raise UnknownVariableError(f"CPD for unknown variable {name!r}")
-            if name in cpd_map:
-                raise DuplicateNameError(f"two CPDs are given for variable {name!r}")
-            cpd_map[name] = c
-        missing = [n for n in vars_ if n not in cpd_map]
-        if missing:
-            raise ModelError(f"no CPD for variable(s) {missing}")
-
-        graph = nx.DiGraph()
-        graph.add_nodes_from(vars_)
-        for name, c in cpd_map.items():
-            for p in c.parents:
-                if p not in vars_:
-                    raise UnknownVariableError(f"CPD of {name!r}: unknown parent {p!r}")
-                graph.add_edge(p, name)
-        try:
-            cycle = nx.find_cycle(graph)
-        except nx.NetworkXNoCycle:
-            cycle = None
-        if cycle:
-            path = " -> ".join([u for u, _ in cycle] + [cycle[0][0]])
-            raise CycleError(f"the graph has a directed cycle: {path}")
-
-        tables: dict[str, np.ndarray] = {}
-        for name, c in cpd_map.items():
-            v = vars_[name]
-            if isinstance(v, DiscreteVariable):
-                if not isinstance(c, TabularCPD | DeterministicCPD):
-                    raise ModelError(
-                        f"discrete variable {name!r} needs a TabularCPD or DeterministicCPD, "
-                        f"got {type(c).__name__}"
-                    )
-                for p in c.parents:
-                    if not isinstance(vars_[p], DiscreteVariable):
-                        raise ModelError(
-                            f"discrete variable {name!r} has a continuous parent {p!r}"
-                        )
-                pcards = [vars_[p].cardinality for p in c.parents]  # type: ignore[union-attr]
-                table = np.asarray(c.to_table(pcards, v.cardinality), dtype=np.float64)
-                table.setflags(write=False)
-                tables[name] = table
-            elif isinstance(c, TabularCPD | DeterministicCPD):
-                raise ModelError(f"continuous variable {name!r} has a discrete CPD")
-            elif isinstance(c, LinearGaussianCPD) and c.dim != v.dim:
-                raise CPDShapeError(
-                    f"CPD of {name!r}: dimension {c.dim}, but the variable has dim {v.dim}"
-                )
+        vars_ = _index_variables(variables)
+        cpd_map = _index_cpds(cpds, vars_)
+        graph = _acyclic_graph(vars_, cpd_map)
+        tables = _tables(vars_, cpd_map)
         self._variables = vars_
         self._cpds = cpd_map
         self._graph = graph
