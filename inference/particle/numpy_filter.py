@@ -30,6 +30,27 @@ arrays, and the step never writes into its inputs.
 
 :func:`run_steps` calls a step function over a sequence of observations with one
 generator, and records every step's info and wall time.
+
+Usage (a 2-state HMM with Gaussian emissions)::
+
+    import numpy as np
+    from inference.particle import ParticleState
+    from inference.particle.numpy_filter import run_steps, sir_step
+
+    A = np.array([[0.9, 0.1], [0.2, 0.8]])  # transition matrix
+    means = np.array([-1.0, 1.0])
+
+    def predict(rng, x):  # x: (N,) int states
+        return (rng.random(x.size) < A[x, 1]).astype(np.int64)
+
+    def step(rng, state, y):
+        weight = lambda r, x: (x, -0.5 * (y - means[x]) ** 2, None)
+        return sir_step(rng, state, predict, weight)
+
+    n = 1000
+    state = ParticleState(np.zeros(n, np.int64), np.full(n, -np.log(n)))
+    final, infos, seconds = run_steps(np.random.default_rng(0), step, state, [0.8, 1.1, -0.9])
+    p_state1 = [np.exp(i.log_weights) @ i.particles for i in infos]  # P(x_t = 1 | y_1:t)
 """
 
 from __future__ import annotations

@@ -4,6 +4,7 @@ filter (checked itself by enumerating every path), replayed by hand, and on prop
 from __future__ import annotations
 
 import itertools
+import textwrap
 from typing import NamedTuple
 
 import numpy as np
@@ -194,3 +195,14 @@ def test_take_rows_keeps_the_structure() -> None:
     out = take_rows(p, np.array([4, 4, 0]))
     assert isinstance(out, Pair)
     np.testing.assert_array_equal(out.vel, [[8, 9], [8, 9], [0, 1]])
+
+
+def test_the_module_usage_block_runs() -> None:
+    import inference.particle.numpy_filter as mod
+
+    doc = mod.__doc__
+    code = doc[doc.index("Usage") :].split("::", 1)[1]
+    namespace: dict = {}
+    exec(compile(textwrap.dedent(code), "numpy_filter usage", "exec"), namespace)  # noqa: S102
+    p1 = namespace["p_state1"]
+    assert len(p1) == 3 and p1[1] > 0.5 > p1[2]  # y = 1.1 favours state 1, y = -0.9 state 0
