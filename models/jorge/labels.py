@@ -643,10 +643,34 @@ def child_table(
         [_piece_law(lab, sh, params) for lab in dom]
         for dom, sh in zip(parent_domains, parent_shared)
     ]
-    shape = tuple(len(d) for d in parent_domains) + (len(domain),)
-    table = np.zeros(shape)
-    # single-parent inheritance: one slab per parent, broadcast over the other parent
     gmax = params.max_group_size
+    table, total = _inherit(laws, index, len(domain), w_single, gmax)
+    if n == 2 and p_merge > 0:
+        _merge_mass(table, total, laws, index, p_merge, gmax)
+    if params.p_join > 0:  # one new object joins what is inherited (our addition)
+        _join(table, index, new_label, params)
+    new_params = params if params.child_new_groups else None
+    table += p_new * _new_column(domain, new_label, new_params)
+    table = table[..., :kept]
+    if truncate:
+        total += p_new * _new_mass(new_label, new_params)
+        return table / total[..., None]
+    return table / table.sum(axis=-1, keepdims=True)
+
+
+def _inherit(
+    laws: list, index: dict, num_labels: int, w_single: float, gmax: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Single-parent inheritance of :func:`child_table`: each parent ``p`` hands each
+    piece ``s`` of its label's piece law (weight ``w``) to the child with mass
+    ``w_single * w``; one slab per parent, broadcast over the other parent.
+
+    Returns the (len(L_1), [len(L_2),] num_labels) table over ``index``'s labels and the
+    per-row mass over all admissible labels (pieces of at most ``gmax`` objects; for
+    ``truncate``)."""
+    n = len(laws)
+    shape = tuple(len(law) for law in laws) + (num_labels,)
+    table = np.zeros(shape)
     total = np.zeros(shape[:-1])  # mass per row over all admissible labels (``truncate``)
     for p in range(n):
         # a law's pieces are distinct, so each (i, j) of the slab is set once
@@ -661,7 +685,7 @@ def child_table(
                     cols.append(j)
                     vals.append(w_single * w)
             masses.append(m)
-        slab = np.zeros((len(parent_domains[p]), len(domain)))
+        slab = np.zeros((len(laws[p]), num_labels))
         slab[rows, cols] = vals
         mass = np.array(masses)
         total += mass.reshape([-1 if q == p else 1 for q in range(n)])
@@ -671,17 +695,7 @@ def child_table(
             table += slab[:, None, :]
         else:
             table += slab[None, :, :]
-    if n == 2 and p_merge > 0:
-        _merge_mass(table, total, laws, index, p_merge, gmax)
-    if params.p_join > 0:  # one new object joins what is inherited (our addition)
-        _join(table, index, new_label, params)
-    new_params = params if params.child_new_groups else None
-    table += p_new * _new_column(domain, new_label, new_params)
-    table = table[..., :kept]
-    if truncate:
-        total += p_new * _new_mass(new_label, new_params)
-        return table / total[..., None]
-    return table / table.sum(axis=-1, keepdims=True)
+    return table, total
 
 
 def _merge_mass(table: np.ndarray, total: np.ndarray, laws: list, index: dict, p_merge: float,
