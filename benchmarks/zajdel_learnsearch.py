@@ -62,7 +62,7 @@ def _adf_lag3(scenarios) -> tuple[list[float] | None, str | None]:
         return None, f"{type(exc).__name__}: {exc}"
 
 
-def _offline_seed(s: int, sc, add) -> tuple[float, object, bool]:
+def _offline_seed(sc, add) -> tuple[float, object, bool]:
     """Learn-search with T = 1, 5, 10, 20 (learned parameters), T = 5 biased, T = 20 under
     the true parameters, and the greedy labelling on one SIMULATED office; ``add(key,
     value)`` records each figure. Returns the T = 10 time, the T = 20 parameters, ok."""
@@ -122,7 +122,7 @@ def run(quick: bool, seed: int, mapper=map) -> dict:
         acc.setdefault(key, []).append(float(value))
 
     for s, sc in zip(seeds, scen):
-        dt, params, seed_ok = _offline_seed(s, sc, add)
+        dt, params, seed_ok = _offline_seed(sc, add)
         times_t10.append(dt)
         learned.append(params)
         ok &= seed_ok
