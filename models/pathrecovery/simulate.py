@@ -403,7 +403,7 @@ def simulate_scene(
     Scene.
     """
     rng = np.random.default_rng(seed)
-    chol = _check_scene(num_objects, num_timesteps, cm, spread, feature_dim, gamma, sigma)
+    sigma, chol = _check_scene(num_objects, num_timesteps, cm, spread, feature_dim, gamma, sigma)
     M, T, d = int(num_objects), int(num_timesteps), int(feature_dim)
     target = int(rng.integers(M))
     z = rng.standard_normal((M, d))
@@ -424,7 +424,7 @@ def simulate_scene(
         target=target,
         c0=int(obj_cam[target, 0]),
         f0=means[target].copy(),
-        sigma=np.eye(d) if sigma is None else np.asarray(sigma, dtype=np.float64),
+        sigma=sigma,
         spread=float(spread),
         cm=float(achieved),
         true_cam=obj_cam[target].copy(),
@@ -443,9 +443,9 @@ def _check_scene(
     feature_dim: int,
     gamma: float,
     sigma: np.ndarray | None,
-) -> np.ndarray:
-    """Validate :func:`simulate_scene`'s arguments; returns the (d, d) Cholesky factor of
-    ``sigma`` (identity by default)."""
+) -> tuple[np.ndarray, np.ndarray]:
+    """Validate :func:`simulate_scene`'s arguments; returns ``sigma`` as a (d, d) float64
+    array (identity by default) and its lower Cholesky factor."""
     if num_objects < 1 or num_timesteps < 2:
         raise InputError(f"need num_objects >= 1 and num_timesteps >= 2, got {num_objects}, {num_timesteps}")
     if not 0.0 < gamma < 1.0:
@@ -460,7 +460,7 @@ def _check_scene(
     if sigma.shape != (feature_dim, feature_dim):
         raise ShapeError(f"sigma must have shape ({feature_dim}, {feature_dim}), got {sigma.shape}")
     try:
-        return cholesky(sigma, lower=True)
+        return sigma, cholesky(sigma, lower=True)
     except np.linalg.LinAlgError as exc:
         raise InputError("sigma is not symmetric positive definite") from exc
 
