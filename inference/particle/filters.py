@@ -173,9 +173,11 @@ def _resample_predicate(cur_ess: Array, ess_threshold: float, n: int) -> Array:
     return cur_ess < ess_threshold * n
 
 
-def _check_threshold(ess_threshold: float) -> None:
-    if not (ess_threshold >= 0.0):
-        raise InputError(f"ess_threshold must be >= 0, got {ess_threshold!r}")
+def check_threshold(ess_threshold: Any) -> None:
+    """Raise :class:`InputError` unless ``ess_threshold`` is a real number >= 0 (not a bool)."""
+    real = isinstance(ess_threshold, (int, float, np.integer, np.floating))
+    if isinstance(ess_threshold, bool) or not real or not (ess_threshold >= 0.0):
+        raise InputError(f"ess_threshold must be a number >= 0, got {ess_threshold!r}")
 
 
 def check_num_particles(num_particles: Any) -> int:
@@ -218,7 +220,7 @@ def bootstrap_filter(
     ParticleFilter
         ``init(key)`` and ``step(key, state, observation, action=None)``.
     """
-    _check_threshold(ess_threshold)
+    check_threshold(ess_threshold)
     n = check_num_particles(num_particles)
     log_n = math.log(n)
 
@@ -274,7 +276,7 @@ def auxiliary_filter(
     Parameters and return as :func:`bootstrap_filter`; the model must also declare a
     look-ahead (``transition_mean``, ``lookahead`` or ``log_eta``).
     """
-    _check_threshold(ess_threshold)
+    check_threshold(ess_threshold)
     n = check_num_particles(num_particles)
     log_n = math.log(n)
 

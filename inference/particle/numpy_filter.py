@@ -17,11 +17,15 @@ normalised log weights :math:`\log W_{t-1}` (a :class:`ParticleState`), one
    :math:`\log \sum_i w^i` estimates :math:`\log p(y_t | y_{1:t-1})`
    (seed 002, eq. 1.7; ``-inf`` when every weight is zero, and then the weights fall
    back to uniform);
-4. **resample**: ancestors :math:`a \sim` ``resample(rng, log W_t, N)`` (any
+4. **resample** when :math:`\mathrm{ESS}(W_t) < \tau N` (``ess_threshold`` :math:`\tau`;
+   the default :math:`\tau = 1` resamples at every step, as seed 001's filter does):
+   ancestors :math:`a \sim` ``resample(rng, log W_t, N)`` (any
    :data:`inference.particle.numpy_path.NUMPY_RESAMPLERS` entry), :math:`x \leftarrow x^a`,
-   weights uniform :math:`-\log N`;
+   weights uniform :math:`-\log N`. Otherwise the particles keep their rows and weights
+   :math:`\log W_t` (ancestors :math:`0..N-1`) and the generator is not drawn from;
 5. **move** (optional): the model's ``move(rng, particles) -> particles`` applied to the
-   resampled particles (seed 001, sec. 4.1.6: diffusion and feature switching).
+   particles after step 4, resampled or not (seed 001, sec. 4.1.6: diffusion and feature
+   switching; an MCMC move that leaves the filtering law invariant).
 
 Particles are any pytree of numpy arrays whose leaves share the leading axis
 ``num_particles`` (a NamedTuple of arrays, a dict, one array); rows are taken with
@@ -63,7 +67,7 @@ import jax
 import numpy as np
 
 from dbn.errors import InputError, ShapeError
-from inference.particle.filters import ParticleState
+from inference.particle.filters import ParticleState, check_threshold
 from inference.particle.numpy_path import NumpyResampler, ess, log_normalise, systematic
 
 __all__ = ["SIRInfo", "sir_step", "run_steps", "take_rows"]
@@ -88,9 +92,12 @@ class SIRInfo(NamedTuple):
     ess : float
         Effective sample size of :math:`W_t`, in particles.
     ancestors : (num_particles,) int64
-        Row of ``particles`` each resampled particle was taken from.
+        Row of ``particles`` each new particle was taken from (``0..N-1`` when the step
+        did not resample).
     aux : Any
         What the model's ``weight`` returned beside the weights.
+    resampled : bool
+        Whether the step resampled (always, for ``ess_threshold >= 1``).
     """
 
     particles: Any
@@ -99,6 +106,7 @@ class SIRInfo(NamedTuple):
     ess: float
     ancestors: np.ndarray
     aux: Any
+    resampled: bool = True
 
 
 def _num_rows(particles: Any, who: str, n: int) -> None:
@@ -122,8 +130,9 @@ def sir_step(
     *,
     resample: NumpyResampler = systematic,
     move: Move | None = None,
+    ess_threshold: float = 1.0,
 ) -> tuple[ParticleState, SIRInfo]:
-    """One SIR step (module docstring: predict, weight, normalise, resample, move).
+    r"""One SIR step (module docstring: predict, weight, normalise, resample, move).
 
     Parameters
     ----------
@@ -135,18 +144,25 @@ def sir_step(
     weight : ``(rng, particles) -> (particles, log_g, aux)``: ``log_g`` is the
         (num_particles,) log potential (NaN is read as ``-inf``).
     resample : ``(rng, log_weights, n) -> ancestors`` (default systematic).
-    move : ``(rng, particles) -> particles`` applied after resampling, or None.
+    move : ``(rng, particles) -> particles`` applied after step 4, or None.
+    ess_threshold : float >= 0
+        Resample when the ESS of :math:`W_t` is below ``ess_threshold * num_particles``;
+        ``>= 1`` (the default) resamples at every step, 0 never does.
 
     Returns
     -------
-    (ParticleState at ``t`` with uniform weights, :class:`SIRInfo`).
+    (ParticleState at ``t``: uniform weights after resampling, :math:`\log W_t` otherwise;
+    :class:`SIRInfo`).
 
     Raises
     ------
     ShapeError
         When ``state``'s weights or a function's particles or ``log_g`` do not have
         ``num_particles`` rows (``state`` is never modified).
+    InputError
+        When ``ess_threshold`` is not a number >= 0, before anything is drawn.
     """
+    check_threshold(ess_threshold)
     log_prev = np.asarray(state.log_weights, dtype=np.float64)
     if log_prev.ndim != 1 or log_prev.size == 0:
         raise ShapeError(f"state.log_weights must be 1-D and non-empty, got shape {log_prev.shape}")
@@ -160,15 +176,21 @@ def sir_step(
     if log_g.shape != (n,):
         raise ShapeError(f"weight returned log_g of shape {log_g.shape}; expected ({n},)")
     log_w, log_score = log_normalise(log_prev + log_g)
-    ancestors = np.asarray(resample(rng, log_w, n))
-    if ancestors.shape != (n,):
-        raise ShapeError(f"resample returned ancestors of shape {ancestors.shape}; expected ({n},)")
-    new = take_rows(particles, ancestors)
+    cur_ess = ess(log_w)
+    resampled = bool(ess_threshold >= 1.0 or cur_ess < ess_threshold * n)
+    if resampled:
+        ancestors = np.asarray(resample(rng, log_w, n))
+        if ancestors.shape != (n,):
+            shape = ancestors.shape
+            raise ShapeError(f"resample returned ancestors of shape {shape}; expected ({n},)")
+        new, new_lw = take_rows(particles, ancestors), np.full(n, -np.log(n))
+    else:
+        ancestors, new, new_lw = np.arange(n, dtype=np.int64), particles, log_w
     if move is not None:
         new = move(rng, new)
         _num_rows(new, "move", n)
-    info = SIRInfo(particles, log_w, log_score, ess(log_w), ancestors, aux)
-    return ParticleState(new, np.full(n, -np.log(n))), info
+    info = SIRInfo(particles, log_w, log_score, cur_ess, ancestors, aux, resampled)
+    return ParticleState(new, new_lw), info
 
 
 def run_steps(

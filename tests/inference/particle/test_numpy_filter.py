@@ -128,8 +128,9 @@ def test_step_order_replayed_by_hand_and_inputs_untouched() -> None:
     st.integers(0, 2**31 - 1),
     st.floats(0.0, 0.7),
     st.sampled_from(sorted(NUMPY_RESAMPLERS)),
+    st.floats(0.0, 1.5),
 )
-def test_weights_normalise_and_score_is_the_log_total(n, seed, p_zero, name) -> None:
+def test_weights_normalise_and_score_is_the_log_total(n, seed, p_zero, name, tau) -> None:
     rng = np.random.default_rng(seed)
     lw = rng.normal(size=n) * 5 - 300
     lw[rng.random(n) < p_zero / 2] = -np.inf
@@ -138,15 +139,24 @@ def test_weights_normalise_and_score_is_the_log_total(n, seed, p_zero, name) -> 
     parts = {"x": rng.normal(size=(n, 3)), "k": np.arange(n)}
     state = ParticleState(parts, lw)
     new, info = sir_step(
-        rng, state, lambda r, p: p, lambda r, p: (p, log_g, None), resample=NUMPY_RESAMPLERS[name]
+        rng,
+        state,
+        lambda r, p: p,
+        lambda r, p: (p, log_g, None),
+        resample=NUMPY_RESAMPLERS[name],
+        ess_threshold=tau,
     )
     total = logsumexp(lw + log_g)
+    assert info.resampled == (tau >= 1 or info.ess < tau * n)
+    expect_lw = np.full(n, -np.log(n)) if info.resampled else info.log_weights
+    np.testing.assert_array_equal(new.log_weights, expect_lw)
     assert set(new.particles) == {"x", "k"} and new.particles["x"].shape == (n, 3)
     np.testing.assert_array_equal(new.particles["x"], parts["x"][info.ancestors])
     if np.isfinite(total):
         assert info.log_score == pytest.approx(total, rel=1e-12)
         assert logsumexp(info.log_weights) == pytest.approx(0.0, abs=1e-9)
-        assert np.all(np.isfinite(info.log_weights[info.ancestors]))
+        if info.resampled:  # a kept step keeps its zero weights in their rows
+            assert np.all(np.isfinite(info.log_weights[info.ancestors]))
         assert 1.0 - 1e-9 <= info.ess <= n + 1e-9
     else:  # every weight zero: uniform fallback
         assert info.log_score == -np.inf
@@ -206,3 +216,74 @@ def test_the_module_usage_block_runs() -> None:
     exec(compile(textwrap.dedent(code), "numpy_filter usage", "exec"), namespace)  # noqa: S102
     p1 = namespace["p_state1"]
     assert len(p1) == 3 and p1[1] > 0.5 > p1[2]  # y = 1.1 favours state 1, y = -0.9 state 0
+
+
+@pytest.mark.parametrize("tau", [0.5, 0.0])
+def test_adaptive_resampling_matches_the_exact_hmm_filter(tau: float) -> None:
+    """ESS-triggered resampling (0.5: three steps keep their weights, two resample) and
+    none at all (0: sequential importance sampling) still give the exact filter."""
+    n = 200_000
+    rng = np.random.default_rng(0)
+    state = ParticleState(rng.choice(3, size=n, p=P0), np.full(n, -np.log(n)))
+    exact, loglik = exact_filter(Y)
+    log_score, flags = 0.0, []
+    for t, y in enumerate(Y):
+        prev = state
+        state, info = sir_step(
+            rng, state, predict, lambda r, x, y=y: (x, log_emission(y, x), None), ess_threshold=tau
+        )
+        assert info.resampled == (info.ess < tau * n)
+        flags.append(info.resampled)
+        marg = np.bincount(state.particles, weights=np.exp(state.log_weights), minlength=3)
+        np.testing.assert_allclose(marg, exact[t], atol=0.008)
+        if not info.resampled:  # rows and weights carried: the weights go on accumulating
+            np.testing.assert_array_equal(info.ancestors, np.arange(n))
+            np.testing.assert_array_equal(state.log_weights, info.log_weights)
+            assert np.ptp(state.log_weights) > 0 and prev.particles.shape == state.particles.shape
+        log_score += info.log_score
+    assert log_score == pytest.approx(loglik, abs=0.02)
+    assert (sum(flags), len(flags)) == ((2, 5) if tau else (0, 5))
+
+
+def test_a_step_that_keeps_its_weights_is_replayed_by_hand() -> None:
+    """No resampling: ``resample`` is not called, the generator goes from weight to move,
+    and ``move`` sees the weighted particles in their own rows."""
+    n = 6
+    lw = np.full(n, -np.log(n))
+    log_g = np.array([0.0, -0.2, 0.1, -0.1, 0.05, 0.0])  # ESS near n: above 0.5 n
+
+    def never(r, w, k):
+        raise AssertionError("resample must not run")
+
+    def pred(r, x):
+        return x + r.normal(size=n)
+
+    def move(r, x):
+        return x + r.random(n)
+
+    x0 = np.arange(n, dtype=float)
+    new, info = sir_step(
+        np.random.default_rng(2), ParticleState(x0, lw), pred,
+        lambda r, x: (x, log_g, None), resample=never, move=move, ess_threshold=0.5,
+    )
+    r = np.random.default_rng(2)
+    x = x0 + r.normal(size=n)
+    assert not info.resampled
+    np.testing.assert_allclose(new.particles, x + r.random(n))
+    np.testing.assert_allclose(new.log_weights, log_g - logsumexp(log_g))
+    np.testing.assert_allclose(info.particles, x)
+
+
+@pytest.mark.parametrize("bad", [-0.1, float("nan"), "0.5", True, None])
+def test_a_bad_threshold_is_refused_before_anything_is_drawn(bad) -> None:
+    n = 3
+    state = ParticleState(np.zeros(n), np.full(n, -np.log(n)))
+    rng = np.random.default_rng(0)
+    before = rng.bit_generator.state
+
+    def pred(r, x):
+        raise AssertionError("predict must not run")
+
+    with pytest.raises(InputError, match="ess_threshold"):
+        sir_step(rng, state, pred, lambda r, x: (x, np.zeros(n), None), ess_threshold=bad)
+    assert rng.bit_generator.state == before

@@ -158,9 +158,10 @@ def test_apf_needs_a_lookahead() -> None:
         pf.step(jax.random.key(0), pf.init(jax.random.key(1)), jnp.zeros(1))
 
 
-def test_bad_threshold() -> None:
+@pytest.mark.parametrize("bad", [float("nan"), -1.0, "0.5", True])
+def test_bad_threshold(bad) -> None:
     with pytest.raises(ValueError, match="ess_threshold"):
-        bootstrap_filter(LinearGaussianSSM(_params()), 10, ess_threshold=float("nan"))
+        bootstrap_filter(LinearGaussianSSM(_params()), 10, ess_threshold=bad)
 
 
 @pytest.mark.parametrize("algo", sorted(ALGOS))
