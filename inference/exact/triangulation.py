@@ -56,6 +56,39 @@ def _fill(adj: dict[int, set[int]], v: int) -> int:
     return missing // 2
 
 
+def _eliminate(
+    g: dict[int, set[int]],
+    v: int,
+    fill: dict[int, int],
+    weight: dict[int, float],
+    logk: dict[int, float],
+) -> tuple[set[int], set[int]]:
+    """Eliminate ``v``: remove it from ``g``, join its neighbours (the fill-in edges) and
+    update ``fill`` and ``weight`` in place. Returns (``v``'s neighbours, the nodes whose
+    heap key changed)."""
+    nb = g.pop(v)
+    for a in nb:
+        g[a].discard(v)
+    changed = set(nb)
+    for a in nb:  # fill-in edges; a node outside nb seeing both ends loses one fill
+        na = g[a]
+        for b in nb - na:
+            if b <= a:
+                continue
+            for w in na & g[b]:
+                if w not in nb:
+                    fill[w] -= 1
+                    changed.add(w)
+    for a in nb:
+        g[a] |= nb
+        g[a].discard(a)
+    for a in nb:
+        fill[a] = _fill(g, a)
+        weight[a] = logk[a] + sum(logk[u] for u in g[a])
+    del fill[v], weight[v]
+    return nb, changed
+
+
 def greedy_order(
     adj: dict[int, set[int]],
     logk: dict[int, float],
@@ -107,31 +140,12 @@ def greedy_order(
         k, v = heapq.heappop(heap)
         if v not in g or k != key(v):
             continue
-        nb = g.pop(v)
         size = math.exp(weight[v])
+        nb, changed = _eliminate(g, v, fill, weight, logk)
         total += size
         biggest = max(biggest, size)
         order.append(v)
         cliques.append((v, *sorted(nb, key=pos.__getitem__)))
-        for a in nb:
-            g[a].discard(v)
-        changed = set(nb)
-        for a in nb:  # fill-in edges; a node outside nb seeing both ends loses one fill
-            na = g[a]
-            for b in nb - na:
-                if b <= a:
-                    continue
-                for w in na & g[b]:
-                    if w not in nb:
-                        fill[w] -= 1
-                        changed.add(w)
-        for a in nb:
-            g[a] |= nb
-            g[a].discard(a)
-        for a in nb:
-            fill[a] = _fill(g, a)
-            weight[a] = logk[a] + sum(logk[u] for u in g[a])
-        del fill[v], weight[v]
         for u in changed:
             heapq.heappush(heap, (key(u), u))
     return Triangulation(tuple(order), tuple(cliques), total, biggest, heuristic)
