@@ -427,6 +427,37 @@ def _initial_labels(
 
 
 # ----------------------------------------------------------------------------- driver
+class _Recorder:
+    """The ``on_step`` of :func:`partition_mcmc`; it records and never changes a chain.
+
+    ``co`` sums, over the kept steps (after ``burn_in``) and the chains, how often two
+    observations share a track (``kept`` counts them); ``best_at[n]`` is the best sample
+    of the first ``n`` steps, for each checkpoint ``n`` in ``marks``.
+    """
+
+    def __init__(self, labels: np.ndarray, marks: set[int], burn_in: int, start: float):
+        self.marks, self.burn_in, self.start = marks, burn_in, start
+        self.num_chains, num_obs = labels.shape
+        self.co = np.zeros((num_obs, num_obs))
+        self.co_now = (labels[:, :, None] == labels[:, None, :]).sum(0)
+        self.kept = 0
+        self.best_at: dict = {}
+
+    def __call__(self, s: int, st: ChainState, info, best_score: np.ndarray, best) -> None:
+        if s + 1 in self.marks:
+            c = int(np.argmax(best_score))
+            self.best_at[s + 1] = (
+                _canonical(best.labels[c][None])[0],
+                float(best_score[c]),
+                time.perf_counter() - self.start,
+            )
+        if info.accepted.any():
+            self.co_now = (st.labels[:, :, None] == st.labels[:, None, :]).sum(0)
+        if s >= self.burn_in:
+            self.co += self.co_now
+            self.kept += self.num_chains
+
+
 def partition_mcmc(
     seed,
     obs: Observations,
@@ -474,41 +505,23 @@ def partition_mcmc(
     t = _terms(obs, params)
     state = chain_init(lab0, obs, params)
     marks = {int(n) for n in checkpoints if 1 <= int(n) <= num_samples}
-    best_at = {}
-    co = np.zeros((K, K))
-    co_now = [(state.labels[:, :, None] == state.labels[:, None, :]).sum(0)]
-    kept = [0]
-
-    def on_step(s, st, info, best_score, best):  # recording only: co-assignment, checkpoints
-        if s + 1 in marks:
-            c = int(np.argmax(best_score))
-            best_at[s + 1] = (
-                _canonical(best.labels[c][None])[0],
-                float(best_score[c]),
-                time.perf_counter() - start,
-            )
-        if info.accepted.any():
-            co_now[0] = (st.labels[:, :, None] == st.labels[:, None, :]).sum(0)
-        if s >= cfg.burn_in:
-            co[...] += co_now[0]
-            kept[0] += num_chains
-
+    record = _Recorder(state.labels, marks, cfg.burn_in, start)
     rec = run_batch(
         rng,
         partition_kernel(t, params.p_new, probs),
         state,
         num_samples,
         state.score,
-        on_step=on_step,
+        on_step=record,
         progress=progress,
     )
     c = int(np.argmax(rec.best_log_target))
     return MCMCResult(
         _canonical(rec.best_state.labels[c][None])[0],
         float(rec.best_log_target[c]),
-        co / max(kept[0], 1),
+        record.co / max(record.kept, 1),
         rec.accept_rate,
         rec.state,
         rec.trace,
-        best_at,
+        record.best_at,
     )
