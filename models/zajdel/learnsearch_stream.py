@@ -244,18 +244,14 @@ def _gather(st: dict, parent: np.ndarray) -> dict:
     return out
 
 
-def _extend(st: dict, obs: Observations, j: int, i: int, theta: LSParams, par: _Par, T: int) -> int:
-    """Extend every kept hypothesis by observation ``obs[j]`` (stream index i) in K_open + 1
-    ways and keep the T best (seed 000, Fig. 4); returns the number of children scored."""
-    _grow(st, int(st["ncol"].max()) + 1)
-    H = st["score"].shape[0]
-    smax = int(st["ncol"].max())
-    u, ci, single, l = _obs_terms(par, obs, j)
+def _path_and_prior(
+    st: dict, obs: Observations, j: int, l: int, theta: LSParams, smax: int
+) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
+    """The path and label-prior log terms of placing ``obs[j]`` (camera ``l``) in each
+    hypothesis (H rows): ``lpd`` (H, smax) after each open track's last observation,
+    ``lp0`` as a new track's first, and the prior ``pj`` (H,) of joining one of ``ntr``
+    tracks, ``pn`` (H,) of starting a new one (zeros without ``p_new``)."""
     be, te = int(obs.border_enter[j]), float(obs.t_enter[j])
-    Pc = st["P"][:, :smax] + par.Sinv[l]
-    hc = st["h"][:, :smax] + u
-    cc = st["c"][:, :smax] + ci
-    Ec = _evidence(Pc, hc, cc, par.c0) if smax else np.zeros((H, 0))
     lpd = _floor(
         log_p_delta(
             theta.path,
@@ -270,10 +266,24 @@ def _extend(st: dict, obs: Observations, j: int, i: int, theta: LSParams, par: _
     lp0 = float(_floor(log_p_delta0(theta.path, l, be)))
     ntr = st["ntr"].astype(float)
     if theta.p_new is None:
-        pj, pn = np.zeros(H), np.zeros(H)
-    else:
-        pj = np.log1p(-theta.p_new) - np.log(np.maximum(ntr, 1.0))
-        pn = np.where(ntr > 0, np.log(theta.p_new), 0.0)
+        return lpd, lp0, np.zeros(ntr.shape[0]), np.zeros(ntr.shape[0])
+    pj = np.log1p(-theta.p_new) - np.log(np.maximum(ntr, 1.0))
+    pn = np.where(ntr > 0, np.log(theta.p_new), 0.0)
+    return lpd, lp0, pj, pn
+
+
+def _extend(st: dict, obs: Observations, j: int, i: int, theta: LSParams, par: _Par, T: int) -> int:
+    """Extend every kept hypothesis by observation ``obs[j]`` (stream index i) in K_open + 1
+    ways and keep the T best (seed 000, Fig. 4); returns the number of children scored."""
+    _grow(st, int(st["ncol"].max()) + 1)
+    H = st["score"].shape[0]
+    smax = int(st["ncol"].max())
+    u, ci, single, l = _obs_terms(par, obs, j)
+    Pc = st["P"][:, :smax] + par.Sinv[l]
+    hc = st["h"][:, :smax] + u
+    cc = st["c"][:, :smax] + ci
+    Ec = _evidence(Pc, hc, cc, par.c0) if smax else np.zeros((H, 0))
+    lpd, lp0, pj, pn = _path_and_prior(st, obs, j, l, theta, smax)
     valid = np.arange(smax)[None, :] < st["ncol"][:, None]
     join = st["score"][:, None] + Ec - st["E"][:, :smax] + lpd + pj[:, None]
     new = st["score"] + single + lp0 + pn
