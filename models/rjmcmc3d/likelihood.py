@@ -322,35 +322,37 @@ class IncrementalLikelihood:
         self.present_l = cfg.present.tolist()
         self.total = float(self.fg.sum() + sum(map(sum, self.cc)))
         nb = data.num_bins
-        self._dump = 3 * 2 * nb
+        self._dump = 3 * 2 * nb  # label of covered pixels: a bin beyond the 3 regions
         self._stride = W + 1
         self.alive = [j for j in range(M) if self.present_l[j]]
-        # non-empty part boxes of each present person per view
+        self._box_geometry(data, W)
+        self._array_mirrors(cfg)
+
+    def _box_geometry(self, data: FrameData, W: int) -> None:
+        """Per view and person: its non-empty part boxes (``nz_l``) and the sum of
+        c1 (D - c2) over their union (``usum``, from the integral image); [] and 0.0 for
+        people not present."""
+        rows = range(self.num_views)
         self.nz_l = [
             [
                 [b for b in self.boxes_l[v][j] if b[2] > b[0] and b[3] > b[1]]
                 if self.present_l[j]
                 else []
-                for j in range(M)
+                for j in range(self.M)
             ]
-            for v in range(V)
+            for v in rows
         ]
-        # per view and person: sum of c1 (D - c2) over the union of its boxes
-        st = W + 1
         self.usum = [
             [
-                _union_sum(
-                    data.ii[v].item,
-                    st,
-                    [b for b in self.boxes_l[v][j] if b[2] > b[0] and b[3] > b[1]],
-                )
-                if self.present_l[j]
-                else 0.0
-                for j in range(M)
+                _union_sum(data.ii[v].item, W + 1, self.nz_l[v][j]) if self.present_l[j] else 0.0
+                for j in range(self.M)
             ]
-            for v in range(V)
-        ]  # label of covered pixels: a bin beyond the 3 regions
-        # array mirrors of the per-view geometry (the compiled path)
+            for v in rows
+        ]
+
+    def _array_mirrors(self, cfg: Config) -> None:
+        """Array copies of the per-view geometry and terms, for the compiled path."""
+        V, M = self.num_views, self.M
         self.usum_a = np.array(self.usum, dtype=np.float64).reshape(V, M)
         self.boxes_a = np.array(cfg.boxes, dtype=np.int64, order="C")
         self.bbox_a = np.array(cfg.bbox, dtype=np.int64, order="C")
