@@ -477,7 +477,9 @@ def _rate(rows, key="wrong", lo=1, hi=10**9, crowd: bool | None = None) -> tuple
     return (e / n if n else float("nan")), n
 
 
-def _summary(name: str, split: str, rows: list) -> dict:
+def _summary(split: str, rows: list) -> dict:
+    """One sequence's figures in the JSON (error rates, by true group size, speed, domains)
+    from its rows, one per stroke seed (:func:`_run_one`)."""
     by = {}
     for k in sorted({int(x) for r in rows for x in r["sizes"]}):
         rate, n = _rate(rows, lo=k, hi=k)
@@ -578,7 +580,7 @@ def _label_sequences(seeds: list, cfg: OnlineConfig) -> tuple[dict, dict, list, 
             rows.append(row)
         key = truth.name if split == "simulated_view" else name.split(".")[0]
         rows_by[key] = (split, rows)
-        per[key] = _summary(key, split, rows)
+        per[key] = _summary(split, rows)
         log(f"jorge: {key} ({split}) error {per[key]['error_rate']:.3f} colour-only "
             f"{per[key]['error_rate_colour_only']:.3f} {per[key]['realtime_factor']:.1f}x real time")
     return per, rows_by, windows, ok

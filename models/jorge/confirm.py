@@ -30,6 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from dbn.errors import InputError
+from models.jorge.estimate import mean_and_standard_error
 from models.jorge.network import NetworkConfig
 from models.jorge.strokes import PETS2009_FPS, StrokeSet
 
@@ -62,8 +63,7 @@ class Comparison(NamedTuple):
     @property
     def standard_error(self) -> float:
         """Standard error of :attr:`difference` (NaN with one seed)."""
-        d = self.candidate - self.incumbent
-        return float(np.std(d, ddof=1) / np.sqrt(d.size)) if d.size > 1 else float("nan")
+        return mean_and_standard_error(self.candidate - self.incumbent)[1]
 
     @property
     def lower_on(self) -> int:

@@ -79,11 +79,14 @@ def _label_scene(job: tuple) -> tuple[int, int, int, int]:
     return len(strokes.strokes), len(wrong), len(big), sum(i in wrong for i in big)
 
 
-def _mean_se(rates: np.ndarray) -> tuple[float, float]:
-    if rates.size == 0:
+def mean_and_standard_error(values: np.ndarray) -> tuple[float, float]:
+    """Mean of ``values`` (n,) and its standard error ``std(ddof=1) / sqrt(n)``: NaN for
+    both when n = 0, and for the standard error when n = 1."""
+    values = np.asarray(values, dtype=np.float64)
+    if values.size == 0:
         return math.nan, math.nan
-    se = float(np.std(rates, ddof=1) / np.sqrt(rates.size)) if rates.size > 1 else math.nan
-    return float(np.mean(rates)), se
+    se = float(np.std(values, ddof=1) / np.sqrt(values.size)) if values.size > 1 else math.nan
+    return float(np.mean(values)), se
 
 
 def _summarise(rows: np.ndarray, above: float) -> MeetingEstimate:
@@ -91,8 +94,11 @@ def _summarise(rows: np.ndarray, above: float) -> MeetingEstimate:
     n, e, nb, eb = (int(v) for v in rows.sum(axis=0))
     has = rows[:, 2] > 0
     big = rows[has, 3] / rows[has, 2]
-    return MeetingEstimate(len(rows), n, e / n if n else math.nan, *_mean_se(rows[:, 1] / np.maximum(rows[:, 0], 1)),
-                           nb, eb / nb if nb else math.nan, *_mean_se(big), int(np.sum(big > above)))
+    per_scene = rows[:, 1] / np.maximum(rows[:, 0], 1)
+    return MeetingEstimate(
+        len(rows), n, e / n if n else math.nan, *mean_and_standard_error(per_scene),
+        nb, eb / nb if nb else math.nan, *mean_and_standard_error(big), int(np.sum(big > above)),
+    )
 
 
 def estimate_meetings(scenes: Sequence[int], sizes: Sequence[int] = (3, 4, 5), fps: float | None = None,

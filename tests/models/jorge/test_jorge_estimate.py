@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from dbn.errors import InputError
-from models.jorge.estimate import _summarise, estimate_meetings, main
+from models.jorge.estimate import _summarise, estimate_meetings, main, mean_and_standard_error
 from models.jorge.fit import meeting_strokes
 from models.jorge.online import label_online
 from models.jorge.scoring import score, true_links
@@ -71,3 +71,11 @@ def test_command_line_prints_one_json_line(capsys):
     assert out["3"]["scenes"] == 1 and out["fps"] == 7.0 and "SIMULATED" in out["simulated"]
     with pytest.raises(InputError):
         main(["--scenes", "12", "11"])
+
+
+def test_mean_and_standard_error_by_hand() -> None:
+    """Two values a, b: mean (a + b) / 2 and standard error |a - b| / 2; NaN where undefined."""
+    assert mean_and_standard_error(np.array([0.1, 0.4])) == pytest.approx((0.25, 0.15))
+    mean, se = mean_and_standard_error(np.array([0.3]))
+    assert mean == 0.3 and math.isnan(se)
+    assert all(math.isnan(v) for v in mean_and_standard_error(np.array([])))
