@@ -111,11 +111,25 @@ class NumpyLoopADF:
     def step(self, o, cam, be, bq, te, tq):
         """One observation; returns (link_obs (S,), link_prob (S,), new_prob, loglik,
         label posterior q_k(l_k) (N,), counter mean)."""
-        cfg, p, r = self.cfg, self.p, self.r
-        S = cfg.max_open
-        pr = p.prior
+        cfg, pr = self.cfg, self.p.prior
         prior = (np.asarray(pr.a, float), float(pr.kappa), float(pr.eta), np.asarray(pr.C, float))
-        open_ = np.array([self.pprob[j].sum() for j in range(S)])
+        open_ = np.array([self.pprob[j].sum() for j in range(cfg.max_open)])
+        w, w0, lz = self._link_weights(o, cam, be, te, prior, open_)
+        qlab, pprob, new_n, new_p = self._labels_and_counter(w, w0, open_)
+        new_niw, niw = self._new_slice(o, w, w0, prior)
+        idx = self._insert_slot(qlab, pprob, new_n, new_p)
+        link_obs = np.where(w > 0, self.sobs, -1)
+        self.sobs[idx] = self.k
+        self.cam[idx], self.bq[idx], self.tq[idx] = cam, bq, tq
+        niw[idx] = new_niw
+        self.niw = niw
+        self.k += 1
+        cmean = float(np.arange(self.counter.size) @ self.counter)
+        return link_obs, w, w0, lz, qlab, cmean
+
+    def _link_weights(self, o, cam, be, te, prior, open_):
+        """Posterior of each candidate link (S,) and of a new person, and log p(o_k | past)."""
+        p, S = self.p, self.cfg.max_open
         valid = self.valid & (open_ > 0)
         logw = np.full(S, -np.inf)
         if p.p_new is None:
@@ -138,16 +152,17 @@ class NumpyLoopADF:
                 + float(log_p_delta(p.path, self.cam[j], self.bq[j], self.tq[j], cam, be, te))
             )
         logw0 = lp_new + _t_logpdf(o, *prior) + float(log_p_delta0(p.path, cam, be))
-        allw = np.append(logw, logw0)
-        lz = logsumexp(allw)
+        lz = logsumexp(np.append(logw, logw0))
         if not np.isfinite(lz):
-            w, w0 = np.zeros(S), 1.0
-        else:
-            w = np.exp(logw - lz)
-            w0 = float(np.exp(logw0 - lz))
-        N = self.N
+            return np.zeros(S), 1.0, lz
+        return np.exp(logw - lz), float(np.exp(logw0 - lz)), lz
+
+    def _labels_and_counter(self, w, w0, open_):
+        """Label posterior q_k (N,), the counter and never-seen updates (in place), the
+        slots' person probabilities with q_k taken out, and the new slot's persons."""
+        cfg, N = self.cfg, self.N
         qlab = np.zeros(N)
-        for j in range(S):
+        for j in range(cfg.max_open):
             if open_[j] > 0:
                 for i in range(cfg.persons_per_slot):
                     qlab[self.person[j, i]] += self.pprob[j, i] * (w[j] / open_[j])
@@ -158,8 +173,12 @@ class NumpyLoopADF:
         pprob = self.pprob * (1.0 - qlab[self.person])
         self.never = self.never * (1.0 - qlab)
         order = np.argsort(-qlab.astype(np.float32), kind="stable")[: cfg.persons_per_slot]
-        new_n, new_p = order, qlab[order]
-        # new slice: projection of the mixture over links (loop over components)
+        return qlab, pprob, order, qlab[order]
+
+    def _new_slice(self, o, w, w0, prior):
+        """KL projection of the new slice's mixture over links (loop over components), and
+        the slots' NIWs after the old-slice update."""
+        cfg, r, S = self.cfg, self.r, self.cfg.max_open
         comps, weights, upd = [], [], {}
         mix = np.argsort(-w.astype(np.float32), kind="stable")[: min(cfg.mix_top, S)]
         for j in mix:  # loop over the mixture components (the mix_top best links)
@@ -186,6 +205,12 @@ class NumpyLoopADF:
             for j in top:
                 if w[j] > 0:
                     niw[j] = _project([w[j], 1.0 - w[j]], [upd[j], self.niw[j]], r)
+        return new_niw, niw
+
+    def _insert_slot(self, qlab, pprob, new_n, new_p):
+        """Closed-person mass, slot insertion (a free slot, else the oldest) and pruning,
+        in place; returns the new slot's index."""
+        cfg, S = self.cfg, self.cfg.max_open
         closed = self.closed * (1.0 - qlab)
         closed = closed + qlab
         for n, q in zip(new_n, new_p):
@@ -209,15 +234,8 @@ class NumpyLoopADF:
         pprob[small] = 0.0
         self.closed = closed
         self.valid = valid & (pprob.sum(1) > 0)
-        link_obs = np.where(w > 0, self.sobs, -1)
-        self.sobs[idx] = self.k
-        self.cam[idx], self.bq[idx], self.tq[idx] = cam, bq, tq
-        niw[idx] = new_niw
-        self.niw = niw
         self.pprob = pprob
-        self.k += 1
-        cmean = float(np.arange(self.counter.size) @ self.counter)
-        return link_obs, w, w0, lz, qlab, cmean
+        return idx
 
     def run(self, obs, full: bool = False):
         """Filter a batch; returns (link_obs (K, S), link_prob (K, S), new_prob (K,)) and
