@@ -78,16 +78,24 @@ def _ini_frame_rate(ini: Path) -> float | None:
     return fps
 
 
+def _mot_fields(line: str) -> list[str]:
+    """The fields of one MOTChallenge line: comma-separated (an empty field stays, so a
+    missing value is an error in its own column, never a shift of the next ones), or
+    separated by white space where the line has no comma."""
+    text = line.strip()
+    return [x.strip() for x in text.split(",")] if "," in text else text.split()
+
+
 def read_mot(path: str | Path):
     """A MOTChallenge box file as a :class:`models.jorge.strokes.GroundTruth`; its ``fps``
     from :func:`mot_frame_rate`, else :data:`MOT_DEFAULT_FPS`."""
-    from models.jorge.strokes import _assemble
+    from models.jorge.strokes import MAX_PIXELS, _assemble
 
     path = Path(path)
     frames: dict[int, dict[int, tuple]] = {}
     for line_no, line in enumerate(read_lines(path, "MOTChallenge file"), start=1):
-        fields = [x.strip() for x in line.replace(" ", ",").split(",") if x.strip()]
-        if not fields or fields[0].startswith("#"):
+        fields = _mot_fields(line)
+        if not any(fields) or fields[0].startswith("#"):
             continue
         if len(fields) < 6:
             raise fail(path, line_no, f"{len(fields)} fields, need frame,id,x,y,w,h")
@@ -96,13 +104,15 @@ def read_mot(path: str | Path):
             as_int(fields[1], path, line_no, "id"),
         )
         x, y, w, h = (as_float(v, path, line_no, n) for v, n in zip(fields[2:6], "xywh"))
-        if len(fields) > 6 and as_float(fields[6], path, line_no, "conf") == 0:
+        if len(fields) > 6 and as_float(fields[6], path, line_no, "conf", allow_empty=True) == 0:
             continue
         if oid < 0:
             raise fail(path, line_no, f"id = {oid}: detections without ids cannot make "
                        "strokes (give tracks with ids, e.g. gt.txt)")  # fmt: skip
         if w <= 0 or h <= 0:
             raise fail(path, line_no, f"box width/height must be > 0, got {w}, {h}")
+        if max(abs(x + w / 2), abs(y + h / 2), w, h) > MAX_PIXELS:
+            raise fail(path, line_no, f"box {x}, {y}, {w}, {h} is beyond {MAX_PIXELS:g} pixels")
         objs = frames.setdefault(fr, {})
         if oid in objs:
             raise fail(path, line_no, f"id {oid} appears twice in frame {fr}")

@@ -58,6 +58,7 @@ from models.jorge.labels import (
 )
 from models.jorge.links import LinkRule
 from models.jorge.memo import ChainMemo, EvidenceMemo, TableMemo
+from models.jorge.strokes import MAX_PIXELS as _MAX_PIXELS
 from models.jorge.strokes import Stroke, _check_colours, check_frame_rate
 from models.jorge.window import (
     Inference,
@@ -744,8 +745,6 @@ def _linear_quantile(values: np.ndarray, q: float) -> float:
     return b - (b - a) * (1 - t) if t >= 0.5 else a + (b - a) * t
 
 
-# pixel coordinates / sizes beyond this are not an image (a unit or scale mistake)
-_MAX_PIXELS = 1e6
 _MAX_TABLE_ENTRIES = 5e7  # a CPD table of one node (400 MB of float64)
 
 

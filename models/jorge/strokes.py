@@ -134,6 +134,7 @@ class GroundTruth:
         wh = boxes[..., 2:][present[..., 2:]]
         if np.any(wh <= 0):
             raise InputError(f"GroundTruth.boxes: width/height must be > 0, got {wh[wh <= 0][0]}")
+        _check_pixels(boxes, frames, ids)
         object.__setattr__(self, "frames", frames.astype(np.int64))
         object.__setattr__(self, "ids", ids.astype(np.int64))
         object.__setattr__(self, "boxes", boxes)
@@ -148,6 +149,19 @@ class GroundTruth:
         return self.num_frames / self.fps
 
 
+def _check_pixels(boxes: np.ndarray, frames: np.ndarray, ids: np.ndarray) -> None:
+    """:class:`InputError` naming the first frame and id whose box centre is beyond
+    :data:`MAX_PIXELS` or whose width or height exceeds it (NaN boxes: absent)."""
+    with np.errstate(invalid="ignore"):
+        bad = (np.abs(boxes) > MAX_PIXELS).any(-1)
+    if bad.any():
+        r, c = np.argwhere(bad)[0]
+        raise InputError(
+            f"GroundTruth.boxes: frame {frames[r]} id {ids[c]}: box {boxes[r, c].tolist()} "
+            f"is beyond {MAX_PIXELS:g} pixels (centre or size; a unit or scale mistake?)"
+        )
+
+
 def _int_attr(elem: ET.Element, key: str, path, where: str) -> int:
     """An integer attribute; missing or malformed is a FileFormatError naming the element."""
     text = elem.get(key)
@@ -158,6 +172,10 @@ def _int_attr(elem: ET.Element, key: str, path, where: str) -> int:
             path, f"{where}: <{elem.tag} {key}={text!r}> is not an integer"
         ) from None
 
+
+MAX_PIXELS = 1e6
+"""Largest pixel coordinate or box side the readers, :class:`GroundTruth` and the
+labeller accept: a larger one is a unit or scale mistake, not an image."""
 
 PETS2009_FPS = 7.0
 """Frame rate of the PETS2009 cameras ("~7" fps for every view, PETS2009 dataset page,
@@ -191,6 +209,8 @@ def _parse_box(elem: ET.Element | None, where: str) -> tuple[float, float, float
         raise NonFiniteError(f"{where}: non-finite box {elem.attrib}")
     if b[2] <= 0 or b[3] <= 0:
         raise InputError(f"{where}: box width/height must be > 0, got {elem.attrib}")
+    if max(abs(v) for v in b) > MAX_PIXELS:
+        raise InputError(f"{where}: box {elem.attrib} is beyond {MAX_PIXELS:g} pixels")
     return b  # type: ignore[return-value]
 
 

@@ -458,6 +458,28 @@ def test_jorge_bad_files(tmp_path, capsys):
     _bad(capsys, ["track", "jorge", str(bad), "-o", str(tmp_path)], "broken.xml:4:")
 
 
+def test_mot_reader_keeps_empty_fields_and_bounds_pixels(tmp_path, capsys):
+    """An empty field is an error in its own column (it used to be dropped, shifting y, w,
+    h into x, y, w: a silent wrong box); a box beyond the pixel bound names its line, as
+    does the XML reader its frame and object; blank and space-separated lines still read."""
+    from models.io.jorge import read_mot
+
+    good = tmp_path / "good.txt"
+    good.write_text("1,1,10,20,5,8,1,1,1\n,,,,,,,,\n2 1 11 20 5 8\n3,1,12,20,5,8,\n")
+    truth = read_mot(good)
+    np.testing.assert_allclose(truth.boxes[:, 0], [[12.5, 24, 5, 8], [13.5, 24, 5, 8], [14.5, 24, 5, 8]])
+    gap = tmp_path / "gap.txt"
+    gap.write_text("1,1,10,20,5,8,1,1,1\n2,1,,20,5,8,1,1,1\n")
+    _bad(capsys, ["track", "jorge", str(gap), "-o", str(tmp_path / "a")], "gap.txt:2:", "x = ''")
+    far = tmp_path / "far.txt"
+    far.write_text("1,1,10,20,5,8,1,1,1\n2,1,99999999999,20,5,8,1,1,1\n")
+    _bad(capsys, ["track", "jorge", str(far), "-o", str(tmp_path / "b")], "far.txt:2:", "pixels")
+    xml = (DATA / "jorge" / "caviar.xml").read_text()
+    big = tmp_path / "big.xml"
+    big.write_text(xml.replace('w="18.0"', 'w="99999999999"', 1))
+    _bad(capsys, ["track", "jorge", str(big), "-o", str(tmp_path / "c")], "big.xml", "object", "pixels")
+
+
 @pytest.mark.heavy  # ~12-22 s: a whole RJ-MCMC run through the CLI; CI runs it (pytest -m heavy)
 def test_rjmcmc3d_track_eval(tmp_path, capsys):
     d = DATA / "rjmcmc3d"

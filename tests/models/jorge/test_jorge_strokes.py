@@ -90,6 +90,10 @@ def test_bad_inputs():
         make_stroke(0, 0, 5, (0, 0), (1, 1), [1, 99])
     with pytest.raises(TimeOrderError):
         GroundTruth("x", np.array([0, 2, 1]), np.array([0]), np.ones((3, 1, 4)))
+    far = np.ones((2, 2, 4))
+    far[1, 1, 0] = -2e6  # a centre beyond the pixel bound names its frame and id
+    with pytest.raises(InputError, match="frame 8 id 5"):
+        GroundTruth("x", np.array([7, 8]), np.array([4, 5]), far)
     s0 = make_stroke(0, 5, 9, (0, 0), (1, 1), [1, 2])
     s1 = make_stroke(1, 0, 9, (0, 0), (1, 1), [1, 2])
     with pytest.raises(TimeOrderError):
