@@ -105,13 +105,18 @@ def evaluate(result: str, truth: str, model: str | None = None) -> dict:
 
     marg = read_marginals(result)
     header, rows = read_rows(truth, what="truth CSV", keep_blank=True)
+    if not marg:
+        raise InputError(f"{result}: no marginals to score")
+    num_slices = min(m.shape[0] for _, m in marg.values())
+    if len(rows) > num_slices:  # another recording's truth: a silent partial score otherwise
+        raise rows[num_slices].fail(f"truth has {len(rows)} slices, {result} has {num_slices}")
     errors, losses = [], []
     for col in header:
         if col not in marg:
             raise InputError(f"{truth}:1: column {col!r} has no marginals in {result}")
         states, m = marg[col]
         for t, row in enumerate(rows):
-            if row[col] == "" or t >= m.shape[0]:
+            if row[col] == "":
                 continue
             if row[col] not in states:
                 raise row.fail(f"{col} = {row[col]!r} is not a state of {states}")

@@ -73,6 +73,10 @@ def test_dbn_track_eval_matches_forward_algorithm(tmp_path, capsys):
     assert metrics == summary["metrics"]
     truth = np.array([0, 0, 1, 1, 0])
     assert metrics["label_error_rate"] == pytest.approx(np.mean(np.argmax(ref, 1) != truth))
+    # a truth longer than the run is another recording's: refused at its first extra line
+    long_truth = tmp_path / "long.csv"
+    long_truth.write_text((d / "truth.csv").read_text() + "no\n")
+    _bad(capsys, ["eval", "dbn", str(out / "marginals.csv"), str(long_truth)], "long.csv:7:", "6 slices")
 
 
 def test_dbn_bad_evidence_names_file_and_line(tmp_path, capsys):
