@@ -49,7 +49,7 @@ def _options(config: dict) -> dict:
     if initial is not None and initial.shape != (3,):
         raise ConfigError(f"config initial_pose = {config['initial_pose']!r}: need [x, y, theta]")
     opts = {"robot": integer(config, "robot", 1), "initial_pose": initial, "dt": number(config, "dt", 0.1),
-            "duration": number(config, "duration") if config.get("duration") else None,
+            "duration": number(config, "duration") if config.get("duration") is not None else None,
             "start": number(config, "start") if config.get("start") is not None else None,
             "num_particles": integer(config, "num_particles", 2000),
             "algorithm": text(config, "algorithm", "apf")}  # fmt: skip

@@ -71,6 +71,14 @@ def test_localization_odometry_shorter_than_a_step_names_the_file(capsys, tmp_pa
     assert len(err.splitlines()) == 1 and "odometry.csv" in err and "one step" in err, err
 
 
+@pytest.mark.parametrize("bad", [{}, [], False, "", 0])
+def test_localization_duration_of_the_wrong_kind_is_refused(capsys, tmp_path, bad):
+    """``duration`` is a number of seconds or absent (null: the whole odometry); an empty
+    object, list or string, ``false`` and 0 used to read as absent and ran the whole file."""
+    rc, err = _run(capsys, tmp_path, "localization", {"duration": bad})
+    assert rc == 2 and len(err.splitlines()) == 1 and "duration" in err, err
+
+
 def test_option_readers():
     cfg = {"a": 2, "b": 2.5, "c": True, "d": "x", "e": [[1, 2], [3, 4]], "f": "2", "g": 2.0,
            "h": [1, "x"], "i": float("nan"), "j": 10**400}
