@@ -282,7 +282,7 @@ def check_cameras(name: str, cams: np.ndarray, network: CameraNetwork) -> None:
     cams = np.asarray(cams)
     if cams.size and (cams.min() < 0 or cams.max() >= network.num_cameras):
         bad = cams[(cams < 0) | (cams >= network.num_cameras)][0]
-        raise InputError(f"{name} holds camera {bad!r}, outside [0, {network.num_cameras})")
+        raise InputError(f"{name} holds camera {int(bad)}, outside [0, {network.num_cameras})")
 
 
 def propagate(

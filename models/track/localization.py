@@ -29,6 +29,7 @@ from models.track.options import array, check_keys, integer, number, text
 INPUTS = ("an MRCLAM dataset folder (RobotN_Odometry.dat, ...), or",
           "odometry.csv measurements.csv landmarks.csv [groundtruth.csv]")  # fmt: skip
 _KEYS = {"robot", "duration", "dt", "num_particles", "algorithm", "initial_pose", "start"}
+_MAX_STEPS = 1e8  # filter steps of one run (a duration beyond it is a unit mistake)
 
 
 def _read(inputs: list[str], robot: int):
@@ -58,6 +59,9 @@ def _options(config: dict) -> dict:
     if opts["duration"] is not None and not opts["duration"] > opts["dt"]:
         raise ConfigError(f"config duration = {opts['duration']!r}: expected more than one step "
                           f"(dt = {opts['dt']!r})")  # fmt: skip
+    if opts["duration"] is not None and not opts["duration"] / opts["dt"] <= _MAX_STEPS:
+        raise ConfigError(f"config duration = {opts['duration']!r}: more than {_MAX_STEPS:g} steps "
+                          f"of dt = {opts['dt']!r}")  # fmt: skip
     return opts
 
 

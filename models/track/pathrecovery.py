@@ -25,8 +25,17 @@ INPUTS = ("EDGES.csv: from,to,prob[,gap_mean] camera network (with self loops)",
 
 
 def _start(odb, config: dict) -> tuple[int, np.ndarray]:
-    if "c0" in config and "f0" in config:
-        return integer(config, "c0"), array(config, "f0")
+    """The target's camera and feature at ``t = 0``: config ``c0`` and ``f0`` (both), or
+    config ``target_obs``, or the only observation at ``t = 0``."""
+    given = [k for k in ("c0", "f0", "target_obs") if k in config]
+    if given and given not in (["c0", "f0"], ["target_obs"]):
+        raise ConfigError(f"config {given}: give c0 and f0 together, or target_obs alone")
+    if "c0" in config:
+        f0, dim = array(config, "f0"), odb.feat.shape[1]
+        if f0.shape != (dim,):
+            raise ConfigError(f"config f0: expected {dim} numbers (the observations' features), "
+                              f"got shape {f0.shape}")  # fmt: skip
+        return integer(config, "c0"), f0
     lo, hi = int(odb.time_ptr[0]), int(odb.time_ptr[1])
     if "target_obs" in config:
         hit = np.flatnonzero(odb.ids[lo:hi] == integer(config, "target_obs"))

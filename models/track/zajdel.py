@@ -13,6 +13,8 @@ Config keys: ``num_cameras``, ``num_borders`` (default: the largest index + 1), 
 ``stream_window`` and ``close_z`` (learn-search: the streaming form with that lag, one
 protocol step per pass; without it one search over all passes), and the fields of
 :class:`~models.zajdel.tracker.ADFConfig` / :class:`~models.zajdel.learnsearch.LearnSearchConfig`.
+A key of the other runner is refused (it would do nothing), and every value is checked
+for its type and range before the observations are read.
 """
 
 from __future__ import annotations
@@ -28,8 +30,10 @@ from models.track.options import array, build, check_keys, integer, number, text
 INPUTS = ("OBSERVATIONS.csv: one row per camera pass (or enter/leave events), "
           "appearance columns a0..",)  # fmt: skip
 _MODEL_KEYS = {"num_cameras", "num_borders", "trans", "entry", "travel_mean", "travel_std",
-               "window", "p_new", "within_std", "between_std", "decode", "stream_window",
-               "close_z"}  # fmt: skip
+               "window", "p_new"}  # fmt: skip
+_RUNNER_KEYS = {"zajdel_adf": {"within_std", "between_std", "decode"},
+                "zajdel_learnsearch": {"stream_window", "close_z"}}  # fmt: skip
+_MAX_SCALE = 1e100  # times and spreads beyond it overflow once squared (a unit mistake)
 
 
 _MAX_PATH_ENTRIES = 10**7  # the dense (C, B, C, B) transition table: 80 MB
@@ -65,20 +69,49 @@ def _path_and_start(table, config: dict, path: str):
     start = initial_params(o, path, number(config, "p_new") if "p_new" in config else None)
     travel = {k: array(config, k) for k in ("travel_mean", "travel_std") if k in config}
     if travel:
+        for key, v in travel.items():
+            if v.shape not in ((), (1,), (C, C)):
+                raise ConfigError(f"config {key}: expected a number or a {C} x {C} table, "
+                                  f"got shape {v.shape}")  # fmt: skip
         mu = np.broadcast_to(travel.get("travel_mean", start.path.travel_mean), (C, C))
         sd = np.broadcast_to(travel.get("travel_std", start.path.travel_std), (C, C))
         start = start._replace(path=make_path_model(trans, entry, mu, sd, window))
     return start
 
 
-def _split_config(config: dict, cls) -> tuple[dict, object]:
-    """The fields of the tracker's config class ``cls`` and the instance; every key and
-    type checked (before any file is read)."""
-    check_keys(config, _MODEL_KEYS | set(cls._fields))
+def _split_config(config: dict, cls, name: str) -> tuple[dict, object]:
+    """The fields of the tracker's config class ``cls`` and the instance; every key (those
+    of runner ``name`` only: another runner's key would silently do nothing), type and
+    range checked (before any file is read)."""
+    check_keys(config, _MODEL_KEYS | _RUNNER_KEYS[name] | set(cls._fields))
     fields = {k: config[k] for k in cls._fields if k in config}
     if text(config, "decode", "chain") not in ("chain", "online"):
         raise ConfigError(f"config decode = {config['decode']!r}, expected 'chain' or 'online'")
+    _check_model_options(config)
     return fields, build(cls, fields)
+
+
+def _check_model_options(config: dict) -> None:
+    """Ranges of the model keys (:class:`ConfigError` naming the key): counts >= 1, a
+    window and spreads > 0, ``p_new`` in (0, 1), times below :data:`_MAX_SCALE`."""
+    for key in ("num_cameras", "num_borders", "stream_window"):
+        if key in config and integer(config, key) < 1:
+            raise ConfigError(f"config {key} = {config[key]!r}: expected an integer >= 1")
+    for key in ("window", "within_std", "between_std", "close_z"):
+        if key in config and not 0 < number(config, key) < _MAX_SCALE:
+            raise ConfigError(f"config {key} = {config[key]!r}: expected a number in (0, {_MAX_SCALE:g})")
+    if "p_new" in config and not 0 < number(config, "p_new") < 1:
+        raise ConfigError(f"config p_new = {config['p_new']!r}: expected a probability in (0, 1)")
+    for key, interval in (("travel_mean", "[0, "), ("travel_std", "(0, ")):
+        if key not in config:
+            continue
+        v = array(config, key)
+        above = v > 0 if key == "travel_std" else v >= 0
+        if v.size == 0 or not np.all(above & (v < _MAX_SCALE)):
+            raise ConfigError(f"config {key} = {config[key]!r}: expected numbers in "
+                              f"{interval}{_MAX_SCALE:g})")  # fmt: skip
+    if "close_z" in config and "stream_window" not in config:
+        raise ConfigError("config close_z: applies to the streaming search; give stream_window too")
 
 
 def _run_adf(ctx: RunContext, table, start, config: dict, fields: dict, cfg):
@@ -144,7 +177,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
         from models.zajdel.tracker import ADFConfig as Config
     else:
         from models.zajdel.learnsearch import LearnSearchConfig as Config
-    fields, cfg = _split_config(config, Config)
+    fields, cfg = _split_config(config, Config, ctx.name)
     with ctx.timed("read"):
         table = read_observations(inputs[0])
         start = _path_and_start(table, config, inputs[0])

@@ -7,7 +7,9 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import jax.numpy as jnp
+import numpy as np
 
+from dbn.errors import ModelError
 from models.zajdel.path import PathModel
 
 __all__ = ["ADFConfig", "ADFState", "ADFInfo", "ADFParams", "DEFAULT_OLD_UPDATE"]
@@ -82,6 +84,25 @@ class ADFConfig(NamedTuple):
     lag_branch: int = 5
     record_counter: bool = False
     birth_leave: bool | str = False
+
+    def validate(self) -> None:
+        """Raise :class:`~dbn.errors.ModelError` naming the first field the filter cannot
+        run with (sizes, thresholds, switches); called by the tracker and the CLI."""
+        if self.old_update not in ("seed", "keep"):
+            raise ModelError(f"old_update = {self.old_update!r}: must be 'seed' or 'keep'")
+        for name in ("max_open", "persons_per_slot", "chunk", "init_persons", "mix_top",
+                     "link_out", "label_out", "lag_branch"):
+            if getattr(self, name) < 1:
+                raise ModelError(f"{name} = {getattr(self, name)!r}: must be >= 1")
+        for name in ("min_open", "old_update_top"):
+            if getattr(self, name) < 0:
+                raise ModelError(f"{name} = {getattr(self, name)!r}: must be >= 0")
+        for name in ("prune_eps", "slot_mass_eps"):  # probabilities: 1 or more drops all
+            v = getattr(self, name)
+            if not (np.isfinite(v) and 0 <= v < 1):
+                raise ModelError(f"{name} = {v!r}: must be in [0, 1)")
+        if self.birth_leave not in (False, True, "filter"):
+            raise ModelError(f"birth_leave = {self.birth_leave!r}: must be False, True or 'filter'")
 
 
 class ADFState(NamedTuple):

@@ -139,6 +139,27 @@ class LearnSearchConfig(NamedTuple):
     shrinkage: float = 30.0
     travel_shrinkage: float = 2.0
 
+    def validate(self) -> None:
+        """Raise :class:`~dbn.errors.InputError` naming the first field the search cannot
+        run with; called by :func:`learn_search` and the CLI."""
+        if self.num_hypotheses < 1:
+            raise InputError(f"num_hypotheses = {self.num_hypotheses}: must be >= 1")
+        if self.batch < 1:
+            raise InputError(f"batch = {self.batch}: must be >= 1")
+        if not 0 <= self.n0 <= 8:
+            raise InputError(f"n0 = {self.n0}: must be in 0..8 (Bell(n0) partitions are enumerated)")
+        if self.em_max_iter < 0:
+            raise InputError(f"em_max_iter = {self.em_max_iter}: must be >= 0")
+        if not (np.isfinite(self.em_tol) and self.em_tol >= 0):
+            raise InputError(f"em_tol = {self.em_tol}: must be a number >= 0")
+        for name in ("shrinkage", "travel_shrinkage"):  # pseudo-counts of observations
+            v = getattr(self, name)
+            if not 0 <= v <= _MAX_PSEUDO_COUNT:
+                raise InputError(f"{name} = {v}: must be in [0, {_MAX_PSEUDO_COUNT:g}]")
+
+
+_MAX_PSEUDO_COUNT = 1e12  # beyond it the data weigh nothing, and the M step overflows
+
 
 class LearnSearchResult(NamedTuple):
     """Output of :func:`learn_search`.
@@ -633,20 +654,6 @@ def _keep_best(beam: _Beam, T: int) -> _Beam:
 
 
 # --------------------------------------------------------------------------- the search
-def _check_config(cfg: LearnSearchConfig) -> None:
-    """Reject a configuration the search cannot run (InputError naming the field)."""
-    if cfg.num_hypotheses < 1:
-        raise InputError(f"num_hypotheses = {cfg.num_hypotheses}: must be >= 1")
-    if cfg.batch < 1:
-        raise InputError(f"batch = {cfg.batch}: must be >= 1")
-    if not 0 <= cfg.n0 <= 8:
-        raise InputError(f"n0 = {cfg.n0}: must be in 0..8 (Bell(n0) partitions are enumerated)")
-    if cfg.shrinkage < 0 or cfg.travel_shrinkage < 0:
-        raise InputError(
-            f"shrinkage = {cfg.shrinkage}, travel_shrinkage = {cfg.travel_shrinkage}: must be >= 0"
-        )
-
-
 def learn_search(obs: Observations, params: LSParams,
                  config: LearnSearchConfig | None = None, progress: bool = False) -> LearnSearchResult:
     r"""The learn-search tracker of seed 000 (Fig. 4): the T most probable partitions of
@@ -674,7 +681,7 @@ def learn_search(obs: Observations, params: LSParams,
     O(T K (C r^2 + r^3)).
     """
     cfg = LearnSearchConfig() if config is None else config
-    _check_config(cfg)
+    cfg.validate()
     _check_params(params)
     obs = validate_observations(obs, params.obs_dim, params.path.num_cameras, params.path.num_borders)
     K = obs.num_obs

@@ -48,7 +48,6 @@ from models.zajdel.learnsearch import (
     LearnSearchConfig,
     LSParams,
     _canonical,
-    _check_config,
     _check_params,
     _evidence,
     _param_change,
@@ -367,7 +366,7 @@ def _check_stream_args(cfg: LearnSearchConfig, window: int, close_z: float | Non
         raise InputError(f"window = {window!r}: must be an integer >= 1")
     if close_z is not None and not (np.isfinite(close_z) and close_z > 0):
         raise InputError(f"close_z = {close_z}: must be None or a finite number > 0")
-    _check_config(cfg)
+    cfg.validate()
 
 
 def _initial_em(pre: Observations, parts: np.ndarray, theta: LSParams, cfg: LearnSearchConfig):

@@ -142,14 +142,7 @@ class ZajdelADF:
         self.params: ZajdelParams = params
         self.config = ADFConfig() if config is None else config
         cfg = self.config
-        if cfg.old_update not in ("seed", "keep"):
-            raise ModelError(f"old_update = {cfg.old_update!r}: must be 'seed' or 'keep'")
-        if cfg.max_open < 1 or cfg.persons_per_slot < 1 or cfg.chunk < 1:
-            raise ModelError(f"config: sizes must be >= 1, got {cfg}")
-        if cfg.birth_leave not in (False, True, "filter"):
-            raise ModelError(f"birth_leave = {cfg.birth_leave!r}: must be False, True or 'filter'")
-        if cfg.min_open < 0 or not (np.isfinite(cfg.slot_mass_eps) and cfg.slot_mass_eps >= 0):
-            raise ModelError(f"config: min_open and slot_mass_eps must be >= 0, got {cfg}")
+        cfg.validate()
         if cfg.birth_leave and not (
             np.all(np.isfinite(params.path.new_rate)) and np.isfinite(params.path.leave_prob)
         ):

@@ -79,6 +79,38 @@ def test_localization_duration_of_the_wrong_kind_is_refused(capsys, tmp_path, ba
     assert rc == 2 and len(err.splitlines()) == 1 and "duration" in err, err
 
 
+#: values a random sweep of every runner's keys found unchecked (a raw ZeroDivisionError,
+#: OverflowError, numpy shape error, an endless growth loop, or a key silently ignored)
+RANGE_CASES = [
+    ("zajdel_adf", {"init_persons": 0}, "init_persons"),  # grew its capacity forever
+    ("zajdel_adf", {"init_persons": -1}, "init_persons"),
+    ("zajdel_adf", {"mix_top": 0}, "mix_top"),
+    ("zajdel_adf", {"prune_eps": 1.5}, "prune_eps"),
+    ("zajdel_adf", {"num_borders": 0}, "num_borders"),
+    ("zajdel_adf", {"num_cameras": -1}, "num_cameras"),
+    ("zajdel_adf", {"within_std": 1e308}, "within_std"),
+    ("zajdel_adf", {"between_std": 0}, "between_std"),
+    ("zajdel_adf", {"travel_mean": []}, "travel_mean"),
+    ("zajdel_adf", {"travel_std": [[1.0, 2.0]]}, "travel_std"),
+    ("zajdel_adf", {"stream_window": 5}, "stream_window"),  # learn-search's key
+    ("zajdel_learnsearch", {"within_std": 1.0}, "within_std"),  # the ADF's key
+    ("zajdel_learnsearch", {"travel_shrinkage": 1e308}, "travel_shrinkage"),
+    ("zajdel_learnsearch", {"travel_mean": 1e308}, "travel_mean"),
+    ("zajdel_learnsearch", {"em_tol": -1}, "em_tol"),
+    ("zajdel_learnsearch", {"close_z": 3.0}, "close_z"),  # without stream_window
+    ("localization", {"duration": 1e308}, "duration"),
+    ("pathrecovery", {"c0": 0}, "c0"),  # without f0 it was ignored
+    ("pathrecovery", {"c0": 16, "f0": [0.1, 0.2]}, "f0"),
+]
+
+
+@pytest.mark.parametrize("name, config, key", RANGE_CASES)
+def test_out_of_range_options_name_the_config_file_and_key(capsys, tmp_path, name, config, key):
+    rc, err = _run(capsys, tmp_path, name, config)
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "opts.json" in err and key in err, err
+
+
 def test_option_readers():
     cfg = {"a": 2, "b": 2.5, "c": True, "d": "x", "e": [[1, 2], [3, 4]], "f": "2", "g": 2.0,
            "h": [1, "x"], "i": float("nan"), "j": 10**400}
