@@ -77,6 +77,8 @@ def array(config: Mapping[str, Any], key: str, default: Any = _MISSING,
     v = _value(config, key, default)
     if key not in config:
         return np.asarray(v, dtype=np.float64)
+    if _holds_bool(v):  # numpy would read true as 1.0
+        raise ConfigError(f"config {key} = {v!r}: expected numbers, not true / false")
     try:
         out = np.asarray(v, dtype=np.float64)
     except (TypeError, ValueError):
@@ -86,6 +88,11 @@ def array(config: Mapping[str, Any], key: str, default: Any = _MISSING,
     if not np.isfinite(out).all():
         raise ConfigError(f"config {key}: expected finite numbers")
     return out
+
+
+def _holds_bool(v: Any) -> bool:
+    """Whether ``v`` is a boolean or a (nested) list holding one."""
+    return isinstance(v, bool) or (isinstance(v, list | tuple) and any(map(_holds_bool, v)))
 
 
 def _defaults(cls: Any) -> dict[str, Any]:

@@ -125,6 +125,9 @@ def test_option_readers():
             fn(cfg, key) if fn not in (flag, text) else fn(cfg, key, None)
     with pytest.raises(ConfigError, match="axes"):
         array(cfg, "e", ndim=1)
+    for v in (True, [1.0, False], [[1.0], [True]]):  # numpy alone reads true as 1.0
+        with pytest.raises(ConfigError, match="true / false"):
+            array({"t": v}, "t")
     with pytest.raises(ConfigError, match="unknown config key"):
         check_keys(cfg, {"a"})
     assert build(StrokeConfig, {"gap_min": 3}).gap_min == 3
