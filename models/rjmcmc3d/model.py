@@ -33,6 +33,9 @@ __all__ = [
 LOG_2PI = math.log(2.0 * math.pi)
 
 
+_MAX_MAGNITUDE = 1e100  # a parameter beyond it is a unit mistake, and overflows once squared
+
+
 class TrackerParams(NamedTuple):
     """Parameters of the seed 003 tracker (all documented with the equation they enter).
 
@@ -96,6 +99,9 @@ class TrackerParams(NamedTuple):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int | np.integer):
                 raise InputError(f"TrackerParams.{name}={v!r} must be an int")
+        for name, v in self._asdict().items():  # lengths, times, weights: squared somewhere
+            if isinstance(v, float | np.floating) and not abs(v) < _MAX_MAGNITUDE:
+                raise InputError(f"TrackerParams.{name}={v!r} must be finite, |x| < {_MAX_MAGNITUDE:g}")
         for name in ("h_mean", "d_min", "leave_ramp", "add_gate", "det_gate"):
             if not getattr(self, name) > 0:
                 raise InputError(f"TrackerParams.{name}={getattr(self, name)} must be > 0")

@@ -101,6 +101,8 @@ RANGE_CASES = [
     ("localization", {"duration": 1e308}, "duration"),
     ("pathrecovery", {"c0": 0}, "c0"),  # without f0 it was ignored
     ("pathrecovery", {"c0": 16, "f0": [0.1, 0.2]}, "f0"),
+    ("rjmcmc3d", {"tau": 1e308}, "tau"),  # six such fields overflowed once squared
+    ("rjmcmc3d", {"min_sd": 1e308}, "min_sd"),
 ]
 
 
