@@ -103,6 +103,9 @@ class LSParams(NamedTuple):
         return int(np.shape(self.mean)[0])
 
 
+_MAX_PSEUDO_COUNT = 1e12  # beyond it the data weigh nothing, and the M step overflows
+
+
 class LearnSearchConfig(NamedTuple):
     """Settings of :func:`learn_search`.
 
@@ -156,9 +159,6 @@ class LearnSearchConfig(NamedTuple):
             v = getattr(self, name)
             if not 0 <= v <= _MAX_PSEUDO_COUNT:
                 raise InputError(f"{name} = {v}: must be in [0, {_MAX_PSEUDO_COUNT:g}]")
-
-
-_MAX_PSEUDO_COUNT = 1e12  # beyond it the data weigh nothing, and the M step overflows
 
 
 class LearnSearchResult(NamedTuple):
