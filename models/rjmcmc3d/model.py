@@ -101,7 +101,9 @@ class TrackerParams(NamedTuple):
                 raise InputError(f"TrackerParams.{name}={v!r} must be an int")
         for name, v in self._asdict().items():  # lengths, times, weights: squared somewhere
             if isinstance(v, float | np.floating) and not abs(v) < _MAX_MAGNITUDE:
-                raise InputError(f"TrackerParams.{name}={v!r} must be finite, |x| < {_MAX_MAGNITUDE:g}")
+                raise InputError(
+                    f"TrackerParams.{name}={v!r} must be finite, |x| < {_MAX_MAGNITUDE:g}"
+                )
         for name in ("h_mean", "d_min", "leave_ramp", "add_gate", "det_gate"):
             if not getattr(self, name) > 0:
                 raise InputError(f"TrackerParams.{name}={getattr(self, name)} must be > 0")

@@ -99,7 +99,9 @@ def _check_model_options(config: dict) -> None:
             raise ConfigError(f"config {key} = {config[key]!r}: expected an integer >= 1")
     for key in ("window", "within_std", "between_std", "close_z"):
         if key in config and not 0 < number(config, key) < _MAX_SCALE:
-            raise ConfigError(f"config {key} = {config[key]!r}: expected a number in (0, {_MAX_SCALE:g})")
+            raise ConfigError(
+                f"config {key} = {config[key]!r}: expected a number in (0, {_MAX_SCALE:g})"
+            )
     if "p_new" in config and not 0 < number(config, "p_new") < 1:
         raise ConfigError(f"config p_new = {config['p_new']!r}: expected a probability in (0, 1)")
     for key, interval in (("travel_mean", "[0, "), ("travel_std", "(0, ")):

@@ -150,7 +150,9 @@ class LearnSearchConfig(NamedTuple):
         if self.batch < 1:
             raise InputError(f"batch = {self.batch}: must be >= 1")
         if not 0 <= self.n0 <= 8:
-            raise InputError(f"n0 = {self.n0}: must be in 0..8 (Bell(n0) partitions are enumerated)")
+            raise InputError(
+                f"n0 = {self.n0}: must be in 0..8 (Bell(n0) partitions are enumerated)"
+            )
         if self.em_max_iter < 0:
             raise InputError(f"em_max_iter = {self.em_max_iter}: must be >= 0")
         if not (np.isfinite(self.em_tol) and self.em_tol >= 0):
