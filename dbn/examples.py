@@ -75,6 +75,9 @@ def sample_coupled_chains(
     filters take.
     """
     coupled_chains(n, keep, flip, noise, p_on)  # validates the arguments
+    ok = isinstance(num_timesteps, int | np.integer) and not isinstance(num_timesteps, bool)
+    if not ok or num_timesteps < 1:
+        raise ModelError(f"num_timesteps must be an integer >= 1, got {num_timesteps!r}")
     xs = np.empty((num_timesteps, n), np.int64)
     x = (rng.random(n) < p_on).astype(np.int64)
     for t in range(num_timesteps):
