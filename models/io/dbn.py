@@ -134,21 +134,53 @@ def write_marginals(path: str | Path, dbn: TwoSliceDBN, marginals: dict[str, np.
     return write_rows(path, ("slice", "variable", "state", "probability"), rows)
 
 
+MARGINAL_SUM_TOL = 1e-3
+"""How far a marginal read back may sum from 1 (rounded probabilities pass, garbage not)."""
+
+
 def read_marginals(path: str | Path) -> dict[str, tuple[list[str], np.ndarray]]:
-    """Read a marginals CSV back: ``name -> (state names, (T, K) probabilities)``."""
+    """Read a marginals CSV back: ``name -> (state names, (T, K) probabilities)``.
+
+    Raises
+    ------
+    FileFormatError
+        Naming the file and line: a negative slice; a probability outside [0, 1]; a
+        (slice, variable, state) given twice; a state without a row for some slice
+        ``0..T-1``; a (slice, variable) whose probabilities do not sum to 1 (within
+        :data:`MARGINAL_SUM_TOL`). A gap would leave NaN, a huge slice number would
+        allocate that many rows, and the scores would be garbage.
+    """
     _, rows = read_rows(path, ("slice", "variable", "state", "probability"), "marginals CSV")
     table: dict[str, dict[str, dict[int, float]]] = {}
+    lines: dict[tuple[str, int], int] = {}
     for r in rows:
-        table.setdefault(r["variable"], {}).setdefault(r["state"], {})[r.int("slice")] = r.float(
-            "probability"
-        )
-    out = {}
-    for name, by_state in table.items():
-        states = list(by_state)
-        T = 1 + max(max(d) for d in by_state.values())
-        m = np.full((T, len(states)), np.nan)
-        for k, s in enumerate(states):
-            for t, p in by_state[s].items():
-                m[t, k] = p
-        out[name] = (states, m)
-    return out
+        t, p = r.int("slice"), r.float("probability")
+        if t < 0:
+            raise r.fail(f"slice = {t} (slices count from 0)")
+        if not -1e-9 <= p <= 1.0 + 1e-9:  # a float sum may end a hair above 1
+            raise r.fail(f"probability = {p!r} is not in [0, 1]")
+        cell = table.setdefault(r["variable"], {}).setdefault(r["state"], {})
+        if t in cell:
+            raise r.fail(f"slice {t}, {r['variable']} = {r['state']} is given twice")
+        cell[t] = p
+        lines.setdefault((r["variable"], t), r.line)
+    return {name: _marginal_array(path, name, by_state, lines) for name, by_state in table.items()}
+
+
+def _marginal_array(path, name: str, by_state: dict[str, dict[int, float]],
+                    lines: dict[tuple[str, int], int]) -> tuple[list[str], np.ndarray]:  # fmt: skip
+    """``(states, (T, K) array)`` of one variable of :func:`read_marginals`, checked whole."""
+    states = list(by_state)
+    T = 1 + max(max(d) for d in by_state.values())
+    for s, d in by_state.items():
+        if len(d) != T:  # the first gap, found in at most len(d) + 1 steps
+            gap = next(t for t in range(T) if t not in d)
+            raise fail(path, 0, f"{name} = {s} has no row for slice {gap} (every state of "
+                                f"{name} needs one for each slice 0..{T - 1})")  # fmt: skip
+    m = np.array([[by_state[s][t] for s in states] for t in range(T)])
+    off = np.flatnonzero(np.abs(m.sum(axis=1) - 1.0) > MARGINAL_SUM_TOL)
+    if off.size:
+        t = int(off[0])
+        raise fail(path, lines[(name, t)], f"the probabilities of {name} at slice {t} sum to "
+                                           f"{m[t].sum():.6g}, not 1")  # fmt: skip
+    return states, m

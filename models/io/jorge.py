@@ -32,8 +32,8 @@ import numpy as np
 from dbn.errors import DBNError, InputError, in_file
 from models.io.table import as_float, as_int, fail, read_lines, require_file, write_rows
 
-__all__ = ["read_boxes", "read_mot", "mot_frame_rate", "frame_rate_source", "is_obsmat", "write_strokes",
-           "read_stroke_rows", "read_strokes", "read_strokes_header", "write_mot_tracks"]
+__all__ = ["read_boxes", "read_mot", "mot_frame_rate", "frame_rate_source", "is_obsmat", "is_mot",
+           "write_strokes", "read_stroke_rows", "read_strokes", "read_strokes_header", "write_mot_tracks"]
 
 MOT_DEFAULT_FPS = 25.0
 """Frame rate assumed for a MOTChallenge file without a ``seqinfo.ini`` (CAVIAR's)."""
@@ -106,6 +106,8 @@ def read_mot(path: str | Path):
         x, y, w, h = (as_float(v, path, line_no, n) for v, n in zip(fields[2:6], "xywh"))
         if len(fields) > 6 and as_float(fields[6], path, line_no, "conf", allow_empty=True) == 0:
             continue
+        if fr < 0:
+            raise fail(path, line_no, f"frame = {fr}: frames count from 0 (MOTChallenge's from 1)")
         if oid < 0:
             raise fail(path, line_no, f"id = {oid}: detections without ids cannot make "
                        "strokes (give tracks with ids, e.g. gt.txt)")  # fmt: skip
@@ -171,6 +173,11 @@ def frame_rate_source(path: str | Path) -> str:
 def is_obsmat(path: str | Path) -> bool:
     """An ETH / UCY ``obsmat`` file (its name starts with ``obsmat``: tracks in metres)."""
     return Path(path).name.lower().startswith("obsmat")
+
+
+def is_mot(path: str | Path) -> bool:
+    """A MOTChallenge text file: neither XML nor obsmat (:func:`read_boxes`'s rule)."""
+    return not is_obsmat(path) and not _is_xml(Path(path))
 
 
 def _is_xml(path: Path) -> bool:
@@ -245,8 +252,8 @@ def read_stroke_rows(path: str | Path) -> list[dict]:
     Raises
     ------
     InputError
-        A missing column, a label or truth that is not ints separated by spaces, or an
-        empty label (naming the file and line).
+        A missing column, a label or truth that is not ints (>= 0) separated by spaces,
+        or an empty label (naming the file and line).
     """
     from models.io.table import read_rows
 
@@ -261,6 +268,8 @@ def read_stroke_rows(path: str | Path) -> list[dict]:
                          "by spaces expected") from None  # fmt: skip
         if not label:
             raise r.fail("empty label")
+        if min(label | truth) < 0:
+            raise r.fail(f"label {r['label']!r} / truth {r.get('truth')!r}: objects count from 0")
         out.append({"stroke": r.int("stroke"), "start": r.int("start"), "end": r.int("end"),
                     "label": label, "truth": truth})  # fmt: skip
     return out

@@ -103,6 +103,8 @@ def read_observations(path: str | Path) -> Observations:
         raise rows[int(big[0])].fail(f"a feature of |value| > {MAX_FEATURE:g} (features are "
                                      "expected of order 1-1000; rescale them)")  # fmt: skip
     ids = np.array([r.int("obs") for r in rows]) if "obs" in header else np.arange(len(rows))
+    if ids.size and ids.min() < 0:  # -1 marks a hidden step in a path
+        raise rows[int(np.argmin(ids))].fail(f"obs = {int(ids.min())}: obs ids count from 0")
     if np.unique(ids).size != ids.size:
         raise fail(path, 0, "obs ids are not unique")
     obj = np.array([r.int("object") for r in rows]) if "object" in header else None
@@ -121,10 +123,24 @@ def write_path(path, t: np.ndarray, kind, cam, ta, obs_ids) -> Path:
     return write_rows(path, ("t", "state", "camera", "ta", "obs"), rows)
 
 
+def _path_step(r, kind: int, cam: int, ta: int, obs: int) -> tuple[int, int, int, int]:
+    """One checked step of :func:`read_path`: a visible step names its observation (obs
+    >= 0), a hidden one has none (obs -1); camera >= -1 (-1: unknown), ta >= 0."""
+    if kind == 0 and obs < 0:
+        raise r.fail(f"obs = {obs}: a visible step names its observation (an id >= 0)")
+    if kind == 1 and obs != -1:
+        raise r.fail(f"obs = {obs}: a hidden step has no observation (obs = -1)")
+    if cam < -1 or ta < 0:
+        raise r.fail(f"camera = {cam}, ta = {ta}: expected camera >= -1 (-1 or empty: "
+                     "unknown) and ta >= 0")  # fmt: skip
+    return kind, cam, ta, obs
+
+
 def read_path(path: str | Path) -> dict[int, tuple[int, int, int, int]]:
     """``t -> (kind, camera, ta, obs)`` of a path CSV (kind 0 visible, 1 hidden); rows in
     increasing ``t >= 0`` (a repeated, earlier or negative step is a TimeOrderError
-    naming file and line: it would silently replace a step)."""
+    naming file and line: it would silently replace a step); each step checked by
+    :func:`_path_step`."""
     _, rows = read_rows(path, ("t", "state", "obs"), "path CSV")
     out, last = {}, -1
     for r in rows:
@@ -135,7 +151,7 @@ def read_path(path: str | Path) -> dict[int, tuple[int, int, int, int]]:
             raise r.fail(f"state = {r['state']!r}, expected visible or hidden")
         cam = r.int("camera") if r.get("camera", "") != "" else -1
         ta = r.int("ta") if r.get("ta", "") != "" else 0
-        out[t], last = (_KIND[r["state"]], cam, ta, r.int("obs")), t
+        out[t], last = _path_step(r, _KIND[r["state"]], cam, ta, r.int("obs")), t
     if not out:
         raise fail(path, 0, "no steps")
     return out

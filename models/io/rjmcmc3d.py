@@ -139,7 +139,8 @@ def write_tracks3d(path, frames: list[int], ids: list, X: list, presence: list) 
 
 
 def read_tracks3d(path: str | Path) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """``frame -> (ids (n,), ground positions (n, 2))`` of a MOT 3-D file."""
+    """``frame -> (ids (n,), ground positions (n, 2))`` of a MOT 3-D file (frames and ids
+    >= 0; an id at most once per frame)."""
     path = Path(path)
     out: dict[int, tuple[list, list]] = {}
     for line_no, line in enumerate(read_lines(path, "tracks file"), start=1):
@@ -153,6 +154,8 @@ def read_tracks3d(path: str | Path) -> dict[int, tuple[np.ndarray, np.ndarray]]:
             as_int(fields[0], path, line_no, "frame"),
             as_int(fields[1], path, line_no, "id"),
         )
+        if fr < 0 or i < 0:
+            raise fail(path, line_no, f"frame = {fr}, id = {i}: both count from 0")
         xy = [as_float(fields[k], path, line_no, "xyz"[k - 7]) for k in (7, 8)]
         ids, pos = out.setdefault(fr, ([], []))
         if i in ids:

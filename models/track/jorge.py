@@ -29,6 +29,7 @@ import numpy as np
 from dbn.errors import ConfigError, InputError
 from models.io.jorge import (
     frame_rate_source,
+    is_mot,
     is_obsmat,
     read_boxes,
     read_stroke_rows,
@@ -154,9 +155,10 @@ def iou_distance(a: np.ndarray, b: np.ndarray, max_distance: float = 0.5) -> np.
 
 
 def _mot(result: str, truth: str) -> dict:
-    """MOTA, IDF1, ... of MOTChallenge tracks against the truth boxes (motmetrics, IoU);
-    an obsmat truth is seen through the view in the header of the ``strokes.csv`` beside
-    the tracks (the same run's), else the default one."""
+    """MOTA, IDF1, ... of MOTChallenge tracks against the truth boxes (motmetrics, IoU)
+    over the truth's frames (:func:`_scored_frames`): a box in one of them that matches
+    no person is a false positive. An obsmat truth is seen through the view in the header
+    of the ``strokes.csv`` beside the tracks (the same run's), else the default one."""
     import motmetrics as mm
 
     from models.io.jorge import read_mot
@@ -168,20 +170,33 @@ def _mot(result: str, truth: str) -> dict:
     pred, ref = read_mot(result), read_boxes(truth, view)
     acc = mm.MOTAccumulator(auto_id=True)
     pf = {int(f): i for i, f in enumerate(pred.frames)}
+    rf = {int(f): i for i, f in enumerate(ref.frames)}
+    absent = np.full((ref.ids.size, 4), np.nan)
 
     def tlwh(b):
         return np.column_stack([b[:, 0] - b[:, 2] / 2, b[:, 1] - b[:, 3] / 2, b[:, 2], b[:, 3]])
 
-    for r, f in enumerate(ref.frames):
-        rb = ref.boxes[r]
+    for f in _scored_frames(rf, pf, is_mot(truth)):
+        rb = ref.boxes[rf[f]] if f in rf else absent
         ok = ~np.isnan(rb[:, 0])
-        pb = pred.boxes[pf[int(f)]] if int(f) in pf else np.zeros((0, 4))
+        pb = pred.boxes[pf[f]] if f in pf else np.zeros((0, 4))
         pok = ~np.isnan(pb[:, 0])
         d = iou_distance(tlwh(rb[ok]), tlwh(pb[pok]))
-        acc.update(ref.ids[ok].tolist(), pred.ids[pok].tolist() if int(f) in pf else [], d)
+        acc.update(ref.ids[ok].tolist(), pred.ids[pok].tolist() if f in pf else [], d)
     mh = mm.metrics.create()
     s = mh.compute(acc, metrics=["mota", "idf1", "num_switches", "precision", "recall"], name="x")
     return {k: float(s[k].iloc[0]) for k in s.columns}
+
+
+def _scored_frames(truth_frames, result_frames, mot: bool) -> list[int]:
+    """The frames ``_mot`` scores: those the truth lists (XML lists every frame, obsmat
+    its annotated ones) and, for MOTChallenge truth, where an empty frame has no row,
+    also the result's frames inside the truth's span. Frames outside are not annotated."""
+    frames = set(truth_frames)
+    if mot and frames:
+        lo, hi = min(frames), max(frames)
+        frames |= {f for f in result_frames if lo <= f <= hi}
+    return sorted(frames)
 
 
 def _settings(result: str, head: dict):
@@ -219,7 +234,10 @@ def evaluate(result: str, truth: str) -> dict:
     if len(strokes) != len(rows):
         raise InputError(f"{result}: {len(rows)} strokes, but {truth} gives {len(strokes)} "
                          f"with seed {seed} and the file's stroke settings")  # fmt: skip
-    for r, s in zip(rows, strokes):
+    for k, (r, s) in enumerate(zip(rows, strokes)):
+        if r["stroke"] != s.index:  # rows are matched to strokes by position
+            raise InputError(f"{result}: row {k + 1} is stroke {r['stroke']}, but stroke "
+                             f"{s.index} belongs there (rows in stroke order, as written)")  # fmt: skip
         if (r["start"], r["end"]) != (s.start, s.end):
             raise InputError(f"{result}: stroke {r['stroke']} spans frames {r['start']}-{r['end']}, but "
                              f"{truth} gives {s.start}-{s.end} with seed {seed}: not the boxes "

@@ -141,7 +141,8 @@ def _plot(ctx: RunContext, scene, ids, X) -> None:
 def evaluate(result: str, truth: str, threshold: float = 0.5) -> dict:
     """MOTA, IDF1, ID switches, ... on ground-plane positions (match within 0.5 m), by
     :func:`models.rjmcmc3d.metrics.evaluate` (the benchmark's metric), over the truth's
-    frames (a frame missing from the result has no hypothesis)."""
+    span of frames (a frame missing from the result has no hypothesis; a result's frame
+    inside the span that the truth lacks has no person; frames outside are not scored)."""
     from models.rjmcmc3d.metrics import evaluate as mot_eval
     from models.rjmcmc3d.scene import FrameTruth
     from models.rjmcmc3d.tracker import FrameResult
@@ -149,7 +150,8 @@ def evaluate(result: str, truth: str, threshold: float = 0.5) -> dict:
     pred, ref = read_tracks3d(result), read_tracks3d(truth)
     if not ref:
         raise InputError(f"{truth}: no rows")
-    frames = range(min(ref), max(ref) + 1)
+    lo, hi = min(ref), max(ref)  # frames in neither file add nothing: not a range(lo, hi)
+    frames = sorted(set(ref) | {f for f in pred if lo <= f <= hi})
     empty = (np.zeros(0, np.int64), np.zeros((0, 2)))
     gts, hyps = [], []
     for f in frames:

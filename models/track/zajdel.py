@@ -214,14 +214,18 @@ def _plot(ctx: RunContext, table, labels: np.ndarray, matrix: np.ndarray) -> Non
 
 def evaluate(result: str, truth: str) -> dict:
     """Partition accuracy q (seed 000, eqs. 7-8), pairwise precision/recall/F1 and the
-    number of tracks, over the passes both files label (matched by pass id)."""
+    number of tracks, over the passes the truth labels (matched by pass id; a pass with
+    an empty ``person`` is not scored). Every one of them must have a label in the result:
+    a run labels every pass, so a result without some is another run's, or cut short."""
     from models.zajdel.metrics import num_objects, pairwise_prf, partition_accuracy
 
     pred = read_labels(result, "label")
     true = read_labels(truth, "person")
-    common = sorted(set(pred) & set(true))
-    if not common:
-        raise InputError(f"{result}: no pass id in common with {truth}")
+    missing = sorted(set(true) - set(pred))
+    if missing:
+        raise InputError(f"{result}: no label for {len(missing)} pass(es) that {truth} labels "
+                         f"(first: {missing[:5]}); a run labels every pass")  # fmt: skip
+    common = sorted(true)
     p = np.array([pred[i] for i in common])
     t = np.array([true[i] for i in common])
     prec, rec, f1 = pairwise_prf(p, t)

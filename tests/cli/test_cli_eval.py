@@ -1,0 +1,200 @@
+"""``dbntrack eval`` on hand-made result files: what each runner scores, and the damaged
+results it refuses with one line naming the file (and line) instead of scoring garbage
+(found by damaging every runner's example result and truth in about 40 ways)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from models.cli import main
+
+DATA = Path(__file__).resolve().parent.parent / "data"
+
+
+def _bad(capsys, argv: list[str], *needles: str) -> None:
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    for n in needles:
+        assert n in err, err
+
+
+def _metrics(capsys, argv: list[str]) -> dict:
+    assert main([*argv, "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def _write(path: Path, lines: list[str]) -> Path:
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+# -- dbn: marginals.csv ---------------------------------------------------------------------
+
+RAIN = [0.8, 0.3, 0.6]  # P(Rain_t = yes); the truth below is yes, yes, no
+
+
+def _marginals(tmp_path: Path, edit=None) -> Path:
+    rows = ["slice,variable,state,probability"]
+    for t, p in enumerate(RAIN):
+        rows += [f"{t},Rain,yes,{p}", f"{t},Rain,no,{1 - p:.15g}"]
+    return _write(tmp_path / "marginals.csv", edit(rows) if edit else rows)
+
+
+def test_dbn_eval_scores_a_hand_made_file(tmp_path, capsys):
+    truth = _write(tmp_path / "truth.csv", ["Rain", "yes", "yes", "no"])
+    m = _metrics(capsys, ["eval", "dbn", str(_marginals(tmp_path)), str(truth)])
+    assert m["num_compared"] == 3
+    assert m["label_error_rate"] == pytest.approx(2 / 3)  # argmax: yes, no, yes
+    loss = -(math.log(0.8) + math.log(0.3) + math.log(0.4)) / 3
+    assert m["mean_log_loss"] == pytest.approx(loss)
+
+
+@pytest.mark.parametrize(
+    ("row", "needles"),
+    [
+        ("99999999999,Rain,yes,0.5", ["marginals.csv", "Rain = yes has no row for slice 3"]),
+        ("-1,Rain,yes,0.5", ["marginals.csv:8:", "slice = -1"]),
+        ("2,Rain,yes,1.5", ["marginals.csv:8:", "probability = 1.5 is not in [0, 1]"]),
+        ("1,Rain,no,0.7", ["marginals.csv:8:", "slice 1, Rain = no is given twice"]),
+    ],
+)
+def test_dbn_eval_refuses_a_damaged_marginal(tmp_path, capsys, row, needles):
+    """A huge slice number used to allocate that many rows (numpy MemoryError); a negative
+    one wrote into the last slice; a probability of 1.5 or a repeated row was scored."""
+    truth = _write(tmp_path / "truth.csv", ["Rain", "yes", "yes", "no"])
+    bad = _marginals(tmp_path, lambda rows: [*rows, row])
+    _bad(capsys, ["eval", "dbn", str(bad), str(truth)], *needles)
+
+
+def test_dbn_eval_refuses_a_gap_and_a_bad_sum(tmp_path, capsys):
+    truth = _write(tmp_path / "truth.csv", ["Rain", "yes", "yes", "no"])
+    gap = _marginals(tmp_path, lambda rows: rows[:3] + rows[4:])  # slice 1's "yes" row dropped
+    _bad(capsys, ["eval", "dbn", str(gap), str(truth)], "Rain = yes has no row for slice 1")
+    off = _marginals(tmp_path, lambda rows: [r.replace("1,Rain,no,0.7", "1,Rain,no,0.07")
+                                             for r in rows])  # fmt: skip
+    _bad(capsys, ["eval", "dbn", str(off), str(truth)], "marginals.csv:4:",
+         "Rain at slice 1 sum to 0.37")  # fmt: skip
+
+
+# -- zajdel: labels.csv ----------------------------------------------------------------------
+
+
+def test_zajdel_eval_needs_every_pass_the_truth_labels(tmp_path, capsys):
+    """A result without some of the truth's passes used to be scored on the rest (a run
+    cut in half scored q = 1). A pass the truth leaves unlabelled is not needed."""
+    truth = _write(tmp_path / "truth.csv", ["pass,person", "0,0", "1,0", "2,1", "3,1"])
+    full = _write(tmp_path / "full.csv", ["pass,label", "0,5", "1,5", "2,6", "3,5"])
+    m = _metrics(capsys, ["eval", "zajdel_adf", str(full), str(truth)])
+    assert (m["num_compared"], m["num_tracks"], m["num_people"]) == (4, 2, 2)
+    assert m["pairwise_precision"] == pytest.approx(1 / 3)  # pairs 01 right; 03, 13 wrong
+    assert m["pairwise_recall"] == pytest.approx(1 / 2)  # pairs 01 found, 23 missed
+    half = _write(tmp_path / "half.csv", ["pass,label", "0,5", "1,5"])
+    _bad(capsys, ["eval", "zajdel_adf", str(half), str(truth)], "half.csv",
+         "no label for 2 pass(es)", "[2, 3]")  # fmt: skip
+    partial = _write(tmp_path / "partial.csv", ["pass,person", "0,0", "1,0", "2,", "3,"])
+    assert _metrics(capsys, ["eval", "zajdel_adf", str(half), str(partial)])["q"] == 1.0
+
+
+# -- jorge: tracks.txt (MOTChallenge) and strokes.csv -----------------------------------------
+
+
+def _mot_rows(frames, ids=(1, 2)) -> list[str]:
+    return [f"{f},{i},{10 + 40 * i},{20 + f},20,40,1,-1,-1,-1" for f in frames for i in ids]
+
+
+def test_jorge_mot_eval_counts_a_box_in_an_empty_frame(tmp_path, capsys):
+    """MOTChallenge truth has no row for a frame where nobody is; a box the result puts
+    there matched nothing and was ignored (precision 1). Frames past the truth's span are
+    not annotated, and stay unscored."""
+    truth = _write(tmp_path / "gt.txt", _mot_rows([1, 2, 4, 5]))  # frame 3: nobody
+    result = _write(tmp_path / "tracks.txt", _mot_rows([1, 2, 4, 5]) + _mot_rows([3, 9], ids=(1,)))
+    m = _metrics(capsys, ["eval", "jorge", str(result), str(truth)])
+    assert m["recall"] == 1.0
+    assert m["precision"] == pytest.approx(8 / 9)  # frame 3's box; frame 9 is not scored
+    assert m["mota"] == pytest.approx(1 - 1 / 8)
+
+
+def test_jorge_mot_eval_refuses_a_negative_frame(tmp_path, capsys):
+    truth = _write(tmp_path / "gt.txt", _mot_rows([1, 2]))
+    result = _write(tmp_path / "tracks.txt", _mot_rows([1, -2]))
+    _bad(capsys, ["eval", "jorge", str(result), str(truth)], "tracks.txt:3:", "frame = -2")
+
+
+def test_jorge_strokes_eval_refuses_rows_out_of_stroke_order(tmp_path, capsys):
+    """Rows are matched to the rebuilt strokes by position: a stroke id that is not the
+    one at its position, or a negative object, was accepted."""
+    out = tmp_path / "run"
+    assert main(["track", "jorge", str(DATA / "jorge" / "caviar.xml"), "-o", str(out),
+                 "--seed", "3", "--quiet"]) == 0  # fmt: skip
+    capsys.readouterr()
+    lines = (out / "strokes.csv").read_text().splitlines()
+    head = [i for i, line in enumerate(lines) if line.startswith("stroke,")][0]
+    first, second = lines[head + 1].split(","), lines[head + 2].split(",")
+    renamed = lines.copy()
+    renamed[head + 2] = ",".join(["0", *second[1:]])
+    bad = _write(tmp_path / "renamed.csv", renamed)
+    xml = str(DATA / "jorge" / "caviar.xml")
+    _bad(capsys, ["eval", "jorge", str(bad), xml], "row 2 is stroke 0", "stroke 1 belongs there")
+    negative = lines.copy()
+    negative[head + 1] = ",".join([*first[:3], "-1", *first[4:]])
+    bad = _write(tmp_path / "negative.csv", negative)
+    _bad(capsys, ["eval", "jorge", str(bad), xml], f"negative.csv:{head + 2}:", "count from 0")
+
+
+# -- rjmcmc3d: tracks3d.txt ------------------------------------------------------------------
+
+
+def _rows3d(frames, ids=(0, 1)) -> list[str]:
+    return [f"{f},{i},-1,-1,-1,-1,1,{2.0 * i},{0.1 * f},0" for f in frames for i in ids]
+
+
+def test_rjmcmc3d_eval_scores_the_truth_span_only(tmp_path, capsys):
+    truth = _write(tmp_path / "truth3d.txt", _rows3d([1, 2, 4]))  # frame 3: nobody
+    result = _write(tmp_path / "tracks3d.txt", _rows3d([1, 2, 3, 4, 8]))
+    m = _metrics(capsys, ["eval", "rjmcmc3d", str(result), str(truth)])
+    assert (m["num_objects"], m["misses"], m["false_positives"]) == (6, 0, 2)  # frame 3's
+
+
+def test_rjmcmc3d_eval_of_a_far_frame_does_not_walk_every_frame(tmp_path, capsys):
+    """The truth's span used to be walked frame by frame: a last frame of 10^11 hung."""
+    truth = _write(tmp_path / "truth3d.txt", _rows3d([1, 2, 99_999_999_999]))
+    result = _write(tmp_path / "tracks3d.txt", _rows3d([1, 2]))
+    m = _metrics(capsys, ["eval", "rjmcmc3d", str(result), str(truth)])
+    assert (m["num_objects"], m["misses"]) == (6, 2)
+    _bad(capsys, ["eval", "rjmcmc3d", str(_write(tmp_path / "neg.txt", _rows3d([-1]))),
+                  str(truth)], "neg.txt:1:", "frame = -1")  # fmt: skip
+
+
+# -- pathrecovery: path.csv ------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("row", "needle"),
+    [
+        ("2,visible,3,0,-1", "a visible step names its observation"),
+        ("2,hidden,3,2,7", "a hidden step has no observation"),
+        ("2,hidden,3,-1,-1", "ta = -1"),
+        ("2,visible,-2,0,7", "camera = -2"),
+    ],
+)
+def test_pathrecovery_eval_refuses_an_inconsistent_step(tmp_path, capsys, row, needle):
+    truth = _write(tmp_path / "truth.csv", ["t,state,camera,ta,obs", "0,visible,1,0,0",
+                                            "1,visible,1,0,4", "2,visible,3,0,7"])  # fmt: skip
+    bad = _write(tmp_path / "path.csv", ["t,state,camera,ta,obs", "0,visible,1,0,0",
+                                         "1,visible,1,0,4", row])  # fmt: skip
+    assert _metrics(capsys, ["eval", "pathrecovery", str(truth), str(truth)])["path_score"] == 1.0
+    _bad(capsys, ["eval", "pathrecovery", str(bad), str(truth)], "path.csv:4:", needle)
+
+
+def test_pathrecovery_track_refuses_a_negative_observation_id(tmp_path, capsys):
+    d = DATA / "pathrecovery"
+    lines = (d / "observations.csv").read_text().splitlines()
+    lines[3] = ",".join(["-1", *lines[3].split(",")[1:]])
+    obs = _write(tmp_path / "observations.csv", lines)
+    _bad(capsys, ["track", "pathrecovery", str(d / "edges.csv"), str(obs), "-o",
+                  str(tmp_path / "out")], "observations.csv:4:", "obs = -1")  # fmt: skip
