@@ -50,9 +50,12 @@ def chain_task(point: GridPoint) -> dict:
     if p.get("fail"):
         raise RuntimeError(f"point {point.seed} fails on purpose")
     rng = np.random.default_rng(point.rng_seed)
-    _, ys = sample_coupled_chains(rng, int(p.get("n", 9)), int(p.get("T", 200)))
+    _, ys = sample_coupled_chains(rng, p.get("n", 9), p.get("T", 200))  # they check both
     marg, logz = numpy_factored_filter(ys)
     return {"log_likelihood": float(logz.sum()), "mean_on": float(marg[:, :, 1].mean())}
+
+
+chain_task.params = ("n", "T", "fail", "die_once")  # what models.experiments.check_params allows
 
 
 def _results(records: list[dict]) -> list:

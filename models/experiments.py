@@ -42,6 +42,7 @@ __all__ = [
     "read_results",
     "local_cluster",
     "load_sweep",
+    "check_params",
     "example_task",
 ]
 
@@ -220,7 +221,8 @@ def run_grid(
     task : callable ``GridPoint -> dict``
         A picklable (module-level) function; its dict must be JSON-able.
     grid : sequence of GridPoint
-        Duplicate points are rejected.
+        Duplicate points are rejected, and so are parameters the task says it does not
+        read (:func:`check_params`).
     client : dask.distributed.Client or str, optional
         A client, or a scheduler address (``"tcp://host:8786"``); default a new
         :func:`local_cluster` closed at the end.
@@ -248,6 +250,7 @@ def run_grid(
         raise InputError("grid has duplicate points (same tracker, data, seed and params)")
     if resume and out is None:
         raise InputError("resume=True needs the results file (out=...)")
+    check_params(task, grid)
     # the points already done (resume) are returned as recorded; the rest are run
     records = {}
     if resume:
@@ -267,6 +270,28 @@ def run_grid(
         if sink is not None:
             sink.close()
     return [records[i] for i in ids]
+
+
+def check_params(task: Task, grid: Sequence[GridPoint]) -> None:
+    """Refuse grid parameters that ``task`` does not read, where it says which it reads.
+
+    A task declares them as a ``params`` attribute (a collection of names; empty: none);
+    a task without one is taken at its word for any. Without this a misspelt name (``N``
+    for ``n``) ran every point with the default, silently.
+
+    Raises
+    ------
+    InputError
+        Naming the unknown parameters and the ones the task reads.
+    """
+    accepted = getattr(task, "params", None)
+    if accepted is None:
+        return
+    unknown = sorted({name for p in grid for name, _ in p.params} - set(accepted))
+    if unknown:
+        reads = ", ".join(sorted(accepted)) or "none"
+        name = getattr(task, "__qualname__", repr(task))
+        raise InputError(f"parameter(s) {unknown} are not read by {name} (it reads: {reads})")
 
 
 def _records(task: Task, todo: list[GridPoint], client: Any, serial: bool, n_workers):
@@ -301,9 +326,10 @@ def example_task(point: GridPoint) -> dict[str, Any]:
     """A sweep task over the tracker registry: run ``point.tracker`` on its tiny SIMULATED
     example (``models.get(name).example``) through the protocol's ``run``.
 
-    The jax key is ``jax.random.key(point.rng_seed % 2**32)``; ``point.params`` are passed
-    to nothing (the example fixes its own settings). Returns the number of steps and the
-    sum of the tracker's one-step scores (its ``score_field``; ``None`` where it has none).
+    The jax key is ``jax.random.key(point.rng_seed % 2**32)``. It reads no ``point.params``
+    (the example fixes its own settings: ``example_task.params`` is empty, so a grid that
+    gives some is refused). Returns the number of steps and the sum of the tracker's
+    one-step scores (its ``score_field``; ``None`` where it has none).
     """
     import jax
     import numpy as np
@@ -319,6 +345,9 @@ def example_task(point: GridPoint) -> dict[str, Any]:
     if field_name is not None:
         score = float(sum(np.sum(np.asarray(getattr(info, field_name))) for info in infos))
     return {"steps": len(infos), "score_field": field_name, "total_score": score}
+
+
+example_task.params = ()  # type: ignore[attr-defined]
 
 
 def _seeds(seeds: Any) -> list[int]:
@@ -345,7 +374,7 @@ def load_sweep(path: str | os.PathLike) -> tuple[Task, list[GridPoint]]:
         data = ["simulated"]                        # optional, default ["simulated"]
         seeds = [0, 1, 2, 3]                        # or {start = 0, stop = 8}
         [params]                                    # optional: each a list of values
-        n = [9, 10]
+        n = [9, 10]                                 # (names the task reads: check_params)
 
     Raises
     ------
@@ -381,6 +410,7 @@ def load_sweep(path: str | os.PathLike) -> tuple[Task, list[GridPoint]]:
     try:
         seeds = _seeds(cfg.get("seeds", [0]))
         grid = make_grid(cfg["trackers"], cfg.get("data", ["simulated"]), seeds, cfg.get("params"))
+        check_params(task, grid)
     except (InputError, TypeError, ValueError, KeyError, AttributeError) as exc:
         raise FileFormatError(p, str(exc)) from None
     return task, grid

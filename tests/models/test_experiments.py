@@ -40,6 +40,27 @@ def test_duplicate_points_and_resume_without_file_are_rejected(tmp_path) -> None
         run_grid(chain_task, [p], serial=True, resume=True)
 
 
+def test_parameters_a_task_does_not_read_are_refused_before_anything_runs(tmp_path) -> None:
+    """A misspelt name (``N`` for chain_task's ``n``) ran every point with the default,
+    and example_task ignored any parameter; a task that declares none is not checked."""
+    from models.experiments import check_params, example_task, load_sweep
+
+    typo = make_grid(["chains"], params={"N": [4], "T": [5]})
+    out = tmp_path / "r.jsonl"
+    with pytest.raises(InputError, match=r"\['N'\] are not read by chain_task \(it reads: T, "):
+        run_grid(chain_task, typo, serial=True, out=out)
+    assert not out.exists()  # refused before the results file is opened
+    with pytest.raises(InputError, match="example_task .it reads: none"):
+        check_params(example_task, make_grid(["jorge"], params={"num_particles": [10]}))
+    check_params(lambda p: {}, typo)  # undeclared: taken at its word
+    check_params(chain_task, make_grid(["chains"], params={"n": [4], "T": [5]}))
+    toml = tmp_path / "sweep.toml"
+    toml.write_text('task = "benchmarks.scale_out:chain_task"\ntrackers = ["chains"]\n'
+                    '[params]\nn = [4]\ntee = [5]\n')  # fmt: skip
+    with pytest.raises(InputError, match=r"sweep.toml.*\['tee'\]"):
+        load_sweep(toml)
+
+
 def test_serial_failing_task_is_recorded_and_others_finish(tmp_path) -> None:
     grid = [GridPoint("chains", seed=0, params=(("n", 3), ("T", 20)))]
     grid.append(GridPoint("chains", seed=1, params=(("fail", True), ("n", 3))))
