@@ -34,18 +34,18 @@ from dbn.errors import (
     UnknownEvidenceError,
 )
 from dbn.variables import DiscreteVariable
-from inference.evidence_columns import first_bad_row
-from inference.exact.frontier import MAX_FRONTIER_SIZE
+from inference.evidence_columns import as_column, first_bad_row
+from inference.exact.frontier import MAX_FRONTIER_SIZE, check_max_size
 from inference.results import DBNFilterResult
 
 __all__ = ["filter", "online_filter", "as_two_slice_dbn", "METHODS"]
 
 METHODS = ("auto", "exact", "bk", "particle", "rbpf")
-_OPTIONS = {
+_OPTIONS = {  # and max_size under "auto" whatever it chose (it bounds the choice)
     "exact": {"max_size"},
-    "bk": {"clusters", "max_size"},
-    "particle": {"num_particles", "particle_method", "max_size"},
-    "rbpf": {"num_particles", "max_size"},
+    "bk": {"clusters"},
+    "particle": {"num_particles", "particle_method"},
+    "rbpf": {"num_particles"},
 }
 _UNBOUNDED = 2**62
 
@@ -84,7 +84,7 @@ def _check_evidence(
                 f"evidence on unknown variable {name!r} (known: {sorted(variables)})"
             )
         v = variables[name]
-        arr = np.asarray(col)
+        arr = as_column(name, col, "soft evidence" if name in (soft or {}) else "evidence column")
         if isinstance(v, DiscreteVariable):
             lengths[name] = arr.shape[0] if arr.ndim else -1
             continue
@@ -158,10 +158,11 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     num_timesteps : int, optional
         ``T`` when no evidence column gives it (exact only).
     **options
-        ``max_size`` (largest exact table, entries; default
+        ``max_size`` (exact and auto: largest exact table, entries; default
         :data:`~inference.exact.frontier.MAX_FRONTIER_SIZE`), ``clusters`` (bk),
         ``num_particles`` (particle, rbpf), ``particle_method`` (particle: passed as the
-        adapter's ``method``, e.g. ``"bootstrap"``).
+        adapter's ``method``, e.g. ``"bootstrap"``). An option the engine that runs does
+        not read is refused, not ignored.
 
     Returns
     -------
@@ -178,12 +179,13 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     if method not in METHODS:
         raise InputError(f"method must be one of {METHODS}, got {method!r}")
     _check_evidence(dbn, evidence, soft_evidence)
-    max_size = int(options.get("max_size", MAX_FRONTIER_SIZE))
+    max_size = check_max_size(options.get("max_size", MAX_FRONTIER_SIZE))
     info: dict[str, Any] = {}
+    allowed = {"max_size"} if method == "auto" else set()
     if method == "auto":
         evars = [*(evidence or {}), *(soft_evidence or {})]
         method, info = _choose(dbn, evars, query, max_size)
-    unknown = set(options) - _OPTIONS[method]
+    unknown = set(options) - _OPTIONS[method] - allowed
     if unknown:
         raise InputError(f"options {sorted(unknown)} do not apply to method {method!r}")
     if method in ("particle", "rbpf"):
@@ -224,14 +226,14 @@ def _dispatch(method, dbn, evidence, query, key, soft, num_timesteps, options, m
     if method == "particle":
         from inference.particle.dbn_adapter import particle_filter_dbn
 
-        kw = {"num_particles": int(options.get("num_particles", 1000))}
+        kw = {"num_particles": options.get("num_particles", 1000)}  # the engine checks it
         if "particle_method" in options:
             kw["method"] = options["particle_method"]
         return particle_filter_dbn(key, dbn, evidence, query, **kw)
     from inference.particle.rbpf import rbpf_filter_dbn
 
     return rbpf_filter_dbn(
-        key, dbn, evidence, query, num_particles=int(options.get("num_particles", 1000))
+        key, dbn, evidence, query, num_particles=options.get("num_particles", 1000)
     )
 
 

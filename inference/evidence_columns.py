@@ -30,7 +30,7 @@ from dbn.errors import (
 )
 from dbn.variables import ContinuousVariable, DiscreteVariable
 
-__all__ = ["Columns", "check_columns", "check_query", "first_bad_row"]
+__all__ = ["Columns", "as_column", "check_columns", "check_query", "first_bad_row"]
 
 
 class Columns(NamedTuple):
@@ -48,6 +48,15 @@ class Columns(NamedTuple):
     discrete: dict[str, np.ndarray]
     continuous: dict[str, np.ndarray]
     soft: dict[str, np.ndarray]
+
+
+def as_column(name: str, col: ArrayLike, what: str = "evidence column", dtype=None) -> np.ndarray:
+    """``col`` as an array (of ``dtype``): a ragged or non-numeric one is an
+    :class:`EvidenceError` naming ``what`` and ``name``, not numpy's error."""
+    try:
+        return np.asarray(col, dtype=dtype)
+    except (TypeError, ValueError) as exc:
+        raise EvidenceError(f"{what} {name!r} is not an array of numbers ({exc})") from None
 
 
 def _length(name: str, n: int, T: int | None) -> int:
@@ -69,7 +78,7 @@ def _discrete_column(
 ) -> tuple[np.ndarray, int]:
     """A hard evidence column of a discrete variable: (T,) int64 states, -1 unobserved;
     and its length (which must equal ``T`` unless ``T`` is None)."""
-    arr = np.asarray(col)
+    arr = as_column(name, col)
     if arr.ndim != 1:
         raise ShapeError(f"evidence column {name!r} must be 1-D, got shape {arr.shape}")
     if not np.issubdtype(arr.dtype, np.integer):
@@ -90,7 +99,7 @@ def _continuous_column(
 ) -> tuple[np.ndarray, int]:
     """An evidence column of a continuous variable: (T, dim) float64, NaN rows unobserved;
     and its length."""
-    arr = np.asarray(col, dtype=np.float64)
+    arr = as_column(name, col, dtype=np.float64)
     if arr.ndim == 1 and v.dim == 1:
         arr = arr[:, None]
     if arr.ndim != 2 or arr.shape[1] != v.dim:
@@ -114,7 +123,7 @@ def _soft_column(
     all-NaN rows (no soft evidence) read as ones; and its length."""
     if not isinstance(v, DiscreteVariable):
         raise EvidenceError(f"soft evidence on continuous variable {name!r}")
-    arr = np.asarray(col, dtype=np.float64)
+    arr = as_column(name, col, "soft evidence", np.float64)
     if arr.ndim != 2 or arr.shape[1] != v.cardinality:
         raise ShapeError(
             f"soft evidence {name!r} must have shape (num_timesteps, {v.cardinality}), "

@@ -9,6 +9,7 @@ product when both are given. The structured filter multiplies it into ``v``'s CP
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -16,6 +17,7 @@ from numpy.typing import ArrayLike
 from dbn.bayesnet import check_likelihood
 from dbn.errors import EvidenceError, ShapeError, UnknownEvidenceError
 from dbn.variables import DiscreteVariable
+from inference.evidence_columns import as_column
 
 __all__ = ["sequence_likelihoods", "slice_likelihoods", "distinct_rows"]
 
@@ -26,6 +28,17 @@ def _variable(variables: Mapping[str, DiscreteVariable], name: str, what: str):
             f"{what} on unknown variable {name!r} (known: {sorted(variables)})"
         )
     return variables[name]
+
+
+def _check_num_timesteps(T: Any) -> None:
+    ok = isinstance(T, (int, np.integer)) and not isinstance(T, bool)
+    if T is not None and (not ok or T < 1):
+        raise ShapeError(f"num_timesteps must be an int >= 1, got {T!r}")
+
+
+def _check_mapping(what: str, value: Any) -> None:
+    if value is not None and not isinstance(value, Mapping):
+        raise EvidenceError(f"{what} must be a mapping name -> value, got {type(value).__name__}")
 
 
 def _length(name: str, n: int, T: int | None) -> int:
@@ -64,11 +77,14 @@ def sequence_likelihoods(
         Unknown variable, non-integer states, a state out of range, lengths that differ,
         a soft row of the wrong shape or not a likelihood.
     """
+    _check_num_timesteps(num_timesteps)
+    _check_mapping("evidence", evidence)
+    _check_mapping("soft evidence", soft_evidence)
     T = num_timesteps
     lam: dict[str, np.ndarray] = {}
     for name, col in (evidence or {}).items():
         k = _variable(variables, name, "evidence").cardinality
-        arr = np.asarray(col)
+        arr = as_column(name, col)
         if arr.ndim != 1:
             raise ShapeError(f"evidence column {name!r} must be 1-D (T,), got shape {arr.shape}")
         if not np.issubdtype(arr.dtype, np.integer):
@@ -89,7 +105,7 @@ def sequence_likelihoods(
         lam[name] = rows
     for name, col in (soft_evidence or {}).items():
         k = _variable(variables, name, "soft evidence").cardinality
-        arr = np.asarray(col, dtype=np.float64)
+        arr = as_column(name, col, "soft evidence", np.float64)
         if arr.ndim != 2 or arr.shape[1] != k:
             raise ShapeError(
                 f"soft evidence {name!r} must have shape (T, {k}), got shape {arr.shape}"
@@ -117,6 +133,8 @@ def slice_likelihoods(
 ) -> dict[str, np.ndarray]:
     """One slice's evidence (name -> state, name -> likelihood vector) as likelihoods,
     each of shape (1, cardinality)."""
+    _check_mapping("evidence", evidence)
+    _check_mapping("soft evidence", soft_evidence)
     lam: dict[str, np.ndarray] = {}
     for name, state in (evidence or {}).items():
         v = _variable(variables, name, "evidence")

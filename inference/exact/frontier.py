@@ -29,15 +29,24 @@ from __future__ import annotations
 import string
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from dbn.errors import FrontierTooLargeError
+from dbn.errors import FrontierTooLargeError, InputError
 
-__all__ = ["MAX_FRONTIER_SIZE", "Op", "SlicePlan", "compile_slice_plan", "barren"]
+__all__ = ["MAX_FRONTIER_SIZE", "check_max_size", "Op", "SlicePlan", "compile_slice_plan", "barren"]
 
 MAX_FRONTIER_SIZE = 2**25
 """Default limit (entries, float64) of the largest table one slice may allocate (256 MiB)."""
+
+
+def check_max_size(max_size: Any) -> int:
+    """``max_size`` as an int >= 1 (not a bool or a fraction); else :class:`InputError`."""
+    ok = isinstance(max_size, (int, np.integer)) and not isinstance(max_size, bool)
+    if not ok or max_size < 1:
+        raise InputError(f"max_size must be an int >= 1 (table entries), got {max_size!r}")
+    return int(max_size)
 
 _APPROX = (
     "use an approximate method: inference.filter(model, evidence, method='bk' "

@@ -38,10 +38,22 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from dbn.dbn import TwoSliceDBN, prev
-from dbn.errors import EvidenceError, FrontierTooLargeError, ModelError, UnknownVariableError
+from dbn.errors import (
+    EvidenceError,
+    FrontierTooLargeError,
+    MemoryLimitError,
+    ModelError,
+    UnknownVariableError,
+)
 from dbn.variables import DiscreteVariable
 from inference.exact.dbn_evidence import distinct_rows, sequence_likelihoods, slice_likelihoods
-from inference.exact.frontier import MAX_FRONTIER_SIZE, SlicePlan, barren, compile_slice_plan
+from inference.exact.frontier import (
+    MAX_FRONTIER_SIZE,
+    SlicePlan,
+    barren,
+    check_max_size,
+    compile_slice_plan,
+)
 
 __all__ = ["StructuredFilter", "FrontierState", "StructuredResult", "SmoothedResult"]
 
@@ -162,15 +174,15 @@ class StructuredFilter:
         self.dbn = dbn
         self.variables = {v.name: v for v in dbn.variables}
         self.interface = tuple(dbn.interface)
-        query = self.interface if query is None else tuple(query)
-        if isinstance(query, str):
+        if isinstance(query, str):  # one name (tuple() would split it into letters)
             query = (query,)
+        query = self.interface if query is None else tuple(query)
         for q in query:
             if q not in self.variables:
                 raise UnknownVariableError(f"query names unknown variable {q!r}")
         self.query = tuple(dict.fromkeys(query))
         self.extras = tuple(q for q in self.query if q not in self.interface)
-        self.max_size = int(max_size)
+        self.max_size = check_max_size(max_size)
         self.cards = {n: v.cardinality for n, v in self.variables.items()}
         self.cards.update({prev(n): self.cards[n] for n in self.interface})
         self.iface_shape = tuple(self.cards[n] for n in self.interface)
@@ -383,8 +395,12 @@ class StructuredFilter:
         if self._dense:
             per_row = max(per_row, self._static_entries(self._plan("dense", evars)))
         block = max(1, min(T, _BLOCK_ENTRIES // (size + per_row), 4096))
-        marg = {q: np.empty((T, self.cards[q])) for q in self.query}
-        norms = np.empty(T)
+        try:
+            marg = {q: np.empty((T, self.cards[q])) for q in self.query}
+            norms = np.empty(T)
+        except MemoryError:  # a huge num_timesteps without evidence columns
+            raise MemoryLimitError(f"the marginals of {T:,} slices do not fit in memory; "
+                                   "filter shorter sequences, or on-line") from None  # fmt: skip
         msg = None
         start = 0
         while start < T:

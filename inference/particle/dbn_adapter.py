@@ -56,7 +56,14 @@ from dbn.errors import CPDShapeError, InputError, ModelError
 from dbn.variables import DiscreteVariable
 from inference.evidence_columns import check_columns, check_query
 from inference.model_cache import ModelCache
-from inference.particle.filters import auxiliary_filter, bootstrap_filter, ess, run
+from inference.particle.filters import (
+    auxiliary_filter,
+    bootstrap_filter,
+    check_key,
+    check_num_particles,
+    ess,
+    run,
+)
 from inference.particle.model import StateSpaceModel
 from inference.precision import scoped
 from inference.results import DBNFilterResult
@@ -428,8 +435,8 @@ def particle_filter_dbn(
     """
     if method not in ("bootstrap", "auxiliary"):
         raise InputError(f"method must be 'bootstrap' or 'auxiliary', got {method!r}")
-    if isinstance(num_particles, bool) or not isinstance(num_particles, int) or num_particles < 1:
-        raise InputError(f"num_particles must be an integer >= 1, got {num_particles!r}")
+    num_particles = check_num_particles(num_particles)
+    check_key(key)
     model = _CACHE.get(dbn, dict).get("model") or DBNStateSpaceModel(dbn)
     inp = model.inputs(evidence, soft_evidence)
     hidden = tuple(n for n in dbn.names if n not in inp["discrete"] and n not in inp["continuous"])

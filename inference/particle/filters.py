@@ -180,12 +180,31 @@ def check_threshold(ess_threshold: Any) -> None:
         raise InputError(f"ess_threshold must be a number >= 0, got {ess_threshold!r}")
 
 
+MAX_PARTICLES = 2**31 - 1
+"""The most particles a filter takes: jax indexes them with int32."""
+
+
 def check_num_particles(num_particles: Any) -> int:
-    """``num_particles`` as an int >= 1 (an int, not a bool or a fractional float)."""
+    """``num_particles`` as an int in [1, :data:`MAX_PARTICLES`] (an int, not a bool or a
+    fractional float); else :class:`InputError`."""
     ok = isinstance(num_particles, (int, np.integer)) and not isinstance(num_particles, bool)
-    if not ok or num_particles < 1:
-        raise InputError(f"num_particles must be an int >= 1, got {num_particles!r}")
+    if not ok or not 1 <= num_particles <= MAX_PARTICLES:
+        raise InputError(f"num_particles must be an int in [1, 2**31 - 1], got {num_particles!r}")
     return int(num_particles)
+
+
+def check_key(key: Any) -> None:
+    """Raise :class:`InputError` unless ``key`` is one jax PRNG key: a typed key
+    (``jax.random.key(seed)``, shape ``()``) or a legacy one (``jax.random.PRNGKey(seed)``,
+    uint32, shape ``(2,)``). Else jax fails deep inside the filter, naming no argument."""
+    dtype, shape = getattr(key, "dtype", None), getattr(key, "shape", None)
+    if dtype is not None and shape is not None:
+        if jax.dtypes.issubdtype(dtype, jax.dtypes.prng_key) and tuple(shape) == ():
+            return
+        if np.dtype(dtype) == np.uint32 and tuple(shape) == (2,):
+            return
+    got = type(key).__name__ + ("" if dtype is None else f" of dtype {dtype}, shape {shape}")
+    raise InputError(f"key must be one jax PRNG key (jax.random.key(seed)), got {got}")
 
 
 def bootstrap_filter(

@@ -50,6 +50,7 @@ from dbn.variables import DiscreteVariable
 from inference.evidence_columns import check_columns, check_query
 from inference.model_cache import ModelCache
 from inference.particle.dbn_adapter import _Node
+from inference.particle.filters import check_key, check_num_particles
 from inference.particle.resampling import systematic
 from inference.precision import scoped
 from inference.results import DBNFilterResult
@@ -357,8 +358,8 @@ def rbpf_filter_dbn(
         A continuous CPD that is not (conditional) linear-Gaussian, or an observed
         continuous variable whose continuous parents are not hidden in its slice.
     """
-    if isinstance(num_particles, bool) or not isinstance(num_particles, int) or num_particles < 1:
-        raise InputError(f"num_particles must be an integer >= 1, got {num_particles!r}")
+    num_particles = check_num_particles(num_particles)
+    check_key(key)
     cols = check_columns(dbn, evidence)
     model = _model(dbn, tuple(cols.continuous))
     hidden = tuple(n for n in dbn.names if n not in cols.discrete and n not in cols.continuous)

@@ -3,6 +3,7 @@ bad input out. The approximate engines are stubbed here (they have their own tes
 
 from __future__ import annotations
 
+import re
 import sys
 import types
 
@@ -18,6 +19,7 @@ from dbn.errors import (
     EvidenceError,
     FrontierTooLargeError,
     InputError,
+    MemoryLimitError,
     ModelError,
     NonFiniteError,
     ShapeError,
@@ -200,3 +202,47 @@ def test_evidence_on_an_unknown_variable_is_one_error_everywhere() -> None:
         with pytest.raises(UnknownEvidenceError, match="'zz'") as exc:
             call()
         assert isinstance(exc.value, EvidenceError) and isinstance(exc.value, UnknownVariableError)
+
+
+_BAD_ARGUMENTS = [  # (method, arguments beyond the model and good evidence, error, needle)
+    ("exact", {"evidence": {"y0": [[0], [1, 0]]}}, EvidenceError, "'y0' is not an array"),
+    ("bk", {"evidence": {"y0": [[0], [1, 0]]}}, EvidenceError, "'y0' is not an array"),
+    ("exact", {"soft_evidence": {"x0": [["a", "b"]] * 5}}, EvidenceError, "'x0' is not an array"),
+    ("exact", {"evidence": None, "num_timesteps": "5"}, ShapeError, "num_timesteps"),
+    ("exact", {"evidence": None, "num_timesteps": 2.5}, ShapeError, "num_timesteps"),
+    ("exact", {"evidence": None, "num_timesteps": True}, ShapeError, "num_timesteps"),
+    ("exact", {"evidence": None, "num_timesteps": 10**15}, MemoryLimitError, "10**15"),
+    ("exact", {"max_size": "big"}, InputError, "max_size"),
+    ("auto", {"max_size": 2.5}, InputError, "max_size"),
+    ("bk", {"max_size": 100}, InputError, "do not apply to method 'bk'"),
+    ("particle", {"key": 0, "num_particles": 10}, InputError, "key must be one jax PRNG key"),
+    ("rbpf", {"key": np.zeros(3), "num_particles": 10}, InputError, "jax PRNG key"),
+    ("particle", {"key": jax.random.key(0), "num_particles": 2.5}, InputError, "num_particles"),
+    ("rbpf", {"key": jax.random.key(0), "num_particles": 10**13}, InputError, "2**31 - 1"),
+]
+
+
+@pytest.mark.parametrize(("method", "kwargs", "error", "needle"), _BAD_ARGUMENTS)
+def test_bad_arguments_raise_the_library_error_naming_them(method, kwargs, error, needle) -> None:
+    """Each of these reached numpy or jax (a raw ValueError, TypeError, MemoryError,
+    OverflowError or jax's key error), or was taken silently (2.5 particles ran 2, True
+    slices ran 1, max_size with method='bk' was ignored)."""
+    dbn, ev = _chains(2, 5)
+    kwargs = dict(kwargs)
+    evidence = kwargs.pop("evidence", ev)
+    if evidence is not None and evidence is not ev:
+        evidence = {**ev, **evidence}
+    needle = needle.replace("10**15", f"{10**15:,}")
+    with pytest.raises(error, match=re.escape(needle)):
+        inference.filter(dbn, evidence, method, **kwargs)
+
+
+def test_one_query_name_is_one_variable_everywhere() -> None:
+    """``query="x0"`` was split into the letters 'x', '0' by the exact engine, and read as
+    one name by the others."""
+    dbn, ev = _chains(2, 5)
+    for method in ("exact", "bk"):
+        assert list(inference.filter(dbn, ev, method, "x0").marginals) == ["x0"]
+    assert inference.online_filter(dbn, "x0").query == ("x0",)
+    with pytest.raises(EvidenceError, match="mapping"):
+        inference.online_filter(dbn).init([0, 1])
