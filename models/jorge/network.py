@@ -195,9 +195,10 @@ class LabelGraph(LinkRule):
         _check_frames(k, stroke, pos.shape[0])
         ext = getattr(stroke, "extent", None)
         if ext is not None:
-            if np.iscomplexobj(ext):
-                raise InputError(f"stroke {k}: extent must be real numbers")
-            ext = np.asarray(ext, dtype=np.float64)
+            ext = np.asarray(ext)
+            if not np.issubdtype(ext.dtype, np.number) or np.iscomplexobj(ext):
+                raise InputError(f"stroke {k}: extent must be real numbers, got dtype {ext.dtype}")
+            ext = ext.astype(np.float64)
             if ext.shape != pos.shape:
                 raise ShapeError(f"stroke {k}: extent must have shape {pos.shape}, got {ext.shape}")
             if not np.all(np.isfinite(ext)) or np.any(ext <= 0) or np.any(ext > _MAX_PIXELS):

@@ -19,7 +19,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from dbn.errors import CheckpointError, InputError, NonFiniteError, ShapeError, TimeOrderError
+from dbn.errors import CheckpointError, InputError, ShapeError
 from inference.checkpoint import load_arrays, save_arrays
 from inference.particle import ParticleInfo, ParticleState
 from inference.precision import precision_scope
@@ -28,7 +28,7 @@ from models.localization.model import (
     RangeBearingObservation,
     RobotModel,
 )
-from models.localization.tracker import check_observation, make_filter
+from models.localization.tracker import check_observation, check_timestamp, make_filter
 from models.protocol import Example, StepTracker, seed_from_key
 
 __all__ = ["LocalizationStep", "LocalizationState", "LocalizationTracker", "make", "example"]
@@ -82,13 +82,7 @@ class LocalizationTracker(StepTracker):
                 f"obs must be (odometry, observation[, timestamp]), got {type(obs).__name__}"
             )
         obs = LocalizationStep(*obs)
-        ts = None
-        if obs.timestamp is not None:
-            ts = float(obs.timestamp)
-            if not math.isfinite(ts):
-                raise NonFiniteError(f"timestamp = {obs.timestamp!r} is not finite")
-            if state.timestamp is not None and ts <= state.timestamp:
-                raise TimeOrderError(f"timestamp = {ts} does not come after {state.timestamp}")
+        ts = check_timestamp(obs.timestamp, state.timestamp)
         with precision_scope(self.dtype):
             action = jnp.asarray(self.model.prepare_actions(obs.odometry), self.dtype)
             if action.shape != (4, 3):

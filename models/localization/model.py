@@ -35,6 +35,7 @@ from jax import Array
 from scipy.spatial import cKDTree
 
 from dbn.errors import InputError, NonFiniteError, ShapeError
+from inference.evidence_columns import as_column
 from inference.particle import StateSpaceModel
 from inference.precision import honours_dtype
 
@@ -175,7 +176,7 @@ class RobotModel(StateSpaceModel):
         """
         if np.iscomplexobj(odometry):
             raise InputError("odometry must hold real numbers, got complex")
-        u = np.asarray(odometry, dtype=np.float64)
+        u = as_column("odometry", odometry, "observation field", np.float64)
         if u.shape[-1:] != (4,) or u.ndim not in (1, 2):
             raise ShapeError(
                 f"odometry has shape {u.shape}, expected (..., 4) = (dx, dy, dtheta, dt)"

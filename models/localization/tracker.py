@@ -16,6 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from dbn.errors import InputError, NonFiniteError, ShapeError, TimeOrderError
+from inference.evidence_columns import as_column
 from inference.particle import (
     ParticleInfo,
     ParticleState,
@@ -39,6 +40,7 @@ __all__ = [
     "LocalizationResult",
     "check_observation",
     "check_sequence",
+    "check_timestamp",
     "localize",
     "make_filter",
     "position_errors",
@@ -168,6 +170,22 @@ def position_errors(means: np.ndarray, truth: np.ndarray) -> np.ndarray:
     return np.hypot(means[..., 0] - truth[..., 0], means[..., 1] - truth[..., 1])
 
 
+def check_timestamp(timestamp: Any, last: float | None) -> float | None:
+    """``timestamp`` as a float (None stays None) that comes after ``last``; else
+    :class:`NonFiniteError`, :class:`InputError` or :class:`TimeOrderError`."""
+    if timestamp is None:
+        return None
+    real = isinstance(timestamp, (int, float, np.integer, np.floating))
+    if isinstance(timestamp, bool) or not real:
+        raise InputError(f"timestamp must be a number, got {timestamp!r}")
+    ts = float(timestamp)
+    if not math.isfinite(ts):
+        raise NonFiniteError(f"timestamp = {timestamp!r} is not finite")
+    if last is not None and ts <= last:
+        raise TimeOrderError(f"timestamp = {ts} does not come after {last}")
+    return ts
+
+
 def check_observation(model: RobotModel, observation: Any, dtype: Any = jnp.float64):
     """Validate and pre-process one step's observation for ``model`` (before any state change).
 
@@ -190,10 +208,12 @@ def check_observation(model: RobotModel, observation: Any, dtype: Any = jnp.floa
         if not np.issubdtype(lm.dtype, np.integer):
             raise InputError(f"observation.landmark must hold integer ids, got dtype {lm.dtype}")
         fields = {
-            "range": np.asarray(observation.range, dtype=np.float64),
-            "bearing": np.asarray(observation.bearing, dtype=np.float64),
+            "range": as_column("observation.range", observation.range, "field", np.float64),
+            "bearing": as_column("observation.bearing", observation.bearing, "field", np.float64),
             "mask": np.asarray(observation.mask),
         }
+        if fields["mask"].dtype != bool:  # "x" or 2 was read as True
+            raise InputError(f"observation.mask must hold booleans, got dtype {fields['mask'].dtype}")
         for name, arr in fields.items():
             if arr.shape != lm.shape or lm.ndim != 1:
                 raise ShapeError(f"observation.{name} has shape {arr.shape}, landmark {lm.shape}")
@@ -284,12 +304,7 @@ class Localizer:
         ShapeError, NonFiniteError, InputError, TimeOrderError
             Before any change of state.
         """
-        if timestamp is not None:
-            ts = float(timestamp)
-            if not math.isfinite(ts):
-                raise NonFiniteError(f"timestamp = {timestamp!r} is not finite")
-            if self.timestamp is not None and ts <= self.timestamp:
-                raise TimeOrderError(f"timestamp = {ts} does not come after {self.timestamp}")
+        ts = check_timestamp(timestamp, self.timestamp)
         with precision_scope(self.dtype):  # float64 by default, whatever jax's global mode
             step = jnp.asarray(self.model.prepare_actions(odometry), self.dtype)
             if step.shape != (4, 3):
@@ -297,8 +312,8 @@ class Localizer:
             obs = self._check_observation(observation)
             new_state, info = self._step(key, self.state, obs, step)
         self.state, self.last_info = new_state, info
-        if timestamp is not None:
-            self.timestamp = float(timestamp)
+        if ts is not None:
+            self.timestamp = ts
         return self.mean()
 
     def mean(self) -> np.ndarray:

@@ -2,7 +2,7 @@
 
 An observation is walked as a tree (named tuples, tuples, lists, dataclasses, arrays,
 numbers); :func:`mutants` yields ``(label, bad_obs)`` pairs that each change ONE leaf in
-one of the ways of issue 14 (NaN, inf, huge, negative, wrong dtype, wrong shape,
+one of the ways of issue 14 (NaN, inf, huge, negative, wrong dtype, text, wrong shape,
 out-of-range id). :func:`snapshot` / :func:`same` compare a state before and after a
 rejected step deeply (arrays by value, NaN equal to NaN, objects by their attributes).
 """
@@ -17,7 +17,7 @@ from typing import Any
 import jax
 import numpy as np
 
-KINDS = ("nan", "inf", "huge", "negative", "dtype", "shape", "id")
+KINDS = ("nan", "inf", "huge", "negative", "dtype", "text", "shape", "id")
 
 
 def _is_array(x: Any) -> bool:
@@ -79,6 +79,8 @@ def _bad_leaves(v: Any) -> Iterator[tuple[str, Any]]:
         yield "dtype", wrap(b)
     if a.size:
         yield "dtype", wrap(a.astype(np.complex128)) if not scalar else "1"
+    if a.size and not scalar:  # an array of text of the right shape (numpy's float() failed)
+        yield "text", np.full(a.shape, "x")
     if not scalar:
         yield "shape", a[..., None] if a.ndim else a.reshape(1, 1)
         if a.ndim and a.shape[-1] > 1:

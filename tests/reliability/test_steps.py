@@ -420,3 +420,16 @@ def test_parameters_validated_at_construction():
         with pytest.raises(DBNError):
             make()
             pytest.fail(f"{label} accepted")
+
+
+def test_localization_mask_and_timestamp_must_be_what_they_say():
+    """A mask of 0/2 ints or of text was read as booleans, and a timestamp "1" as 1.0."""
+    ex, s1, _, allowed = _setup("localization")
+    obs = ex.observations[1]
+    ints = obs._replace(observation=obs.observation._replace(
+        mask=np.asarray(obs.observation.mask, int) * 2))  # fmt: skip
+    with pytest.raises(InputError, match="observation.mask must hold booleans"):
+        ex.tracker.step(jax.random.key(3), s1, ints)
+    with pytest.raises(InputError, match="timestamp must be a number"):
+        ex.tracker.step(jax.random.key(3), s1, obs._replace(timestamp=str(obs.timestamp)))
+    assert _check_one(ex.tracker, s1, obs, allowed, "localization good") == "accepted"
