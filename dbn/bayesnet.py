@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import networkx as nx
@@ -20,15 +20,22 @@ from dbn.errors import (
 )
 from dbn.variables import ContinuousVariable, DiscreteVariable, Variable
 
-__all__ = ["BayesNet", "CPD", "check_evidence"]
+__all__ = ["BayesNet", "CPD", "check_evidence", "check_sequence"]
 
 CPD = TabularCPD | DeterministicCPD | LinearGaussianCPD | ContinuousCPD
+
+
+def check_sequence(what: str, items: Any) -> list:
+    """``items`` as a list; a string, None or another non-iterable is a :class:`ModelError`."""
+    if isinstance(items, str) or not isinstance(items, Iterable):
+        raise ModelError(f"{what} must be a sequence, got {items!r}")
+    return list(items)
 
 
 def _index_variables(variables: Sequence[Variable]) -> dict[str, Variable]:
     """Name -> variable, in declaration order; names unique."""
     vars_: dict[str, Variable] = {}
-    for v in variables:
+    for v in check_sequence("variables", variables):
         if not isinstance(v, DiscreteVariable | ContinuousVariable):
             raise ModelError(f"not a variable: {v!r}")
         if v.name in vars_:
@@ -40,7 +47,7 @@ def _index_variables(variables: Sequence[Variable]) -> dict[str, Variable]:
 def _index_cpds(cpds: Sequence[CPD], vars_: Mapping[str, Variable]) -> dict[str, CPD]:
     """Name -> CPD: exactly one CPD per declared variable."""
     cpd_map: dict[str, CPD] = {}
-    for c in cpds:
+    for c in check_sequence("cpds", cpds):
         name = getattr(c, "variable", None)
         if name not in vars_:
             raise UnknownVariableError(f"CPD for unknown variable {name!r}")

@@ -24,7 +24,7 @@ the child, so ``table[u_1, ..., u_m]`` is the row ``P(child | parents = u)`` and
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
 
@@ -48,9 +48,12 @@ ROW_TOLERANCE = 1e-9
 
 
 def _parents_tuple(variable: str, parents: Sequence[str]) -> tuple[str, ...]:
-    if isinstance(parents, str):
+    """The parents as a tuple of names (checked, with the CPD's own name)."""
+    if not isinstance(variable, str) or not variable:
+        raise ModelError(f"a CPD's variable must be a non-empty name, got {variable!r}")
+    if isinstance(parents, str) or not isinstance(parents, Iterable):
         raise ModelError(
-            f"CPD of {variable!r}: parents must be a sequence of names, got the string {parents!r}"
+            f"CPD of {variable!r}: parents must be a sequence of names, got {parents!r}"
         )
     out = tuple(parents)
     for p in out:
@@ -63,6 +66,30 @@ def _parents_tuple(variable: str, parents: Sequence[str]) -> tuple[str, ...]:
     if variable in out:
         raise ModelError(f"CPD of {variable!r}: the variable is its own parent")
     return out
+
+
+def _real_array(variable: str, what: str, value: ArrayLike) -> np.ndarray:
+    """``value`` as a finite float64 array; else :class:`ModelError` naming the CPD."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ModelError(f"CPD of {variable!r}: {what} is not numeric ({exc})") from None
+    if not np.all(np.isfinite(arr)):
+        raise ModelError(f"CPD of {variable!r}: {what} must be finite")
+    return arr
+
+
+def _weight_list(variable: str, weights: Any, num_parents: int) -> list:
+    """One weight array per continuous parent; else :class:`CPDShapeError`."""
+    if isinstance(weights, str) or not isinstance(weights, Iterable):
+        raise CPDShapeError(f"CPD of {variable!r}: weights must be a sequence of arrays, "
+                            f"got {weights!r}")  # fmt: skip
+    weights = list(weights)
+    if len(weights) != num_parents:
+        raise CPDShapeError(
+            f"CPD of {variable!r}: {len(weights)} weight arrays for {num_parents} continuous parents"
+        )
+    return weights
 
 
 def check_probability_table(variable: str, parents: tuple[str, ...], table: np.ndarray) -> None:
@@ -274,11 +301,11 @@ class LinearGaussianCPD:
         cov: ArrayLike,
     ) -> None:
         parents_t = _parents_tuple(variable, parents)
-        b = np.atleast_1d(np.asarray(bias, dtype=np.float64))
+        b = np.atleast_1d(_real_array(variable, "bias", bias))
         d = b.shape[0]
         if b.ndim != 1:
             raise CPDShapeError(f"CPD of {variable!r}: bias must be a vector, got shape {b.shape}")
-        S = np.atleast_2d(np.asarray(cov, dtype=np.float64))
+        S = np.atleast_2d(_real_array(variable, "cov", cov))
         if S.shape != (d, d):
             raise CPDShapeError(f"CPD of {variable!r}: cov shape {S.shape}, expected {(d, d)}")
         if not np.all(np.isfinite(S)) or not np.allclose(S, S.T, atol=1e-12):
@@ -287,13 +314,10 @@ class LinearGaussianCPD:
             L = np.linalg.cholesky(S)
         except np.linalg.LinAlgError:
             raise ModelError(f"CPD of {variable!r}: cov is not positive definite") from None
-        if len(weights) != len(parents_t):
-            raise CPDShapeError(
-                f"CPD of {variable!r}: {len(weights)} weight matrices for {len(parents_t)} parents"
-            )
+        weights = _weight_list(variable, weights, len(parents_t))
         W = []
         for p, w in zip(parents_t, weights):
-            w = np.atleast_2d(np.asarray(w, dtype=np.float64))
+            w = np.atleast_2d(_real_array(variable, f"weight of parent {p!r}", w))
             if w.shape[0] != d:
                 raise CPDShapeError(
                     f"CPD of {variable!r}: weight of parent {p!r} has shape {w.shape}, needs {d} rows"
@@ -390,14 +414,14 @@ class ConditionalLinearGaussianCPD:
         if set(dpa) & set(cpa):
             raise ModelError(f"CPD of {variable!r}: {set(dpa) & set(cpa)} listed twice")
         m = len(dpa)
-        b = np.asarray(bias, dtype=np.float64)
+        b = _real_array(variable, "bias", bias)
         if b.ndim != m + 1:
             raise CPDShapeError(
                 f"CPD of {variable!r}: bias has shape {b.shape}, expected one axis per discrete "
                 f"parent {dpa} and one of size d"
             )
         kshape, d = b.shape[:-1], b.shape[-1]
-        S = np.asarray(cov, dtype=np.float64)
+        S = _real_array(variable, "cov", cov)
         if S.shape != (*kshape, d, d):
             raise CPDShapeError(
                 f"CPD of {variable!r}: cov shape {S.shape}, expected {(*kshape, d, d)}"
@@ -408,16 +432,10 @@ class ConditionalLinearGaussianCPD:
             L = np.linalg.cholesky(S)
         except np.linalg.LinAlgError:
             raise ModelError(f"CPD of {variable!r}: a cov[k] is not positive definite") from None
-        if not np.all(np.isfinite(b)):
-            raise ModelError(f"CPD of {variable!r}: bias must be finite")
-        if len(weights) != len(cpa):
-            raise CPDShapeError(
-                f"CPD of {variable!r}: {len(weights)} weight arrays for {len(cpa)} "
-                "continuous parents"
-            )
+        weights = _weight_list(variable, weights, len(cpa))
         W = []
         for p, w in zip(cpa, weights):
-            w = np.asarray(w, dtype=np.float64)
+            w = _real_array(variable, f"weight of parent {p!r}", w)
             if w.ndim != m + 2 or w.shape[: m + 1] != (*kshape, d) or not np.all(np.isfinite(w)):
                 raise CPDShapeError(
                     f"CPD of {variable!r}: weight of parent {p!r} has shape {w.shape}, "

@@ -21,14 +21,18 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from dbn.bayesnet import CPD, BayesNet
+from dbn.bayesnet import CPD, BayesNet, check_sequence
 from dbn.cpds import DeterministicCPD, LinearGaussianCPD, TabularCPD
 from dbn.errors import ModelError, UnknownVariableError
 from dbn.variables import DiscreteVariable, Variable
 
-__all__ = ["prev", "is_prev", "unprev", "TwoSliceDBN", "PreviousSliceCPD", "slice_name"]
+__all__ = ["prev", "is_prev", "unprev", "TwoSliceDBN", "PreviousSliceCPD", "slice_name",
+           "MAX_UNROLL_NODES"]
 
 _PREV = "[t-1]"
+
+MAX_UNROLL_NODES = 10**6
+"""The most nodes :meth:`TwoSliceDBN.unroll` builds (one per variable and slice)."""
 
 
 def prev(name: str) -> str:
@@ -126,7 +130,11 @@ class TwoSliceDBN:
         initial_cpds: Sequence[CPD],
         transition_cpds: Sequence[CPD],
     ) -> None:
-        variables = list(variables)
+        variables = check_sequence("variables", variables)
+        transition_cpds = check_sequence("transition_cpds", transition_cpds)
+        for c in transition_cpds:
+            if not (isinstance(getattr(c, "variable", None), str) and hasattr(c, "parents")):
+                raise ModelError(f"transition slice: not a CPD: {c!r}")
         for v in variables:
             if is_prev(getattr(v, "name", "")):
                 raise ModelError(f"variable name {v.name!r} may not end with {_PREV!r}")
@@ -193,13 +201,19 @@ class TwoSliceDBN:
         return f"TwoSliceDBN(variables={list(self.names)}, interface={list(self.interface)})"
 
     def unroll(self, num_timesteps: int) -> BayesNet:
-        """The Bayes net of slices ``0..num_timesteps-1``, nodes named ``"name_t"``."""
+        """The Bayes net of slices ``0..num_timesteps-1``, nodes named ``"name_t"`` (at most
+        :data:`MAX_UNROLL_NODES` nodes: it is meant for checks on short sequences)."""
         if (
             isinstance(num_timesteps, bool)
             or not isinstance(num_timesteps, int | np.integer)
             or num_timesteps < 1
         ):
             raise ModelError(f"num_timesteps must be an integer >= 1, got {num_timesteps!r}")
+        if num_timesteps * len(self._variables) > MAX_UNROLL_NODES:
+            raise ModelError(
+                f"unrolling {num_timesteps} slices of {len(self._variables)} variables is over "
+                f"{MAX_UNROLL_NODES:,} nodes; filter it with inference.filter instead"
+            )
         variables: list[Variable] = []
         cpds: list[CPD] = []
         for t in range(int(num_timesteps)):

@@ -2,19 +2,24 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
 
 from dbn.errors import EvidenceError, ModelError
 
-__all__ = ["DiscreteVariable", "ContinuousVariable", "Variable"]
+__all__ = ["DiscreteVariable", "ContinuousVariable", "Variable", "MAX_CARDINALITY"]
 
 
 def _check_name(name: object) -> str:
     if not isinstance(name, str) or not name:
         raise ModelError(f"variable name must be a non-empty string, got {name!r}")
     return name
+
+
+MAX_CARDINALITY = 2**24
+"""The most states a discrete variable may have: one table row over them is 128 MiB."""
 
 
 @dataclass(frozen=True)
@@ -26,7 +31,7 @@ class DiscreteVariable:
     name : str
         Unique name in its model.
     cardinality : int
-        Number of states (>= 1).
+        Number of states, 1 to :data:`MAX_CARDINALITY`.
     state_names : tuple of str, optional
         One name per state; defaults to ``("0", "1", ...)``.
     """
@@ -42,11 +47,19 @@ class DiscreteVariable:
             raise ModelError(
                 f"variable {self.name!r}: cardinality must be an integer >= 1, got {card!r}"
             )
+        if card > MAX_CARDINALITY:  # its default state names alone would not fit in memory
+            raise ModelError(
+                f"variable {self.name!r}: cardinality {card} is over {MAX_CARDINALITY:,} (2**24)"
+            )
         object.__setattr__(self, "cardinality", int(card))
         if self.state_names is None:
             object.__setattr__(self, "state_names", tuple(str(i) for i in range(card)))
         else:
-            names = tuple(str(s) for s in self.state_names)
+            given = self.state_names
+            if isinstance(given, str) or not isinstance(given, Iterable):
+                raise ModelError(f"variable {self.name!r}: state_names must be a sequence of "
+                                 f"names, got {given!r}")  # fmt: skip
+            names = tuple(str(s) for s in given)
             if len(names) != card:
                 raise ModelError(
                     f"variable {self.name!r}: {len(names)} state names for cardinality {card}"

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
@@ -166,3 +168,37 @@ def test_continuous_two_slice_dbn_unrolls_and_exact_filter_refuses_it() -> None:
     np.testing.assert_allclose(cpd.mean({slice_name("x", 1): np.ones(2)}), [0.9, 0.9])
     with pytest.raises(ModelError, match="continuous"):
         DBNFilter(dbn)
+
+
+_X = DiscreteVariable("x", 2)
+_X0 = TabularCPD("x", [], [0.5, 0.5])
+_XT = TabularCPD("x", [prev("x")], [[0.9, 0.1], [0.2, 0.8]])
+
+
+@pytest.mark.parametrize(
+    ("build", "error", "needle"),
+    [
+        (lambda: DiscreteVariable("x", 2**62), ModelError, "is over 16,777,216"),
+        (lambda: DiscreteVariable("x", 2, 5), ModelError, "state_names must be a sequence"),
+        (lambda: DiscreteVariable("x", 2, "ab"), ModelError, "state_names must be a sequence"),
+        (lambda: TabularCPD(None, [], [0.5, 0.5]), ModelError, "non-empty name, got None"),
+        (lambda: TabularCPD("y", None, [0.5, 0.5]), ModelError, "parents must be a sequence"),
+        (lambda: LinearGaussianCPD("z", [], [], [np.nan], [[1.0]]), ModelError, "bias must be finite"),
+        (lambda: LinearGaussianCPD("z", [], [], ["a"], [[1.0]]), ModelError, "bias is not numeric"),
+        (lambda: LinearGaussianCPD("z", ["u"], [[[np.inf]]], [0.0], [[1.0]]), ModelError,
+         "weight of parent 'u' must be finite"),
+        (lambda: LinearGaussianCPD("z", ["u"], None, [0.0], [[1.0]]), CPDShapeError,
+         "weights must be a sequence"),
+        (lambda: BayesNet(None, [_X0]), ModelError, "variables must be a sequence"),
+        (lambda: BayesNet([_X], None), ModelError, "cpds must be a sequence"),
+        (lambda: TwoSliceDBN([_X], [_X0], [None]), ModelError, "not a CPD: None"),
+        (lambda: TwoSliceDBN([_X], [_X0], "x"), ModelError, "transition_cpds must be a sequence"),
+        (lambda: TwoSliceDBN([_X], [_X0], [_XT]).unroll(10**9), ModelError, "over 1,000,000 nodes"),
+    ],
+)
+def test_malformed_declarations_are_model_errors(build, error, needle) -> None:
+    """Each raised Python's or numpy's own error (TypeError, AttributeError, ValueError), was
+    accepted (a NaN mean, a CPD of variable None, the state names 'a', 'b' of "ab"), or hung
+    (2**62 default state names, an unrolled net of 10^9 nodes)."""
+    with pytest.raises(error, match=re.escape(needle)):
+        build()
