@@ -29,7 +29,7 @@ import numpy as np
 from dbn.bayesnet import BayesNet
 from dbn.cpds import ROW_TOLERANCE, TabularCPD
 from dbn.dbn import TwoSliceDBN, is_prev, prev, unprev
-from dbn.errors import DBNError, FileFormatError, ModelError
+from dbn.errors import DBNError, EvidenceError, FileFormatError, InputError, ModelError
 from dbn.variables import DiscreteVariable
 
 __all__ = [
@@ -92,6 +92,8 @@ def to_pgmpy(bn: BayesNet):
     with _quiet():
         from pgmpy.models import DiscreteBayesianNetwork
 
+    if not isinstance(bn, BayesNet):
+        raise ModelError(f"expected a BayesNet, got {type(bn).__name__}")
     if not bn.is_discrete:
         raise ModelError("only discrete Bayes nets convert to pgmpy")
     names = {n: bn.variable(n).state_names for n in bn.nodes}
@@ -115,6 +117,20 @@ def _cpd_table(cpd) -> tuple[Any, list[Any], np.ndarray, list[str]]:
     return child, parents, table, state_names
 
 
+def _check_pgmpy(model: Any, kind: str) -> None:
+    """A :class:`ModelError` unless ``model`` is a pgmpy model of class ``kind``."""
+    cls = type(model)
+    if not (cls.__module__.startswith("pgmpy") and kind in (c.__name__ for c in cls.__mro__)):
+        raise ModelError(f"expected a pgmpy {kind}, got {cls.__name__}")
+
+
+def _check_tol(renormalize_tol: Any) -> float:
+    real = isinstance(renormalize_tol, (int, float, np.integer, np.floating))
+    if isinstance(renormalize_tol, bool) or not real or not renormalize_tol >= 0:
+        raise ModelError(f"renormalize_tol must be a number >= 0, got {renormalize_tol!r}")
+    return float(renormalize_tol)
+
+
 def _renormalized(name: Any, table: np.ndarray, tol: float) -> np.ndarray:
     """Rows within ``tol`` of summing to 1 divided by their sum (files print ~8 digits)."""
     sums = table.sum(axis=-1, keepdims=True)
@@ -134,7 +150,18 @@ def from_pgmpy(model, renormalize_tol: float = 1e-6) -> BayesNet:
         Tables whose rows all sum to 1 within this tolerance are divided by their row sums
         (published BIF files round to a few digits: sachs has rows summing to 0.99999998);
         a row further off raises :class:`~dbn.errors.NotNormalizedError`. 0 disables it.
+
+    Raises
+    ------
+    ModelError
+        Not a pgmpy Bayes net; a node without a CPD (it used to be dropped silently).
     """
+    _check_pgmpy(model, "DiscreteBayesianNetwork")
+    renormalize_tol = _check_tol(renormalize_tol)
+    have = {cpd.variable for cpd in model.get_cpds()}
+    missing = [n for n in model.nodes() if n not in have]
+    if missing:
+        raise ModelError(f"pgmpy model: no CPD for node(s) {missing}; add them (model.add_cpds) first")
     variables, cpds = [], []
     for cpd in model.get_cpds():
         child, parents, table, states = _cpd_table(cpd)
@@ -168,6 +195,8 @@ def read_bif(path: str | Path) -> BayesNet:
     with _quiet():
         from pgmpy.readwrite import BIFReader
 
+    if not isinstance(path, str | Path):
+        raise InputError(f"path must be a file name, got {path!r}")
     text = read_bif_text(path)
     parse_bif(text, source=str(path))
     try:
@@ -204,6 +233,8 @@ def dbn_to_pgmpy(dbn: TwoSliceDBN):
     with _quiet():
         from pgmpy.models import DynamicBayesianNetwork
 
+    if not isinstance(dbn, TwoSliceDBN):
+        raise ModelError(f"expected a TwoSliceDBN, got {type(dbn).__name__}")
     names: dict[Any, tuple[str, ...]] = {}
     for v in dbn.variables:
         if not isinstance(v, DiscreteVariable):
@@ -243,6 +274,7 @@ def dbn_from_pgmpy(model) -> TwoSliceDBN:
         A node of either slice has no CPD (the message lists them), or the CPDs do not
         make a valid two-slice template (as :class:`TwoSliceDBN`).
     """
+    _check_pgmpy(model, "DynamicBayesianNetwork")
     have = {(str(c.variable[0]), int(c.variable[1])) for c in model.get_cpds()}
     nodes = list(dict.fromkeys(str(n[0]) for n in model.nodes()))  # insertion order
     missing = [(n, t) for n in nodes for t in (0, 1) if (n, t) not in have]
@@ -267,6 +299,20 @@ def dbn_from_pgmpy(model) -> TwoSliceDBN:
 
 
 # --- pgmpy's engines, for comparisons ---------------------------------------------------
+def _check_pgmpy_evidence(model, evidence, nodes: Sequence[str] = ()) -> None:
+    """Evidence names and state names, and query nodes, the pgmpy ``model`` has; else an
+    :class:`EvidenceError` (pgmpy raised networkx's or numpy's own errors)."""
+    _check_pgmpy(model, "DiscreteBayesianNetwork")
+    known = set(model.nodes())
+    for n in [*nodes, *(evidence or {})]:
+        if n not in known:
+            raise EvidenceError(f"pgmpy model has no node {n!r} (nodes: {sorted(map(str, known))})")
+    for n, s in (evidence or {}).items():
+        states = model.get_cpds(n).state_names[n]
+        if s not in states:
+            raise EvidenceError(f"pgmpy model: node {n!r} has no state {s!r} (states: {states})")
+
+
 def pgmpy_marginals(
     model, nodes: Sequence[str], evidence: Mapping[str, str] | None = None
 ) -> dict[str, np.ndarray]:
@@ -277,6 +323,7 @@ def pgmpy_marginals(
     with _quiet():
         from pgmpy.inference import VariableElimination
 
+    _check_pgmpy_evidence(model, evidence, nodes)
     engine = VariableElimination(model)
     out = {}
     with _quiet():
@@ -293,6 +340,7 @@ def pgmpy_map(model, evidence: Mapping[str, str] | None = None) -> dict[str, str
     with _quiet():
         from pgmpy.inference import VariableElimination
 
+    _check_pgmpy_evidence(model, evidence)
     engine = VariableElimination(model)
     hidden = [n for n in model.nodes() if n not in (evidence or {})]
     with _quiet():
@@ -461,6 +509,9 @@ def parse_bif(text: str, renormalize_tol: float = 1e-6, source: str = "<BIF text
         (its subclasses, message prefixed by ``source``) a cycle, a row not summing to 1,
         a negative or NaN probability.
     """
+    if not isinstance(text, str):
+        raise InputError(f"parse_bif takes the text of a BIF file, got {type(text).__name__}")
+    renormalize_tol = _check_tol(renormalize_tol)
     _check_bif_text(text, source)
     states = _bif_states(text, source)
     cpds: dict[str, TabularCPD] = {}

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dbn import pgmpy_adapter as pa
+from dbn.errors import EvidenceError, InputError, ModelError
 
 
 @settings(max_examples=25, deadline=None)
@@ -70,3 +73,40 @@ def test_read_bif_gz(tmp_path) -> None:
         bn = pa.read_bif(path)
     assert set(bn.nodes) == {"Pollution", "Smoker", "Cancer", "Xray", "Dyspnoea"}
     assert bn.parents("Cancer") == ("Pollution", "Smoker") or set(bn.parents("Cancer")) == {"Pollution", "Smoker"}
+
+
+def _asia():
+    return pa.to_pgmpy(pa.bundled_network("asia"))
+
+
+def _half_declared():
+    """A pgmpy Bayes net a -> b with a CPD for a only."""
+    from pgmpy.factors.discrete import TabularCPD as PgmpyCPD
+    from pgmpy.models import DiscreteBayesianNetwork
+
+    model = DiscreteBayesianNetwork([("a", "b")])
+    model.add_cpds(PgmpyCPD("a", 2, [[0.5], [0.5]]))
+    return model
+
+
+@pytest.mark.parametrize(
+    ("call", "error", "needle"),
+    [
+        (lambda: pa.from_pgmpy(_half_declared()), ModelError, "no CPD for node(s) ['b']"),
+        (lambda: pa.from_pgmpy(None), ModelError, "expected a pgmpy DiscreteBayesianNetwork"),
+        (lambda: pa.dbn_from_pgmpy("x"), ModelError, "expected a pgmpy DynamicBayesianNetwork"),
+        (lambda: pa.to_pgmpy(None), ModelError, "expected a BayesNet"),
+        (lambda: pa.dbn_to_pgmpy(None), ModelError, "expected a TwoSliceDBN"),
+        (lambda: pa.parse_bif(None), InputError, "text of a BIF file"),
+        (lambda: pa.parse_bif("network x {}", renormalize_tol=-1), ModelError, "renormalize_tol"),
+        (lambda: pa.read_bif(None), InputError, "path must be a file name"),
+        (lambda: pa.pgmpy_marginals(_asia(), ["asia"], {"nosuch": "yes"}), EvidenceError,
+         "no node 'nosuch'"),
+        (lambda: pa.pgmpy_map(_asia(), {"asia": "maybe"}), EvidenceError, "no state 'maybe'"),
+    ],
+)
+def test_bad_arguments_are_library_errors(call, error, needle) -> None:
+    """A node without a CPD was dropped silently; the rest raised AttributeError,
+    TypeError, networkx's or numpy's errors, or (a negative tolerance) were accepted."""
+    with pytest.raises(error, match=re.escape(needle)):
+        call()
