@@ -6,13 +6,13 @@ evidence into log-space factors the same way, with :func:`evidence_factors`.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from dbn.bayesnet import BayesNet, check_evidence
-from dbn.errors import EvidenceError, ModelError, UnknownVariableError
+from dbn.errors import EvidenceError, InputError, ModelError, UnknownVariableError
 from inference.exact.factor import Factor, product
 from inference.exact.graph import elimination_order, interaction_graph
 from inference.exact.pruning import barren, net_index, requisite
@@ -99,6 +99,10 @@ def variable_elimination(
     EvidenceError
         The evidence has probability zero, or a query variable is observed.
     """
+    if isinstance(query, str):  # one name, as the DBN engines read it
+        query = [query]
+    if not isinstance(query, Iterable):
+        raise InputError(f"query must be a sequence of variable names, got {query!r}")
     query = list(query)
     for q in query:
         if q not in bn:

@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
-from dbn.errors import NonFiniteError, ShapeError
+from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 
 __all__ = [
     "LinearGaussianParams",
@@ -73,8 +73,37 @@ class KalmanResult(NamedTuple):
     log_likelihood: float
 
 
+def _real(name: str, value) -> np.ndarray:
+    """A parameter or the observations as a finite float64 array, else the library's error."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} is not an array of numbers ({exc})") from None
+    if not np.all(np.isfinite(arr)):
+        bad = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
+        raise NonFiniteError(f"{name}{list(bad)} = {arr[bad]} is not finite")
+    return arr
+
+
+def _check_covariances(params: LinearGaussianParams) -> None:
+    """Q, R and P0 symmetric and positive semi-definite (within rounding)."""
+    for name in ("Q", "R", "P0"):
+        S = np.asarray(getattr(params, name), dtype=np.float64)
+        scale = max(1.0, float(np.abs(S).max(initial=0.0)))
+        if not np.allclose(S, S.T, rtol=0.0, atol=1e-9 * scale):
+            raise InputError(f"{name} is not symmetric")
+        if S.size and np.linalg.eigvalsh(S).min() < -1e-9 * scale:
+            raise InputError(f"{name} is not positive semi-definite (a covariance)")
+
+
 def _check(params: LinearGaussianParams, observations: np.ndarray) -> np.ndarray:
-    d = np.asarray(params.m0).shape[0]
+    if not isinstance(params, LinearGaussianParams):
+        raise InputError(f"params must be a LinearGaussianParams, got {type(params).__name__}")
+    for name in params._fields:
+        _real(name, getattr(params, name))
+    d = np.asarray(params.m0).shape[0] if np.ndim(params.m0) == 1 else -1
+    if d < 0:
+        raise ShapeError(f"m0 has shape {np.shape(params.m0)}, expected (state_dim,)")
     shapes = {"F": (d, d), "Q": (d, d), "P0": (d, d)}
     for name, shape in shapes.items():
         if np.shape(getattr(params, name)) != shape:
@@ -86,13 +115,14 @@ def _check(params: LinearGaussianParams, observations: np.ndarray) -> np.ndarray
         raise ShapeError(
             f"H {np.shape(params.H)} / R {np.shape(params.R)} do not fit state_dim {d}"
         )
-    y = np.asarray(observations, dtype=np.float64)
+    _check_covariances(params)
+    try:
+        y = np.asarray(observations, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"observations is not an array of numbers ({exc})") from None
     if y.ndim != 2 or y.shape[1] != m:
         raise ShapeError(f"observations has shape {y.shape}, expected (num_timesteps, {m})")
-    if not np.all(np.isfinite(y)):
-        bad = np.argwhere(~np.isfinite(y))[0]
-        raise NonFiniteError(f"observations[{bad[0]}, {bad[1]}] = {y[tuple(bad)]} is not finite")
-    return y
+    return _real("observations", y)
 
 
 def _predict(m: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray):
@@ -103,7 +133,11 @@ def _predict(m: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray):
 
 def _condition_on(m: np.ndarray, P: np.ndarray, H: np.ndarray, R: np.ndarray, y: np.ndarray):
     S = H @ P @ H.T + R
-    c = cho_factor(0.5 * (S + S.T), lower=True)
+    try:
+        c = cho_factor(0.5 * (S + S.T), lower=True)
+    except np.linalg.LinAlgError:  # R singular where H P H^T is too (e.g. R = 0, P0 = 0)
+        raise ModelError("the innovation covariance H P H^T + R is singular: give R (or "
+                         "P0 and Q) positive definite") from None  # fmt: skip
     resid = y - H @ m
     K = cho_solve(c, H @ P).T  # P H^T S^-1  (S symmetric)
     m_new = m + K @ resid
@@ -131,7 +165,12 @@ def kalman_filter(params: LinearGaussianParams, observations: np.ndarray) -> Kal
 
     Raises
     ------
-    ShapeError, NonFiniteError
+    InputError, ShapeError, NonFiniteError
+        Before any work: params not a :class:`LinearGaussianParams`, a field or the
+        observations not finite numbers of the right shapes, ``Q``, ``R`` or ``P0`` not a
+        covariance (symmetric, positive semi-definite).
+    ModelError
+        A singular innovation covariance (``R`` and the predicted ``H P H^T`` both singular).
     """
     y = _check(params, observations)
     F, Q, H, R = (np.asarray(a, dtype=np.float64) for a in params[:4])

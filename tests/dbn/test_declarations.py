@@ -202,3 +202,15 @@ def test_malformed_declarations_are_model_errors(build, error, needle) -> None:
     (2**62 default state names, an unrolled net of 10^9 nodes)."""
     with pytest.raises(error, match=re.escape(needle)):
         build()
+
+
+def test_evidence_that_is_not_a_mapping_is_an_evidence_error() -> None:
+    """A list of pairs or a bare name raised AttributeError ('list' has no 'items')."""
+    from inference.exact import marginals, variable_elimination
+
+    bn = BayesNet([A], [TabularCPD("a", [], [0.5, 0.5])])
+    with pytest.raises(EvidenceError, match="evidence must be a mapping"):
+        check_evidence(bn, [("a", 1)])
+    with pytest.raises(EvidenceError, match="soft evidence must be a mapping"):
+        marginals(bn, None, "a")
+    assert variable_elimination(bn, "a").variables == ("a",)  # one name, as a sequence of one

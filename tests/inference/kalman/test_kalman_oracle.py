@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from dbn.errors import NonFiniteError, ShapeError
+from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 from inference.kalman import (
     LinearGaussianParams,
     kalman_filter,
@@ -89,3 +91,25 @@ def test_kalman_bad_input() -> None:
         kalman_filter(params, ys_bad)
     with pytest.raises(ShapeError, match="observations"):
         kalman_filter(params, ys[:, :1])
+
+
+@pytest.mark.parametrize(
+    ("edit", "error", "needle"),
+    [
+        (lambda p: p._replace(Q=-np.eye(2)), InputError, "Q is not positive semi-definite"),
+        (lambda p: p._replace(P0=np.array([[1.0, 0.5], [0.0, 1.0]])), InputError,
+         "P0 is not symmetric"),
+        (lambda p: p._replace(R=np.full((2, 2), np.nan)), NonFiniteError, "R[0, 0] = nan"),
+        (lambda p: p._replace(F=np.full((2, 2), "x")), InputError, "F is not an array of numbers"),
+        (lambda p: tuple(p), InputError, "params must be a LinearGaussianParams"),
+        (lambda p: p._replace(R=0 * p.R, Q=0 * p.Q, P0=0 * p.P0), ModelError,
+         "innovation covariance H P H^T + R is singular"),
+    ],
+)
+def test_kalman_bad_parameters_are_named(edit, error, needle) -> None:
+    """A covariance that is not one (not symmetric, or negative) was used as given; the
+    rest raised numpy's or scipy's own errors (LinAlgError, ValueError, AttributeError)."""
+    params = _params(0)
+    _, ys = lgssm_sample(0, params, 4)
+    with pytest.raises(error, match=re.escape(needle)):
+        kalman_filter(edit(params), ys)
