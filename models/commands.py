@@ -45,7 +45,8 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
     p.add_argument("name", metavar="NAME", help="tracker (see `dbntrack list`)")
     p.add_argument("inputs", metavar="INPUT", nargs="+", help="input files or folders")
     p.add_argument("-o", "--outdir", required=True, help="output folder (created)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    p.add_argument("--seed", type=_seed, default=0, help="seed of the run, 0 to 2**32 - 1 "
+                   "(default 0)")  # fmt: skip
     p.add_argument("--config", metavar="FILE", help="JSON file of tracker options")
     p.add_argument("--truth", metavar="FILE", help="truth file: metrics go into summary.json")
     p.add_argument("--method", help="dbn only: exact (default), auto, bk, particle, rbpf")
@@ -73,7 +74,7 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
     p.add_argument("-o", "--out", default="sweep.jsonl", help="results file (JSON lines)")
     p.add_argument("--scheduler", help="address of a running Dask scheduler (default: a "
                    "local cluster)")  # fmt: skip
-    p.add_argument("--workers", type=int, help="local cluster size (default: one per core)")
+    p.add_argument("--workers", type=_positive, help="local cluster size (default: one per core)")
     p.add_argument("--resume", action="store_true", help="skip points already done in OUT")
     return parser
 
@@ -158,10 +159,35 @@ def evaluate(args: argparse.Namespace) -> dict:
     return metrics
 
 
+def _seed(text: str) -> int:
+    """``--seed``: an int in [0, 2**32) (numpy's generators refuse a negative one, and
+    some of the trackers' seed arithmetic overflowed C longs beyond)."""
+    try:
+        seed = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if not 0 <= seed < 2**32:
+        raise argparse.ArgumentTypeError(f"{seed} is not in 0 .. 2**32 - 1")
+    return seed
+
+
+def _positive(text: str) -> int:
+    """An int >= 1 (``--workers``: 0 ran one per core, -1 hung the local cluster)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{value} is not >= 1")
+    return value
+
+
 def dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
     """Run the parsed command; bad input -> one line on stderr, exit status 2."""
     from dbn.errors import DBNError
 
+    if args.data and not Path(args.data).expanduser().is_dir():
+        parser.error(f"--data {args.data}: no such folder")
     if args.data:
         os.environ["DBNTRACK_DATA"] = str(Path(args.data).expanduser().resolve())
     try:

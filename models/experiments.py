@@ -181,14 +181,27 @@ def read_results(path: str | os.PathLike) -> list[dict[str, Any]]:
     return records
 
 
+def _check_workers(n_workers: Any) -> None:
+    if n_workers is not None and (
+        isinstance(n_workers, bool) or not isinstance(n_workers, int) or n_workers < 1
+    ):
+        raise InputError(f"n_workers must be an int >= 1, got {n_workers!r}")
+
+
 def local_cluster(n_workers: int | None = None):
     """A ``LocalCluster`` of single-threaded worker processes (one per core by default).
 
     BLAS, OpenMP and XLA are limited to one thread per worker, so ``n`` workers use ``n``
     cores and a CPU-bound sweep scales with them.
+
+    Raises
+    ------
+    InputError
+        ``n_workers`` given but not an int >= 1 (0 ran one per core, -1 hung).
     """
     from dask.distributed import LocalCluster
 
+    _check_workers(n_workers)
     n = n_workers or os.cpu_count() or 1
     env = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
     env["XLA_FLAGS"] = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
@@ -251,12 +264,16 @@ def run_grid(
     if resume and out is None:
         raise InputError("resume=True needs the results file (out=...)")
     check_params(task, grid)
+    _check_workers(n_workers)
     # the points already done (resume) are returned as recorded; the rest are run
     records = {}
     if resume:
         records = {r["id"]: r for r in read_results(out) if r.get("status") == "ok"}
     todo = [p for p in grid if p.id not in records]
-    sink = open(out, "a") if out is not None else None  # noqa: SIM115 - closed below
+    try:
+        sink = open(out, "a") if out is not None else None  # noqa: SIM115 - closed below
+    except OSError as exc:  # a folder, a read-only place, ...
+        raise InputError(f"results file {out}: cannot write it ({exc.strerror or exc})") from None
     bar = _progress(len(todo), progress and sys.stderr.isatty())
     try:
         for rec in _records(task, todo, client, serial, n_workers):

@@ -15,6 +15,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from dbn.errors import InputError
+
 __all__ = ["RunContext", "clean", "versions", "write_summary"]
 
 
@@ -39,7 +41,11 @@ class RunContext:
 
     def __post_init__(self) -> None:
         self.outdir = Path(self.outdir)
-        self.outdir.mkdir(parents=True, exist_ok=True)
+        try:
+            self.outdir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:  # a file of that name, a read-only place, ...
+            raise InputError(f"output folder {self.outdir}: cannot create it "
+                             f"({exc.strerror or exc})") from None  # fmt: skip
 
     def progress(self, iterable: Iterable, total: int | None = None, desc: str = ""):
         """``iterable`` wrapped in a tqdm bar (silent when :attr:`quiet`)."""

@@ -198,3 +198,39 @@ def test_pathrecovery_track_refuses_a_negative_observation_id(tmp_path, capsys):
     obs = _write(tmp_path / "observations.csv", lines)
     _bad(capsys, ["track", "pathrecovery", str(d / "edges.csv"), str(obs), "-o",
                   str(tmp_path / "out")], "observations.csv:4:", "obs = -1")  # fmt: skip
+
+
+# -- the command line itself ------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", ["-1", str(2**70), "x"])
+def test_track_refuses_a_seed_out_of_range(tmp_path, capsys, seed):
+    """A negative seed or one of 2**70 raised numpy's ValueError or an OverflowError in
+    some runners."""
+    with pytest.raises(SystemExit):
+        main(["track", "jorge", str(DATA / "jorge" / "caviar.xml"), "-o", str(tmp_path / "o"),
+              "--seed", seed])  # fmt: skip
+    assert "argument --seed" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_track_refuses_an_output_folder_that_is_a_file(tmp_path, capsys):
+    """It raised FileExistsError."""
+    (tmp_path / "afile").write_text("x")
+    _bad(capsys, ["track", "jorge", str(DATA / "jorge" / "caviar.xml"), "-o",
+                  str(tmp_path / "afile")], f"output folder {tmp_path / 'afile'}: cannot create")  # fmt: skip
+
+
+def test_data_and_sweep_arguments_are_checked(tmp_path, capsys):
+    """--data naming no folder was taken silently; a sweep's results file that is a folder
+    raised IsADirectoryError; --workers 0 ran one worker per core and -1 hung."""
+    with pytest.raises(SystemExit):
+        main(["--data", str(tmp_path / "nosuch"), "list"])
+    assert "--data" in capsys.readouterr().err
+    toml = str(DATA / "sweep_example.toml")
+    _bad(capsys, ["sweep", toml, "-o", str(tmp_path)], "results file", "cannot write it")
+    for workers in ("0", "-1"):
+        with pytest.raises(SystemExit):
+            main(["sweep", toml, "-o", str(tmp_path / "r.jsonl"), "--workers", workers])
+        assert "argument --workers" in capsys.readouterr().err
+    assert not (tmp_path / "r.jsonl").exists()
