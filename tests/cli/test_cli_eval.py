@@ -11,16 +11,9 @@ from pathlib import Path
 import pytest
 
 from models.cli import main
+from tests.cli.test_cli_track import _bad
 
 DATA = Path(__file__).resolve().parent.parent / "data"
-
-
-def _bad(capsys, argv: list[str], *needles: str) -> None:
-    assert main(argv) == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1, err
-    for n in needles:
-        assert n in err, err
 
 
 def _metrics(capsys, argv: list[str]) -> dict:
