@@ -272,7 +272,9 @@ def check_evidence(
     """
     for what, given in (("evidence", evidence), ("soft evidence", soft_evidence)):
         if given is not None and not isinstance(given, Mapping):
-            raise EvidenceError(f"{what} must be a mapping name -> value, got {type(given).__name__}")
+            raise EvidenceError(
+                f"{what} must be a mapping name -> value, got {type(given).__name__}"
+            )
     hard: dict[str, int] = {}
     for name, state in (evidence or {}).items():
         if name not in bn:

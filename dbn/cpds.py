@@ -87,7 +87,8 @@ def _weight_list(variable: str, weights: Any, num_parents: int) -> list:
     weights = list(weights)
     if len(weights) != num_parents:
         raise CPDShapeError(
-            f"CPD of {variable!r}: {len(weights)} weight arrays for {num_parents} continuous parents"
+            f"CPD of {variable!r}: {len(weights)} weight arrays for {num_parents} "
+            "continuous parents"
         )
     return weights
 

@@ -161,7 +161,9 @@ def from_pgmpy(model, renormalize_tol: float = 1e-6) -> BayesNet:
     have = {cpd.variable for cpd in model.get_cpds()}
     missing = [n for n in model.nodes() if n not in have]
     if missing:
-        raise ModelError(f"pgmpy model: no CPD for node(s) {missing}; add them (model.add_cpds) first")
+        raise ModelError(
+            f"pgmpy model: no CPD for node(s) {missing}; add them (model.add_cpds) first"
+        )
     variables, cpds = [], []
     for cpd in model.get_cpds():
         child, parents, table, states = _cpd_table(cpd)

@@ -33,7 +33,8 @@ from dbn.errors import DBNError, InputError, in_file
 from models.io.table import as_float, as_int, fail, read_lines, require_file, write_rows
 
 __all__ = ["read_boxes", "read_mot", "mot_frame_rate", "frame_rate_source", "is_obsmat", "is_mot",
-           "write_strokes", "read_stroke_rows", "read_strokes", "read_strokes_header", "write_mot_tracks"]
+           "write_strokes", "read_stroke_rows", "read_strokes", "read_strokes_header",
+           "write_mot_tracks"]
 
 MOT_DEFAULT_FPS = 25.0
 """Frame rate assumed for a MOTChallenge file without a ``seqinfo.ini`` (CAVIAR's)."""

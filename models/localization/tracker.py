@@ -213,7 +213,8 @@ def check_observation(model: RobotModel, observation: Any, dtype: Any = jnp.floa
             "mask": np.asarray(observation.mask),
         }
         if fields["mask"].dtype != bool:  # "x" or 2 was read as True
-            raise InputError(f"observation.mask must hold booleans, got dtype {fields['mask'].dtype}")
+            dtype = fields["mask"].dtype
+            raise InputError(f"observation.mask must hold booleans, got dtype {dtype}")
         for name, arr in fields.items():
             if arr.shape != lm.shape or lm.ndim != 1:
                 raise ShapeError(f"observation.{name} has shape {arr.shape}, landmark {lm.shape}")

@@ -237,7 +237,8 @@ def evaluate(result: str, truth: str) -> dict:
     for k, (r, s) in enumerate(zip(rows, strokes)):
         if r["stroke"] != s.index:  # rows are matched to strokes by position
             raise InputError(f"{result}: row {k + 1} is stroke {r['stroke']}, but stroke "
-                             f"{s.index} belongs there (rows in stroke order, as written)")  # fmt: skip
+                             f"{s.index} belongs there (rows in stroke order, as "
+                             "written)")  # fmt: skip
         if (r["start"], r["end"]) != (s.start, s.end):
             raise InputError(f"{result}: stroke {r['stroke']} spans frames {r['start']}-{r['end']}, but "
                              f"{truth} gives {s.start}-{s.end} with seed {seed}: not the boxes "

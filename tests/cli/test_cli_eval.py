@@ -210,8 +210,8 @@ def test_track_refuses_a_seed_out_of_range(tmp_path, capsys, seed):
 def test_track_refuses_an_output_folder_that_is_a_file(tmp_path, capsys):
     """It raised FileExistsError."""
     (tmp_path / "afile").write_text("x")
-    _bad(capsys, ["track", "jorge", str(DATA / "jorge" / "caviar.xml"), "-o",
-                  str(tmp_path / "afile")], f"output folder {tmp_path / 'afile'}: cannot create")  # fmt: skip
+    argv = ["track", "jorge", str(DATA / "jorge" / "caviar.xml"), "-o", str(tmp_path / "afile")]
+    _bad(capsys, argv, f"output folder {tmp_path / 'afile'}: cannot create")
 
 
 def test_data_and_sweep_arguments_are_checked(tmp_path, capsys):
