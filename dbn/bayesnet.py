@@ -9,6 +9,7 @@ import networkx as nx
 import numpy as np
 from numpy.typing import ArrayLike
 
+from dbn.checks import check_mapping
 from dbn.cpds import ContinuousCPD, DeterministicCPD, LinearGaussianCPD, TabularCPD
 from dbn.errors import (
     CPDShapeError,
@@ -270,11 +271,8 @@ def check_evidence(
     EvidenceError
         Unknown variable, state out of range, wrong length, negative/NaN/all-zero vector.
     """
-    for what, given in (("evidence", evidence), ("soft evidence", soft_evidence)):
-        if given is not None and not isinstance(given, Mapping):
-            raise EvidenceError(
-                f"{what} must be a mapping name -> value, got {type(given).__name__}"
-            )
+    check_mapping("evidence", evidence)
+    check_mapping("soft evidence", soft_evidence)
     hard: dict[str, int] = {}
     for name, state in (evidence or {}).items():
         if name not in bn:

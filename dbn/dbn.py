@@ -22,6 +22,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from dbn.bayesnet import CPD, BayesNet, check_sequence
+from dbn.checks import check_count
 from dbn.cpds import DeterministicCPD, LinearGaussianCPD, TabularCPD
 from dbn.errors import ModelError, UnknownVariableError
 from dbn.variables import DiscreteVariable, Variable
@@ -203,12 +204,7 @@ class TwoSliceDBN:
     def unroll(self, num_timesteps: int) -> BayesNet:
         """The Bayes net of slices ``0..num_timesteps-1``, nodes named ``"name_t"`` (at most
         :data:`MAX_UNROLL_NODES` nodes: it is meant for checks on short sequences)."""
-        if (
-            isinstance(num_timesteps, bool)
-            or not isinstance(num_timesteps, int | np.integer)
-            or num_timesteps < 1
-        ):
-            raise ModelError(f"num_timesteps must be an integer >= 1, got {num_timesteps!r}")
+        num_timesteps = check_count("num_timesteps", num_timesteps, ModelError)
         if num_timesteps * len(self._variables) > MAX_UNROLL_NODES:
             raise ModelError(
                 f"unrolling {num_timesteps} slices of {len(self._variables)} variables is over "

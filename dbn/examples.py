@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dbn.checks import check_count
 from dbn.cpds import TabularCPD
 from dbn.dbn import TwoSliceDBN, prev
 from dbn.errors import ModelError
@@ -38,8 +39,7 @@ def coupled_chains(
 
     Tables put the parents' axes first (``x{i}[t-1]``, then ``x{i-1}[t-1]``), the child last.
     """
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-        raise ModelError(f"n (number of chains) must be an integer >= 1, got {n!r}")
+    n = check_count("n (number of chains)", n, ModelError)
     keep, flip = _check_prob("keep", keep), _check_prob("flip", flip)
     noise, p_on = _check_prob("noise", noise), _check_prob("p_on", p_on)
     stay = np.array([[keep, 1 - keep], [1 - keep, keep]])
@@ -75,9 +75,7 @@ def sample_coupled_chains(
     filters take.
     """
     coupled_chains(n, keep, flip, noise, p_on)  # validates the arguments
-    ok = isinstance(num_timesteps, int | np.integer) and not isinstance(num_timesteps, bool)
-    if not ok or num_timesteps < 1:
-        raise ModelError(f"num_timesteps must be an integer >= 1, got {num_timesteps!r}")
+    num_timesteps = check_count("num_timesteps", num_timesteps, ModelError)
     xs = np.empty((num_timesteps, n), np.int64)
     x = (rng.random(n) < p_on).astype(np.int64)
     for t in range(num_timesteps):

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from dbn.bayesnet import BayesNet
+from dbn.checks import check_nonnegative
 from dbn.cpds import ROW_TOLERANCE, TabularCPD
 from dbn.dbn import TwoSliceDBN, is_prev, prev, unprev
 from dbn.errors import DBNError, EvidenceError, FileFormatError, InputError, ModelError
@@ -124,13 +125,6 @@ def _check_pgmpy(model: Any, kind: str) -> None:
         raise ModelError(f"expected a pgmpy {kind}, got {cls.__name__}")
 
 
-def _check_tol(renormalize_tol: Any) -> float:
-    real = isinstance(renormalize_tol, (int, float, np.integer, np.floating))
-    if isinstance(renormalize_tol, bool) or not real or not renormalize_tol >= 0:
-        raise ModelError(f"renormalize_tol must be a number >= 0, got {renormalize_tol!r}")
-    return float(renormalize_tol)
-
-
 def _renormalized(name: Any, table: np.ndarray, tol: float) -> np.ndarray:
     """Rows within ``tol`` of summing to 1 divided by their sum (files print ~8 digits)."""
     sums = table.sum(axis=-1, keepdims=True)
@@ -157,7 +151,7 @@ def from_pgmpy(model, renormalize_tol: float = 1e-6) -> BayesNet:
         Not a pgmpy Bayes net; a node without a CPD (it used to be dropped silently).
     """
     _check_pgmpy(model, "DiscreteBayesianNetwork")
-    renormalize_tol = _check_tol(renormalize_tol)
+    renormalize_tol = check_nonnegative("renormalize_tol", renormalize_tol, ModelError)
     have = {cpd.variable for cpd in model.get_cpds()}
     missing = [n for n in model.nodes() if n not in have]
     if missing:
@@ -513,7 +507,7 @@ def parse_bif(text: str, renormalize_tol: float = 1e-6, source: str = "<BIF text
     """
     if not isinstance(text, str):
         raise InputError(f"parse_bif takes the text of a BIF file, got {type(text).__name__}")
-    renormalize_tol = _check_tol(renormalize_tol)
+    renormalize_tol = check_nonnegative("renormalize_tol", renormalize_tol, ModelError)
     _check_bif_text(text, source)
     states = _bif_states(text, source)
     cpds: dict[str, TabularCPD] = {}

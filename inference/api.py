@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from dbn.checks import check_mapping
 from dbn.dbn import TwoSliceDBN
 from dbn.errors import (
     EvidenceError,
@@ -73,10 +74,7 @@ def _check_evidence(
     """Names, shapes and lengths of every column (discrete ones are checked in full by the
     exact engine's :func:`~inference.exact.dbn_evidence.sequence_likelihoods`)."""
     variables = {v.name: v for v in dbn.variables}
-    if evidence is not None and not isinstance(evidence, Mapping):
-        raise EvidenceError(
-            f"evidence must be a mapping name -> column, got {type(evidence).__name__}"
-        )
+    check_mapping("evidence", evidence)
     lengths: dict[str, int] = {}
     for name, col in {**(evidence or {}), **(soft or {})}.items():
         if name not in variables:

@@ -20,6 +20,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
+from dbn.checks import check_mapping
 from dbn.dbn import TwoSliceDBN
 from dbn.errors import (
     EvidenceError,
@@ -152,8 +153,7 @@ def check_columns(
     ------
     UnknownVariableError, EvidenceError, ShapeError, NonFiniteError
     """
-    if evidence is not None and not isinstance(evidence, Mapping):
-        raise EvidenceError(f"evidence must be a mapping name -> column, got {type(evidence)}")
+    check_mapping("evidence", evidence)
     variables = {v.name: v for v in dbn.variables}
     T = num_timesteps
     disc: dict[str, np.ndarray] = {}

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from dbn.checks import check_count
 from dbn.errors import FileFormatError, InputError
 
 __all__ = [
@@ -181,13 +182,6 @@ def read_results(path: str | os.PathLike) -> list[dict[str, Any]]:
     return records
 
 
-def _check_workers(n_workers: Any) -> None:
-    if n_workers is not None and (
-        isinstance(n_workers, bool) or not isinstance(n_workers, int) or n_workers < 1
-    ):
-        raise InputError(f"n_workers must be an int >= 1, got {n_workers!r}")
-
-
 def local_cluster(n_workers: int | None = None):
     """A ``LocalCluster`` of single-threaded worker processes (one per core by default).
 
@@ -201,8 +195,7 @@ def local_cluster(n_workers: int | None = None):
     """
     from dask.distributed import LocalCluster
 
-    _check_workers(n_workers)
-    n = n_workers or os.cpu_count() or 1
+    n = (os.cpu_count() or 1) if n_workers is None else check_count("n_workers", n_workers)
     env = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
     env["XLA_FLAGS"] = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
     return LocalCluster(
@@ -264,7 +257,8 @@ def run_grid(
     if resume and out is None:
         raise InputError("resume=True needs the results file (out=...)")
     check_params(task, grid)
-    _check_workers(n_workers)
+    if n_workers is not None:  # before the results file is opened
+        check_count("n_workers", n_workers)
     # the points already done (resume) are returned as recorded; the rest are run
     records = {}
     if resume:

@@ -9,12 +9,12 @@ product when both are given. The structured filter multiplies it into ``v``'s CP
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from dbn.bayesnet import check_likelihood
+from dbn.checks import check_count, check_mapping
 from dbn.errors import EvidenceError, ShapeError, UnknownEvidenceError
 from dbn.variables import DiscreteVariable
 from inference.evidence_columns import as_column
@@ -28,17 +28,6 @@ def _variable(variables: Mapping[str, DiscreteVariable], name: str, what: str):
             f"{what} on unknown variable {name!r} (known: {sorted(variables)})"
         )
     return variables[name]
-
-
-def _check_num_timesteps(T: Any) -> None:
-    ok = isinstance(T, (int, np.integer)) and not isinstance(T, bool)
-    if T is not None and (not ok or T < 1):
-        raise ShapeError(f"num_timesteps must be an int >= 1, got {T!r}")
-
-
-def _check_mapping(what: str, value: Any) -> None:
-    if value is not None and not isinstance(value, Mapping):
-        raise EvidenceError(f"{what} must be a mapping name -> value, got {type(value).__name__}")
 
 
 def _length(name: str, n: int, T: int | None) -> int:
@@ -77,9 +66,10 @@ def sequence_likelihoods(
         Unknown variable, non-integer states, a state out of range, lengths that differ,
         a soft row of the wrong shape or not a likelihood.
     """
-    _check_num_timesteps(num_timesteps)
-    _check_mapping("evidence", evidence)
-    _check_mapping("soft evidence", soft_evidence)
+    if num_timesteps is not None:
+        check_count("num_timesteps", num_timesteps, ShapeError)
+    check_mapping("evidence", evidence)
+    check_mapping("soft evidence", soft_evidence)
     T = num_timesteps
     lam: dict[str, np.ndarray] = {}
     for name, col in (evidence or {}).items():
@@ -133,8 +123,8 @@ def slice_likelihoods(
 ) -> dict[str, np.ndarray]:
     """One slice's evidence (name -> state, name -> likelihood vector) as likelihoods,
     each of shape (1, cardinality)."""
-    _check_mapping("evidence", evidence)
-    _check_mapping("soft evidence", soft_evidence)
+    check_mapping("evidence", evidence)
+    check_mapping("soft evidence", soft_evidence)
     lam: dict[str, np.ndarray] = {}
     for name, state in (evidence or {}).items():
         v = _variable(variables, name, "evidence")

@@ -33,7 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from dbn.errors import FrontierTooLargeError, InputError
+from dbn.checks import check_count
+from dbn.errors import FrontierTooLargeError
 
 __all__ = ["MAX_FRONTIER_SIZE", "check_max_size", "Op", "SlicePlan", "compile_slice_plan", "barren"]
 
@@ -43,10 +44,7 @@ MAX_FRONTIER_SIZE = 2**25
 
 def check_max_size(max_size: Any) -> int:
     """``max_size`` as an int >= 1 (not a bool or a fraction); else :class:`InputError`."""
-    ok = isinstance(max_size, (int, np.integer)) and not isinstance(max_size, bool)
-    if not ok or max_size < 1:
-        raise InputError(f"max_size must be an int >= 1 (table entries), got {max_size!r}")
-    return int(max_size)
+    return check_count("max_size (table entries)", max_size)
 
 _APPROX = (
     "use an approximate method: inference.filter(model, evidence, method='bk' "

@@ -86,9 +86,9 @@ def _real(name: str, value) -> np.ndarray:
 
 
 def _check_covariances(params: LinearGaussianParams) -> None:
-    """Q, R and P0 symmetric and positive semi-definite (within rounding)."""
+    """Q, R and P0 (float arrays) symmetric and positive semi-definite (within rounding)."""
     for name in ("Q", "R", "P0"):
-        S = np.asarray(getattr(params, name), dtype=np.float64)
+        S = getattr(params, name)
         scale = max(1.0, float(np.abs(S).max(initial=0.0)))
         if not np.allclose(S, S.T, rtol=0.0, atol=1e-9 * scale):
             raise InputError(f"{name} is not symmetric")
@@ -96,33 +96,32 @@ def _check_covariances(params: LinearGaussianParams) -> None:
             raise InputError(f"{name} is not positive semi-definite (a covariance)")
 
 
-def _check(params: LinearGaussianParams, observations: np.ndarray) -> np.ndarray:
+def _check(
+    params: LinearGaussianParams, observations: np.ndarray
+) -> tuple[LinearGaussianParams, np.ndarray]:
+    """``params`` as finite float64 arrays of consistent shapes (Q, R and P0 covariances)
+    and the observations as a finite ``(num_timesteps, obs_dim)`` array."""
     if not isinstance(params, LinearGaussianParams):
         raise InputError(f"params must be a LinearGaussianParams, got {type(params).__name__}")
-    for name in params._fields:
-        _real(name, getattr(params, name))
-    d = np.asarray(params.m0).shape[0] if np.ndim(params.m0) == 1 else -1
+    p = LinearGaussianParams(*(_real(name, v) for name, v in zip(params._fields, params)))
+    d = p.m0.shape[0] if p.m0.ndim == 1 else -1
     if d < 0:
-        raise ShapeError(f"m0 has shape {np.shape(params.m0)}, expected (state_dim,)")
+        raise ShapeError(f"m0 has shape {p.m0.shape}, expected (state_dim,)")
     shapes = {"F": (d, d), "Q": (d, d), "P0": (d, d)}
     for name, shape in shapes.items():
-        if np.shape(getattr(params, name)) != shape:
-            raise ShapeError(
-                f"{name} has shape {np.shape(getattr(params, name))}, expected {shape}"
-            )
-    m = np.shape(params.H)[0]
-    if np.shape(params.H) != (m, d) or np.shape(params.R) != (m, m):
-        raise ShapeError(
-            f"H {np.shape(params.H)} / R {np.shape(params.R)} do not fit state_dim {d}"
-        )
-    _check_covariances(params)
+        if getattr(p, name).shape != shape:
+            raise ShapeError(f"{name} has shape {getattr(p, name).shape}, expected {shape}")
+    m = p.H.shape[0] if p.H.ndim else -1
+    if p.H.shape != (m, d) or p.R.shape != (m, m):
+        raise ShapeError(f"H {p.H.shape} / R {p.R.shape} do not fit state_dim {d}")
+    _check_covariances(p)
     try:
         y = np.asarray(observations, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise InputError(f"observations is not an array of numbers ({exc})") from None
     if y.ndim != 2 or y.shape[1] != m:
         raise ShapeError(f"observations has shape {y.shape}, expected (num_timesteps, {m})")
-    return _real("observations", y)
+    return p, _real("observations", y)
 
 
 def _predict(m: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray):
@@ -172,10 +171,9 @@ def kalman_filter(params: LinearGaussianParams, observations: np.ndarray) -> Kal
     ModelError
         A singular innovation covariance (``R`` and the predicted ``H P H^T`` both singular).
     """
-    y = _check(params, observations)
-    F, Q, H, R = (np.asarray(a, dtype=np.float64) for a in params[:4])
-    m = np.asarray(params.m0, dtype=np.float64)
-    P = np.asarray(params.P0, dtype=np.float64)
+    p, y = _check(params, observations)
+    F, Q, H, R = p[:4]
+    m, P = p.m0, p.P0
     T, d = y.shape[0], m.shape[0]
     fm, fP = np.zeros((T, d)), np.zeros((T, d, d))
     pm, pP = np.zeros((T, d)), np.zeros((T, d, d))
@@ -216,17 +214,17 @@ def lgssm_joint_log_likelihood(params: LinearGaussianParams, observations: np.nd
     Builds the mean and covariance of the stacked :math:`(y_1..y_T)` and evaluates the
     multivariate normal density with a Cholesky factor. For checking :func:`kalman_filter`.
     """
-    y = _check(params, observations)
-    F, Q, H, R = (np.asarray(a, dtype=np.float64) for a in params[:4])
+    p, y = _check(params, observations)
+    F, Q, H, R = p[:4]
     T, m = y.shape[0], H.shape[0]
     # s_k = F^k s_0 + sum_{j<=k} F^{k-j} q_j
     Fp = [np.linalg.matrix_power(F, k) for k in range(T + 1)]
-    mean = np.concatenate([H @ Fp[k + 1] @ params.m0 for k in range(T)])
+    mean = np.concatenate([H @ Fp[k + 1] @ p.m0 for k in range(T)])
     cov = np.zeros((T * m, T * m))
     for a in range(T):
         for b in range(T):
             ka, kb = a + 1, b + 1
-            c = Fp[ka] @ params.P0 @ Fp[kb].T
+            c = Fp[ka] @ p.P0 @ Fp[kb].T
             for j in range(1, min(ka, kb) + 1):
                 c = c + Fp[ka - j] @ Q @ Fp[kb - j].T
             cov[a * m : (a + 1) * m, b * m : (b + 1) * m] = H @ c @ H.T + (R if a == b else 0.0)

@@ -32,6 +32,7 @@ import numpy as np
 from jax import Array
 from jax.scipy.special import logsumexp
 
+from dbn.checks import check_count, check_nonnegative
 from dbn.errors import InputError, ModelError
 from inference.particle.model import StateSpaceModel
 from inference.particle.resampling import Resampler, systematic
@@ -175,9 +176,7 @@ def _resample_predicate(cur_ess: Array, ess_threshold: float, n: int) -> Array:
 
 def check_threshold(ess_threshold: Any) -> None:
     """Raise :class:`InputError` unless ``ess_threshold`` is a real number >= 0 (not a bool)."""
-    real = isinstance(ess_threshold, (int, float, np.integer, np.floating))
-    if isinstance(ess_threshold, bool) or not real or not (ess_threshold >= 0.0):
-        raise InputError(f"ess_threshold must be a number >= 0, got {ess_threshold!r}")
+    check_nonnegative("ess_threshold", ess_threshold)
 
 
 MAX_PARTICLES = 2**31 - 1
@@ -187,10 +186,10 @@ MAX_PARTICLES = 2**31 - 1
 def check_num_particles(num_particles: Any) -> int:
     """``num_particles`` as an int in [1, :data:`MAX_PARTICLES`] (an int, not a bool or a
     fractional float); else :class:`InputError`."""
-    ok = isinstance(num_particles, (int, np.integer)) and not isinstance(num_particles, bool)
-    if not ok or not 1 <= num_particles <= MAX_PARTICLES:
-        raise InputError(f"num_particles must be an int in [1, 2**31 - 1], got {num_particles!r}")
-    return int(num_particles)
+    n = check_count("num_particles", num_particles)
+    if n > MAX_PARTICLES:
+        raise InputError(f"num_particles must be at most 2**31 - 1, got {num_particles!r}")
+    return n
 
 
 def check_key(key: Any) -> None:

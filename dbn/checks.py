@@ -1,0 +1,39 @@
+"""Argument checks shared by the declarations, the engines and the runners. Each raises
+the library's error (the class the caller names) with the argument's name, never
+numpy's or Python's own."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from dbn.errors import DBNError, EvidenceError, InputError
+
+__all__ = ["check_count", "check_mapping", "check_nonnegative"]
+
+
+def check_count(name: str, value: Any, error: type[DBNError] = InputError) -> int:
+    """``value`` as an int >= 1: a Python or numpy integer, not a bool or a float (2.5 would
+    be truncated, True read as 1); else ``error`` naming ``name``."""
+    ok = isinstance(value, int | np.integer) and not isinstance(value, bool)
+    if not ok or value < 1:
+        raise error(f"{name} must be an integer >= 1, got {value!r}")
+    return int(value)
+
+
+def check_nonnegative(name: str, value: Any, error: type[DBNError] = InputError) -> float:
+    """``value`` as a float >= 0: a real number, not a bool (True read as 1) or a string
+    (raised ``TypeError`` on comparison); NaN is refused; else ``error`` naming ``name``."""
+    real = isinstance(value, int | float | np.integer | np.floating)
+    if isinstance(value, bool) or not real or not value >= 0:
+        raise error(f"{name} must be a number >= 0, got {value!r}")
+    return float(value)
+
+
+def check_mapping(what: str, value: Any, error: type[DBNError] = EvidenceError) -> None:
+    """Raise ``error`` unless ``value`` is None or a mapping (evidence ``name -> value``:
+    a list of pairs raised ``AttributeError`` deep inside)."""
+    if value is not None and not isinstance(value, Mapping):
+        raise error(f"{what} must be a mapping name -> value, got {type(value).__name__}")
