@@ -4,9 +4,11 @@ Inputs (``docs/formats.md``): a CAVIAR CVML ground-truth file (``<frame number>`
 ``<objectlist><object id><box xc yc w h>``, ``<grouplist>``), a PETS2009 XML of the same
 frame/object/box layout, or a MOTChallenge text file ``frame,id,bb_left,bb_top,w,h[,conf,
 ...]`` (``gt.txt``, or a tracker's output; rows with ``conf = 0`` are ignored, as in
-MOT16+ ``gt.txt``; ``id = -1`` detections cannot make strokes). An ETH / UCY ``obsmat.txt`` (tracks in
-world metres, :mod:`models.jorge.eth`) is read through a SIMULATED oblique camera. Any of
-them may be gzipped. A MOTChallenge file's frame rate is the ``frameRate`` of the ``seqinfo.ini``
+MOT16+ ``gt.txt``; ``id = -1`` detections cannot make strokes; a ground truth being
+scored also reads the classes of a MOT16/17/20 ``gt.txt``, :func:`read_mot`,
+:func:`mot_distractors`). An ETH / UCY ``obsmat.txt`` (tracks in world metres,
+:mod:`models.jorge.eth`) is read through a SIMULATED oblique camera. Any of them may be
+gzipped. A MOTChallenge file's frame rate is the ``frameRate`` of the ``seqinfo.ini``
 beside it or one folder up (the challenge's ``SEQ/gt/gt.txt`` and ``SEQ/seqinfo.ini``);
 without one it is assumed to be 25 fps, CAVIAR's (:func:`mot_frame_rate`).
 
@@ -32,7 +34,8 @@ import numpy as np
 from dbn.errors import DBNError, InputError, in_file
 from models.io.table import as_float, as_int, fail, read_lines, require_file, write_rows
 
-__all__ = ["read_boxes", "read_mot", "mot_frame_rate", "frame_rate_source", "is_obsmat", "is_mot",
+__all__ = ["read_boxes", "read_mot", "mot_distractors", "mot_distractor_classes",
+           "mot_frame_rate", "frame_rate_source", "is_obsmat", "is_mot",
            "write_strokes", "read_stroke_rows", "read_strokes", "read_strokes_header",
            "write_mot_tracks"]
 
@@ -52,31 +55,38 @@ def mot_frame_rate(path: str | Path) -> tuple[float | None, Path | None]:
         A ``seqinfo.ini`` that cannot be read, or a ``frameRate`` that is not a finite
         number > 0 (naming the file).
     """
-    path = Path(path)
-    for folder in (path.parent, path.parent.parent):
-        ini = folder / "seqinfo.ini"
-        if ini.is_file():
-            fps = _ini_frame_rate(ini)
-            return (fps, ini) if fps is not None else (None, None)
-    return None, None
-
-
-def _ini_frame_rate(ini: Path) -> float | None:
-    parser = configparser.ConfigParser(interpolation=None)
-    try:
-        parser.read_string("".join(read_lines(ini, "seqinfo.ini")), source=str(ini))
-    except configparser.Error as exc:
-        raise fail(ini, getattr(exc, "lineno", 0) or 0, f"not an INI file ({type(exc).__name__})") from None
-    if not parser.has_option("Sequence", "frameRate"):
-        return None
-    text = parser.get("Sequence", "frameRate")
+    ini = _seqinfo(Path(path))
+    if ini is None:
+        return None, None
+    text = _ini_option(ini, "frameRate")
+    if text is None:
+        return None, None
     try:
         fps = float(text)
     except ValueError:
         fps = float("nan")
     if not (np.isfinite(fps) and fps > 0):
         raise fail(ini, 0, f"[Sequence] frameRate = {text!r}: expected a number > 0")
-    return fps
+    return fps, ini
+
+
+def _seqinfo(path: Path) -> Path | None:
+    """The ``seqinfo.ini`` in the folder of ``path`` or the one above it, nearest first."""
+    for folder in (path.parent, path.parent.parent):
+        if (folder / "seqinfo.ini").is_file():
+            return folder / "seqinfo.ini"
+    return None
+
+
+def _ini_option(ini: Path, option: str) -> str | None:
+    """``[Sequence] option`` of a ``seqinfo.ini``, None when absent; a file that is not
+    INI is an :class:`InputError` naming it."""
+    parser = configparser.ConfigParser(interpolation=None)
+    try:
+        parser.read_string("".join(read_lines(ini, "seqinfo.ini")), source=str(ini))
+    except configparser.Error as exc:
+        raise fail(ini, getattr(exc, "lineno", 0) or 0, f"not an INI file ({type(exc).__name__})") from None
+    return parser.get("Sequence", option) if parser.has_option("Sequence", option) else None
 
 
 def _mot_fields(line: str) -> list[str]:
@@ -87,13 +97,25 @@ def _mot_fields(line: str) -> list[str]:
     return [x.strip() for x in text.split(",")] if "," in text else text.split()
 
 
-def read_mot(path: str | Path):
-    """A MOTChallenge box file as a :class:`models.jorge.strokes.GroundTruth`; its ``fps``
-    from :func:`mot_frame_rate`, else :data:`MOT_DEFAULT_FPS`."""
-    from models.jorge.strokes import MAX_PIXELS, _assemble
+MOT_DISTRACTOR_CLASSES = (2, 7, 8, 12)
+"""Classes of a MOT16/17/20 ground truth whose boxes are not scored (person on vehicle,
+static person, distractor, reflection): a result's box matched to one of them is dropped,
+as the challenge's evaluation does; MOT20 adds 6, non-motorised vehicle
+(:func:`mot_distractor_classes`)."""
 
-    path = Path(path)
-    frames: dict[int, dict[int, tuple]] = {}
+MOT_CLASS_FIELDS = 9
+"""Fields of a MOT16/17/20 ground-truth row, ``frame,id,bb_left,bb_top,w,h,flag,class,
+visibility``: the only layout with a class (MOT15's and the results' 10 fields end in
+world coordinates)."""
+
+
+def _mot_rows(path: Path, classes: bool):
+    """Each row of a MOTChallenge file: ``(line, frame, id, (left, top, w, h), conf,
+    class)``, ``conf`` NaN where the row has none, ``class`` None unless ``classes`` and
+    the row has :data:`MOT_CLASS_FIELDS` fields (an int in 1..12). Frames >= 0 and boxes
+    of positive size within the pixel bound are checked on every row."""
+    from models.jorge.strokes import MAX_PIXELS
+
     for line_no, line in enumerate(read_lines(path, "MOTChallenge file"), start=1):
         fields = _mot_fields(line)
         if not any(fields) or fields[0].startswith("#"):
@@ -105,17 +127,41 @@ def read_mot(path: str | Path):
             as_int(fields[1], path, line_no, "id"),
         )
         x, y, w, h = (as_float(v, path, line_no, n) for v, n in zip(fields[2:6], "xywh"))
-        if len(fields) > 6 and as_float(fields[6], path, line_no, "conf", allow_empty=True) == 0:
-            continue
+        conf = np.nan
+        if len(fields) > 6:
+            conf = as_float(fields[6], path, line_no, "conf", allow_empty=True)
+        cls = None
+        if classes and len(fields) == MOT_CLASS_FIELDS:
+            cls = as_int(fields[7], path, line_no, "class")
+            if not 1 <= cls <= 12:
+                raise fail(path, line_no, f"class = {cls}: a {MOT_CLASS_FIELDS}-field "
+                           "ground-truth row is frame,id,box,flag,class,visibility "
+                           "with class 1..12")  # fmt: skip
         if fr < 0:
             raise fail(path, line_no, f"frame = {fr}: frames count from 0 (MOTChallenge's from 1)")
-        if oid < 0:
-            raise fail(path, line_no, f"id = {oid}: detections without ids cannot make "
-                       "strokes (give tracks with ids, e.g. gt.txt)")  # fmt: skip
         if w <= 0 or h <= 0:
             raise fail(path, line_no, f"box width/height must be > 0, got {w}, {h}")
         if max(abs(x + w / 2), abs(y + h / 2), w, h) > MAX_PIXELS:
             raise fail(path, line_no, f"box {x}, {y}, {w}, {h} is beyond {MAX_PIXELS:g} pixels")
+        yield line_no, fr, oid, (x, y, w, h), conf, cls
+
+
+def read_mot(path: str | Path, *, classes: bool = False):
+    """A MOTChallenge box file as a :class:`models.jorge.strokes.GroundTruth`; its ``fps``
+    from :func:`mot_frame_rate`, else :data:`MOT_DEFAULT_FPS`. Rows with ``conf = 0`` are
+    not people. ``classes`` (a ground truth being scored): a row of
+    :data:`MOT_CLASS_FIELDS` fields is a person only if its class is 1 (pedestrian), as
+    the challenge's evaluation reads ``gt.txt``."""
+    from models.jorge.strokes import _assemble
+
+    path = Path(path)
+    frames: dict[int, dict[int, tuple]] = {}
+    for line_no, fr, oid, (x, y, w, h), conf, cls in _mot_rows(path, classes):
+        if conf == 0 or cls not in (None, 1):
+            continue
+        if oid < 0:
+            raise fail(path, line_no, f"id = {oid}: detections without ids cannot make "
+                       "strokes (give tracks with ids, e.g. gt.txt)")  # fmt: skip
         objs = frames.setdefault(fr, {})
         if oid in objs:
             raise fail(path, line_no, f"id {oid} appears twice in frame {fr}")
@@ -127,6 +173,32 @@ def read_mot(path: str | Path):
         return _assemble(path.name, sorted(frames.items()), [], fps=MOT_DEFAULT_FPS if fps is None else fps)
     except DBNError as exc:
         raise in_file(exc, path) from None
+
+
+def mot_distractors(path: str | Path) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """The boxes a scored result is matched against before scoring, per frame, in a MOT16/17/20
+    ground truth (rows of :data:`MOT_CLASS_FIELDS` fields): ``frame -> (boxes, distractor)``,
+    every such row's box ``(n, 4)`` as ``(left, top, w, h)`` whatever its flag, and whether
+    its class is a distractor (:func:`mot_distractor_classes`). Empty for a file without
+    classes (nothing is dropped)."""
+    path = Path(path)
+    ignored = mot_distractor_classes(path)
+    rows: dict[int, list] = {}
+    for _, fr, _, box, _, cls in _mot_rows(path, classes=True):
+        if cls is not None:
+            rows.setdefault(fr, []).append((*box, cls in ignored))
+    return {f: (np.array([r[:4] for r in v], float), np.array([r[4] for r in v], bool))
+            for f, v in rows.items()}
+
+
+def mot_distractor_classes(path: str | Path) -> tuple[int, ...]:
+    """:data:`MOT_DISTRACTOR_CLASSES`, and class 6 for a MOT20 sequence (its
+    ``seqinfo.ini`` ``[Sequence]`` ``name`` starts with ``MOT20``), as the challenge's
+    evaluation does."""
+    ini = _seqinfo(Path(path))
+    name = _ini_option(ini, "name") if ini is not None else None
+    extra = (6,) if name is not None and name.upper().startswith("MOT20") else ()
+    return tuple(sorted(MOT_DISTRACTOR_CLASSES + extra))
 
 
 def read_boxes(path: str | Path, view=None):

@@ -157,17 +157,23 @@ def iou_distance(a: np.ndarray, b: np.ndarray, max_distance: float = 0.5) -> np.
 def _mot(result: str, truth: str) -> dict:
     """MOTA, IDF1, ... of MOTChallenge tracks against the truth boxes (motmetrics, IoU)
     over the truth's frames (:func:`_scored_frames`): a box in one of them that matches
-    no person is a false positive. An obsmat truth is seen through the view in the header
-    of the ``strokes.csv`` beside the tracks (the same run's), else the default one."""
+    no person is a false positive. A MOT16/17/20 truth's pedestrians are scored, and a box
+    matched to one of its distractors (:func:`on_distractors`) is dropped first. An
+    obsmat truth is seen through the view in the header of the ``strokes.csv`` beside the
+    tracks (the same run's), else the default one."""
     import motmetrics as mm
 
-    from models.io.jorge import read_mot
+    from models.io.jorge import mot_distractors, read_mot
 
-    view = None
+    view, ignored = None, {}
     beside = Path(result).with_name("strokes.csv")  # the same run's view, for an obsmat truth
     if is_obsmat(truth) and beside.is_file():
         view = _settings(str(beside), read_strokes_header(beside))[1]
-    pred, ref = read_mot(result), read_boxes(truth, view)
+    pred = read_mot(result)
+    if is_mot(truth):
+        ref, ignored = read_mot(truth, classes=True), mot_distractors(truth)
+    else:
+        ref = read_boxes(truth, view)
     acc = mm.MOTAccumulator(auto_id=True)
     pf = {int(f): i for i, f in enumerate(pred.frames)}
     rf = {int(f): i for i, f in enumerate(ref.frames)}
@@ -181,11 +187,29 @@ def _mot(result: str, truth: str) -> dict:
         ok = ~np.isnan(rb[:, 0])
         pb = pred.boxes[pf[f]] if f in pf else np.zeros((0, 4))
         pok = ~np.isnan(pb[:, 0])
+        if f in ignored:
+            pok[pok] = ~on_distractors(tlwh(pb[pok]), *ignored[f])
         d = iou_distance(tlwh(rb[ok]), tlwh(pb[pok]))
         acc.update(ref.ids[ok].tolist(), pred.ids[pok].tolist() if f in pf else [], d)
     mh = mm.metrics.create()
     s = mh.compute(acc, metrics=["mota", "idf1", "num_switches", "precision", "recall"], name="x")
     return {k: float(s[k].iloc[0]) for k in s.columns}
+
+
+def on_distractors(boxes: np.ndarray, truth: np.ndarray, distractor: np.ndarray) -> np.ndarray:
+    """Which result ``boxes`` (n, 4) of one frame a MOTChallenge evaluation drops: those
+    that the one-to-one matching with every ground-truth box of the frame, ``truth`` (m, 4)
+    (all ``(left, top, w, h)``), maximising the IoU among pairs with IoU >= 0.5, pairs with
+    a ``distractor`` (m,) box. Returns a bool array (n,)."""
+    from scipy.optimize import linear_sum_assignment
+
+    iou = 1.0 - iou_distance(truth, boxes)  # NaN where IoU < 0.5: no pair
+    iou = np.where(np.isnan(iou), 0.0, iou)
+    rows, cols = linear_sum_assignment(iou, maximize=True)
+    hit = (iou[rows, cols] > 0) & distractor[rows]
+    out = np.zeros(len(boxes), bool)
+    out[cols[hit]] = True
+    return out
 
 
 def _scored_frames(truth_frames, result_frames, mot: bool) -> list[int]:

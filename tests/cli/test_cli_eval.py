@@ -8,6 +8,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from models.cli import main
@@ -116,6 +117,73 @@ def test_jorge_mot_eval_refuses_a_negative_frame(tmp_path, capsys):
     truth = _write(tmp_path / "gt.txt", _mot_rows([1, 2]))
     result = _write(tmp_path / "tracks.txt", _mot_rows([1, -2]))
     _bad(capsys, ["eval", "jorge", str(result), str(truth)], "tracks.txt:3:", "frame = -2")
+
+
+def _gt_rows(frames, people=(1, 2), others=()) -> list[str]:
+    """MOT16/17/20 ``gt.txt`` rows (9 fields: ..., flag, class, visibility): ``people``
+    are pedestrians (class 1, flag 1); ``others`` are ``(id, flag, class)``."""
+    rows = [f"{f},{i},{10 + 40 * i},{20 + f},20,40,1,1,1" for f in frames for i in people]
+    rows += [f"{f},{i},{10 + 40 * i},{20 + f},20,40,{flag},{c},1"
+             for f in frames for i, flag, c in others]
+    return rows
+
+
+def _on(frames, i: int, dx: int = 0) -> list[str]:
+    """A result's track of id ``i`` on the box of truth id ``i`` (moved ``dx`` pixels)."""
+    return [f"{f},{i},{10 + 40 * i + dx},{20 + f},20,40,1,-1,-1,-1" for f in frames]
+
+
+@pytest.mark.parametrize("cls", [2, 7, 8, 12])
+def test_jorge_mot_eval_drops_a_box_on_a_distractor(tmp_path, capsys, cls):
+    """A box on a static person, a reflection, ... (flag 0 in gt.txt) was a false
+    positive; the challenge's evaluation drops it. A box on a car stays one."""
+    frames = [1, 2, 3, 4]
+    truth = _write(tmp_path / "gt.txt", _gt_rows(frames, others=[(3, 0, cls), (4, 0, 3)]))
+    result = _write(tmp_path / "tracks.txt", _mot_rows(frames) + _on(frames, 3, dx=2))
+    m = _metrics(capsys, ["eval", "jorge", str(result), str(truth)])
+    assert m["precision"] == 1.0 and m["mota"] == 1.0
+    result = _write(tmp_path / "tracks.txt", _mot_rows(frames) + _on(frames, 4))  # the car
+    m = _metrics(capsys, ["eval", "jorge", str(result), str(truth)])
+    assert m["precision"] == pytest.approx(8 / 12)
+    assert m["mota"] == pytest.approx(1 - 4 / 8)
+
+
+def test_jorge_mot_eval_reads_classes_of_a_nine_field_truth_only(tmp_path, capsys):
+    """A flagged row of another class (a car) is not a person to find; class 6 is a
+    distractor in MOT20 only (seqinfo.ini's name); a 10-field truth (MOT15) has no class."""
+    frames = [1, 2]
+    seq = tmp_path / "SEQ"
+    (seq / "gt").mkdir(parents=True)
+    truth = _write(seq / "gt" / "gt.txt", _gt_rows(frames, others=[(3, 1, 3), (4, 0, 6)]))
+    result = _write(tmp_path / "tracks.txt", _mot_rows(frames) + _on(frames, 4))
+    m = _metrics(capsys, ["eval", "jorge", str(result), str(truth)])
+    assert m["recall"] == 1.0  # the car (id 3) is not missed
+    assert m["precision"] == pytest.approx(4 / 6)  # the pram (class 6) counts in MOT17
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=MOT20-01\nframeRate=25\n")
+    m = _metrics(capsys, ["eval", "jorge", str(result), str(truth)])
+    assert m["precision"] == 1.0
+    mot15 = _write(tmp_path / "gt15.txt", [r + ",-1" for r in _gt_rows(frames, others=[(3, 1, 3)])])
+    m = _metrics(capsys, ["eval", "jorge", str(result), str(mot15)])
+    assert m["recall"] == pytest.approx(4 / 6)  # every flagged row is a person
+
+
+def test_jorge_mot_eval_keeps_a_box_matched_to_a_person_beside_a_distractor(tmp_path, capsys):
+    """One to one: a box overlapping both a pedestrian and a static person (IoU >= 0.5
+    with each) is the pedestrian's when that matching has the larger IoU."""
+    from models.track.jorge import on_distractors
+
+    truth = np.array([[0.0, 0.0, 20, 40], [4.0, 0.0, 20, 40]])
+    boxes = np.array([[1.0, 0.0, 20, 40], [60.0, 0.0, 20, 40]])
+    assert not on_distractors(boxes, truth, np.array([False, True])).any()
+    assert on_distractors(boxes, truth, np.array([True, False])).tolist() == [True, False]
+    two = np.array([[1.0, 0.0, 20, 40], [4.0, 0.0, 20, 40]])
+    assert on_distractors(two, truth, np.array([False, True])).tolist() == [False, True]
+
+
+def test_jorge_mot_eval_refuses_a_bad_class(tmp_path, capsys):
+    truth = _write(tmp_path / "gt.txt", _gt_rows([1, 2]) + ["2,5,10,10,20,40,0,13,1"])
+    result = _write(tmp_path / "tracks.txt", _mot_rows([1, 2]))
+    _bad(capsys, ["eval", "jorge", str(result), str(truth)], "gt.txt:5:", "class = 13")
 
 
 def test_jorge_strokes_eval_refuses_rows_out_of_stroke_order(tmp_path, capsys):
