@@ -69,6 +69,7 @@ __all__ = [
     "TRAIN_SEQUENCES",
     "VALIDATION_SEQUENCES",
     "SIMULATED_VIEW_SEQUENCES",
+    "unlisted_sequences",
     "TRAIN_SEEDS",
     "EventCounts",
     "count_events",
@@ -110,6 +111,31 @@ SIMULATED_VIEW_SEQUENCES = (("eth", "obsmat.txt.gz"),)
 """Real motion seen through a SIMULATED camera (:mod:`models.jorge.eth`: ETH ``seq_eth``
 has ground positions, no boxes): scored by the benchmark on its own, never fitted on,
 never pooled with the real views, and nothing is chosen on it."""
+
+UNLISTED_FOLDERS = ("caviar", "pets2009")
+"""Folders of the data whose other ground truths :func:`unlisted_sequences` finds."""
+
+
+def unlisted_sequences() -> list[tuple[str, str]]:
+    """``(folder, name)`` of every CAVIAR / PETS2009 XML file (``.xml``, ``.xml.gz``) in
+    the data folder's ``caviar`` and ``pets2009`` that none of the lists above names:
+    sequences someone added (yours to hold out). The benchmark scores them as the split
+    ``unlisted``, on their own; nothing is fitted or chosen on them. Files that are not
+    a ground truth (PETS2009's camera ``View_001.xml``) are skipped where they are read."""
+    from models import datasets
+
+    listed = set(TRAIN_SEQUENCES) | set(VALIDATION_SEQUENCES) | set(SIMULATED_VIEW_SEQUENCES)
+    out = []
+    for folder in UNLISTED_FOLDERS:
+        path = datasets.find(folder)
+        if path is None or not path.is_dir():
+            continue
+        for file in sorted(path.iterdir()):
+            xml = file.is_file() and file.name.lower().endswith((".xml", ".xml.gz"))
+            if xml and (folder, file.name) not in listed:
+                out.append((folder, file.name))
+    return out
+
 
 TRAIN_SEEDS = tuple(range(100, 110))
 """Simulation seeds (occlusion gaps, colours) of the fit; the benchmark scores seeds 0-4."""
