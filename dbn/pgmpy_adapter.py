@@ -119,9 +119,11 @@ def _cpd_table(cpd) -> tuple[Any, list[Any], np.ndarray, list[str]]:
 
 
 def _check_pgmpy(model: Any, kind: str) -> None:
-    """A :class:`ModelError` unless ``model`` is a pgmpy model of class ``kind``."""
+    """A :class:`ModelError` unless ``model`` is an instance of pgmpy's class ``kind`` or of
+    a subclass (yours included), told by the class's name and module so that pgmpy is not
+    imported here."""
     cls = type(model)
-    if not (cls.__module__.startswith("pgmpy") and kind in (c.__name__ for c in cls.__mro__)):
+    if not any(c.__name__ == kind and c.__module__.startswith("pgmpy") for c in cls.__mro__):
         raise ModelError(f"expected a pgmpy {kind}, got {cls.__name__}")
 
 

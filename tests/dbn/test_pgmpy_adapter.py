@@ -110,3 +110,27 @@ def test_bad_arguments_are_library_errors(call, error, needle) -> None:
     TypeError, networkx's or numpy's errors, or (a negative tolerance) were accepted."""
     with pytest.raises(error, match=re.escape(needle)):
         call()
+
+
+def test_a_subclass_of_a_pgmpy_model_is_taken() -> None:
+    """Your own subclass of pgmpy's Bayes net was refused ('expected a pgmpy
+    DiscreteBayesianNetwork, got MyNet'); a class of that name outside pgmpy still is."""
+    from pgmpy.factors.discrete import TabularCPD as PgmpyCPD
+    from pgmpy.models import DiscreteBayesianNetwork
+
+    class MyNet(DiscreteBayesianNetwork):
+        pass
+
+    model = MyNet([("a", "b")])
+    model.add_cpds(PgmpyCPD("a", 2, [[0.3], [0.7]]),
+                   PgmpyCPD("b", 2, [[0.9, 0.2], [0.1, 0.8]], evidence=["a"], evidence_card=[2]))
+    bn = pa.from_pgmpy(model)
+    assert bn.parents("b") == ("a",)
+    assert pa.pgmpy_marginals(model, ["b"], {})["b"] == pytest.approx([0.3 * 0.9 + 0.7 * 0.2,
+                                                                         0.3 * 0.1 + 0.7 * 0.8])
+
+    class DiscreteBayesianNetwork:  # noqa: F811 - a look-alike that is not pgmpy's
+        pass
+
+    with pytest.raises(ModelError, match="expected a pgmpy DiscreteBayesianNetwork"):
+        pa.from_pgmpy(DiscreteBayesianNetwork())
