@@ -118,6 +118,16 @@ def _cpd_table(cpd) -> tuple[Any, list[Any], np.ndarray, list[str]]:
     return child, parents, table, state_names
 
 
+def _check_state_order(cpd, node: Any, states: tuple[str, ...], whose: str) -> None:
+    """A :class:`ModelError` unless the pgmpy ``cpd`` lists the states of ``node`` (its
+    child or a parent) as ``states``, ``whose`` own (pgmpy's ``check_model`` rule for
+    parents): a table read in another order would silently mean other probabilities."""
+    mine = tuple(str(s) for s in cpd.state_names.get(node, ()))
+    if mine != states:
+        raise ModelError(f"pgmpy model: the CPD of {cpd.variable} lists the states of {node} "
+                         f"as {list(mine)}, but {whose} are {list(states)}; use one order")
+
+
 def _check_pgmpy(model: Any, kind: str) -> None:
     """A :class:`ModelError` unless ``model`` is an instance of pgmpy's class ``kind`` or of
     a subclass (yours included), told by the class's name and module so that pgmpy is not
@@ -150,7 +160,9 @@ def from_pgmpy(model, renormalize_tol: float = 1e-6) -> BayesNet:
     Raises
     ------
     ModelError
-        Not a pgmpy Bayes net; a node without a CPD (it used to be dropped silently).
+        Not a pgmpy Bayes net; a node without a CPD (it used to be dropped silently); a
+        CPD that lists a parent's states in another order than the parent's own CPD
+        (pgmpy's ``check_model`` refuses it too; it used to be read as if in one order).
     """
     _check_pgmpy(model, "DiscreteBayesianNetwork")
     renormalize_tol = check_nonnegative("renormalize_tol", renormalize_tol, ModelError)
@@ -160,9 +172,13 @@ def from_pgmpy(model, renormalize_tol: float = 1e-6) -> BayesNet:
         raise ModelError(
             f"pgmpy model: no CPD for node(s) {missing}; add them (model.add_cpds) first"
         )
+    own = {cpd.variable: tuple(_cpd_table(cpd)[3]) for cpd in model.get_cpds()}
     variables, cpds = [], []
     for cpd in model.get_cpds():
         child, parents, table, states = _cpd_table(cpd)
+        for p in parents:
+            if p in own:  # an unknown parent is BayesNet's error
+                _check_state_order(cpd, p, own[p], "its own CPD's")
         table = _renormalized(child, table, renormalize_tol)
         variables.append(DiscreteVariable(str(child), table.shape[-1], tuple(states)))
         cpds.append(TabularCPD(str(child), [str(p) for p in parents], table))
@@ -269,8 +285,10 @@ def dbn_from_pgmpy(model) -> TwoSliceDBN:
     Raises
     ------
     ModelError
-        A node of either slice has no CPD (the message lists them), or the CPDs do not
-        make a valid two-slice template (as :class:`TwoSliceDBN`).
+        A node of either slice has no CPD (the message lists them), a CPD lists a
+        variable's states (its own at slice 1, or a parent's) in another order than the
+        variable's slice-0 CPD (read as if in one order before), or the CPDs do not make
+        a valid two-slice template (as :class:`TwoSliceDBN`).
     """
     _check_pgmpy(model, "DynamicBayesianNetwork")
     have = {(str(c.variable[0]), int(c.variable[1])) for c in model.get_cpds()}
@@ -283,11 +301,16 @@ def dbn_from_pgmpy(model) -> TwoSliceDBN:
     variables: dict[str, DiscreteVariable] = {}
     initial, transition = [], []
     rank = {n: i for i, n in enumerate(nodes)}
+    own = {str(c.variable[0]): tuple(_cpd_table(c)[3])
+           for c in model.get_cpds() if int(c.variable[1]) == 0}
     for cpd in sorted(model.get_cpds(), key=lambda c: (int(c.variable[1]), rank.get(str(c.variable[0]), len(rank)))):
         child, parents, table, states = _cpd_table(cpd)
         name, t = child
         table = _renormalized(child, table, 1e-6)
         variables.setdefault(str(name), DiscreteVariable(str(name), table.shape[-1], tuple(states)))
+        for node in [child, *parents]:  # every slice's states in the order of (name, 0)'s CPD
+            if str(node[0]) in own:  # an unknown parent is TwoSliceDBN's error
+                _check_state_order(cpd, node, own[str(node[0])], f"({node[0]}, 0)'s CPD's")
         if t == 0:
             initial.append(TabularCPD(str(name), [str(p) for p, _ in parents], table))
         else:

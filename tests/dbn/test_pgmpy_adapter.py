@@ -134,3 +134,40 @@ def test_a_subclass_of_a_pgmpy_model_is_taken() -> None:
 
     with pytest.raises(ModelError, match="expected a pgmpy DiscreteBayesianNetwork"):
         pa.from_pgmpy(DiscreteBayesianNetwork())
+
+
+def _weather_dbn(slice1_rain=("dry", "wet"), parent_rain=("dry", "wet")):
+    """A pgmpy DBN Rain -> Rain' with named states; the slice-1 CPD may list Rain's states
+    (as its child, and for its parent Rain at slice 0) in other orders."""
+    from pgmpy.factors.discrete import TabularCPD as PgmpyCPD
+    from pgmpy.models import DynamicBayesianNetwork
+
+    model = DynamicBayesianNetwork([(("Rain", 0), ("Rain", 1))])
+    model.add_cpds(
+        PgmpyCPD(("Rain", 0), 2, [[0.9], [0.1]], state_names={("Rain", 0): ["dry", "wet"]}),
+        PgmpyCPD(("Rain", 1), 2, [[0.8, 0.3], [0.2, 0.7]], evidence=[("Rain", 0)],
+                 evidence_card=[2],
+                 state_names={("Rain", 1): list(slice1_rain), ("Rain", 0): list(parent_rain)}),
+    )
+    return model
+
+
+def test_states_listed_in_another_order_are_refused() -> None:
+    """A CPD that lists a variable's states in another order than the variable's own CPD
+    was read as if they were in that order: its probabilities silently meant others
+    (pgmpy's own check_model refuses the Bayes-net case; its DBN check does not)."""
+    from pgmpy.factors.discrete import TabularCPD as PgmpyCPD
+    from pgmpy.models import DiscreteBayesianNetwork
+
+    model = DiscreteBayesianNetwork([("a", "b")])
+    model.add_cpds(PgmpyCPD("a", 2, [[0.3], [0.7]], state_names={"a": ["x", "y"]}),
+                   PgmpyCPD("b", 2, [[0.9, 0.2], [0.1, 0.8]], evidence=["a"], evidence_card=[2],
+                            state_names={"b": ["u", "v"], "a": ["y", "x"]}))
+    with pytest.raises(ModelError, match=r"the CPD of b lists the states of a as \['y', 'x'\]"):
+        pa.from_pgmpy(model)
+    tdbn = pa.dbn_from_pgmpy(_weather_dbn())  # one order: taken
+    assert tdbn.variables[0].state_names == ("dry", "wet")
+    for kwargs in ({"slice1_rain": ("wet", "dry")}, {"parent_rain": ("wet", "dry")}):
+        needle = r"lists the states of \('Rain', [01]\) as \['wet', 'dry'\]"
+        with pytest.raises(ModelError, match=needle):
+            pa.dbn_from_pgmpy(_weather_dbn(**kwargs))
