@@ -8,7 +8,9 @@ are the transition, whose ``_0`` parents are the previous slice. This is the unr
 A variable ``X_1`` whose BIF has no ``X_0`` is an error.
 
 Evidence CSV: a header of observed variable names (the base names, without ``_0``/``_1``),
-then one row per slice; a field holds a state name (or its index), empty = unobserved.
+then one row per slice; a field holds a state name (or its index, for a variable none of
+whose state names is a number), empty = unobserved. ``X_0`` and ``X_1`` declare the same
+states in the same order.
 
 Marginals CSV (output): ``slice,variable,state,probability``, one row per slice, hidden
 variable and state, ``P(X_t = state | e_{0:t})``.
@@ -60,6 +62,11 @@ def two_slice_from_bn(bn: BayesNet, source: str = "model") -> TwoSliceDBN:
         base, t = _split(name)
         if base not in variables:
             raise FileFormatError(source, f"{name!r} has no slice-0 variable {base + '_0'!r}")
+        states, first = bn.variable(name).state_names, variables[base].state_names
+        if states != first:
+            raise FileFormatError(source, f"{name!r} has states {list(states)}, but "
+                                  f"{base + '_0'!r} has {list(first)}: one variable, one "
+                                  "list of states in one order")
         parents = [_split(p) for p in bn.parents(name)]
         if t == 0:
             if any(pt != 0 for _, pt in parents):
@@ -90,11 +97,16 @@ def read_two_slice_bif(path: str | Path) -> TwoSliceDBN:
 
 
 def _state_index(var: DiscreteVariable, text: str, path, line: int, where: str) -> int:
+    """The index of state ``text`` of ``var``: its name, else its index, unless a state
+    name is itself a number (then ``"0"`` could mean either, and only names are read)."""
     if text in var.state_names:
         return var.state_names.index(text)
-    if text.isdigit() and int(text) < var.cardinality:
+    numbered = any(s.strip().lstrip("+-").replace(".", "", 1).isdigit() for s in var.state_names)
+    if text.isdigit() and int(text) < var.cardinality and not numbered:
         return int(text)
-    raise fail(path, line, f"{var.name} = {text!r} is not a state of {list(var.state_names)}{where}")
+    also = " (its state names are numbers: a field is a name, never an index)" if numbered else ""
+    raise fail(path, line,
+               f"{var.name} = {text!r} is not a state of {list(var.state_names)}{where}{also}")
 
 
 def read_states(path: str | Path, dbn: TwoSliceDBN, model: str | Path | None = None) -> dict[str, np.ndarray]:

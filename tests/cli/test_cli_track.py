@@ -597,15 +597,54 @@ def test_bif_with_a_control_character_is_refused_at_its_line(tmp_path, capsys):
 
 
 def test_dbn_evidence_state_mismatch_names_both_files(tmp_path, capsys):
-    """A byte flip renamed a state in the BIF (' yes' -> '!yes'): both files parse, and
+    """A byte flip renamed a state in the BIF (' yes' -> '!yes', in both slices; in one,
+    the BIF itself is refused): both files parse, and
     the evidence's 'yes' is no longer a state; either file may be the wrong one, so the
     error names the evidence line and the BIF that declares the states."""
     raw = (DATA / "dbn" / "umbrella.bif").read_text()
     bif = tmp_path / "renamed.bif"
-    i = raw.index("{ yes, no", raw.index("variable Umbrella_0"))  # a child: no parent rows
-    bif.write_text(raw[:i] + "{!yes, no" + raw[i + len("{ yes, no"):])
+    for v in ("Umbrella_0", "Umbrella_1"):  # a child: no parent rows; both slices alike
+        i = raw.index("{ yes, no", raw.index(f"variable {v}"))
+        raw = raw[:i] + "{!yes, no" + raw[i + len("{ yes, no"):]
+    bif.write_text(raw)
     argv = ["track", "dbn", str(bif), str(DATA / "dbn" / "evidence.csv"), "-o", str(tmp_path)]
     _bad(capsys, argv, "evidence.csv:2:", "'!yes'", "declared in", "renamed.bif")
+
+
+def test_dbn_slice_one_states_in_another_order_are_refused(tmp_path, capsys):
+    """Rain_1 declared { no, yes } while Rain_0 is { yes, no }: the transition table was
+    read in Rain_0's order, so P(rain tomorrow | rain today) silently became 0.3."""
+    raw = (DATA / "dbn" / "umbrella.bif").read_text()
+    i = raw.index("{ yes, no", raw.index("variable Rain_1"))
+    bif = tmp_path / "swapped.bif"
+    bif.write_text(raw[:i] + "{ no, yes" + raw[i + len("{ yes, no"):])
+    argv = ["track", "dbn", str(bif), str(DATA / "dbn" / "evidence.csv"), "-o", str(tmp_path)]
+    _bad(capsys, argv, "swapped.bif", "'Rain_1' has states ['no', 'yes']",
+         "'Rain_0' has ['yes', 'no']")
+
+
+def test_dbn_state_names_that_are_numbers_are_never_read_as_indices(tmp_path):
+    """States named 1 and 2: the field "0" was read as index 0 (the state "1"), the same
+    state as the field "1"; now a field is a name, and "0" is refused at its line."""
+    from dbn.errors import InputError
+    from dbn.pgmpy_adapter import parse_bif
+    from models.io.dbn import read_evidence, two_slice_from_bn
+
+    raw = (DATA / "dbn" / "umbrella.bif").read_text()
+    for v in ("Umbrella_0", "Umbrella_1"):
+        i = raw.index("{ yes, no", raw.index(f"variable {v}"))
+        raw = raw[:i] + "{ 1, 2" + raw[i + len("{ yes, no"):]
+
+    model = two_slice_from_bn(parse_bif(raw))
+    ev = tmp_path / "ev.csv"
+    ev.write_text("Umbrella\n1\n2\n")
+    assert read_evidence(ev, model)["Umbrella"].tolist() == [0, 1]  # names
+    ev.write_text("Umbrella\n1\n0\n")
+    with pytest.raises(InputError, match="ev.csv:3:.*state names are numbers"):
+        read_evidence(ev, model)
+    plain = tmp_path / "plain.csv"  # named states that are not numbers: an index still reads
+    plain.write_text("Rain\nno\n0\n")
+    assert read_evidence(plain, model)["Rain"].tolist() == [1, 0]
 
 
 def _edited_csv(src: Path, dst: Path, line: int, column: str, value: str) -> Path:
