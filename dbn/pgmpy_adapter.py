@@ -476,18 +476,22 @@ def _bif_table(
     pcards = [len(states[p]) for p in parents]
     card = len(states[child])
     table = np.zeros((*pcards, card))
+    given: set[tuple] = set()  # parent rows read so far (a table gives every row)
+    what = f"probability of {child!r}"
     for entry in body.split(";"):
         entry = entry.strip()
         if not entry:
             continue
-        what = f"probability of {child!r}"
         if entry.startswith("table"):
             values = _numbers(entry[5:], source, line, what)
             if values.size != table.size:
                 raise FileFormatError(
                     source, f"{what}: table has {values.size} numbers, needs {table.size}", line
                 )
+            if given:
+                raise FileFormatError(source, f"{what}: a table besides other rows", line)
             table = values.reshape(card, -1).T.reshape(*pcards, card)
+            given.update(np.ndindex(*pcards))
             continue
         if not entry.startswith("(") or ")" not in entry:
             raise FileFormatError(source, f"{what}: unsupported row {entry[:30]!r}", line)
@@ -502,7 +506,16 @@ def _bif_table(
             raise FileFormatError(
                 source, f"{what}: row {row} has {values.size} numbers, needs {card}", line
             )
+        if index in given:  # the last one silently won
+            raise FileFormatError(source, f"{what}: row {row} is given twice", line)
+        given.add(index)
         table[index] = values
+    missing = [i for i in np.ndindex(*pcards) if i not in given]
+    if missing:  # it was a row of zeros, refused as not summing to 1
+        first = tuple(states[p][i] for p, i in zip(parents, missing[0], strict=True))
+        more = f" and {len(missing) - 1} more" if len(missing) > 1 else ""
+        say = f"no row for parents {first}{more}" if parents else "no table"
+        raise FileFormatError(source, f"{what}: {say}", line)
     return child, parents, table
 
 

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dbn import pgmpy_adapter as pa
-from dbn.errors import EvidenceError, InputError, ModelError
+from dbn.errors import EvidenceError, FileFormatError, InputError, ModelError
 
 
 @settings(max_examples=25, deadline=None)
@@ -171,3 +171,30 @@ def test_states_listed_in_another_order_are_refused() -> None:
         needle = r"lists the states of \('Rain', [01]\) as \['wet', 'dry'\]"
         with pytest.raises(ModelError, match=needle):
             pa.dbn_from_pgmpy(_weather_dbn(**kwargs))
+
+
+_BIF_HEAD = """network t { }
+variable A { type discrete [ 2 ] { a0, a1 }; }
+variable C { type discrete [ 2 ] { c0, c1 }; }
+probability ( A ) { table 0.3, 0.7; }
+"""
+
+
+@pytest.mark.parametrize(
+    ("block", "needle"),
+    [
+        # the last of two rows silently won
+        ("( C | A ) { (a0) 0.2, 0.8; (a1) 0.5, 0.5; (a0) 0.4, 0.6; }",
+         "row ('a0',) is given twice"),
+        ("( C | A ) { (a0) 0.2, 0.8; table 0.2, 0.5, 0.8, 0.5; }", "a table besides other rows"),
+        # a missing row was a row of zeros, refused as not summing to 1
+        ("( C | A ) { (a1) 0.5, 0.5; }", "no row for parents ('a0',)"),
+        ("( C ) { }", "no table"),
+    ],
+)
+def test_a_bif_probability_block_gives_each_row_once(block: str, needle: str) -> None:
+    message = re.escape(f"<BIF text>:5: probability of 'C': {needle}")
+    with pytest.raises(FileFormatError, match=message):
+        pa.parse_bif(_BIF_HEAD + f"probability {block}\n")
+    ok = pa.parse_bif(_BIF_HEAD + "probability ( C | A ) { (a1) 0.5, 0.5; (a0) 0.2, 0.8; }\n")
+    assert ok.table("C").tolist() == [[0.2, 0.8], [0.5, 0.5]]  # rows in any order, by name
