@@ -78,6 +78,19 @@ def _check_sorted(t: np.ndarray, path, lines: list[int]) -> None:
         raise TimeOrderError(f"{path}:{lines[i]}: time goes back ({t[i]} after {t[i - 1]})")
 
 
+def _check_range_bearing(meas: np.ndarray, path, lines: list[int]) -> None:
+    """A :class:`FileFormatError` at the line of the first measurement whose range is
+    negative (not a distance) or whose bearing is beyond one turn (``|bearing| > 2 pi``:
+    bearings are radians, and such a value is most likely degrees, which were taken)."""
+    bad = np.flatnonzero((meas[:, 2] < 0) | (np.abs(meas[:, 3]) > 2 * np.pi))
+    if bad.size:
+        i = int(bad[0])
+        r, b = meas[i, 2], meas[i, 3]
+        say = (f"range {r:g} is negative" if r < 0 else
+               f"bearing {b:g} is beyond one turn: bearings are radians (degrees?)")
+        raise fail(path, lines[i], say)
+
+
 _MAX_ID = 2**31
 
 
@@ -110,6 +123,7 @@ def read_mrclam_folder(folder: str | Path, robot: int = 1) -> MRCLAMRobot:
         _check_sorted(arr[:, 0], p, lines)
     odo, meas = timed[0][1], timed[1][1]
     _check_ids(meas[:, 1], meas_p, timed[1][2], "measured barcode", unique=False)
+    _check_range_bearing(meas, meas_p, timed[1][2])
     gt = timed[2][1] if gt_p else None
     lm_p, codes_p = _find(folder, "Landmark_Groundtruth"), _find(folder, "Barcodes")
     lm, lm_lines = _read_dat(lm_p, 3)
@@ -153,6 +167,7 @@ def read_generic(
         _check_sorted(arr[:, 0], p, lines)
     odo, meas = timed[0][1], timed[1][1]
     _check_ids(meas[:, 1], measurements, timed[1][2], "measured landmark", unique=False)
+    _check_range_bearing(meas, measurements, timed[1][2])
     gt = timed[2][1] if groundtruth else None
     lm, lm_lines = _csv_lines(landmarks, ("id", "x", "y"), "landmarks CSV")
     _check_ids(lm[:, 0], landmarks, lm_lines, "landmark id")

@@ -226,6 +226,11 @@ def check_observation(model: RobotModel, observation: Any, dtype: Any = jnp.floa
         if np.any(fields["range"] < 0):
             i = int(np.flatnonzero(fields["range"] < 0)[0])
             raise InputError(f"observation.range[{i}] = {fields['range'][i]} is negative")
+        turns = fields["mask"] & (np.abs(fields["bearing"]) > 2 * np.pi)
+        if np.any(turns):  # a bearing in degrees was taken as radians
+            i = int(np.flatnonzero(turns)[0])
+            raise InputError(f"observation.bearing[{i}] = {fields['bearing'][i]} is beyond one "
+                             "turn: bearings are radians (degrees?)")
         if np.any((lm < 0) | (lm >= len(m.landmarks))):
             raise InputError(f"observation.landmark {lm.tolist()} out of [0, {len(m.landmarks)})")
         return RangeBearingObservation(

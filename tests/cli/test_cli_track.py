@@ -4,6 +4,8 @@
 from __future__ import annotations
 
 import json
+import math
+import shutil
 import warnings
 from pathlib import Path
 
@@ -125,6 +127,39 @@ def test_localization_bad_file(tmp_path, capsys):
     argv = ["track", "localization", str(d / "bad_odometry.csv"), str(d / "measurements.csv"),
             str(d / "landmarks.csv"), "-o", str(tmp_path)]  # fmt: skip
     _bad(capsys, argv, "bad_odometry.csv:3:", "oops")
+
+
+@pytest.mark.parametrize(("column", "value", "needle"), [
+    ("bearing", lambda b: b * 180 / math.pi, "beyond one turn: bearings are radians"),
+    ("range", lambda r: -r, "is negative"),
+])
+def test_localization_refuses_degrees_and_negative_ranges(tmp_path, capsys, column, value,
+                                                            needle):
+    """Bearings in degrees and negative ranges were taken, in both layouts."""
+    d = DATA / "localization"
+    lines = (d / "measurements.csv").read_text().splitlines()
+    col = lines[0].split(",").index(column)
+    rows = [r.split(",") for r in lines[1:]]
+    for r in rows:
+        r[col] = f"{value(float(r[col])):.6g}"
+    meas = tmp_path / "measurements.csv"
+    meas.write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
+    argv = ["track", "localization", str(d / "odometry.csv"), str(meas),
+            str(d / "landmarks.csv"), "-o", str(tmp_path / "out")]  # fmt: skip
+    _bad(capsys, argv, "measurements.csv:2:", needle)
+    folder = tmp_path / "mrclam"
+    shutil.copytree(d / "mrclam", folder)
+    dat = folder / "Robot1_Measurement.dat"  # time barcode range bearing
+    out, i = [], 2 if column == "range" else 3
+    for ln in dat.read_text().splitlines():
+        f = ln.split()
+        if f and not ln.startswith("#"):
+            f[i] = f"{value(float(f[i])):.6g}"
+            ln = " ".join(f)
+        out.append(ln)
+    dat.write_text("\n".join(out) + "\n")
+    argv = ["track", "localization", str(folder), "-o", str(tmp_path / "out2")]
+    _bad(capsys, argv, "Robot1_Measurement.dat:", needle)
 
 
 @pytest.mark.parametrize("name", ["zajdel_adf", "zajdel_learnsearch"])

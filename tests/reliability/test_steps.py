@@ -214,6 +214,31 @@ def test_localize_checks_on_the_host_before_tracing():
     assert np.isfinite(res.means).all()
 
 
+def test_localization_refuses_bearings_in_degrees():
+    """A bearing beyond one turn (degrees given for radians) was taken; a masked-out slot
+    may hold anything finite."""
+    from models.localization.model import RangeBearingObservation
+    from models.localization.tracker import localize
+
+    ex, *_ = _setup("localization")
+    steps = ex.observations
+    odo = np.stack([s.odometry for s in steps])
+    fields = RangeBearingObservation._fields
+    obs = RangeBearingObservation(
+        *(np.stack([np.asarray(getattr(s.observation, f)) for s in steps]) for f in fields)
+    )
+    degrees = obs._replace(bearing=np.where(obs.mask, 7.0, obs.bearing))
+    with pytest.raises(InputError, match="beyond one turn: bearings are radians"):
+        localize(jax.random.key(0), ex.tracker.model, odo, degrees, 50)
+    one = steps[0].observation
+    bad = one._replace(bearing=np.where(np.asarray(one.mask), 90.0, np.asarray(one.bearing)))
+    state = ex.tracker.init(jax.random.key(0))
+    with pytest.raises(InputError, match=r"observation.bearing\[\d+\] = 90.0 is beyond one turn"):
+        ex.tracker.step(jax.random.key(1), state, steps[0]._replace(observation=bad))
+    padded = one._replace(bearing=np.where(np.asarray(one.mask), np.asarray(one.bearing), 99.0))
+    ex.tracker.step(jax.random.key(1), state, steps[0]._replace(observation=padded))
+
+
 def test_jorge_bad_palette_rejected_before_the_periodic_inference():
     from models.jorge.online import OnlineLabeller
 
