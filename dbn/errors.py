@@ -29,6 +29,7 @@ __all__ = [
     "CheckpointError",
     "in_file",
     "MemoryLimitError",
+    "as_memory_limit",
 ]
 
 
@@ -136,4 +137,17 @@ def in_file(exc: DBNError, file) -> DBNError:
 # --- resources -------------------------------------------------------------------------
 class MemoryLimitError(DBNError):
     """An exact engine would allocate a table larger than its limit (the message names
-    the clique and its size); raised before anything is allocated."""
+    the clique and its size); raised before anything is allocated. Also what a run that
+    did run out of memory raises in its place (:func:`as_memory_limit`)."""
+
+
+def as_memory_limit(exc: BaseException, what: str, advice: str) -> MemoryLimitError | None:
+    """``MemoryLimitError("{what} ran out of memory (...): {advice}")`` for numpy's
+    ``MemoryError`` or jax's ``RESOURCE_EXHAUSTED`` (a ``RuntimeError``: raw and naming
+    no setting before); None for any other exception, which the caller re-raises."""
+    if not isinstance(exc, MemoryError) and not (
+        isinstance(exc, RuntimeError) and "RESOURCE_EXHAUSTED" in str(exc)
+    ):
+        return None
+    detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    return MemoryLimitError(f"{what} ran out of memory ({detail}): {advice}")

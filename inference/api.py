@@ -33,6 +33,7 @@ from dbn.errors import (
     NonFiniteError,
     ShapeError,
     UnknownEvidenceError,
+    as_memory_limit,
 )
 from dbn.variables import DiscreteVariable
 from inference.evidence_columns import as_column, first_bad_row
@@ -193,9 +194,17 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
             )
         if soft_evidence:
             raise InputError(f"method {method!r} takes no soft evidence")
-    res = _dispatch(
-        method, dbn, evidence, query, key, soft_evidence, num_timesteps, options, max_size
-    )
+    try:
+        res = _dispatch(
+            method, dbn, evidence, query, key, soft_evidence, num_timesteps, options, max_size
+        )
+    except (MemoryError, RuntimeError) as exc:  # jax's JaxRuntimeError is a RuntimeError
+        shrink = (f"fewer particles (num_particles = {options.get('num_particles', 1000):,})"
+                  if method in ("particle", "rbpf") else "a shorter sequence")
+        oom = as_memory_limit(exc, f"method {method!r}", f"use {shrink}")
+        if oom is None:
+            raise
+        raise oom from None
     return dataclasses.replace(res, info={**res.info, **info})
 
 

@@ -184,7 +184,7 @@ def _positive(text: str) -> int:
 
 def dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
     """Run the parsed command; bad input -> one line on stderr, exit status 2."""
-    from dbn.errors import DBNError
+    from dbn.errors import DBNError, as_memory_limit
 
     if args.data and not Path(args.data).expanduser().is_dir():
         parser.error(f"--data {args.data}: no such folder")
@@ -208,7 +208,13 @@ def dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
             from models.experiments import sweep_main
 
             return sweep_main(args.config, args.out, args.scheduler, args.resume, args.workers)
-    except (DBNError, FileNotFoundError) as exc:
+    except (DBNError, FileNotFoundError, MemoryError, RuntimeError) as exc:
+        if isinstance(exc, MemoryError | RuntimeError):  # jax's out of memory: a RuntimeError
+            oom = as_memory_limit(exc, "the run", "lower the sizes in --config "
+                                  "(num_particles, ...) or give less data")  # fmt: skip
+            if oom is None:
+                raise
+            exc = oom
         msg = " ".join(str(exc).split())
         print(f"dbntrack {args.command}: error: {msg}", file=sys.stderr)
         return 2

@@ -295,3 +295,26 @@ def test_data_and_sweep_arguments_are_checked(tmp_path, capsys):
             main(["sweep", toml, "-o", str(tmp_path / "r.jsonl"), "--workers", workers])
         assert "argument --workers" in capsys.readouterr().err
     assert not (tmp_path / "r.jsonl").exists()
+
+
+def test_running_out_of_memory_is_one_line(monkeypatch, capsys, tmp_path):
+    """jax's RESOURCE_EXHAUSTED (e.g. num_particles = 10**9 in --config) was a traceback;
+    any other RuntimeError still is one (a bug, not bad input)."""
+    import jax
+
+    import models.commands
+
+    def oom(args):
+        raise jax.errors.JaxRuntimeError("RESOURCE_EXHAUSTED: Out of memory allocating 8e9 bytes.")
+
+    monkeypatch.setattr(models.commands, "track", oom)
+    argv = ["track", "localization", "x", "-o", str(tmp_path)]
+    _bad(capsys, argv, "the run ran out of memory",
+         "lower the sizes in --config (num_particles, ...)")
+
+    def bug(args):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(models.commands, "track", bug)
+    with pytest.raises(RuntimeError, match="a bug"):
+        main(argv)

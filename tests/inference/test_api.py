@@ -246,3 +246,30 @@ def test_one_query_name_is_one_variable_everywhere() -> None:
     assert inference.online_filter(dbn, "x0").query == ("x0",)
     with pytest.raises(EvidenceError, match="mapping"):
         inference.online_filter(dbn).init([0, 1])
+
+
+def _failing(monkeypatch, module: str, fn: str, exc: BaseException) -> None:
+    def engine(*args, **kwargs):
+        raise exc
+
+    mod = types.ModuleType(module)
+    setattr(mod, fn, engine)
+    monkeypatch.setitem(sys.modules, module, mod)
+
+
+def test_running_out_of_memory_is_a_memory_limit_error(monkeypatch) -> None:
+    """jax's RESOURCE_EXHAUSTED (a million-fold num_particles) was a raw JaxRuntimeError;
+    now a MemoryLimitError saying what to shrink. Other engine errors pass unchanged."""
+    dbn, ev = _chains(2, 4)
+    oom = jax.errors.JaxRuntimeError("RESOURCE_EXHAUSTED: Out of memory allocating 8 bytes.")
+    _failing(monkeypatch, "inference.particle.dbn_adapter", "particle_filter_dbn", oom)
+    with pytest.raises(MemoryLimitError, match=r"fewer particles \(num_particles = 2,000,000\)"):
+        inference.filter(dbn, ev, method="particle", key=jax.random.key(0), num_particles=2 * 10**6)
+    _failing(monkeypatch, "inference.adf.boyen_koller", "bk_filter", MemoryError())
+    with pytest.raises(MemoryLimitError, match="'bk' ran out of memory .*a shorter sequence"):
+        inference.filter(dbn, ev, method="bk")
+    other = RuntimeError("a bug")
+    _failing(monkeypatch, "inference.particle.rbpf", "rbpf_filter_dbn", other)
+    with pytest.raises(RuntimeError) as info:
+        inference.filter(dbn, ev, method="rbpf", key=jax.random.key(0))
+    assert info.value is other
