@@ -159,27 +159,27 @@ def evaluate(args: argparse.Namespace) -> dict:
     return metrics
 
 
-def _seed(text: str) -> int:
-    """``--seed``: an int in [0, 2**32) (numpy's generators refuse a negative one, and
-    some of the trackers' seed arithmetic overflowed C longs beyond)."""
-    try:
-        seed = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if not 0 <= seed < 2**32:
-        raise argparse.ArgumentTypeError(f"{seed} is not in 0 .. 2**32 - 1")
-    return seed
+def _int_in(lo: int, hi: int | None):
+    """An argparse type: an int in ``[lo, hi)`` (``hi`` None: no upper bound)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+        if value < lo or (hi is not None and value >= hi):
+            span = f">= {lo}" if hi is None else f"in {lo} .. {hi - 1}"
+            raise argparse.ArgumentTypeError(f"{value} is not {span}")
+        return value
+
+    return parse
 
 
-def _positive(text: str) -> int:
-    """An int >= 1 (``--workers``: 0 ran one per core, -1 hung the local cluster)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{value} is not >= 1")
-    return value
+# --seed: numpy's generators refuse a negative seed, and some of the trackers' seed
+# arithmetic overflowed C longs beyond 2**32 - 1
+_seed = _int_in(0, 2**32)
+# --workers: 0 ran one worker per core, -1 hung the local cluster
+_positive = _int_in(1, None)
 
 
 def dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
