@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dbn.checks import check_count
 from dbn.errors import EvidenceError, ModelError
 
 __all__ = ["DiscreteVariable", "ContinuousVariable", "Variable", "MAX_CARDINALITY"]
@@ -42,11 +43,7 @@ class DiscreteVariable:
 
     def __post_init__(self) -> None:
         _check_name(self.name)
-        card = self.cardinality
-        if isinstance(card, bool) or not isinstance(card, int | np.integer) or card < 1:
-            raise ModelError(
-                f"variable {self.name!r}: cardinality must be an integer >= 1, got {card!r}"
-            )
+        card = check_count(f"variable {self.name!r}: cardinality", self.cardinality, ModelError)
         if card > MAX_CARDINALITY:  # its default state names alone would not fit in memory
             raise ModelError(
                 f"variable {self.name!r}: cardinality {card} is over {MAX_CARDINALITY:,} (2**24)"
@@ -98,10 +95,8 @@ class ContinuousVariable:
 
     def __post_init__(self) -> None:
         _check_name(self.name)
-        if isinstance(self.dim, bool) or not isinstance(self.dim, int) or self.dim < 1:
-            raise ModelError(
-                f"variable {self.name!r}: dim must be an integer >= 1, got {self.dim!r}"
-            )
+        dim = check_count(f"variable {self.name!r}: dim", self.dim, ModelError)
+        object.__setattr__(self, "dim", dim)  # a numpy integer too, stored as an int
 
 
 Variable = DiscreteVariable | ContinuousVariable

@@ -48,6 +48,7 @@ from inference.particle.filters import (
     ParticleFilter,
     ParticleInfo,
     ParticleState,
+    check_num_particles,
     run,
     weighted_mean,
 )
@@ -107,8 +108,7 @@ def _constrained(pf: ParticleFilter, sharding: NamedSharding) -> ParticleFilter:
 
 def _check(num_particles: int, mesh: Mesh) -> int:
     d = mesh.devices.size
-    if isinstance(num_particles, bool) or int(num_particles) < 1:
-        raise InputError(f"num_particles must be a positive integer, got {num_particles!r}")
+    check_num_particles(num_particles)  # 2.5 passed as 2, and "x" raised int()'s error
     if int(num_particles) % d:
         raise InputError(
             f"num_particles={num_particles} is not divisible by the {d} devices of the mesh"

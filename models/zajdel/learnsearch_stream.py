@@ -41,6 +41,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dbn.checks import check_count
 from dbn.errors import InputError
 from models.zajdel.data import Observations, concat_observations, take, validate_observations
 from models.zajdel.learnsearch import (
@@ -362,8 +363,7 @@ def _close_gap(theta: LSParams, close_z: float | None) -> float:
 
 
 def _check_stream_args(cfg: LearnSearchConfig, window: int, close_z: float | None) -> None:
-    if isinstance(window, bool) or not isinstance(window, (int, np.integer)) or window < 1:
-        raise InputError(f"window = {window!r}: must be an integer >= 1")
+    check_count("window", window)
     if close_z is not None and not (np.isfinite(close_z) and close_z > 0):
         raise InputError(f"close_z = {close_z}: must be None or a finite number > 0")
     cfg.validate()

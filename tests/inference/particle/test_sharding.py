@@ -59,8 +59,9 @@ def test_bad_arguments_raise_library_errors() -> None:
     mesh = particle_mesh(jax.devices()[:1])
     with pytest.raises(InputError, match="resampling"):
         sharded_filter(make, 8, resampling="nearby", mesh=mesh)
-    with pytest.raises(InputError, match="num_particles"):
-        sharded_filter(make, 0, mesh=mesh)
+    for bad in (0, 2.5, "8", True):  # 2.5 passed as 2 particles, "8" raised int()'s error
+        with pytest.raises(InputError, match="num_particles must be an integer >= 1"):
+            sharded_filter(make, bad, mesh=mesh)
 
 
 @pytest.mark.heavy  # ~10 s: a subprocess with 4 host devices; CI runs it (pytest -m heavy)
