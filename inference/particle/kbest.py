@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dbn.checks import check_count
 from dbn.errors import InputError, ShapeError
 
 __all__ = ["k_best_states"]
@@ -50,8 +51,7 @@ def k_best_states(
     w = np.asarray(weights, dtype=np.float64)
     if ids.ndim != 1 or w.shape != ids.shape:
         raise ShapeError(f"state_ids {ids.shape} and weights {w.shape} must be equal 1-D shapes")
-    if not isinstance(k, int | np.integer) or k < 1:
-        raise InputError(f"k must be an int >= 1, got {k!r}")
+    check_count("k", k)  # True was read as 1
     if combine not in ("sum", "max"):
         raise InputError(f"combine = {combine!r}, expected 'sum' or 'max'")
     if np.any(np.isnan(w)) or np.any(w < 0):

@@ -28,6 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dbn.checks import check_count
 from dbn.errors import InputError
 from models.jorge.network import NetworkConfig
 
@@ -143,8 +144,7 @@ def estimate_meetings(scenes: Sequence[int], sizes: Sequence[int] = (3, 4, 5), f
         raise InputError(f"estimate_meetings: sizes must be distinct group sizes >= 2, got {sizes}")
     if fps is not None and not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
         raise InputError(f"estimate_meetings: fps must be a positive number, got {fps!r}")
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise InputError(f"estimate_meetings: workers must be an int >= 1, got {workers!r}")
+    check_count("estimate_meetings: workers", workers)
     from models.jorge.fit import _map
 
     config = NetworkConfig() if config is None else config

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from dbn.checks import check_count
 from dbn.errors import InputError
 from models.jorge.evidence import colour_log_likelihood
 from models.jorge.labels import Label, birth_stroke
@@ -205,8 +206,7 @@ def after_crowd(strokes: Sequence[Stroke], max_group_size: int) -> np.ndarray:
     -------
     ndarray of bool, shape (num_strokes,)
     """
-    if isinstance(max_group_size, bool) or not isinstance(max_group_size, int | np.integer) or max_group_size < 1:
-        raise InputError(f"after_crowd: max_group_size must be an int >= 1, got {max_group_size!r}")
+    check_count("after_crowd: max_group_size", max_group_size)
     strokes = list(strokes)
     first_crowd_end: dict[int, int] = {}  # person -> the earliest end of a crowd stroke holding them
     for s in strokes:

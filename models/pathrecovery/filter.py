@@ -81,6 +81,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.linalg import cholesky
 
+from dbn.checks import check_count
 from dbn.errors import InputError, NonFiniteError, ShapeError
 from inference.particle.filters import ParticleState
 from inference.particle.kbest import k_best_states
@@ -144,9 +145,7 @@ class FilterConfig(NamedTuple):
     def validate(self) -> None:
         """Raise :class:`InputError` naming the first bad field."""
         for name in ("num_particles", "k", "n_fc"):
-            v = getattr(self, name)
-            if not isinstance(v, int | np.integer) or v < 1:
-                raise InputError(f"FilterConfig.{name} must be an int >= 1, got {v!r}")
+            check_count(f"FilterConfig.{name}", getattr(self, name))  # True was read as 1
         for name in ("alpha", "beta", "p_update", "p_switch"):
             v = getattr(self, name)
             if not 0.0 <= float(v) <= 1.0:
