@@ -92,8 +92,9 @@ def test_k_best_states_equal_brute_force(seed: int, m: int, k: int, combine: str
 def test_k_best_states_bad_input() -> None:
     with pytest.raises(ShapeError):
         k_best_states(np.zeros(3, int), np.zeros(2), 2)
-    with pytest.raises(InputError, match="k"):
-        k_best_states(np.zeros(3, int), np.zeros(3), 0)
+    for k in (0, True, 2.0):  # True was read as 1
+        with pytest.raises(InputError, match="k must be an integer >= 1"):
+            k_best_states(np.zeros(3, int), np.zeros(3), k)
     with pytest.raises(InputError, match="combine"):
         k_best_states(np.zeros(3, int), np.zeros(3), 2, "mean")
     with pytest.raises(InputError, match="non-negative"):
