@@ -270,6 +270,19 @@ class ContinuousCPD(Protocol):
         ...
 
 
+def _cov_cholesky(variable: str, S: np.ndarray) -> np.ndarray:
+    """The Cholesky factor of the CPD's covariance ``S`` (d, d), or of each of a stack
+    (..., d, d); a :class:`ModelError` naming the CPD unless finite, symmetric and
+    positive definite."""
+    if not np.all(np.isfinite(S)) or not np.allclose(S, np.swapaxes(S, -1, -2), atol=1e-12):
+        raise ModelError(f"CPD of {variable!r}: cov must be finite and symmetric")
+    try:
+        return np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        which = "a cov[k]" if S.ndim > 2 else "cov"
+        raise ModelError(f"CPD of {variable!r}: {which} is not positive definite") from None
+
+
 @dataclass(frozen=True, eq=False)
 class LinearGaussianCPD:
     """``x ~ N(bias + sum_p W_p u_p, cov)`` for a continuous child of dimension ``d``.
@@ -309,12 +322,7 @@ class LinearGaussianCPD:
         S = np.atleast_2d(_real_array(variable, "cov", cov))
         if S.shape != (d, d):
             raise CPDShapeError(f"CPD of {variable!r}: cov shape {S.shape}, expected {(d, d)}")
-        if not np.all(np.isfinite(S)) or not np.allclose(S, S.T, atol=1e-12):
-            raise ModelError(f"CPD of {variable!r}: cov must be finite and symmetric")
-        try:
-            L = np.linalg.cholesky(S)
-        except np.linalg.LinAlgError:
-            raise ModelError(f"CPD of {variable!r}: cov is not positive definite") from None
+        L = _cov_cholesky(variable, S)
         weights = _weight_list(variable, weights, len(parents_t))
         W = []
         for p, w in zip(parents_t, weights):
@@ -427,12 +435,7 @@ class ConditionalLinearGaussianCPD:
             raise CPDShapeError(
                 f"CPD of {variable!r}: cov shape {S.shape}, expected {(*kshape, d, d)}"
             )
-        if not np.all(np.isfinite(S)) or not np.allclose(S, np.swapaxes(S, -1, -2), atol=1e-12):
-            raise ModelError(f"CPD of {variable!r}: cov must be finite and symmetric")
-        try:
-            L = np.linalg.cholesky(S)
-        except np.linalg.LinAlgError:
-            raise ModelError(f"CPD of {variable!r}: a cov[k] is not positive definite") from None
+        L = _cov_cholesky(variable, S)
         weights = _weight_list(variable, weights, len(cpa))
         W = []
         for p, w in zip(cpa, weights):
