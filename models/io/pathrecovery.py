@@ -59,11 +59,20 @@ def read_network(edges: str | Path, cameras: str | Path | None = None):
                               np.sin(2 * np.pi * np.arange(n) / n)])  # fmt: skip
     if cameras is not None:
         _, crow = read_rows(cameras, ("camera", "x", "y"), "cameras CSV")
+        placed: set[int] = set()
         for r in crow:
             c = r.int("camera")
             if not 0 <= c < n:
                 raise r.fail(f"camera {c} is not in the network (0..{n - 1})")
+            if c in placed:  # the last row silently won
+                raise r.fail(f"camera {c} is listed twice")
+            placed.add(c)
             coords[c] = r.float("x"), r.float("y")
+        unplaced = sorted(set(range(n)) - placed)
+        if unplaced:  # they were drawn on a circle among the real positions
+            raise fail(cameras, 0, f"no position for camera(s) {unplaced[:10]}"
+                       f"{' ...' if len(unplaced) > 10 else ''}: list every camera of the "
+                       "network, or give no cameras CSV (a circle)")
     indptr = np.concatenate([[0], np.cumsum(np.bincount(src, minlength=n))])
     try:
         return CameraNetwork(indptr, dst[order], e[order, 2], gap[order], coords, name=str(edges))

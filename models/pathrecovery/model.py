@@ -140,7 +140,7 @@ class CameraNetwork:
         row_sum = np.add.reduceat(probs, indptr[:-1])
         if np.any(np.abs(row_sum - 1.0) > 1e-9):
             bad = int(np.argmax(np.abs(row_sum - 1.0)))
-            raise NotNormalizedError(f"probs of camera {bad} sum to {row_sum[bad]!r}, not 1")
+            raise NotNormalizedError(f"probs of camera {bad} sum to {float(row_sum[bad]):.6g}, not 1")
         self_edge = rows == indices
         if np.count_nonzero(self_edge) != n:
             raise ModelError("every camera needs its self loop (an object may stay in view)")

@@ -249,7 +249,22 @@ def test_pathrecovery_bad_network(tmp_path, capsys):
     d = DATA / "pathrecovery"
     argv = ["track", "pathrecovery", str(d / "bad_edges.csv"), str(d / "observations.csv"),
             "-o", str(tmp_path)]  # fmt: skip
-    _bad(capsys, argv, "bad_edges.csv", "sum")
+    _bad(capsys, argv, "bad_edges.csv", "probs of camera 0 sum to 1.2, not 1")
+
+
+@pytest.mark.parametrize(("edit", "needle"), [
+    (lambda rows: rows + [rows[1]], "cameras.csv:26: camera 0 is listed twice"),
+    (lambda rows: [rows[0], *rows[2:]], "no position for camera(s) [0]"),
+])
+def test_pathrecovery_cameras_csv_places_every_camera_once(tmp_path, capsys, edit, needle):
+    """A camera listed twice took its last row; one left out was drawn on the default
+    circle among the real positions."""
+    d = DATA / "pathrecovery"
+    cams = tmp_path / "cameras.csv"
+    cams.write_text("\n".join(edit((d / "cameras.csv").read_text().splitlines())) + "\n")
+    argv = ["track", "pathrecovery", str(d / "edges.csv"), str(d / "observations.csv"),
+            str(cams), "-o", str(tmp_path / "out")]  # fmt: skip
+    _bad(capsys, argv, needle)
 
 
 def test_pathrecovery_eval_truth_without_steps(tmp_path, capsys):
