@@ -90,9 +90,11 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     floor = _floor(array(config, "floor")) if "floor" in config else None
     with ctx.timed("read"):
         views = [read_view(p, scale) for p in inputs]
-        n = {len(v.masks) for v in views}
-        if len(n) != 1:
-            raise InputError(f"the views have different numbers of masks: {sorted(n)}")
+        counts = [len(v.masks) for v in views]
+        if len(set(counts)) != 1:  # name the folders: frames are matched by position
+            each = ", ".join(f"{p}: {c}" for p, c in zip(inputs, counts))
+            raise InputError(f"the views have different numbers of masks ({each}); "
+                             "every folder needs one mask per frame")
         scene = _scene(ctx, views, floor, sigma_px)
     tracker = models.get("rjmcmc3d").make(scene=scene, params=params)
     T = len(views[0].masks)

@@ -574,6 +574,12 @@ def test_rjmcmc3d_bad_files(tmp_path, capsys):
     argv = ["eval", "rjmcmc3d", str(d / "bad_truth3d.txt"), str(d / "truth3d.txt")]
     _bad(capsys, argv, "bad_truth3d.txt:2:", "abc")
     _bad(capsys, ["track", "rjmcmc3d", str(tmp_path), "-o", str(tmp_path / "o")], "calibration")
+    short = tmp_path / "short"  # a view with one mask fewer: the message names each folder
+    shutil.copytree(d / "view2", short)
+    sorted(short.glob("mask_*.png"))[-1].unlink()
+    views = [str(d / "view0"), str(d / "view1"), str(short)]
+    _bad(capsys, ["track", "rjmcmc3d", *views, "-o", str(tmp_path / "o2")],
+         "different numbers of masks", "view0: 6", f"{short}: 5")
 
 
 @pytest.mark.parametrize("command", ["track", "eval", "list", "demo"])
