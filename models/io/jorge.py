@@ -5,8 +5,8 @@ Inputs (``docs/formats.md``): a CAVIAR CVML ground-truth file (``<frame number>`
 frame/object/box layout, or a MOTChallenge text file ``frame,id,bb_left,bb_top,w,h[,conf,
 ...]`` (``gt.txt``, or a tracker's output; rows with ``conf = 0`` are ignored, as in
 MOT16+ ``gt.txt``; ``id = -1`` detections cannot make strokes; a ground truth being
-scored also reads the classes of a MOT16/17/20 ``gt.txt``, :func:`read_mot`,
-:func:`mot_distractors`). An ETH / UCY ``obsmat.txt`` (tracks in world metres,
+scored also reads the classes of a MOT16/17/20 ``gt.txt``,
+:func:`read_mot_truth`). An ETH / UCY ``obsmat.txt`` (tracks in world metres,
 :mod:`models.jorge.eth`) is read through a SIMULATED oblique camera. Any of them may be
 gzipped. A MOTChallenge file's frame rate is the ``frameRate`` of the ``seqinfo.ini``
 beside it or one folder up (the challenge's ``SEQ/gt/gt.txt`` and ``SEQ/seqinfo.ini``);
@@ -34,7 +34,7 @@ import numpy as np
 from dbn.errors import DBNError, InputError, in_file
 from models.io.table import as_float, as_int, fail, read_lines, require_file, write_rows
 
-__all__ = ["read_boxes", "read_mot", "mot_distractors", "mot_distractor_classes",
+__all__ = ["read_boxes", "read_mot", "read_mot_truth", "mot_distractor_classes",
            "mot_frame_rate", "frame_rate_source", "is_obsmat", "is_mot",
            "write_strokes", "read_stroke_rows", "read_strokes", "read_strokes_header",
            "write_mot_tracks"]
@@ -146,17 +146,41 @@ def _mot_rows(path: Path, classes: bool):
         yield line_no, fr, oid, (x, y, w, h), conf, cls
 
 
-def read_mot(path: str | Path, *, classes: bool = False):
+def read_mot(path: str | Path):
     """A MOTChallenge box file as a :class:`models.jorge.strokes.GroundTruth`; its ``fps``
     from :func:`mot_frame_rate`, else :data:`MOT_DEFAULT_FPS`. Rows with ``conf = 0`` are
-    not people. ``classes`` (a ground truth being scored): a row of
-    :data:`MOT_CLASS_FIELDS` fields is a person only if its class is 1 (pedestrian), as
-    the challenge's evaluation reads ``gt.txt``."""
+    not people."""
+    path = Path(path)
+    return _people(path, _mot_rows(path, classes=False))
+
+
+def read_mot_truth(path: str | Path):
+    """A MOTChallenge ground truth being scored, read once as the challenge's evaluation
+    reads ``gt.txt``: ``(GroundTruth, distractors)``. A row of :data:`MOT_CLASS_FIELDS`
+    fields is a person only if its class is 1 (pedestrian) and its flag is not 0.
+    ``distractors``: ``frame -> (boxes, distractor)``, the box ``(n, 4)`` as ``(left, top,
+    w, h)`` of every such row, whatever its flag, and whether its class is a distractor
+    (:func:`mot_distractor_classes`): what a result is matched against before scoring.
+    Empty for a file without classes (nothing is dropped)."""
+    path = Path(path)
+    rows = list(_mot_rows(path, classes=True))
+    ignored = mot_distractor_classes(path)
+    boxes: dict[int, list] = {}
+    for _, fr, _, box, _, cls in rows:
+        if cls is not None:
+            boxes.setdefault(fr, []).append((*box, cls in ignored))
+    distractors = {f: (np.array([r[:4] for r in v], float), np.array([r[4] for r in v], bool))
+                   for f, v in boxes.items()}
+    return _people(path, rows), distractors
+
+
+def _people(path: Path, rows):
+    """The :class:`~models.jorge.strokes.GroundTruth` of the rows of :func:`_mot_rows`
+    that are people: ``conf != 0`` and class 1 where the row has a class."""
     from models.jorge.strokes import _assemble
 
-    path = Path(path)
     frames: dict[int, dict[int, tuple]] = {}
-    for line_no, fr, oid, (x, y, w, h), conf, cls in _mot_rows(path, classes):
+    for line_no, fr, oid, (x, y, w, h), conf, cls in rows:
         if conf == 0 or cls not in (None, 1):
             continue
         if oid < 0:
@@ -173,22 +197,6 @@ def read_mot(path: str | Path, *, classes: bool = False):
         return _assemble(path.name, sorted(frames.items()), [], fps=MOT_DEFAULT_FPS if fps is None else fps)
     except DBNError as exc:
         raise in_file(exc, path) from None
-
-
-def mot_distractors(path: str | Path) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """The boxes a scored result is matched against before scoring, per frame, in a MOT16/17/20
-    ground truth (rows of :data:`MOT_CLASS_FIELDS` fields): ``frame -> (boxes, distractor)``,
-    every such row's box ``(n, 4)`` as ``(left, top, w, h)`` whatever its flag, and whether
-    its class is a distractor (:func:`mot_distractor_classes`). Empty for a file without
-    classes (nothing is dropped)."""
-    path = Path(path)
-    ignored = mot_distractor_classes(path)
-    rows: dict[int, list] = {}
-    for _, fr, _, box, _, cls in _mot_rows(path, classes=True):
-        if cls is not None:
-            rows.setdefault(fr, []).append((*box, cls in ignored))
-    return {f: (np.array([r[:4] for r in v], float), np.array([r[4] for r in v], bool))
-            for f, v in rows.items()}
 
 
 def mot_distractor_classes(path: str | Path) -> tuple[int, ...]:

@@ -163,7 +163,7 @@ def _mot(result: str, truth: str) -> dict:
     tracks (the same run's), else the default one."""
     import motmetrics as mm
 
-    from models.io.jorge import mot_distractors, read_mot
+    from models.io.jorge import read_mot, read_mot_truth
 
     view, ignored = None, {}
     beside = Path(result).with_name("strokes.csv")  # the same run's view, for an obsmat truth
@@ -171,7 +171,7 @@ def _mot(result: str, truth: str) -> dict:
         view = _settings(str(beside), read_strokes_header(beside))[1]
     pred = read_mot(result)
     if is_mot(truth):
-        ref, ignored = read_mot(truth, classes=True), mot_distractors(truth)
+        ref, ignored = read_mot_truth(truth)
     else:
         ref = read_boxes(truth, view)
     acc = mm.MOTAccumulator(auto_id=True)
