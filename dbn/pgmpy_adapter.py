@@ -114,8 +114,13 @@ def _cpd_table(cpd) -> tuple[Any, list[Any], np.ndarray, list[str]]:
     cards = [int(k) for k in cpd.cardinality]
     values = np.asarray(cpd.get_values(), dtype=np.float64)  # (card, prod parent cards)
     table = values.T.reshape(*cards[1:], cards[0])
-    state_names = [str(s) for s in cpd.state_names.get(child, range(cards[0]))]
-    return child, parents, table, state_names
+    return child, parents, table, list(_own_states(cpd))
+
+
+def _own_states(cpd) -> tuple[str, ...]:
+    """The state names of a pgmpy CPD's own variable (its index where pgmpy has none)."""
+    card = int(cpd.cardinality[0])
+    return tuple(str(s) for s in cpd.state_names.get(cpd.variable, range(card)))
 
 
 def _check_state_order(cpd, node: Any, states: tuple[str, ...], whose: str) -> None:
@@ -172,7 +177,7 @@ def from_pgmpy(model, renormalize_tol: float = 1e-6) -> BayesNet:
         raise ModelError(
             f"pgmpy model: no CPD for node(s) {missing}; add them (model.add_cpds) first"
         )
-    own = {cpd.variable: tuple(_cpd_table(cpd)[3]) for cpd in model.get_cpds()}
+    own = {cpd.variable: _own_states(cpd) for cpd in model.get_cpds()}
     variables, cpds = [], []
     for cpd in model.get_cpds():
         child, parents, table, states = _cpd_table(cpd)
@@ -301,8 +306,7 @@ def dbn_from_pgmpy(model) -> TwoSliceDBN:
     variables: dict[str, DiscreteVariable] = {}
     initial, transition = [], []
     rank = {n: i for i, n in enumerate(nodes)}
-    own = {str(c.variable[0]): tuple(_cpd_table(c)[3])
-           for c in model.get_cpds() if int(c.variable[1]) == 0}
+    own = {str(c.variable[0]): _own_states(c) for c in model.get_cpds() if int(c.variable[1]) == 0}
     for cpd in sorted(model.get_cpds(), key=lambda c: (int(c.variable[1]), rank.get(str(c.variable[0]), len(rank)))):
         child, parents, table, states = _cpd_table(cpd)
         name, t = child
