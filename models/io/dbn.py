@@ -96,12 +96,18 @@ def read_two_slice_bif(path: str | Path) -> TwoSliceDBN:
     return two_slice_from_bn(bn, str(path))
 
 
-def _state_index(var: DiscreteVariable, text: str, path, line: int, where: str) -> int:
-    """The index of state ``text`` of ``var``: its name, else its index, unless a state
-    name is itself a number (then ``"0"`` could mean either, and only names are read)."""
+def _numbered(var: DiscreteVariable) -> bool:
+    """Whether a state name of ``var`` is itself a number (then ``"0"`` could be a name or
+    an index, and :func:`_state_index` reads names only)."""
+    return any(s.strip().lstrip("+-").replace(".", "", 1).isdigit() for s in var.state_names)
+
+
+def _state_index(var: DiscreteVariable, text: str, path, line: int, where: str,
+                 numbered: bool) -> int:
+    """The index of state ``text`` of ``var``: its name, else its index unless
+    ``numbered`` (:func:`_numbered`, computed once per column)."""
     if text in var.state_names:
         return var.state_names.index(text)
-    numbered = any(s.strip().lstrip("+-").replace(".", "", 1).isdigit() for s in var.state_names)
     if text.isdigit() and int(text) < var.cardinality and not numbered:
         return int(text)
     also = " (its state names are numbers: a field is a name, never an index)" if numbered else ""
@@ -125,10 +131,12 @@ def read_states(path: str | Path, dbn: TwoSliceDBN, model: str | Path | None = N
     if not rows:
         raise fail(path, 0, "no slices (the file has a header only)")
     cols = {c: np.full(len(rows), -1, dtype=np.int64) for c in header}
+    numbered = {c: _numbered(variables[c]) for c in header}
     for t, row in enumerate(rows):
         for c in header:
             if row[c] != "":
-                cols[c][t] = _state_index(variables[c], row[c], path, row.line, where)
+                cols[c][t] = _state_index(variables[c], row[c], path, row.line, where,
+                                          numbered[c])
     return cols
 
 
