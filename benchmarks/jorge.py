@@ -563,13 +563,14 @@ def _unlisted_keys(rows_by: dict) -> dict:
     rows = [r for k in names for r in rows_by[k][1]]
     if not rows:
         return {"unlisted_sequences": names}
+    group_rate, group_strokes = _rate(rows, lo=3)
     return {
         "unlisted_sequences": names,
         "error_rate_unlisted": _rate(rows)[0],
         "error_rate_unlisted_colour_only": _rate(rows, "wrong_col")[0],
         "error_rate_unlisted_true_links": _rate(rows, "wrong_links")[0],
-        "error_rate_unlisted_group_3plus": _rate(rows, lo=3)[0],
-        "strokes_unlisted_group_3plus": _rate(rows, lo=3)[1],
+        "error_rate_unlisted_group_3plus": group_rate,
+        "strokes_unlisted_group_3plus": group_strokes,
     }
 
 
