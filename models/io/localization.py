@@ -22,6 +22,7 @@ import numpy as np
 
 from dbn.errors import InputError, TimeOrderError
 from models.io.table import as_float, fail, read_lines, read_rows, write_rows
+from models.localization.model import TWO_PI
 from models.localization.mrclam import MRCLAMRobot
 
 __all__ = ["read_dat", "mrclam_file", "read_mrclam_folder", "read_generic", "write_poses", "read_poses"]
@@ -82,7 +83,7 @@ def _check_range_bearing(meas: np.ndarray, path, lines: list[int]) -> None:
     """A :class:`FileFormatError` at the line of the first measurement whose range is
     negative (not a distance) or whose bearing is beyond one turn (``|bearing| > 2 pi``:
     bearings are radians, and such a value is most likely degrees, which were taken)."""
-    bad = np.flatnonzero((meas[:, 2] < 0) | (np.abs(meas[:, 3]) > 2 * np.pi))
+    bad = np.flatnonzero((meas[:, 2] < 0) | (np.abs(meas[:, 3]) > TWO_PI))
     if bad.size:
         i = int(bad[0])
         r, b = meas[i, 2], meas[i, 3]

@@ -27,6 +27,7 @@ from inference.particle import (
 )
 from inference.precision import honours_dtype, precision_scope
 from models.localization.model import (
+    TWO_PI,
     KNNLocalizationModel,
     KNNObservation,
     RangeBearingLocalizationModel,
@@ -226,7 +227,7 @@ def check_observation(model: RobotModel, observation: Any, dtype: Any = jnp.floa
         if np.any(fields["range"] < 0):
             i = int(np.flatnonzero(fields["range"] < 0)[0])
             raise InputError(f"observation.range[{i}] = {fields['range'][i]} is negative")
-        turns = fields["mask"] & (np.abs(fields["bearing"]) > 2 * np.pi)
+        turns = fields["mask"] & (np.abs(fields["bearing"]) > TWO_PI)
         if np.any(turns):  # a bearing in degrees was taken as radians
             i = int(np.flatnonzero(turns)[0])
             raise InputError(f"observation.bearing[{i}] = {fields['bearing'][i]} is beyond one "
