@@ -144,7 +144,8 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     ----------
     model : TwoSliceDBN or pgmpy DynamicBayesianNetwork
     evidence : mapping name -> array
-        Columnar evidence: discrete ``name -> (T,) int`` (``-1`` = unobserved), continuous
+        Columnar evidence: discrete ``name -> (T,) int`` (``-1`` = unobserved) or ``(T,)``
+        state names as pgmpy gives them (``None`` = unobserved), continuous
         ``name -> (T, dim) float`` (a row of NaN = unobserved).
     method : {"auto", "exact", "bk", "particle", "rbpf"}
     query : sequence of str, optional

@@ -2,7 +2,9 @@
 
 Columnar evidence maps a variable name to one array over the slices:
 
-- a discrete variable: integer states, shape ``(num_timesteps,)``, ``-1`` = unobserved;
+- a discrete variable: shape ``(num_timesteps,)``, its states by index (integers, ``-1`` =
+  unobserved) or by name (the variable's ``state_names``, as pgmpy gives them; ``None`` =
+  unobserved), not both in one column;
 - a continuous variable of dimension ``d``: floats, shape ``(num_timesteps, d)`` (a 1-D
   column is read as ``d = 1``), a row of NaN = unobserved;
 - soft evidence on a discrete variable: nonnegative likelihoods, shape
@@ -31,7 +33,8 @@ from dbn.errors import (
 )
 from dbn.variables import ContinuousVariable, DiscreteVariable
 
-__all__ = ["Columns", "as_column", "check_columns", "check_query", "first_bad_row"]
+__all__ = ["Columns", "as_column", "check_columns", "check_query", "first_bad_row",
+           "state_column"]
 
 
 class Columns(NamedTuple):
@@ -74,17 +77,37 @@ def first_bad_row(arr: np.ndarray) -> int | None:
     return int(np.argmax(bad)) if bad.any() else None
 
 
-def _discrete_column(
-    name: str, v: DiscreteVariable, col: ArrayLike, T: int | None
+def state_column(
+    name: str, v: DiscreteVariable, col: ArrayLike, T: int | None = None
 ) -> tuple[np.ndarray, int]:
-    """A hard evidence column of a discrete variable: (T,) int64 states, -1 unobserved;
-    and its length (which must equal ``T`` unless ``T`` is None)."""
+    """A hard evidence column of discrete variable ``v``, its states given by index or by
+    name (module docstring), as (T,) int64 states, -1 unobserved; and its length, which
+    must equal ``T`` unless ``T`` is None.
+
+    Raises
+    ------
+    ShapeError
+        Not 1-D, or not of length ``T``.
+    EvidenceError
+        Not integers or names, an index out of range, or an unknown name (each naming the
+        column and the slice).
+    """
     arr = as_column(name, col)
+    if arr.dtype.kind == "U" and not isinstance(col, np.ndarray):
+        arr = as_column(name, col, dtype=object)  # numpy writes a mixed list's ints as names
     if arr.ndim != 1:
-        raise ShapeError(f"evidence column {name!r} must be 1-D, got shape {arr.shape}")
-    if not np.issubdtype(arr.dtype, np.integer):
-        raise EvidenceError(f"evidence column {name!r} must hold integer states (-1 = unobserved)")
+        raise ShapeError(
+            f"evidence column {name!r} must be 1-D (num_timesteps,), got shape {arr.shape}"
+        )
+    named = arr.dtype.kind in "UO"
+    if not (named or np.issubdtype(arr.dtype, np.integer)):
+        raise EvidenceError(
+            f"evidence column {name!r} must hold integer states (-1 = unobserved) or state "
+            f"names, got dtype {arr.dtype}"
+        )
     T = _length(name, arr.shape[0], T)
+    if named:
+        return _state_indices(name, v, arr), T
     bad = (arr < -1) | (arr >= v.cardinality)
     if bad.any():
         t = int(np.argmax(bad))
@@ -93,6 +116,25 @@ def _discrete_column(
             f"-1..{v.cardinality - 1}"
         )
     return arr.astype(np.int64), T
+
+
+def _state_indices(name: str, v: DiscreteVariable, arr: np.ndarray) -> np.ndarray:
+    """A column of state names (None = unobserved) as (T,) int64 indices, -1 unobserved."""
+    index = {s: i for i, s in enumerate(v.state_names)}  # type: ignore[arg-type]
+    out = np.empty(arr.shape[0], np.int64)
+    for t, s in enumerate(arr.tolist()):
+        if s is None:
+            out[t] = -1
+        elif isinstance(s, str) and s in index:
+            out[t] = index[s]
+        else:
+            why = ("is not a state name: a column gives states by index or by name, not both"
+                   if not isinstance(s, str) else f"is not a state of {v.name!r}")
+            raise EvidenceError(
+                f"evidence column {name!r} at slice {t}: {s!r} {why} "
+                f"(states: {v.state_names}; None = unobserved)"
+            )
+    return out
 
 
 def _continuous_column(
@@ -163,7 +205,7 @@ def check_columns(
             raise UnknownEvidenceError(f"evidence on unknown variable {name!r}")
         v = variables[name]
         if isinstance(v, DiscreteVariable):
-            disc[name], T = _discrete_column(name, v, col, T)
+            disc[name], T = state_column(name, v, col, T)
         else:
             cont[name], T = _continuous_column(name, v, col, T)
     soft: dict[str, np.ndarray] = {}

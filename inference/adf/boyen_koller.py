@@ -297,8 +297,8 @@ def bk_filter(
     ----------
     dbn : TwoSliceDBN
         Discrete.
-    evidence : mapping name -> int array (num_timesteps,)
-        Observed states, ``-1`` = unobserved.
+    evidence : mapping name -> array (num_timesteps,)
+        Observed states, ``-1`` = unobserved (or state names, None = unobserved).
     query : sequence of str, optional
         Variables whose marginals are returned (default: every variable without an
         evidence column).

@@ -17,7 +17,7 @@ from dbn.bayesnet import check_likelihood
 from dbn.checks import check_count, check_mapping
 from dbn.errors import EvidenceError, ShapeError, UnknownEvidenceError
 from dbn.variables import DiscreteVariable
-from inference.evidence_columns import as_column
+from inference.evidence_columns import as_column, state_column
 
 __all__ = ["sequence_likelihoods", "slice_likelihoods", "distinct_rows"]
 
@@ -47,8 +47,9 @@ def sequence_likelihoods(
     Parameters
     ----------
     variables : mapping name -> DiscreteVariable
-    evidence : mapping name -> int array, shape (T,)
-        Observed state per slice, ``-1`` where unobserved.
+    evidence : mapping name -> array, shape (T,)
+        Observed state per slice: by index (``-1`` where unobserved) or by name (``None``
+        where unobserved); :func:`~inference.evidence_columns.state_column`.
     soft_evidence : mapping name -> float array, shape (T, cardinality), optional
         A likelihood row per slice (nonnegative, finite, not all zero); a row of NaN means
         no soft evidence on that slice.
@@ -63,8 +64,8 @@ def sequence_likelihoods(
     Raises
     ------
     EvidenceError, ShapeError
-        Unknown variable, non-integer states, a state out of range, lengths that differ,
-        a soft row of the wrong shape or not a likelihood.
+        Unknown variable, states neither integers nor names, a state out of range or not
+        a state name, lengths that differ, a soft row of the wrong shape or not a likelihood.
     """
     if num_timesteps is not None:
         check_count("num_timesteps", num_timesteps, ShapeError)
@@ -73,22 +74,9 @@ def sequence_likelihoods(
     T = num_timesteps
     lam: dict[str, np.ndarray] = {}
     for name, col in (evidence or {}).items():
-        k = _variable(variables, name, "evidence").cardinality
-        arr = as_column(name, col)
-        if arr.ndim != 1:
-            raise ShapeError(f"evidence column {name!r} must be 1-D (T,), got shape {arr.shape}")
-        if not np.issubdtype(arr.dtype, np.integer):
-            raise EvidenceError(
-                f"evidence column {name!r} must hold integer states (-1 = unobserved), "
-                f"got dtype {arr.dtype}"
-            )
-        T = _length(name, arr.shape[0], T)
-        bad = (arr < -1) | (arr >= k)
-        if bad.any():
-            t = int(np.argmax(bad))
-            raise EvidenceError(
-                f"evidence column {name!r}: state {int(arr[t])} at slice {t} out of range -1..{k - 1}"
-            )
+        v = _variable(variables, name, "evidence")
+        arr, T = state_column(name, v, col, T)
+        k = v.cardinality
         rows = np.ones((arr.shape[0], k))
         seen = arr >= 0
         rows[seen] = np.eye(k)[arr[seen]]

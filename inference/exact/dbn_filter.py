@@ -361,9 +361,9 @@ class DBNFilter:
 
         Parameters
         ----------
-        evidence : mapping name -> int array, shape (num_timesteps,)
+        evidence : mapping name -> array, shape (num_timesteps,)
             Columnar hard evidence: the observed state of each variable at every slice,
-            ``-1`` where unobserved.
+            ``-1`` where unobserved (or state names, None where unobserved).
         num_timesteps : int, optional
             Needed only without evidence columns.
 

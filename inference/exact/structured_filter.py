@@ -437,8 +437,9 @@ class StructuredFilter:
 
         Parameters
         ----------
-        evidence : mapping name -> int array, shape (T,)
-            Observed state per slice, ``-1`` where unobserved.
+        evidence : mapping name -> array, shape (T,)
+            Observed state per slice, ``-1`` where unobserved (or state names, None where
+            unobserved).
         soft_evidence : mapping name -> float array, shape (T, cardinality), optional
             Likelihood rows (all-NaN row: none on that slice).
         num_timesteps : int, optional

@@ -417,8 +417,8 @@ def particle_filter_dbn(
     key : jax PRNG key
     dbn : TwoSliceDBN
     evidence : mapping name -> array
-        Discrete: int (num_timesteps,), -1 = unobserved; continuous: float
-        (num_timesteps, dim), NaN rows = unobserved.
+        Discrete: int (num_timesteps,), -1 = unobserved (or state names, None =
+        unobserved); continuous: float (num_timesteps, dim), NaN rows = unobserved.
     query : sequence of str, optional
         Default: every variable without an evidence column.
     num_particles : int

@@ -339,7 +339,8 @@ def rbpf_filter_dbn(
     evidence : mapping name -> array
         Continuous: (num_timesteps, dim) floats, NaN rows = unobserved; these are the
         observed continuous variables, every other continuous variable is hidden.
-        Discrete: (num_timesteps,) ints, -1 = unobserved.
+        Discrete: (num_timesteps,) ints, -1 = unobserved (or state names, None =
+        unobserved).
     query : sequence of str, optional
         Default: every variable without an evidence column.
     num_particles : int

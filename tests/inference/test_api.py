@@ -13,7 +13,7 @@ import pytest
 
 import inference
 from dbn import pgmpy_adapter as pa
-from dbn.cpds import LinearGaussianCPD
+from dbn.cpds import LinearGaussianCPD, TabularCPD
 from dbn.dbn import TwoSliceDBN, prev
 from dbn.errors import (
     EvidenceError,
@@ -27,7 +27,7 @@ from dbn.errors import (
     UnknownVariableError,
 )
 from dbn.examples import coupled_chains, sample_coupled_chains
-from dbn.variables import ContinuousVariable
+from dbn.variables import ContinuousVariable, DiscreteVariable
 from inference import api
 from inference.exact.dbn_filter import DBNFilter
 from inference.results import DBNFilterResult
@@ -84,6 +84,41 @@ def test_pgmpy_dbn_without_all_cpds_is_refused() -> None:
     model.remove_cpds(model.get_cpds(("x1", 1)))
     with pytest.raises(ModelError, match=r"no CPD for node\(s\) \[\('x1', 1\)\]"):
         inference.filter(model, {"y0": np.zeros(3, int)})
+
+
+def _weather() -> TwoSliceDBN:
+    """A two-state chain ``x`` seen through ``y``, states named as pgmpy users name them."""
+    x = DiscreteVariable("x", 2, ("sun", "rain"))
+    y = DiscreteVariable("y", 3, ("dry", "damp", "wet"))
+    obs = np.array([[0.7, 0.2, 0.1], [0.1, 0.3, 0.6]])
+    return TwoSliceDBN(
+        [x, y],
+        [TabularCPD("x", [], [0.5, 0.5]), TabularCPD("y", ["x"], obs)],
+        [TabularCPD("x", [prev("x")], [[0.9, 0.1], [0.2, 0.8]]), TabularCPD("y", ["x"], obs)],
+    )
+
+
+def test_evidence_by_state_name_equals_evidence_by_index_on_every_engine() -> None:
+    """Columns of state names (None = unobserved) were refused by every engine ("must hold
+    integer states"); pgmpy's own inference takes names. They now give the same results as
+    the indices of those names, a pgmpy model in too."""
+    from inference.exact.dbn_filter import DBNFilter
+
+    dbn = _weather()
+    by_index = {"y": np.array([0, 2, -1, 1, 2, 2])}
+    by_name = {"y": ["dry", "wet", None, "damp", "wet", "wet"]}
+    runs = [
+        lambda ev: inference.filter(dbn, ev, "exact"),
+        lambda ev: inference.filter(pa.dbn_to_pgmpy(dbn), ev, "exact"),
+        lambda ev: inference.filter(dbn, ev, "bk"),
+        lambda ev: inference.filter(dbn, ev, "particle", key=jax.random.key(3), num_particles=64),
+    ]
+    for run in runs:
+        a, b = run(by_index), run(by_name)
+        np.testing.assert_array_equal(a.marginals["x"], b.marginals["x"])
+        np.testing.assert_array_equal(a.log_likelihoods, b.log_likelihoods)
+    dense = DBNFilter(dbn)
+    assert dense.filter(by_name).log_likelihood == dense.filter(by_index).log_likelihood
 
 
 def test_auto_falls_back_to_boyen_koller_and_says_why(monkeypatch) -> None:

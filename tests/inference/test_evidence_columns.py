@@ -8,11 +8,21 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from dbn.cpds import TabularCPD
+from dbn.dbn import TwoSliceDBN, prev
 from dbn.errors import EvidenceError, NonFiniteError, ShapeError, UnknownEvidenceError
 from dbn.examples import switching_lds
+from dbn.variables import DiscreteVariable
 from inference.evidence_columns import check_columns, first_bad_row
+from inference.exact.dbn_evidence import sequence_likelihoods
 
 DBN = switching_lds()  # s: discrete (2 states), x: continuous (2), y: continuous (1)
+STATES = ("1", "2", "wet")  # numeric names: the name "1" is the index 0
+NAMED = TwoSliceDBN(
+    [DiscreteVariable("w", 3, STATES)],
+    [TabularCPD("w", [], np.full(3, 1 / 3))],
+    [TabularCPD("w", [prev("w")], np.full((3, 3), 1 / 3))],
+)
 
 
 def test_accepts_and_normalises_every_kind() -> None:
@@ -57,6 +67,40 @@ def test_length_is_checked_before_values() -> None:
     # a column both too long and out of range is reported for its length
     with pytest.raises(ShapeError, match="length"):
         check_columns(DBN, {"s": [0, 5, 1]}, None, num_timesteps=2)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.integers(-1, 2), min_size=1, max_size=12), st.booleans())
+def test_state_names_read_as_their_indices(states, as_array) -> None:
+    """A column of state names (None = unobserved), as pgmpy users give them, is the
+    column of their indices for both column readers (it was refused: "must hold integer
+    states")."""
+    names = [None if i < 0 else STATES[i] for i in states]
+    col = np.array(names, dtype=object) if as_array else names
+    np.testing.assert_array_equal(check_columns(NAMED, {"w": col}).discrete["w"], states)
+    T, lam = sequence_likelihoods({"w": NAMED.variables[0]}, {"w": col})
+    T0, lam0 = sequence_likelihoods({"w": NAMED.variables[0]}, {"w": np.array(states)})
+    assert T == T0 == len(states)
+    np.testing.assert_array_equal(lam["w"], lam0["w"])
+
+
+@pytest.mark.parametrize(
+    ("column", "match"),
+    [
+        (["1", "dry"], r"'w' at slice 1: 'dry' is not a state of 'w'"),
+        # numpy writes [1, "2"] as ["1", "2"]: the index 1 would have been read as the name
+        # "1", the index 0
+        ([1, "2"], r"'w' at slice 0: 1 is not a state name: .* by index or by name, not both"),
+        (np.array(["wet", 2], dtype=object), r"slice 1: 2 is not a state name"),
+        ([["1"], ["2"]], r"'w' must be 1-D"),
+        ([0.0, 1.0], r"'w' must hold integer states \(-1 = unobserved\) or state names"),
+    ],
+)
+def test_bad_state_names_name_the_column_and_slice(column, match) -> None:
+    for read in (lambda: check_columns(NAMED, {"w": column}),
+                 lambda: sequence_likelihoods({"w": NAMED.variables[0]}, {"w": column})):
+        with pytest.raises((EvidenceError, ShapeError), match=match):
+            read()
 
 
 @settings(max_examples=80, deadline=None)
