@@ -361,17 +361,26 @@ def example_task(point: GridPoint) -> dict[str, Any]:
 example_task.params = ()  # type: ignore[attr-defined]
 
 
+SWEEP_FIELDS = frozenset({"task", "trackers", "data", "seeds", "params"})
+"""The fields of a sweep configuration (:func:`load_sweep`)."""
+
+
 def _seeds(seeds: Any) -> list[int]:
     """The ``seeds`` field: a list of ints or ``{start = a, stop = b}``."""
     if isinstance(seeds, dict):
+        if set(seeds) - {"start", "stop"}:  # {begin = 0, stop = 4} would start at 0 silently
+            raise InputError(f"field 'seeds': keys {sorted(set(seeds) - {'start', 'stop'})} "
+                             "are not start or stop")
         start, stop = seeds.get("start", 0), seeds.get("stop")
         if not all(isinstance(v, int) and not isinstance(v, bool) for v in (start, stop)):
             raise InputError(f"field 'seeds': start/stop must be integers, got {seeds!r}")
-        return list(range(start, stop))
-    if not isinstance(seeds, list) or not all(
+        seeds = list(range(start, stop))
+    elif not isinstance(seeds, list) or not all(
         isinstance(v, int) and not isinstance(v, bool) for v in seeds
     ):
         raise InputError("field 'seeds' must be a list of integers or {start, stop}")
+    if not seeds:
+        raise InputError("field 'seeds' gives no seed (an empty list, or stop <= start)")
     return seeds
 
 
@@ -402,6 +411,9 @@ def load_sweep(path: str | os.PathLike) -> tuple[Task, list[GridPoint]]:
         raise FileFormatError(p, "no such sweep configuration") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError, OSError) as exc:
         raise FileFormatError(p, f"not a TOML file: {exc}") from None
+    unknown = sorted(set(cfg) - SWEEP_FIELDS)
+    if unknown:  # a misspelt field (``seed``, ``[param]``) would run the defaults silently
+        raise FileFormatError(p, f"unknown field(s) {unknown}; the fields are {sorted(SWEEP_FIELDS)}")
     spec = cfg.get("task")
     if not isinstance(spec, str) or spec.count(":") != 1:
         raise FileFormatError(p, f"field 'task' must be 'module:function', got {spec!r}")
@@ -418,6 +430,8 @@ def load_sweep(path: str | os.PathLike) -> tuple[Task, list[GridPoint]]:
             raise FileFormatError(p, f"field {field_name!r} must be a non-empty list")
         if not all(isinstance(v, str) for v in value):
             raise FileFormatError(p, f"field {field_name!r} must be a list of names")
+    if not isinstance(cfg.get("params", {}), dict):
+        raise FileFormatError(p, "field 'params' must be a table ([params], one list per name)")
     try:
         seeds = _seeds(cfg.get("seeds", [0]))
         grid = make_grid(cfg["trackers"], cfg.get("data", ["simulated"]), seeds, cfg.get("params"))

@@ -4,6 +4,7 @@ robust to a failing task and to a worker that dies."""
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
@@ -59,6 +60,35 @@ def test_parameters_a_task_does_not_read_are_refused_before_anything_runs(tmp_pa
                     '[params]\nn = [4]\ntee = [5]\n')  # fmt: skip
     with pytest.raises(InputError, match=r"sweep.toml.*\['tee'\]"):
         load_sweep(toml)
+
+
+_HEAD = 'task = "benchmarks.scale_out:chain_task"\ntrackers = ["chains"]\n'
+
+
+@pytest.mark.parametrize(
+    ("body", "needle"),
+    [
+        # a misspelt field ran the defaults: one seed 0, no grid parameter
+        ("seed = [3]\n", "unknown field(s) ['seed']"),
+        ("seeds = [0]\n[param]\nn = [4]\n", "unknown field(s) ['param']"),
+        # an empty range or list ran nothing and said "0 of 0 points ok"
+        ("seeds = {start = 3, stop = 1}\n", "field 'seeds' gives no seed"),
+        ("seeds = []\n", "field 'seeds' gives no seed"),
+        # an unknown key of the range started it at 0
+        ("seeds = {begin = 2, stop = 4}\n", "field 'seeds': keys ['begin']"),
+        # was Python's "cannot convert dictionary update sequence element #0"
+        ("params = [1]\n", "field 'params' must be a table"),
+    ],
+)
+def test_a_misspelt_or_empty_sweep_field_is_refused(tmp_path, body, needle) -> None:
+    from models.experiments import load_sweep
+
+    toml = tmp_path / "sweep.toml"
+    toml.write_text(_HEAD + body)
+    with pytest.raises(InputError, match=re.escape(needle)):
+        load_sweep(toml)
+    toml.write_text(_HEAD + "seeds = {start = 1, stop = 3}\n[params]\nn = [4]\n")
+    assert [(g.seed, g.params) for g in load_sweep(toml)[1]] == [(1, (("n", 4),)), (2, (("n", 4),))]
 
 
 def test_serial_failing_task_is_recorded_and_others_finish(tmp_path) -> None:
