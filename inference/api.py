@@ -20,23 +20,19 @@ import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-import numpy as np
 from numpy.typing import ArrayLike
 
-from dbn.checks import check_mapping
+from dbn.checks import check_count, check_mapping
 from dbn.dbn import TwoSliceDBN
 from dbn.errors import (
-    EvidenceError,
     FrontierTooLargeError,
     InputError,
     ModelError,
-    NonFiniteError,
     ShapeError,
-    UnknownEvidenceError,
     as_memory_limit,
 )
 from dbn.variables import DiscreteVariable
-from inference.evidence_columns import as_column, first_bad_row
+from inference.evidence_columns import check_columns
 from inference.exact.frontier import MAX_FRONTIER_SIZE, check_max_size
 from inference.results import DBNFilterResult
 
@@ -70,36 +66,20 @@ def as_two_slice_dbn(model: Any) -> TwoSliceDBN:
 
 
 def _check_evidence(
-    dbn: TwoSliceDBN, evidence: Mapping[str, ArrayLike] | None, soft: Mapping[str, ArrayLike] | None
+    dbn: TwoSliceDBN,
+    evidence: Mapping[str, ArrayLike] | None,
+    soft: Mapping[str, ArrayLike] | None,
+    num_timesteps: int | None,
 ) -> None:
-    """Names, shapes and lengths of every column (discrete ones are checked in full by the
-    exact engine's :func:`~inference.exact.dbn_evidence.sequence_likelihoods`)."""
-    variables = {v.name: v for v in dbn.variables}
+    """Every column in full, as every engine reads it
+    (:func:`~inference.evidence_columns.check_columns`), and its length against
+    ``num_timesteps`` where given, before any engine runs."""
     check_mapping("evidence", evidence)
-    lengths: dict[str, int] = {}
-    for name, col in {**(evidence or {}), **(soft or {})}.items():
-        if name not in variables:
-            raise UnknownEvidenceError(
-                f"evidence on unknown variable {name!r} (known: {sorted(variables)})"
-            )
-        v = variables[name]
-        arr = as_column(name, col, "soft evidence" if name in (soft or {}) else "evidence column")
-        if isinstance(v, DiscreteVariable):
-            lengths[name] = arr.shape[0] if arr.ndim else -1
-            continue
-        if name in (soft or {}):
-            raise EvidenceError(f"soft evidence on continuous variable {name!r} is not supported")
-        if arr.ndim != 2 or arr.shape[1] != v.dim:
-            raise ShapeError(f"evidence {name!r} must have shape (T, {v.dim}), got {arr.shape}")
-        arr = arr.astype(np.float64)
-        t = first_bad_row(arr)
-        if t is not None:
-            raise NonFiniteError(
-                f"evidence {name!r} at slice {t}: {arr[t]} (a missing row must be all NaN)"
-            )
-        lengths[name] = arr.shape[0]
-    if len(set(lengths.values())) > 1:
-        raise ShapeError(f"evidence columns have different lengths: {lengths}")
+    check_mapping("soft evidence", soft)
+    if num_timesteps is not None:
+        check_count("num_timesteps", num_timesteps, ShapeError)
+    if evidence or soft:  # without, the exact engine asks for num_timesteps
+        check_columns(dbn, evidence, soft, num_timesteps)
 
 
 def _choose(dbn: TwoSliceDBN, evars: Sequence[str], query, max_size: int) -> tuple[str, dict]:
@@ -156,7 +136,8 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     soft_evidence : mapping name -> (T, cardinality) float, optional
         Likelihood rows on discrete variables (all-NaN row = none): exact and bk only.
     num_timesteps : int, optional
-        ``T`` when no evidence column gives it (exact only).
+        ``T``: with evidence, every column's length must equal it; without, only
+        ``exact`` reads it.
     **options
         ``max_size`` (exact and auto: largest exact table, entries; default
         :data:`~inference.exact.frontier.MAX_FRONTIER_SIZE`), ``clusters`` (bk),
@@ -178,7 +159,7 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     dbn = as_two_slice_dbn(model)
     if method not in METHODS:
         raise InputError(f"method must be one of {METHODS}, got {method!r}")
-    _check_evidence(dbn, evidence, soft_evidence)
+    _check_evidence(dbn, evidence, soft_evidence, num_timesteps)
     max_size = check_max_size(options.get("max_size", MAX_FRONTIER_SIZE))
     info: dict[str, Any] = {}
     allowed = {"max_size"} if method == "auto" else set()
@@ -188,6 +169,9 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     unknown = set(options) - _OPTIONS[method] - allowed
     if unknown:
         raise InputError(f"options {sorted(unknown)} do not apply to method {method!r}")
+    if method != "exact" and num_timesteps is not None and not (evidence or soft_evidence):
+        raise InputError(f"method {method!r} takes the number of slices from the evidence "
+                         "columns: num_timesteps without evidence is read by 'exact' only")
     if method in ("particle", "rbpf"):
         if key is None:
             raise InputError(

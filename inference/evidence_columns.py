@@ -153,7 +153,7 @@ def _continuous_column(
     t = first_bad_row(arr)
     if t is not None:
         raise NonFiniteError(
-            f"evidence column {name!r}: row {t} is {arr[t]} (a row is all finite, "
+            f"evidence column {name!r} at slice {t}: {arr[t]} (a row is all finite, "
             "or all NaN for unobserved)"
         )
     return arr, T
@@ -202,7 +202,9 @@ def check_columns(
     cont: dict[str, np.ndarray] = {}
     for name, col in (evidence or {}).items():
         if name not in variables:
-            raise UnknownEvidenceError(f"evidence on unknown variable {name!r}")
+            raise UnknownEvidenceError(
+                f"evidence on unknown variable {name!r} (known: {sorted(variables)})"
+            )
         v = variables[name]
         if isinstance(v, DiscreteVariable):
             disc[name], T = state_column(name, v, col, T)
@@ -212,7 +214,9 @@ def check_columns(
     for name, col in (soft_evidence or {}).items():
         v = variables.get(name)
         if v is None:
-            raise UnknownEvidenceError(f"soft evidence on unknown variable {name!r}")
+            raise UnknownEvidenceError(
+                f"soft evidence on unknown variable {name!r} (known: {sorted(variables)})"
+            )
         soft[name], T = _soft_column(name, v, col, T)
     if T is None or T < 1:
         raise ShapeError("filtering needs num_timesteps >= 1 (give an evidence column)")

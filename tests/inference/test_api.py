@@ -178,11 +178,13 @@ def test_continuous_models_go_to_the_particle_filter_and_evidence_is_checked(mon
     assert res.method == "particle_filter_dbn" and "continuous" in res.info["auto"]
     with pytest.raises(NonFiniteError, match="slice 1"):
         inference.filter(dbn, {"y": np.array([[0.1], [np.inf], [0.2]])}, key="K")
-    with pytest.raises(ShapeError, match=r"\(T, 1\)"):
-        inference.filter(dbn, {"y": np.zeros(3)}, key="K")
+    with pytest.raises(ShapeError, match=r"'y' must have shape \(num_timesteps, 1\)"):
+        inference.filter(dbn, {"y": np.zeros((3, 2))}, key="K")
+    # a 1-D column of a 1-D variable, as every engine reads it (it was refused here alone)
+    inference.filter(dbn, {"y": np.zeros(3)}, key="K")
     with pytest.raises(ModelError, match="continuous"):
         inference.filter(dbn, {"y": ys}, method="exact")
-    assert len(calls) == 1
+    assert len(calls) == 2
 
 
 def test_bad_input_raises_before_any_engine_runs(monkeypatch) -> None:
@@ -193,7 +195,7 @@ def test_bad_input_raises_before_any_engine_runs(monkeypatch) -> None:
         inference.filter(dbn, ev, method="magic")
     with pytest.raises(EvidenceError, match="unknown variable 'z'"):
         inference.filter(dbn, {"z": np.zeros(5, int)}, method="bk")
-    with pytest.raises(ShapeError, match="lengths"):
+    with pytest.raises(ShapeError, match="'y1' has length 4, expected 5"):
         inference.filter(dbn, {"y0": np.zeros(5, int), "y1": np.zeros(4, int)}, method="bk")
     with pytest.raises(InputError, match="num_particles"):
         inference.filter(dbn, ev, method="bk", num_particles=3)
@@ -270,6 +272,21 @@ def test_bad_arguments_raise_the_library_error_naming_them(method, kwargs, error
     needle = needle.replace("10**15", f"{10**15:,}")
     with pytest.raises(error, match=re.escape(needle)):
         inference.filter(dbn, evidence, method, **kwargs)
+
+
+@pytest.mark.parametrize("method", ["bk", "particle"])
+def test_num_timesteps_is_never_ignored(method) -> None:
+    """``num_timesteps=9`` with 5 slices of evidence ran 5 slices under bk and particle
+    (exact refused it), and without evidence they said "filtering needs num_timesteps >= 1"
+    though it was given."""
+    dbn, ev = _chains(2, 5)
+    key = jax.random.key(0)
+    with pytest.raises(ShapeError, match="'y0' has length 5, expected 9"):
+        inference.filter(dbn, ev, method, key=key, num_timesteps=9)
+    with pytest.raises(InputError, match=f"method '{method}' takes the number of slices"):
+        inference.filter(dbn, None, method, key=key, num_timesteps=4)
+    assert inference.filter(dbn, ev, method, key=key, num_timesteps=5).num_timesteps == 5
+    assert inference.filter(dbn, None, "exact", num_timesteps=4).num_timesteps == 4
 
 
 def test_one_query_name_is_one_variable_everywhere() -> None:
