@@ -32,7 +32,7 @@ from dbn.errors import (
     as_memory_limit,
 )
 from dbn.variables import DiscreteVariable
-from inference.evidence_columns import check_columns
+from inference.evidence_columns import check_columns, columns_from_slices
 from inference.exact.frontier import MAX_FRONTIER_SIZE, check_max_size
 from inference.results import DBNFilterResult
 
@@ -125,8 +125,9 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     model : TwoSliceDBN or pgmpy DynamicBayesianNetwork
     evidence : mapping name -> array
         Columnar evidence: discrete ``name -> (T,) int`` (``-1`` = unobserved) or ``(T,)``
-        state names as pgmpy gives them (``None`` = unobserved), continuous
-        ``name -> (T, dim) float`` (a row of NaN = unobserved).
+        state names (``None`` = unobserved), continuous ``name -> (T, dim) float`` (a row
+        of NaN = unobserved). Or pgmpy's ``{(name, t): state}`` (discrete; by index or by
+        name), read by :func:`~inference.evidence_columns.columns_from_slices`.
     method : {"auto", "exact", "bk", "particle", "rbpf"}
     query : sequence of str, optional
         Variables whose marginals are returned (default: the engine's default, the
@@ -159,6 +160,8 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     dbn = as_two_slice_dbn(model)
     if method not in METHODS:
         raise InputError(f"method must be one of {METHODS}, got {method!r}")
+    if isinstance(evidence, Mapping) and any(isinstance(k, tuple) for k in evidence):
+        evidence = columns_from_slices(evidence, num_timesteps)  # pgmpy's {(name, t): state}
     _check_evidence(dbn, evidence, soft_evidence, num_timesteps)
     max_size = check_max_size(options.get("max_size", MAX_FRONTIER_SIZE))
     info: dict[str, Any] = {}

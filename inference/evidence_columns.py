@@ -12,6 +12,7 @@ Columnar evidence maps a variable name to one array over the slices:
   soft evidence at that slice.
 
 Every check runs before any filtering, and each error names the column and the value.
+pgmpy's evidence ``{(name, t): state}`` becomes columns with :func:`columns_from_slices`.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dbn.checks import check_mapping
+from dbn.checks import check_count, check_mapping
 from dbn.dbn import TwoSliceDBN
 from dbn.errors import (
     EvidenceError,
@@ -33,8 +34,8 @@ from dbn.errors import (
 )
 from dbn.variables import ContinuousVariable, DiscreteVariable
 
-__all__ = ["Columns", "as_column", "check_columns", "check_query", "first_bad_row",
-           "state_column"]
+__all__ = ["Columns", "as_column", "check_columns", "check_query", "columns_from_slices",
+           "first_bad_row", "state_column"]
 
 
 class Columns(NamedTuple):
@@ -134,6 +135,56 @@ def _state_indices(name: str, v: DiscreteVariable, arr: np.ndarray) -> np.ndarra
                 f"evidence column {name!r} at slice {t}: {s!r} {why} "
                 f"(states: {v.state_names}; None = unobserved)"
             )
+    return out
+
+
+def columns_from_slices(
+    evidence: Mapping, num_timesteps: int | None = None
+) -> dict[str, np.ndarray]:
+    """pgmpy's DBN evidence, ``{(name, t): state}`` (``DBNInference``), as discrete columns.
+
+    Parameters
+    ----------
+    evidence : mapping (str, int) -> int or str
+        The state of variable ``name`` at slice ``t >= 0``, by index or by name.
+    num_timesteps : int, optional
+        ``T``; default: the last slice with evidence, plus one.
+
+    Returns
+    -------
+    dict name -> ndarray, shape (T,)
+        int64 states with -1 where unobserved, or (a variable given by names) object
+        names with None where unobserved; :func:`state_column` reads both.
+
+    Raises
+    ------
+    EvidenceError
+        A key that is not ``(name, slice)``, a slice beyond ``num_timesteps``, a state that
+        is neither an integer nor a name (each naming the key).
+    """
+    check_mapping("evidence", evidence)
+    slices: dict[str, dict[int, object]] = {}
+    for key, state in evidence.items():
+        if not (isinstance(key, tuple) and len(key) == 2 and isinstance(key[0], str)
+                and isinstance(key[1], int | np.integer) and not isinstance(key[1], bool)
+                and key[1] >= 0):
+            raise EvidenceError(f"evidence key {key!r} is not (variable name, slice >= 0)")
+        if isinstance(state, bool) or not isinstance(state, int | np.integer | str):
+            raise EvidenceError(f"evidence {key!r}: state {state!r} is not an index or a name")
+        slices.setdefault(key[0], {})[int(key[1])] = state
+    last = max((t for col in slices.values() for t in col), default=-1)
+    T = last + 1
+    if num_timesteps is not None:
+        T = check_count("num_timesteps", num_timesteps, ShapeError)
+    if last >= T:
+        raise EvidenceError(f"evidence at slice {last} is beyond num_timesteps = {T}")
+    out = {}
+    for name, col in slices.items():
+        named = any(isinstance(v, str) for v in col.values())
+        arr = np.full(T, None, object) if named else np.full(T, -1, np.int64)
+        for t, v in col.items():
+            arr[t] = v
+        out[name] = arr
     return out
 
 

@@ -5,6 +5,8 @@
 #     text_representation:
 #       extension: .py
 #       format_name: percent
+#       format_version: '1.3'
+#       jupytext_version: 1.19.6
 #   kernelspec:
 #     display_name: Python 3
 #     language: python
@@ -29,6 +31,7 @@ import os
 import matplotlib.pyplot as plt
 import numpy as np
 
+import inference
 from dbn import pgmpy_adapter as pa
 from dbn.cpds import TabularCPD
 from dbn.dbn import TwoSliceDBN, prev
@@ -141,6 +144,8 @@ theirs = pa.pgmpy_dbn_forward(model, [("zone", 14)], evidence)[("zone", 14)]
 print("pgmpy:", theirs.round(6), " ours:", filt.beliefs[14].round(6))
 back = pa.dbn_from_pgmpy(model)
 print("round trip:", back)
+# the pgmpy model and its evidence, as they are, go to every generic engine
+print("inference.filter:", inference.filter(model, evidence).marginals["zone"][14].round(6))
 
 # %% [markdown]
 # ### Any cardinality, any slice structure

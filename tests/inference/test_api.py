@@ -121,6 +121,41 @@ def test_evidence_by_state_name_equals_evidence_by_index_on_every_engine() -> No
     assert dense.filter(by_name).log_likelihood == dense.filter(by_index).log_likelihood
 
 
+def test_pgmpy_evidence_by_slice_equals_pgmpy_dbn_inference() -> None:
+    """pgmpy's evidence, ``{(name, t): state}``, was refused ("unknown variable ('y', 0)").
+    It now gives pgmpy's own ``DBNInference`` marginals at every slice (oracle), by name
+    or by index, a slice without evidence included."""
+    dbn = _weather()
+    model = pa.dbn_to_pgmpy(dbn)
+    names = {("y", 0): "dry", ("y", 1): "wet", ("y", 3): "damp", ("y", 4): "wet"}
+    index = {k: ("dry", "damp", "wet").index(v) for k, v in names.items()}
+    res = inference.filter(model, names)
+    assert res.num_timesteps == 5
+    ours = inference.filter(dbn, index).marginals["x"]
+    np.testing.assert_allclose(ours, res.marginals["x"], atol=1e-12)
+    for t in range(5):
+        seen = {k: v for k, v in names.items() if k[1] <= t}
+        theirs = pa.pgmpy_dbn_forward(model, [("x", t)], seen)[("x", t)]
+        np.testing.assert_allclose(res.marginals["x"][t], theirs, atol=1e-12)
+    assert inference.filter(dbn, names, "bk", num_timesteps=7).num_timesteps == 7
+
+
+@pytest.mark.parametrize(
+    ("evidence", "needle"),
+    [
+        ({("y", -1): "dry"}, "key ('y', -1) is not (variable name, slice >= 0)"),
+        ({("y", 0): "dry", "y": [0]}, "key 'y' is not (variable name, slice >= 0)"),
+        ({("y", 0): 1.5}, "('y', 0): state 1.5 is not an index or a name"),
+        ({("y", 0): "dry", ("y", 1): 2}, "slice 1: 2 is not a state name"),
+        ({("y", 3): "dry"}, "slice 3 is beyond num_timesteps = 3"),
+        ({("z", 0): 1}, "unknown variable 'z'"),
+    ],
+)
+def test_bad_pgmpy_evidence_names_the_key(evidence, needle) -> None:
+    with pytest.raises(EvidenceError, match=re.escape(needle)):
+        inference.filter(_weather(), evidence, num_timesteps=3)
+
+
 def test_auto_falls_back_to_boyen_koller_and_says_why(monkeypatch) -> None:
     calls: list = []
     _stub(monkeypatch, "inference.adf.boyen_koller", "bk_filter", calls)
