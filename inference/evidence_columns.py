@@ -13,6 +13,8 @@ Columnar evidence maps a variable name to one array over the slices:
 
 Every check runs before any filtering, and each error names the column and the value.
 pgmpy's evidence ``{(name, t): state}`` becomes columns with :func:`columns_from_slices`.
+One slice's evidence (the on-line ``init`` / ``step`` of every engine) is ``name -> state``,
+by index or by name, ``-1`` or ``None`` = unobserved: :func:`slice_states`.
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ from dbn.errors import (
 from dbn.variables import ContinuousVariable, DiscreteVariable
 
 __all__ = ["Columns", "as_column", "check_columns", "check_query", "columns_from_slices",
-           "first_bad_row", "state_column"]
+           "first_bad_row", "slice_states", "state_column"]
 
 
 class Columns(NamedTuple):
@@ -135,6 +137,33 @@ def _state_indices(name: str, v: DiscreteVariable, arr: np.ndarray) -> np.ndarra
                 f"evidence column {name!r} at slice {t}: {s!r} {why} "
                 f"(states: {v.state_names}; None = unobserved)"
             )
+    return out
+
+
+def slice_states(
+    variables: Mapping[str, DiscreteVariable], evidence: Mapping | None
+) -> dict[str, int]:
+    """One slice's hard evidence, ``name -> state`` by index or by name (``-1`` or
+    ``None`` = unobserved, as in a column), as ``name -> index`` of the observed ones.
+
+    Raises
+    ------
+    UnknownEvidenceError, EvidenceError
+        Not a mapping, an unknown variable, a state out of range or not a state name.
+    """
+    check_mapping("evidence", evidence)
+    out: dict[str, int] = {}
+    for name, state in (evidence or {}).items():
+        v = variables.get(name)
+        if v is None:
+            raise UnknownEvidenceError(
+                f"evidence on unknown variable {name!r} (known: {sorted(variables)})"
+            )
+        missing = state is None or (
+            isinstance(state, int | np.integer) and not isinstance(state, bool) and state == -1
+        )
+        if not missing:
+            out[name] = v.index(state)
     return out
 
 

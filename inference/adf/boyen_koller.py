@@ -49,7 +49,7 @@ from dbn.dbn import TwoSliceDBN, prev, unprev
 from dbn.errors import EvidenceError, ModelError, UnknownEvidenceError, UnknownVariableError
 from dbn.variables import DiscreteVariable
 from inference.adf.slice_plan import SlicePlan
-from inference.evidence_columns import check_columns, check_query
+from inference.evidence_columns import check_columns, check_query, slice_states
 from inference.results import DBNFilterResult
 
 __all__ = ["BKState", "BoyenKoller", "bk_filter", "auto_clusters"]
@@ -209,14 +209,8 @@ class BoyenKoller:
         """Per-variable likelihood vectors of one slice (validated, nothing changed)."""
         lam: dict[str, np.ndarray] = {}
         variables = {v.name: v for v in self.dbn.variables}
-        for name, state in (evidence or {}).items():
-            if name not in variables:
-                raise UnknownEvidenceError(f"evidence on unknown variable {name!r}")
-            if isinstance(state, int | np.integer) and not isinstance(state, bool) and state == -1:
-                continue
-            vec = np.zeros(self.cards[name])
-            vec[variables[name].index(state)] = 1.0
-            lam[name] = vec
+        for name, state in slice_states(variables, evidence).items():
+            lam[name] = np.eye(self.cards[name])[state]
         for name, vec in (soft or {}).items():
             if name not in variables:
                 raise UnknownEvidenceError(f"soft evidence on unknown variable {name!r}")
@@ -246,7 +240,7 @@ class BoyenKoller:
         evidence: Mapping[str, int | str] | None = None,
         soft_evidence: Mapping[str, ArrayLike] | None = None,
     ) -> BKState:
-        """Absorb slice 0 (hard evidence: name -> state, ``-1`` = unobserved)."""
+        """Absorb slice 0 (hard evidence: name -> state, ``-1`` or None = unobserved)."""
         beliefs, extra, log_z = self._absorb(
             self._initial, (), self._lambdas(evidence, soft_evidence)
         )

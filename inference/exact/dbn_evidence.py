@@ -17,7 +17,7 @@ from dbn.bayesnet import check_likelihood
 from dbn.checks import check_count, check_mapping
 from dbn.errors import EvidenceError, ShapeError, UnknownEvidenceError
 from dbn.variables import DiscreteVariable
-from inference.evidence_columns import as_column, state_column
+from inference.evidence_columns import as_column, slice_states, state_column
 
 __all__ = ["sequence_likelihoods", "slice_likelihoods", "distinct_rows"]
 
@@ -114,9 +114,8 @@ def slice_likelihoods(
     check_mapping("evidence", evidence)
     check_mapping("soft evidence", soft_evidence)
     lam: dict[str, np.ndarray] = {}
-    for name, state in (evidence or {}).items():
-        v = _variable(variables, name, "evidence")
-        lam[name] = np.eye(v.cardinality)[v.index(state)][None]
+    for name, state in slice_states(variables, evidence).items():
+        lam[name] = np.eye(variables[name].cardinality)[state][None]
     for name, vec in (soft_evidence or {}).items():
         v = _variable(variables, name, "soft evidence")
         row = check_likelihood(name, v.cardinality, vec)[None]

@@ -41,7 +41,7 @@ from dbn.bayesnet import check_likelihood
 from dbn.dbn import TwoSliceDBN, prev
 from dbn.errors import EvidenceError, ModelError, UnknownEvidenceError
 from dbn.variables import DiscreteVariable
-from inference.evidence_columns import check_columns
+from inference.evidence_columns import check_columns, slice_states
 from inference.exact.factor import Factor, product
 
 
@@ -191,11 +191,7 @@ class DBNFilter:
     def _check(
         self, evidence: Evidence | None, soft: SoftEvidence | None
     ) -> tuple[dict[str, int], dict[str, np.ndarray]]:
-        hard: dict[str, int] = {}
-        for name, state in (evidence or {}).items():
-            if name not in self._vars:
-                raise UnknownEvidenceError(f"evidence on unknown variable {name!r}")
-            hard[name] = self._vars[name].index(state)
+        hard = slice_states(self._vars, evidence)
         lik: dict[str, np.ndarray] = {}
         for name, vec in (soft or {}).items():
             if name not in self._vars:
@@ -248,7 +244,8 @@ class DBNFilter:
     def init(
         self, evidence: Evidence | None = None, soft_evidence: SoftEvidence | None = None
     ) -> FilterState:
-        """Absorb slice 0. Raises :class:`EvidenceError` (bad or impossible evidence)."""
+        """Absorb slice 0 (evidence: name -> state, ``-1`` or None = unobserved). Raises
+        :class:`EvidenceError` (bad or impossible evidence)."""
         hard, soft = self._check(evidence, soft_evidence)
         M = self._local(True, hard, soft)
         return self._absorb(FilterState(-1, np.ones(1), 0.0), M)

@@ -459,7 +459,8 @@ class StructuredFilter:
         evidence: Mapping[str, int | str] | None = None,
         soft_evidence: Mapping[str, ArrayLike] | None = None,
     ) -> FrontierState:
-        """Absorb slice 0 (evidence: name -> state; soft: name -> likelihood vector)."""
+        """Absorb slice 0 (evidence: name -> state, ``-1`` or None = unobserved,
+        :func:`~inference.evidence_columns.slice_states`; soft: name -> likelihood vector)."""
         lam = slice_likelihoods(self.variables, evidence, soft_evidence)
         return self._absorb(None, lam)
 

@@ -156,6 +156,26 @@ def test_bad_pgmpy_evidence_names_the_key(evidence, needle) -> None:
         inference.filter(_weather(), evidence, num_timesteps=3)
 
 
+def test_one_slice_of_evidence_reads_alike_on_every_on_line_engine() -> None:
+    """``init`` / ``step`` took -1 as unobserved under Boyen-Koller only; the exact
+    engines refused it ("state -1 out of range") and None, as a column does not. Now
+    ``-1`` and None are unobserved, and a name is its index, on all three."""
+    from inference.adf.boyen_koller import BoyenKoller
+    from inference.exact.dbn_filter import DBNFilter
+    from inference.exact.structured_filter import StructuredFilter
+
+    dbn = _weather()
+    for flt in (StructuredFilter(dbn), DBNFilter(dbn), BoyenKoller(dbn)):
+        for ev in ({"y": -1}, {"y": None}, {"y": np.int64(-1)}):
+            np.testing.assert_equal(flt.step(flt.init(ev), ev), flt.step(flt.init({}), {}))
+        np.testing.assert_equal(flt.step(flt.init({"y": "wet"}), {"y": "dry"}),
+                                flt.step(flt.init({"y": 2}), {"y": 0}))
+        with pytest.raises(UnknownEvidenceError, match=r"'z' \(known: \['x', 'y'\]\)"):
+            flt.init({"z": 0})
+        with pytest.raises(EvidenceError, match="state -2 out of range"):
+            flt.init({"y": -2})
+
+
 def test_auto_falls_back_to_boyen_koller_and_says_why(monkeypatch) -> None:
     calls: list = []
     _stub(monkeypatch, "inference.adf.boyen_koller", "bk_filter", calls)
