@@ -37,7 +37,7 @@ from dbn.errors import (
 from dbn.variables import ContinuousVariable, DiscreteVariable
 
 __all__ = ["Columns", "as_column", "check_columns", "check_query", "columns_from_slices",
-           "first_bad_row", "slice_states", "state_column"]
+           "first_bad_row", "slice_states", "soft_column", "state_column"]
 
 
 class Columns(NamedTuple):
@@ -239,11 +239,12 @@ def _continuous_column(
     return arr, T
 
 
-def _soft_column(
-    name: str, v: DiscreteVariable | ContinuousVariable, col: ArrayLike, T: int | None
+def soft_column(
+    name: str, v: DiscreteVariable | ContinuousVariable, col: ArrayLike, T: int | None = None
 ) -> tuple[np.ndarray, int]:
     """A soft evidence column of a discrete variable: (T, cardinality) float64 likelihoods,
-    all-NaN rows (no soft evidence) read as ones; and its length."""
+    all-NaN rows (no soft evidence) read as ones; and its length, which must equal ``T``
+    unless ``T`` is None."""
     if not isinstance(v, DiscreteVariable):
         raise EvidenceError(f"soft evidence on continuous variable {name!r}")
     arr = as_column(name, col, "soft evidence", np.float64)
@@ -254,13 +255,15 @@ def _soft_column(
         )
     T = _length(name, arr.shape[0], T)
     none = np.isnan(arr).all(axis=1)  # an all-NaN row: no soft evidence at that slice
-    arr = np.where(none[:, None], 1.0, arr)
-    if not np.all(np.isfinite(arr)) or np.any(arr < 0) or not np.all(arr.max(axis=1) > 0):
+    rows = np.where(none[:, None], 1.0, arr)
+    ok = np.all(np.isfinite(rows) & (rows >= 0), axis=1) & np.any(rows > 0, axis=1)
+    if not ok.all():
+        t = int(np.argmin(ok))
         raise EvidenceError(
-            f"soft evidence {name!r}: every row must be finite, nonnegative and not all "
-            "zero (or all NaN for none)"
+            f"soft evidence {name!r} at slice {t}: {arr[t]} is not a likelihood "
+            "(finite, nonnegative, not all zero; all-NaN = none)"
         )
-    return arr, T
+    return rows, T
 
 
 def check_columns(
@@ -297,7 +300,7 @@ def check_columns(
             raise UnknownEvidenceError(
                 f"soft evidence on unknown variable {name!r} (known: {sorted(variables)})"
             )
-        soft[name], T = _soft_column(name, v, col, T)
+        soft[name], T = soft_column(name, v, col, T)
     if T is None or T < 1:
         raise ShapeError("filtering needs num_timesteps >= 1 (give an evidence column)")
     return Columns(int(T), disc, cont, soft)

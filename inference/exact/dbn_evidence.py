@@ -15,9 +15,9 @@ from numpy.typing import ArrayLike
 
 from dbn.bayesnet import check_likelihood
 from dbn.checks import check_count, check_mapping
-from dbn.errors import EvidenceError, ShapeError, UnknownEvidenceError
+from dbn.errors import ShapeError, UnknownEvidenceError
 from dbn.variables import DiscreteVariable
-from inference.evidence_columns import as_column, slice_states, state_column
+from inference.evidence_columns import slice_states, soft_column, state_column
 
 __all__ = ["sequence_likelihoods", "slice_likelihoods", "distinct_rows"]
 
@@ -28,12 +28,6 @@ def _variable(variables: Mapping[str, DiscreteVariable], name: str, what: str):
             f"{what} on unknown variable {name!r} (known: {sorted(variables)})"
         )
     return variables[name]
-
-
-def _length(name: str, n: int, T: int | None) -> int:
-    if T is not None and n != T:
-        raise ShapeError(f"evidence column {name!r} has length {n}, expected {T}")
-    return n
 
 
 def sequence_likelihoods(
@@ -82,22 +76,7 @@ def sequence_likelihoods(
         rows[seen] = np.eye(k)[arr[seen]]
         lam[name] = rows
     for name, col in (soft_evidence or {}).items():
-        k = _variable(variables, name, "soft evidence").cardinality
-        arr = as_column(name, col, "soft evidence", np.float64)
-        if arr.ndim != 2 or arr.shape[1] != k:
-            raise ShapeError(
-                f"soft evidence {name!r} must have shape (T, {k}), got shape {arr.shape}"
-            )
-        T = _length(name, arr.shape[0], T)
-        none = np.all(np.isnan(arr), axis=1)
-        rows = np.where(none[:, None], 1.0, arr)
-        ok = np.all(np.isfinite(rows) & (rows >= 0), axis=1) & np.any(rows > 0, axis=1)
-        if not ok.all():
-            t = int(np.argmin(ok))
-            raise EvidenceError(
-                f"soft evidence {name!r} at slice {t}: {arr[t]} is not a likelihood "
-                "(finite, nonnegative, not all zero; all-NaN = none)"
-            )
+        rows, T = soft_column(name, _variable(variables, name, "soft evidence"), col, T)
         lam[name] = lam[name] * rows if name in lam else rows
     if T is None or T < 1:
         raise ShapeError("filtering needs num_timesteps >= 1 (give it or an evidence column)")

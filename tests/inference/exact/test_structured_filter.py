@@ -235,7 +235,7 @@ def test_bad_input_raises_before_any_state_changes() -> None:
         flt.filter({"y0": np.zeros(3)})
     with pytest.raises(EvidenceError, match="slice 2"):
         flt.filter({"y0": np.array([0, 1, 5])})
-    with pytest.raises(ShapeError, match=r"\(T, 2\)"):
+    with pytest.raises(ShapeError, match=r"\(num_timesteps, 2\)"):
         flt.filter(soft_evidence={"y0": np.ones((3, 3))})
     with pytest.raises(EvidenceError, match="slice 1"):
         flt.filter(soft_evidence={"y0": np.array([[1.0, 1.0], [-1.0, 1.0]])})
