@@ -406,7 +406,7 @@ def load_sweep(path: str | os.PathLike) -> tuple[Task, list[GridPoint]]:
 
     p = Path(path)
     try:
-        cfg = tomllib.loads(p.read_text(encoding="utf-8"))
+        cfg = tomllib.loads(p.read_text(encoding="utf-8-sig"))  # a leading BOM dropped
     except FileNotFoundError:
         raise FileFormatError(p, "no such sweep configuration") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError, OSError) as exc:

@@ -3,6 +3,7 @@ errors that name the file and the line (``FILE:LINE: message``)."""
 
 from __future__ import annotations
 
+import codecs
 import csv
 import gzip
 import json
@@ -52,7 +53,8 @@ def fail(path: str | Path, line: int, message: str) -> FileFormatError:
 
 
 def read_lines(path: str | Path, what: str = "file") -> list[str]:
-    """The lines of a UTF-8 text file (``.gz`` decompressed), newlines kept.
+    """The lines of a UTF-8 text file (``.gz`` decompressed), newlines kept; a leading
+    byte-order mark (a spreadsheet's "CSV UTF-8" export writes one) is dropped.
 
     Raises :class:`~dbn.errors.FileFormatError` naming the file for a missing,
     unreadable, truncated (gzip), binary (NUL byte) or non-UTF-8 file, with the line
@@ -65,6 +67,7 @@ def read_lines(path: str | Path, what: str = "file") -> list[str]:
             data = f.read()
     except (OSError, EOFError, zlib.error) as exc:
         raise fail(path, 0, f"unreadable {what} ({exc})") from None
+    data = data.removeprefix(codecs.BOM_UTF8)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import shutil
@@ -748,3 +749,59 @@ def test_pathrecovery_camera_id_beyond_the_edges_is_refused_at_its_line(tmp_path
     argv = ["track", "pathrecovery", str(edges), str(DATA / "pathrecovery" / "observations.csv"),
             "-o", str(tmp_path / "out")]  # fmt: skip
     _bad(capsys, argv, "edges.csv:3:", "camera 4611686018427387904", "edges are listed")
+
+
+def _spreadsheet_copy(src: Path, dst: Path) -> Path:
+    """``src`` as a spreadsheet's "CSV UTF-8" export writes it: a byte-order mark first
+    and CRLF line ends."""
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    dst.write_bytes(b"\xef\xbb\xbf" + src.read_bytes().replace(b"\n", b"\r\n"))
+    return dst
+
+
+def _plain(x):
+    """``x`` with its dataclasses as dicts and named tuples as tuples, for assert_equal."""
+    if dataclasses.is_dataclass(x):
+        return {f.name: _plain(getattr(x, f.name)) for f in dataclasses.fields(x)}
+    if isinstance(x, tuple | list):
+        return [_plain(v) for v in x]
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    return x
+
+
+def test_a_byte_order_mark_is_not_part_of_the_first_field(tmp_path):
+    """A byte-order mark was read as part of the first header name or field: "column
+    '\\ufeffUmbrella' is not a variable" (dbn), "missing column(s) ['t']" (localization,
+    pathrecovery), a zajdel file's header misread, a ``--config`` "not valid JSON", a
+    seqinfo.ini "not an INI file". Every text reader now drops it."""
+    from models.io import jorge, localization, pathrecovery, rjmcmc3d, zajdel
+    from models.io.dbn import read_states, read_two_slice_bif
+    from models.io.table import read_json_config
+
+    def same(read, *names: str) -> None:  # one path each: some results hold the file name
+        paths = [tmp_path / n for n in names]
+        for n, path in zip(names, paths):
+            path.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy(DATA / n, path)
+        want = _plain(read(*paths))
+        for n, path in zip(names, paths):
+            _spreadsheet_copy(DATA / n, path)
+        np.testing.assert_equal(_plain(read(*paths)), want)
+
+    same(pathrecovery.read_network, "pathrecovery/edges.csv", "pathrecovery/cameras.csv")
+    same(pathrecovery.read_observations, "pathrecovery/observations.csv")
+    same(localization.read_generic, *(f"localization/{n}.csv" for n in
+                                      ("odometry", "measurements", "landmarks", "groundtruth")))
+    same(zajdel.read_observations, "zajdel/observations.csv")
+    same(zajdel.read_observations, "zajdel/events.csv")
+    same(jorge.read_mot, "jorge/gt.txt")
+    same(rjmcmc3d.read_tracks3d, "rjmcmc3d/truth3d.txt")
+    same(read_json_config, "rjmcmc3d/config.json")
+    dbn = read_two_slice_bif(DATA / "dbn" / "umbrella.bif")
+    same(lambda path: read_states(path, dbn), "dbn/evidence.csv")
+    ini = tmp_path / "SEQ" / "seqinfo.ini"
+    ini.parent.mkdir()
+    ini.write_bytes(b"\xef\xbb\xbf[Sequence]\r\nname=SEQ\r\nframeRate=7\r\n")
+    gt = _spreadsheet_copy(DATA / "jorge" / "gt.txt", ini.parent / "gt.txt")
+    assert jorge.mot_frame_rate(gt)[0] == 7.0

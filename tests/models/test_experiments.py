@@ -87,8 +87,11 @@ def test_a_misspelt_or_empty_sweep_field_is_refused(tmp_path, body, needle) -> N
     toml.write_text(_HEAD + body)
     with pytest.raises(InputError, match=re.escape(needle)):
         load_sweep(toml)
-    toml.write_text(_HEAD + "seeds = {start = 1, stop = 3}\n[params]\nn = [4]\n")
-    assert [(g.seed, g.params) for g in load_sweep(toml)[1]] == [(1, (("n", 4),)), (2, (("n", 4),))]
+    good = _HEAD + "seeds = {start = 1, stop = 3}\n[params]\nn = [4]\n"
+    for text in (good, "\ufeff" + good):  # a byte-order mark first was "not a TOML file"
+        toml.write_text(text, encoding="utf-8")
+        grid = load_sweep(toml)[1]
+        assert [(g.seed, g.params) for g in grid] == [(1, (("n", 4),)), (2, (("n", 4),))]
 
 
 def test_serial_failing_task_is_recorded_and_others_finish(tmp_path) -> None:
