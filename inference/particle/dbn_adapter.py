@@ -52,7 +52,7 @@ from dbn.cpds import (
     TabularCPD,
 )
 from dbn.dbn import TwoSliceDBN, is_prev, prev, unprev
-from dbn.errors import CPDShapeError, InputError, ModelError
+from dbn.errors import CPDShapeError, EvidenceError, InputError, ModelError
 from dbn.variables import DiscreteVariable
 from inference.evidence_columns import check_columns, check_query
 from inference.model_cache import ModelCache
@@ -399,6 +399,22 @@ def _filters(dbn, model, num_particles: int, method: str, query: tuple[str, ...]
     return per[key]
 
 
+def check_not_collapsed(log_likelihoods: np.ndarray, engine: str, num_particles: int) -> None:
+    """Raise :class:`~dbn.errors.EvidenceError` naming the first slice whose estimate
+    :math:`\\log \\hat p(y_t | y_{0:t-1})` is not finite: every particle got weight zero
+    there, and every marginal from that slice on would be the resampler's uniform
+    fallback, not a posterior (the exact engines and Boyen-Koller raise at that slice too).
+    """
+    bad = ~np.isfinite(log_likelihoods)
+    if bad.any():
+        t = int(np.argmax(bad))
+        raise EvidenceError(
+            f"slice {t}: every one of the {num_particles:,} particles of {engine} has weight "
+            "zero (the evidence is impossible under all of them: impossible evidence, or too "
+            "few particles for it)"
+        )
+
+
 @scoped(jnp.float64)
 def particle_filter_dbn(
     key: Array,
@@ -432,6 +448,12 @@ def particle_filter_dbn(
         query variables; ``log_likelihoods`` are the filter's estimates;
         ``info`` holds ``num_particles``, ``filter`` and ``ess`` (T,), the effective
         sample size of the filtered weights at each slice.
+
+    Raises
+    ------
+    EvidenceError
+        Bad evidence, or a slice where every particle got weight zero
+        (:func:`check_not_collapsed`).
     """
     if method not in ("bootstrap", "auxiliary"):
         raise InputError(f"method must be 'bootstrap' or 'auxiliary', got {method!r}")
@@ -467,5 +489,6 @@ def particle_filter_dbn(
     margs = {q: np.asarray(outs[q]) for q in query if q in model.cards}
     means = {q: np.asarray(outs[q][0]) for q in query if q not in model.cards}
     covs = {q: np.asarray(outs[q][1]) for q in query if q not in model.cards}
+    check_not_collapsed(lls, f"the {method} particle filter", num_particles)
     info = {"num_particles": num_particles, "filter": method, "ess": np.asarray(outs["_ess"])}
     return DBNFilterResult(margs, lls, "particle", means, covs, info)

@@ -49,7 +49,7 @@ from dbn.errors import CPDShapeError, InputError, ModelError
 from dbn.variables import DiscreteVariable
 from inference.evidence_columns import check_columns, check_query
 from inference.model_cache import ModelCache
-from inference.particle.dbn_adapter import _Node
+from inference.particle.dbn_adapter import _Node, check_not_collapsed
 from inference.particle.filters import check_key, check_num_particles
 from inference.particle.resampling import systematic
 from inference.precision import scoped
@@ -358,6 +358,9 @@ def rbpf_filter_dbn(
     ModelError
         A continuous CPD that is not (conditional) linear-Gaussian, or an observed
         continuous variable whose continuous parents are not hidden in its slice.
+    EvidenceError
+        Bad evidence, or a slice where every particle got weight zero
+        (:func:`~inference.particle.dbn_adapter.check_not_collapsed`).
     """
     num_particles = check_num_particles(num_particles)
     check_key(key)
@@ -379,5 +382,6 @@ def rbpf_filter_dbn(
     margs = {q: np.asarray(outs[q]) for q in query if q in model.cards}
     means = {q: np.asarray(outs[q][0]) for q in query if q not in model.cards}
     covs = {q: np.asarray(outs[q][1]) for q in query if q not in model.cards}
+    check_not_collapsed(np.asarray(lls), "the Rao-Blackwellised particle filter", num_particles)
     info = {"num_particles": num_particles, "ess": np.asarray(ess)}
     return DBNFilterResult(margs, np.asarray(lls), "rbpf", means, covs, info)

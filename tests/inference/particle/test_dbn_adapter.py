@@ -8,7 +8,7 @@ import pytest
 
 from dbn.cpds import LinearGaussianCPD, TabularCPD
 from dbn.dbn import TwoSliceDBN, prev
-from dbn.errors import InputError, ShapeError, UnknownVariableError
+from dbn.errors import EvidenceError, InputError, ShapeError, UnknownVariableError
 from dbn.examples import coupled_chains, sample_coupled_chains
 from dbn.variables import ContinuousVariable, DiscreteVariable
 from inference.exact.dbn_filter import DBNFilter
@@ -173,3 +173,26 @@ def test_random_dbn_with_hidden_non_interface_variable(factories) -> None:
         assert np.all(np.abs(est.mean(axis=0) - np.array(exact[q]))[~spread] <= 1e-3)
         # states the exact filter rules out are never held by a particle
         assert np.all(est[:, np.array(exact[q]) == 0] == 0)
+
+
+@pytest.mark.parametrize("engine", ["bootstrap", "auxiliary", "rbpf"])
+def test_a_slice_no_particle_can_explain_is_an_error_not_a_posterior(engine) -> None:
+    """The switch never changes (stay = 1) and is seen to change at slice 2. Every
+    particle got weight zero there: the result held ``-inf`` at slice 2 and, from there
+    on, the resampler's uniform fallback as if it were a posterior. The exact engines and
+    Boyen-Koller raise at that slice; the particle filters now do too."""
+    from dbn.examples import switching_lds
+    from inference.particle.rbpf import rbpf_filter_dbn
+
+    dbn = switching_lds(stay=1.0)
+    ev = {"s": np.array([0, 0, 1, 1]), "y": np.zeros((4, 1))}
+    def run_it(evidence):
+        key = jax.random.key(0)
+        if engine == "rbpf":
+            return rbpf_filter_dbn(key, dbn, evidence, num_particles=16)
+        return particle_filter_dbn(key, dbn, evidence, num_particles=16, method=engine)
+
+    with pytest.raises(EvidenceError, match="slice 2: every one of the 16 particles"):
+        run_it(ev)
+    ok = run_it({"s": np.array([0, 0, 0, -1]), "y": np.zeros((4, 1))})
+    assert np.isfinite(ok.log_likelihoods).all()
