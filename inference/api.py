@@ -161,7 +161,7 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     if method not in METHODS:
         raise InputError(f"method must be one of {METHODS}, got {method!r}")
     if isinstance(evidence, Mapping) and any(isinstance(k, tuple) for k in evidence):
-        evidence = columns_from_slices(evidence, num_timesteps)  # pgmpy's {(name, t): state}
+        evidence = columns_from_slices(dbn, evidence, num_timesteps)  # pgmpy's {(name, t): s}
     _check_evidence(dbn, evidence, soft_evidence, num_timesteps)
     max_size = check_max_size(options.get("max_size", MAX_FRONTIER_SIZE))
     info: dict[str, Any] = {}

@@ -168,38 +168,52 @@ def slice_states(
 
 
 def columns_from_slices(
-    evidence: Mapping, num_timesteps: int | None = None
+    dbn: TwoSliceDBN, evidence: Mapping, num_timesteps: int | None = None
 ) -> dict[str, np.ndarray]:
     """pgmpy's DBN evidence, ``{(name, t): state}`` (``DBNInference``), as discrete columns.
 
     Parameters
     ----------
+    dbn : TwoSliceDBN
     evidence : mapping (str, int) -> int or str
-        The state of variable ``name`` at slice ``t >= 0``, by index or by name.
+        The state of discrete variable ``name`` at slice ``t >= 0``: its name, or an int
+        read as pgmpy reads it: the state of that name where the variable's state names
+        are integers (pgmpy's integer names, converted), else the state's index.
     num_timesteps : int, optional
         ``T``; default: the last slice with evidence, plus one.
 
     Returns
     -------
     dict name -> ndarray, shape (T,)
-        int64 states with -1 where unobserved, or (a variable given by names) object
+        int64 indices with -1 where unobserved, or (a variable given by names) object
         names with None where unobserved; :func:`state_column` reads both.
 
     Raises
     ------
     EvidenceError
-        A key that is not ``(name, slice)``, a slice beyond ``num_timesteps``, a state that
-        is neither an integer nor a name (each naming the key).
+        A key that is not ``(name, slice)`` of a discrete variable, a slice beyond
+        ``num_timesteps``, a state that is neither an integer nor a name, an integer that
+        names no state (each naming the key).
     """
     check_mapping("evidence", evidence)
+    variables = {v.name: v for v in dbn.variables if isinstance(v, DiscreteVariable)}
     slices: dict[str, dict[int, object]] = {}
     for key, state in evidence.items():
         if not (isinstance(key, tuple) and len(key) == 2 and isinstance(key[0], str)
                 and isinstance(key[1], int | np.integer) and not isinstance(key[1], bool)
                 and key[1] >= 0):
             raise EvidenceError(f"evidence key {key!r} is not (variable name, slice >= 0)")
+        v = variables.get(key[0])
+        if v is None:
+            raise UnknownEvidenceError(f"evidence {key!r}: no discrete variable {key[0]!r} "
+                                       f"(discrete: {sorted(variables)})")
         if isinstance(state, bool) or not isinstance(state, int | np.integer | str):
             raise EvidenceError(f"evidence {key!r}: state {state!r} is not an index or a name")
+        if not isinstance(state, str) and _integer_names(v):  # pgmpy's names were integers
+            if str(int(state)) not in v.state_names:  # type: ignore[operator]
+                raise EvidenceError(f"evidence {key!r}: {state!r} is not a state of "
+                                    f"{v.name!r} (states: {v.state_names})")
+            state = str(int(state))
         slices.setdefault(key[0], {})[int(key[1])] = state
     last = max((t for col in slices.values() for t in col), default=-1)
     T = last + 1
@@ -215,6 +229,11 @@ def columns_from_slices(
             arr[t] = v
         out[name] = arr
     return out
+
+
+def _integer_names(v: DiscreteVariable) -> bool:
+    """Whether every state name of ``v`` is an integer numeral (``"0"``, ``"-2"``)."""
+    return all(s.removeprefix("-").isdigit() for s in v.state_names)  # type: ignore[union-attr]
 
 
 def _continuous_column(

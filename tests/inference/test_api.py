@@ -140,6 +140,31 @@ def test_pgmpy_evidence_by_slice_equals_pgmpy_dbn_inference() -> None:
     assert inference.filter(dbn, names, "bk", num_timesteps=7).num_timesteps == 7
 
 
+def test_pgmpy_integer_state_names_read_as_pgmpy_reads_them() -> None:
+    """A pgmpy variable with integer states ``[1, 2, 3]``: pgmpy reads the evidence
+    ``2`` as the state named 2 (the second); as an index it would be the third."""
+    from pgmpy.factors.discrete import TabularCPD as PgmpyCPD
+    from pgmpy.models import DynamicBayesianNetwork
+
+    model = DynamicBayesianNetwork([(("x", 0), ("y", 0)), (("x", 0), ("x", 1))])
+    x0, x1, y0 = ("x", 0), ("x", 1), ("y", 0)
+    model.add_cpds(
+        PgmpyCPD(x0, 2, [[0.5], [0.5]]),
+        PgmpyCPD(y0, 3, [[0.7, 0.1], [0.2, 0.3], [0.1, 0.6]], evidence=[x0], evidence_card=[2],
+                 state_names={y0: [1, 2, 3], x0: [0, 1]}),
+        PgmpyCPD(x1, 2, [[0.9, 0.2], [0.1, 0.8]], evidence=[x0], evidence_card=[2]),
+    )
+    model.initialize_initial_state()
+    for ev in ({("y", 0): 2, ("y", 1): 3}, {("y", 0): 1, ("y", 2): 2}):
+        res = inference.filter(model, ev)
+        for t in range(res.num_timesteps):
+            seen = {k: v for k, v in ev.items() if k[1] <= t}
+            theirs = pa.pgmpy_dbn_forward(model, [("x", t)], seen)[("x", t)]
+            np.testing.assert_allclose(res.marginals["x"][t], theirs, atol=1e-12)
+    with pytest.raises(EvidenceError, match=r"evidence \('y', 0\): 0 is not a state of 'y'"):
+        inference.filter(model, {("y", 0): 0})
+
+
 @pytest.mark.parametrize(
     ("evidence", "needle"),
     [
@@ -148,7 +173,7 @@ def test_pgmpy_evidence_by_slice_equals_pgmpy_dbn_inference() -> None:
         ({("y", 0): 1.5}, "('y', 0): state 1.5 is not an index or a name"),
         ({("y", 0): "dry", ("y", 1): 2}, "slice 1: 2 is not a state name"),
         ({("y", 3): "dry"}, "slice 3 is beyond num_timesteps = 3"),
-        ({("z", 0): 1}, "unknown variable 'z'"),
+        ({("z", 0): 1}, "evidence ('z', 0): no discrete variable 'z' (discrete: ['x', 'y'])"),
     ],
 )
 def test_bad_pgmpy_evidence_names_the_key(evidence, needle) -> None:
