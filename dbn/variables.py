@@ -65,6 +65,16 @@ class DiscreteVariable:
                 raise ModelError(f"variable {self.name!r}: duplicate state names {names}")
             object.__setattr__(self, "state_names", names)
 
+    @property
+    def renumbered(self) -> bool:
+        """Whether the state names are integers other than the indices (pgmpy's states
+        ``[1, 2, 3]`` become ``("1", "2", "3")``): an int there means a name to pgmpy and
+        an index to :meth:`index` (pgmpy's own evidence is read as pgmpy reads it:
+        :func:`inference.evidence_columns.columns_from_slices`)."""
+        names = self.state_names
+        return (all(s.removeprefix("-").isdigit() for s in names)  # type: ignore[union-attr]
+                and names != tuple(str(i) for i in range(self.cardinality)))
+
     def index(self, state: int | str) -> int:
         """Index of a state given by its index or its name."""
         if isinstance(state, str):

@@ -177,8 +177,9 @@ def columns_from_slices(
     dbn : TwoSliceDBN
     evidence : mapping (str, int) -> int or str
         The state of discrete variable ``name`` at slice ``t >= 0``: its name, or an int
-        read as pgmpy reads it: the state of that name where the variable's state names
-        are integers (pgmpy's integer names, converted), else the state's index.
+        read as pgmpy reads it: the state of that name where the state names are integers
+        other than the indices (``DiscreteVariable.renumbered``), else the state's index.
+        (In a column, an int is always an index.)
     num_timesteps : int, optional
         ``T``; default: the last slice with evidence, plus one.
 
@@ -209,7 +210,7 @@ def columns_from_slices(
                                        f"(discrete: {sorted(variables)})")
         if isinstance(state, bool) or not isinstance(state, int | np.integer | str):
             raise EvidenceError(f"evidence {key!r}: state {state!r} is not an index or a name")
-        if not isinstance(state, str) and _integer_names(v):  # pgmpy's names were integers
+        if not isinstance(state, str) and v.renumbered:  # pgmpy's names were integers
             if str(int(state)) not in v.state_names:  # type: ignore[operator]
                 raise EvidenceError(f"evidence {key!r}: {state!r} is not a state of "
                                     f"{v.name!r} (states: {v.state_names})")
@@ -229,11 +230,6 @@ def columns_from_slices(
             arr[t] = v
         out[name] = arr
     return out
-
-
-def _integer_names(v: DiscreteVariable) -> bool:
-    """Whether every state name of ``v`` is an integer numeral (``"0"``, ``"-2"``)."""
-    return all(s.removeprefix("-").isdigit() for s in v.state_names)  # type: ignore[union-attr]
 
 
 def _continuous_column(

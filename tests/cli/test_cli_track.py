@@ -805,3 +805,29 @@ def test_a_byte_order_mark_is_not_part_of_the_first_field(tmp_path):
     ini.write_bytes(b"\xef\xbb\xbf[Sequence]\r\nname=SEQ\r\nframeRate=7\r\n")
     gt = _spreadsheet_copy(DATA / "jorge" / "gt.txt", ini.parent / "gt.txt")
     assert jorge.mot_frame_rate(gt)[0] == 7.0
+
+
+@pytest.mark.parametrize("method", ["exact", "auto", "bk"])
+def test_dbn_integer_state_names_read_as_names_by_every_method(tmp_path, method):
+    """States named 1, 2, 3: the evidence field 2 is the state '2' (index 1) under every
+    method (the CLI hands the engines indices); P(X_0 | Y_0 = '2') = [0.4, 0.6] by hand."""
+    bif = tmp_path / "numbers.bif"
+    bif.write_text(
+        "network n {\n}\n"
+        "variable X_0 { type discrete [ 2 ] { 1, 2 }; }\n"
+        "variable X_1 { type discrete [ 2 ] { 1, 2 }; }\n"
+        "variable Y_0 { type discrete [ 3 ] { 1, 2, 3 }; }\n"
+        "variable Y_1 { type discrete [ 3 ] { 1, 2, 3 }; }\n"
+        "probability ( X_0 ) { table 0.5, 0.5; }\n"
+        "probability ( Y_0 | X_0 ) { (1) 0.7, 0.2, 0.1; (2) 0.1, 0.3, 0.6; }\n"
+        "probability ( X_1 | X_0 ) { (1) 0.9, 0.1; (2) 0.2, 0.8; }\n"
+        "probability ( Y_1 | X_1 ) { (1) 0.7, 0.2, 0.1; (2) 0.1, 0.3, 0.6; }\n"
+    )
+    ev = tmp_path / "ev.csv"
+    ev.write_text("Y\n2\n3\n\n1\n")
+    out = _track(tmp_path, "dbn", [bif, ev], "--method", method)
+    from models.io.dbn import read_marginals
+
+    states, x = read_marginals(out / "marginals.csv")["X"]
+    assert states == ["1", "2"]
+    np.testing.assert_allclose(x[0], [0.4, 0.6], atol=1e-12)

@@ -129,6 +129,12 @@ def test_evidence_validation() -> None:
             check_evidence(bn, None, {"a": lik})
 
 
+def test_renumbered_says_whether_int_states_mean_names_to_pgmpy() -> None:
+    assert DiscreteVariable("r", 3, ("1", "2", "3")).renumbered
+    assert DiscreteVariable("s", 2, ("-1", "0")).renumbered
+    assert not A.renumbered and not B.renumbered  # ("0", "1") are the indices; words
+
+
 def test_two_slice_dbn_unroll_structure() -> None:
     x, y = DiscreteVariable("x", 3), DiscreteVariable("y", 2)
     T = np.full((3, 3), 1 / 3)
