@@ -21,7 +21,7 @@ from dbn.errors import (
 )
 from dbn.variables import ContinuousVariable, DiscreteVariable, Variable
 
-__all__ = ["BayesNet", "CPD", "check_evidence", "check_sequence"]
+__all__ = ["BayesNet", "CPD", "check_discrete_net", "check_evidence", "check_sequence"]
 
 CPD = TabularCPD | DeterministicCPD | LinearGaussianCPD | ContinuousCPD
 
@@ -243,6 +243,18 @@ class BayesNet:
             u = rng.random(num_samples)[:, None]
             out[n] = np.minimum((np.cumsum(rows, axis=-1) < u).sum(axis=-1), table.shape[-1] - 1)
         return out
+
+
+def check_discrete_net(bn: Any, what: str) -> None:
+    """Raise :class:`ModelError` unless ``bn`` is a discrete :class:`BayesNet`; ``what``
+    (e.g. "a junction tree") needs it. A pgmpy model (or anything else) raised Python's
+    ``AttributeError``; the message says how to convert one."""
+    if not isinstance(bn, BayesNet):
+        how = (" (convert a pgmpy model with dbn.pgmpy_adapter.from_pgmpy)"
+               if type(bn).__module__.startswith("pgmpy") else "")
+        raise ModelError(f"{what} needs a dbn BayesNet, got {type(bn).__name__}{how}")
+    if not bn.is_discrete:
+        raise ModelError(f"{what} needs a discrete Bayes net (all variables discrete)")
 
 
 def check_evidence(

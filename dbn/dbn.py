@@ -28,6 +28,7 @@ from dbn.errors import ModelError, UnknownVariableError
 from dbn.variables import DiscreteVariable, Variable
 
 __all__ = ["prev", "is_prev", "unprev", "TwoSliceDBN", "PreviousSliceCPD", "slice_name",
+           "check_two_slice",
            "MAX_UNROLL_NODES"]
 
 _PREV = "[t-1]"
@@ -225,3 +226,14 @@ class TwoSliceDBN:
                 mapping.update({prev(b): slice_name(b, t - 1) for b in self.interface})
             cpds.extend(_renamed(c, mapping) for c in source)
         return BayesNet(variables, cpds)
+
+
+def check_two_slice(dbn: object, what: str) -> None:
+    """Raise :class:`ModelError` unless ``dbn`` is a :class:`TwoSliceDBN`; ``what`` (e.g.
+    "Boyen-Koller") needs one. Another model raised Python's ``AttributeError`` deep
+    inside; for a pgmpy model the message says how to convert it."""
+    if not isinstance(dbn, TwoSliceDBN):
+        how = (" (inference.filter takes a pgmpy DynamicBayesianNetwork as it is; "
+               "dbn.pgmpy_adapter.dbn_from_pgmpy converts one)"
+               if type(dbn).__module__.startswith("pgmpy") else "")
+        raise ModelError(f"{what} needs a TwoSliceDBN, got {type(dbn).__name__}{how}")

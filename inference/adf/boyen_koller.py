@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from dbn.bayesnet import BayesNet, check_likelihood
-from dbn.dbn import TwoSliceDBN, prev, unprev
+from dbn.dbn import TwoSliceDBN, check_two_slice, prev, unprev
 from dbn.errors import EvidenceError, ModelError, UnknownEvidenceError, UnknownVariableError
 from dbn.variables import DiscreteVariable
 from inference.adf.slice_plan import SlicePlan
@@ -165,6 +165,7 @@ class BoyenKoller:
         clusters: Sequence[Sequence[str]] | None = None,
         query: Sequence[str] | None = None,
     ) -> None:
+        check_two_slice(dbn, "Boyen-Koller")
         for v in dbn.variables:
             if not isinstance(v, DiscreteVariable):
                 raise ModelError(
@@ -306,6 +307,7 @@ def bk_filter(
     DBNFilterResult
         ``method="bk"``; ``info`` holds ``clusters`` and ``max_clique_size``.
     """
+    check_two_slice(dbn, "Boyen-Koller")
     cols = check_columns(dbn, evidence, soft_evidence)
     hidden = tuple(n for n in dbn.names if n not in cols.discrete and n not in cols.continuous)
     query = check_query(dbn, query, hidden)

@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from dbn.bayesnet import check_likelihood
-from dbn.dbn import TwoSliceDBN, prev
+from dbn.dbn import TwoSliceDBN, check_two_slice, prev
 from dbn.errors import EvidenceError, ModelError, UnknownEvidenceError
 from dbn.variables import DiscreteVariable
 from inference.evidence_columns import check_columns, slice_states
@@ -135,6 +135,7 @@ class DBNFilter:
     """
 
     def __init__(self, dbn: TwoSliceDBN) -> None:
+        check_two_slice(dbn, "DBNFilter")
         for v in dbn.variables:
             if not isinstance(v, DiscreteVariable):
                 raise ModelError(

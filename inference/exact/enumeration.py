@@ -10,7 +10,7 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dbn.bayesnet import BayesNet
+from dbn.bayesnet import BayesNet, check_discrete_net
 from dbn.errors import EvidenceError, ModelError
 from inference.exact.factor import Factor, product
 from inference.exact.variable_elimination import evidence_factors
@@ -28,6 +28,7 @@ def joint_factor(
 ) -> Factor:
     """The unnormalised joint ``P(x, e) prod lambda`` over all unobserved variables,
     axes in ``bn.nodes`` order."""
+    check_discrete_net(bn, "enumeration")
     size = float(np.prod([bn.cardinality(n) for n in bn.nodes]))
     if size > MAX_JOINT_SIZE:
         raise ModelError(f"joint of {size:.3g} configurations is too large to enumerate")

@@ -22,8 +22,8 @@ import networkx as nx
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dbn.bayesnet import BayesNet, check_evidence
-from dbn.errors import EvidenceError, ModelError
+from dbn.bayesnet import BayesNet, check_discrete_net, check_evidence
+from dbn.errors import EvidenceError
 from inference.exact.factor import Factor
 from inference.exact.graph import elimination_order, interaction_graph
 
@@ -153,8 +153,7 @@ class JunctionTree:
     """
 
     def __init__(self, bn: BayesNet, heuristic: str = "min_fill") -> None:
-        if not bn.is_discrete:
-            raise ModelError("a junction tree needs a discrete Bayes net")
+        check_discrete_net(bn, "a junction tree")
         self.bn = bn
         self.heuristic = heuristic
         self._cards = {n: bn.cardinality(n) for n in bn.nodes}

@@ -25,8 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dbn.bayesnet import BayesNet
-from dbn.errors import ModelError
+from dbn.bayesnet import BayesNet, check_discrete_net
 
 __all__ = ["NetIndex", "Pruned", "net_index", "requisite", "barren"]
 
@@ -57,8 +56,7 @@ class NetIndex:
 
     @classmethod
     def of(cls, bn: BayesNet) -> NetIndex:
-        if not bn.is_discrete:
-            raise ModelError("exact inference needs a discrete Bayes net (all variables discrete)")
+        check_discrete_net(bn, "exact inference")
         names = bn.nodes
         index = {n: i for i, n in enumerate(names)}
         parents = tuple(tuple(index[p] for p in bn.parents(n)) for n in names)

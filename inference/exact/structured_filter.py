@@ -37,7 +37,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dbn.dbn import TwoSliceDBN, prev
+from dbn.dbn import TwoSliceDBN, check_two_slice, prev
 from dbn.errors import (
     EvidenceError,
     FrontierTooLargeError,
@@ -164,8 +164,7 @@ class StructuredFilter:
         max_size: int = MAX_FRONTIER_SIZE,
         dense_limit: int = DENSE_LIMIT,
     ) -> None:
-        if not isinstance(dbn, TwoSliceDBN):
-            raise ModelError(f"expected a TwoSliceDBN, got {type(dbn).__name__}")
+        check_two_slice(dbn, "exact filtering")
         for v in dbn.variables:
             if not isinstance(v, DiscreteVariable):
                 raise ModelError(

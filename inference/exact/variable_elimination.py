@@ -11,7 +11,7 @@ from collections.abc import Iterable, Mapping, Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dbn.bayesnet import BayesNet, check_evidence
+from dbn.bayesnet import BayesNet, check_discrete_net, check_evidence
 from dbn.errors import EvidenceError, InputError, ModelError, UnknownVariableError
 from inference.exact.factor import Factor, product
 from inference.exact.graph import elimination_order, interaction_graph
@@ -36,8 +36,7 @@ def evidence_factors(
     hard : dict name -> int
         The validated hard evidence.
     """
-    if not bn.is_discrete:
-        raise ModelError("exact inference needs a discrete Bayes net (all variables discrete)")
+    check_discrete_net(bn, "exact inference")
     hard, soft = check_evidence(bn, evidence, soft_evidence)
     factors = [Factor.from_table((*bn.parents(n), n), bn.table(n)).reduce(hard) for n in bn.nodes]
     for name, lik in soft.items():
@@ -99,6 +98,7 @@ def variable_elimination(
     EvidenceError
         The evidence has probability zero, or a query variable is observed.
     """
+    check_discrete_net(bn, "exact inference")
     if isinstance(query, str):  # one name, as the DBN engines read it
         query = [query]
     if not isinstance(query, Iterable):

@@ -51,7 +51,7 @@ from dbn.cpds import (
     LinearGaussianCPD,
     TabularCPD,
 )
-from dbn.dbn import TwoSliceDBN, is_prev, prev, unprev
+from dbn.dbn import TwoSliceDBN, check_two_slice, is_prev, prev, unprev
 from dbn.errors import CPDShapeError, EvidenceError, InputError, ModelError
 from dbn.variables import DiscreteVariable
 from inference.evidence_columns import check_columns, check_query
@@ -457,6 +457,7 @@ def particle_filter_dbn(
     """
     if method not in ("bootstrap", "auxiliary"):
         raise InputError(f"method must be 'bootstrap' or 'auxiliary', got {method!r}")
+    check_two_slice(dbn, "the particle filter")
     num_particles = check_num_particles(num_particles)
     check_key(key)
     model = _CACHE.get(dbn, dict).get("model") or DBNStateSpaceModel(dbn)

@@ -44,7 +44,7 @@ from numpy.typing import ArrayLike
 
 from dbn.bayesnet import BayesNet
 from dbn.cpds import ConditionalLinearGaussianCPD, LinearGaussianCPD
-from dbn.dbn import TwoSliceDBN, is_prev, prev, unprev
+from dbn.dbn import TwoSliceDBN, check_two_slice, is_prev, prev, unprev
 from dbn.errors import CPDShapeError, InputError, ModelError
 from dbn.variables import DiscreteVariable
 from inference.evidence_columns import check_columns, check_query
@@ -362,6 +362,7 @@ def rbpf_filter_dbn(
         Bad evidence, or a slice where every particle got weight zero
         (:func:`~inference.particle.dbn_adapter.check_not_collapsed`).
     """
+    check_two_slice(dbn, "the Rao-Blackwellised particle filter")
     num_particles = check_num_particles(num_particles)
     check_key(key)
     cols = check_columns(dbn, evidence)

@@ -405,3 +405,53 @@ def test_running_out_of_memory_is_a_memory_limit_error(monkeypatch) -> None:
     with pytest.raises(RuntimeError) as info:
         inference.filter(dbn, ev, method="rbpf", key=jax.random.key(0))
     assert info.value is other
+
+
+def _bn_entries():
+    from inference.exact import (
+        ExactInference,
+        JunctionTree,
+        log_evidence,
+        map_assignment,
+        posterior_marginals,
+        variable_elimination,
+    )
+    from inference.exact.enumeration import brute_force_marginals
+
+    return [lambda m: variable_elimination(m, ["x"]), lambda m: log_evidence(m, {}),
+            map_assignment, JunctionTree, ExactInference, posterior_marginals,
+            brute_force_marginals]  # fmt: skip
+
+
+def _dbn_entries():
+    from inference.adf.boyen_koller import BoyenKoller, bk_filter
+    from inference.exact.dbn_filter import DBNFilter
+    from inference.exact.structured_filter import StructuredFilter
+    from inference.particle.dbn_adapter import particle_filter_dbn
+    from inference.particle.rbpf import rbpf_filter_dbn
+
+    key = jax.random.key(0)
+    return [StructuredFilter, DBNFilter, BoyenKoller, lambda m: bk_filter(m, {"y0": [0]}),
+            lambda m: particle_filter_dbn(key, m, {"y0": [0]}),
+            lambda m: rbpf_filter_dbn(key, m, {"y0": [0]})]  # fmt: skip
+
+
+def test_every_engine_refuses_a_model_of_another_kind_by_name() -> None:
+    """A pgmpy model, a Bayes net where a DBN is needed (or the reverse), or None gave
+    Python's AttributeError ('DynamicBayesianNetwork' object has no attribute 'variables')
+    in every engine but the structured filter; each now says what it needs, and for a
+    pgmpy model how to convert it."""
+    dbn = coupled_chains(2)
+    bn = dbn.unroll(2)
+    for entries, wrong, needs, convert in [
+        (_bn_entries(), [dbn, None], "BayesNet", None),
+        (_bn_entries(), [pa.to_pgmpy(bn)], "BayesNet", "from_pgmpy"),
+        (_dbn_entries(), [bn, None], "TwoSliceDBN", None),
+        (_dbn_entries(), [pa.dbn_to_pgmpy(dbn)], "TwoSliceDBN", "dbn_from_pgmpy"),
+    ]:
+        for entry in entries:
+            for model in wrong:
+                with pytest.raises(ModelError, match=f"needs a (dbn )?{needs}, got") as exc:
+                    entry(model)
+                text = str(exc.value)
+                assert (convert in text) if convert else ("pgmpy" not in text)
