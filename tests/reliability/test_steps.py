@@ -295,7 +295,8 @@ def test_inference_filter_rejects_bad_evidence(bad, method):
     "evidence, soft",
     [
         ({"y0": 7}, None),
-        ({"y0": -1}, None),
+        ({"y0": -2}, None),  # -1 is unobserved, as in a column (test_api)
+        ({"y0": True}, None),
         ({"zz": 0}, None),
         (None, {"y0": np.array([np.nan, 1.0])}),
         (None, {"y0": np.array([-1.0, 1.0])}),
