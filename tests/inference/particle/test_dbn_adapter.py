@@ -193,6 +193,4 @@ def test_a_slice_no_particle_can_explain_is_an_error_not_a_posterior(engine) -> 
         return particle_filter_dbn(key, dbn, evidence, num_particles=16, method=engine)
 
     with pytest.raises(EvidenceError, match="slice 2: every one of the 16 particles"):
-        run_it(ev)
-    ok = run_it({"s": np.array([0, 0, 0, -1]), "y": np.zeros((4, 1))})
-    assert np.isfinite(ok.log_likelihoods).all()
+        run_it(ev)  # (possible evidence passes the check in every other test here)
