@@ -198,24 +198,10 @@ def columns_from_slices(
     """
     check_mapping("evidence", evidence)
     variables = {v.name: v for v in dbn.variables if isinstance(v, DiscreteVariable)}
-    slices: dict[str, dict[int, object]] = {}
+    slices: dict[str, dict[int, int | str]] = {}
     for key, state in evidence.items():
-        if not (isinstance(key, tuple) and len(key) == 2 and isinstance(key[0], str)
-                and isinstance(key[1], int | np.integer) and not isinstance(key[1], bool)
-                and key[1] >= 0):
-            raise EvidenceError(f"evidence key {key!r} is not (variable name, slice >= 0)")
-        v = variables.get(key[0])
-        if v is None:
-            raise UnknownEvidenceError(f"evidence {key!r}: no discrete variable {key[0]!r} "
-                                       f"(discrete: {sorted(variables)})")
-        if isinstance(state, bool) or not isinstance(state, int | np.integer | str):
-            raise EvidenceError(f"evidence {key!r}: state {state!r} is not an index or a name")
-        if not isinstance(state, str) and v.renumbered:  # pgmpy's names were integers
-            if str(int(state)) not in v.state_names:  # type: ignore[operator]
-                raise EvidenceError(f"evidence {key!r}: {state!r} is not a state of "
-                                    f"{v.name!r} (states: {v.state_names})")
-            state = str(int(state))
-        slices.setdefault(key[0], {})[int(key[1])] = state
+        name, t = _slice_key(key, variables)
+        slices.setdefault(name, {})[t] = _pgmpy_state(key, variables[name], state)
     last = max((t for col in slices.values() for t in col), default=-1)
     T = last + 1
     if num_timesteps is not None:
@@ -224,12 +210,37 @@ def columns_from_slices(
         raise EvidenceError(f"evidence at slice {last} is beyond num_timesteps = {T}")
     out = {}
     for name, col in slices.items():
-        named = any(isinstance(v, str) for v in col.values())
+        named = any(isinstance(x, str) for x in col.values())
         arr = np.full(T, None, object) if named else np.full(T, -1, np.int64)
-        for t, v in col.items():
-            arr[t] = v
+        for t, x in col.items():
+            arr[t] = x
         out[name] = arr
     return out
+
+
+def _slice_key(key: object, variables: Mapping[str, DiscreteVariable]) -> tuple[str, int]:
+    """``(name, t)`` of a pgmpy evidence key, a discrete variable's name and a slice >= 0."""
+    if not (isinstance(key, tuple) and len(key) == 2 and isinstance(key[0], str)
+            and isinstance(key[1], int | np.integer) and not isinstance(key[1], bool)
+            and key[1] >= 0):
+        raise EvidenceError(f"evidence key {key!r} is not (variable name, slice >= 0)")
+    if key[0] not in variables:
+        raise UnknownEvidenceError(f"evidence {key!r}: no discrete variable {key[0]!r} "
+                                   f"(discrete: {sorted(variables)})")
+    return key[0], int(key[1])
+
+
+def _pgmpy_state(key: object, v: DiscreteVariable, state: object) -> int | str:
+    """A pgmpy evidence value as :func:`state_column` reads it: an index or a name (an
+    int of a :attr:`~dbn.variables.DiscreteVariable.renumbered` variable: its name)."""
+    if isinstance(state, bool) or not isinstance(state, int | np.integer | str):
+        raise EvidenceError(f"evidence {key!r}: state {state!r} is not an index or a name")
+    if isinstance(state, str) or not v.renumbered:
+        return state if isinstance(state, str) else int(state)
+    if str(int(state)) not in v.state_names:  # type: ignore[operator]
+        raise EvidenceError(f"evidence {key!r}: {state!r} is not a state of {v.name!r} "
+                            f"(states: {v.state_names})")
+    return str(int(state))  # pgmpy's names were integers
 
 
 def _continuous_column(
