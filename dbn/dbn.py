@@ -28,8 +28,7 @@ from dbn.errors import ModelError, UnknownVariableError
 from dbn.variables import DiscreteVariable, Variable
 
 __all__ = ["prev", "is_prev", "unprev", "TwoSliceDBN", "PreviousSliceCPD", "slice_name",
-           "check_two_slice",
-           "MAX_UNROLL_NODES"]
+           "check_two_slice", "MAX_UNROLL_NODES"]
 
 _PREV = "[t-1]"
 
