@@ -413,7 +413,9 @@ def load_sweep(path: str | os.PathLike) -> tuple[Task, list[GridPoint]]:
         raise FileFormatError(p, f"not a TOML file: {exc}") from None
     unknown = sorted(set(cfg) - SWEEP_FIELDS)
     if unknown:  # a misspelt field (``seed``, ``[param]``) would run the defaults silently
-        raise FileFormatError(p, f"unknown field(s) {unknown}; the fields are {sorted(SWEEP_FIELDS)}")
+        raise FileFormatError(
+            p, f"unknown field(s) {unknown}; the fields are {sorted(SWEEP_FIELDS)}"
+        )
     spec = cfg.get("task")
     if not isinstance(spec, str) or spec.count(":") != 1:
         raise FileFormatError(p, f"field 'task' must be 'module:function', got {spec!r}")
