@@ -27,7 +27,7 @@ from dbn.cpds import TabularCPD
 from dbn.dbn import TwoSliceDBN, prev
 from dbn.errors import DBNError, FileFormatError
 from dbn.variables import DiscreteVariable
-from models.io.table import fail, read_rows, require_file, write_rows
+from models.io.table import Row, fail, read_rows, require_file, write_rows
 
 __all__ = [
     "read_two_slice_bif",
@@ -115,8 +115,31 @@ def _state_index(var: DiscreteVariable, text: str, path, line: int, where: str,
                f"{var.name} = {text!r} is not a state of {list(var.state_names)}{where}{also}")
 
 
+SLICE_COLUMN = "slice"
+"""An evidence or truth CSV's optional column of slice numbers (unless a variable is named
+so): rows then need not be consecutive slices (:func:`row_slices`)."""
+
+
+def row_slices(header: list[str], rows: list[Row], names) -> tuple[list[str], list[int]]:
+    """The variable columns of an evidence or truth CSV and each row's slice: its position,
+    or the row's :data:`SLICE_COLUMN` field (integers >= 0, increasing; a slice no row
+    gives is unobserved, or not scored) where the header has one and ``names`` (the
+    variables) does not."""
+    if SLICE_COLUMN not in header or SLICE_COLUMN in names:
+        return header, list(range(len(rows)))
+    slices: list[int] = []
+    for row in rows:
+        t = row.int(SLICE_COLUMN)
+        if t < 0 or (slices and t <= slices[-1]):
+            after = f" after slice {slices[-1]}" if slices else ""
+            raise row.fail(f"slice = {t}{after}: slices must be >= 0 and increasing")
+        slices.append(t)
+    return [c for c in header if c != SLICE_COLUMN], slices
+
+
 def read_states(path: str | Path, dbn: TwoSliceDBN, model: str | Path | None = None) -> dict[str, np.ndarray]:
-    """Columns of states per slice: ``name -> (T,) int``, ``-1`` where the field is empty.
+    """Columns of states per slice: ``name -> (T,) int``, ``-1`` where the field is empty
+    (or, with a :data:`SLICE_COLUMN`, where no row gives the slice).
 
     Used for evidence and for truth files (same format). ``model``: the DBN's file, named
     beside the states or variables it declares when the CSV disagrees with them (either
@@ -125,14 +148,15 @@ def read_states(path: str | Path, dbn: TwoSliceDBN, model: str | Path | None = N
     header, rows = read_rows(path, what="evidence CSV", keep_blank=True)
     variables = {v.name: v for v in dbn.variables}
     where = "" if model is None else f" (declared in {model})"
+    header, slices = row_slices(header, rows, variables)
     for col in header:
         if col not in variables:
             raise fail(path, 1, f"column {col!r} is not a variable of the DBN {sorted(variables)}{where}")
     if not rows:
         raise fail(path, 0, "no slices (the file has a header only)")
-    cols = {c: np.full(len(rows), -1, dtype=np.int64) for c in header}
+    cols = {c: np.full(slices[-1] + 1, -1, dtype=np.int64) for c in header}
     numbered = {c: _numbered(variables[c]) for c in header}
-    for t, row in enumerate(rows):
+    for t, row in zip(slices, rows):
         for c in header:
             if row[c] != "":
                 cols[c][t] = _state_index(variables[c], row[c], path, row.line, where,

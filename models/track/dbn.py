@@ -100,22 +100,24 @@ def _plot(ctx: RunContext, dbn: TwoSliceDBN, marg: dict[str, np.ndarray]) -> Non
 def evaluate(result: str, truth: str, model: str | None = None) -> dict:
     """Label error rate (argmax of the marginal vs the true state) and mean log-loss, over
     the slices and variables the truth CSV gives."""
-    from models.io.dbn import read_marginals
+    from models.io.dbn import read_marginals, row_slices
     from models.io.table import read_rows
 
     marg = read_marginals(result)
     header, rows = read_rows(truth, what="truth CSV", keep_blank=True)
     if not marg:
         raise InputError(f"{result}: no marginals to score")
+    header, slices = row_slices(header, rows, marg)
     num_slices = min(m.shape[0] for _, m in marg.values())
-    if len(rows) > num_slices:  # another recording's truth: a silent partial score otherwise
-        raise rows[num_slices].fail(f"truth has {len(rows)} slices, {result} has {num_slices}")
+    beyond = [i for i, t in enumerate(slices) if t >= num_slices]
+    if beyond:  # another recording's truth: a silent partial score otherwise
+        raise rows[beyond[0]].fail(f"truth has {slices[-1] + 1} slices, {result} has {num_slices}")
     errors, losses = [], []
     for col in header:
         if col not in marg:
             raise InputError(f"{truth}:1: column {col!r} has no marginals in {result}")
         states, m = marg[col]
-        for t, row in enumerate(rows):
+        for t, row in zip(slices, rows):
             if row[col] == "":
                 continue
             if row[col] not in states:

@@ -831,3 +831,32 @@ def test_dbn_integer_state_names_read_as_names_by_every_method(tmp_path, method)
     states, x = read_marginals(out / "marginals.csv")["X"]
     assert states == ["1", "2"]
     np.testing.assert_allclose(x[0], [0.4, 0.6], atol=1e-12)
+
+
+def test_dbn_slice_column_places_rows_at_their_slices(tmp_path, capsys):
+    """Without slice numbers, a row left out of an evidence or truth CSV shifted every
+    later row to the slice before (silently); a ``slice`` column now places each row,
+    and a slice no row gives is unobserved (evidence) or not scored (truth)."""
+    d = DATA / "dbn"
+    sparse = tmp_path / "sparse.csv"
+    sparse.write_text("slice,Umbrella\n0,yes\n1,yes\n2,no\n4,yes\n")  # slice 3 unobserved
+    a = _track(tmp_path / "a", "dbn", [d / "umbrella.bif", d / "evidence.csv"])
+    b = _track(tmp_path / "b", "dbn", [d / "umbrella.bif", sparse])
+    assert (a / "marginals.csv").read_text() == (b / "marginals.csv").read_text()
+    truth = tmp_path / "truth.csv"
+    truth.write_text("slice,Rain\n1,yes\n4,yes\n")  # the same states as truth.csv's rows 1, 4
+    full = tmp_path / "full.csv"
+    full.write_text("Rain\n\nyes\n\n\nyes\n")
+    capsys.readouterr()
+
+    def scored(path):
+        assert main(["eval", "dbn", str(a / "marginals.csv"), str(path), "--json"]) == 0
+        return json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+
+    assert scored(truth) == scored(full) and scored(truth)["num_compared"] == 2
+    for text, needle in [("slice,Rain\n2,yes\n2,no\n", "bad.csv:3: slice = 2 after slice 2"),
+                         ("slice,Rain\n-1,yes\n", "bad.csv:2: slice = -1"),
+                         ("slice,Rain\n0,yes\nx,no\n", "bad.csv:3: slice = 'x'"),
+                         ("slice,Rain\n0,yes\n7,no\n", "bad.csv:3: truth has 8 slices")]:
+        (tmp_path / "bad.csv").write_text(text)
+        _bad(capsys, ["eval", "dbn", str(a / "marginals.csv"), str(tmp_path / "bad.csv")], needle)
