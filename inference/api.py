@@ -124,10 +124,11 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     ----------
     model : TwoSliceDBN or pgmpy DynamicBayesianNetwork
     evidence : mapping name -> array
-        Columnar evidence: discrete ``name -> (T,) int`` (``-1`` = unobserved) or ``(T,)``
-        state names (``None`` = unobserved), continuous ``name -> (T, dim) float`` (a row
-        of NaN = unobserved). Or pgmpy's ``{(name, t): state}`` (discrete), read as pgmpy
-        reads it by :func:`~inference.evidence_columns.columns_from_slices`.
+        Columnar evidence: discrete ``name -> (T,) int`` (``-1`` = unobserved; or floats
+        of whole numbers, NaN = unobserved) or ``(T,)`` state names (``None`` =
+        unobserved), continuous ``name -> (T, dim) float`` (a row of NaN = unobserved).
+        Or pgmpy's ``{(name, t): state}`` (discrete), read as pgmpy reads it by
+        :func:`~inference.evidence_columns.columns_from_slices`.
     method : {"auto", "exact", "bk", "particle", "rbpf"}
     query : sequence of str, optional
         Variables whose marginals are returned (default: the engine's default, the

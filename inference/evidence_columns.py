@@ -3,8 +3,9 @@
 Columnar evidence maps a variable name to one array over the slices:
 
 - a discrete variable: shape ``(num_timesteps,)``, its states by index (integers, ``-1`` =
-  unobserved) or by name (the variable's ``state_names``, as pgmpy gives them; ``None`` =
-  unobserved), not both in one column;
+  unobserved; floats that are whole numbers, NaN = unobserved, as pandas writes an integer
+  column with a gap) or by name (the variable's ``state_names``, as pgmpy gives them;
+  ``None`` = unobserved), not both in one column;
 - a continuous variable of dimension ``d``: floats, shape ``(num_timesteps, d)`` (a 1-D
   column is read as ``d = 1``), a row of NaN = unobserved;
 - soft evidence on a discrete variable: nonnegative likelihoods, shape
@@ -103,7 +104,7 @@ def state_column(
             f"evidence column {name!r} must be 1-D (num_timesteps,), got shape {arr.shape}"
         )
     named = arr.dtype.kind in "UO"
-    if not (named or np.issubdtype(arr.dtype, np.integer)):
+    if not (named or arr.dtype.kind in "iuf"):
         raise EvidenceError(
             f"evidence column {name!r} must hold integer states (-1 = unobserved) or state "
             f"names, got dtype {arr.dtype}"
@@ -111,6 +112,8 @@ def state_column(
     T = _length(name, arr.shape[0], T)
     if named:
         return _state_indices(name, v, arr), T
+    if arr.dtype.kind == "f":  # pandas' integer column with a gap: whole numbers, NaN
+        arr = _whole_states(name, arr)
     bad = (arr < -1) | (arr >= v.cardinality)
     if bad.any():
         t = int(np.argmax(bad))
@@ -119,6 +122,20 @@ def state_column(
             f"-1..{v.cardinality - 1}"
         )
     return arr.astype(np.int64), T
+
+
+def _whole_states(name: str, arr: np.ndarray) -> np.ndarray:
+    """A float column of whole numbers, NaN = unobserved (pandas writes an integer column
+    with a missing value so), as int64 with -1 for NaN; any other float is refused."""
+    whole = np.isfinite(arr) & (arr == np.round(arr)) & (np.abs(arr) < 2.0**53)
+    bad = ~np.isnan(arr) & ~whole
+    if bad.any():
+        t = int(np.argmax(bad))
+        raise EvidenceError(
+            f"evidence column {name!r} at slice {t}: {float(arr[t])!r} is not a state "
+            "(integers, -1 or NaN = unobserved; or state names)"
+        )
+    return np.where(np.isnan(arr), -1, arr).astype(np.int64)
 
 
 def _state_indices(name: str, v: DiscreteVariable, arr: np.ndarray) -> np.ndarray:

@@ -44,7 +44,9 @@ def test_accepts_and_normalises_every_kind() -> None:
         ({"z": [0]}, None, UnknownEvidenceError, "'z'"),
         (None, {"z": [[1.0]]}, UnknownEvidenceError, "'z'"),
         ({"s": [[0, 1]]}, None, ShapeError, "'s' must be 1-D"),
-        ({"s": [0.0, 1.0]}, None, EvidenceError, "'s' must hold integer"),
+        ({"s": [0.0, 0.5]}, None, EvidenceError, "'s' at slice 1: 0.5 is not a state"),
+        ({"s": [0.0, 1e300]}, None, EvidenceError, "'s' at slice 1: 1e\\+300 is not a state"),
+        ({"s": [True, False]}, None, EvidenceError, "'s' must hold integer"),
         ({"s": [0, 2, 1]}, None, EvidenceError, "state 2 at slice 1"),
         ({"s": [0, 1], "y": [0.0, 1.0, 2.0]}, None, ShapeError, "'y' has length 3, expected 2"),
         ({"x": np.zeros((3, 3))}, None, ShapeError, r"'x' must have shape \(num_timesteps, 2\)"),
@@ -93,7 +95,8 @@ def test_state_names_read_as_their_indices(states, as_array) -> None:
         ([1, "2"], r"'w' at slice 0: 1 is not a state name: .* by index or by name, not both"),
         (np.array(["wet", 2], dtype=object), r"slice 1: 2 is not a state name"),
         ([["1"], ["2"]], r"'w' must be 1-D"),
-        ([0.0, 1.0], r"'w' must hold integer states \(-1 = unobserved\) or state names"),
+        ([True, False], r"'w' must hold integer states \(-1 = unobserved\) or state names"),
+        ([0.0, 1.5], r"'w' at slice 1: 1.5 is not a state"),
     ],
 )
 def test_bad_state_names_name_the_column_and_slice(column, match) -> None:

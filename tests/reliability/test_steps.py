@@ -275,8 +275,9 @@ def _dbn_case():
     [
         {"y0": np.array([0, 1, 5, 0, 1, 0])},  # out-of-range state
         {"y0": np.array([0, 1, -2, 0, 1, 0])},  # negative (-1 is 'unobserved')
-        {"y0": np.array([0, 1, np.nan, 0, 1, 0])},  # NaN
-        {"y0": np.array([0.0, 1.0, 0.5, 0.0, 1.0, 0.0])},  # wrong dtype
+        {"y0": np.array([0.0, 1.0, 0.5, 0.0, 1.0, 0.0])},  # not a whole number
+        {"y0": np.array([0.0, 1.0, np.inf, 0.0, 1.0, 0.0])},  # infinite
+        {"y0": np.array([True, False, True, False, True, False])},  # wrong dtype
         {"y0": np.zeros((6, 2), np.int64)},  # wrong shape
         {"y0": np.zeros(4, np.int64)},  # wrong length
         {"nope": np.zeros(6, np.int64)},  # unknown variable
@@ -289,6 +290,20 @@ def test_inference_filter_rejects_bad_evidence(bad, method):
     dbn, ev = _dbn_case()
     with pytest.raises(DBNError):
         inference.filter(dbn, {**ev, **bad}, method=method)
+
+
+@pytest.mark.parametrize("method", ["exact", "bk"])
+def test_a_float_column_of_whole_numbers_and_nan_is_the_integer_column(method):
+    """pandas writes an integer column with a missing value as floats with NaN: read as
+    the integers with -1 (they were refused as 'wrong dtype', NaN as bad)."""
+    import inference
+
+    dbn, ev = _dbn_case()
+    ints = np.array([0, 1, -1, 0, 1, 0])
+    floats = np.array([0.0, 1.0, np.nan, 0.0, 1.0, 0.0])
+    a = inference.filter(dbn, {**ev, "y0": ints}, method=method)
+    b = inference.filter(dbn, {**ev, "y0": floats}, method=method)
+    np.testing.assert_array_equal(a.log_likelihoods, b.log_likelihoods)
 
 
 @pytest.mark.parametrize(

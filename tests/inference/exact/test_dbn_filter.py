@@ -149,8 +149,8 @@ def test_bad_input_raises_and_state_is_unchanged() -> None:
     )
     with pytest.raises(ShapeError, match="length"):
         flt.filter({"y": np.zeros(3, int), "x": np.zeros(4, int)})
-    with pytest.raises(EvidenceError, match="integer"):
-        flt.filter({"y": np.zeros(3)})
+    with pytest.raises(EvidenceError, match="slice 0: 0.5 is not a state"):
+        flt.filter({"y": np.full(3, 0.5)})
     with pytest.raises(EvidenceError, match="slice 2"):
         flt.filter({"y": np.array([0, 1, 9])})
 
