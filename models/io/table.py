@@ -134,8 +134,8 @@ def read_rows(
     Lines starting with ``#`` are skipped, and so are blank lines unless ``keep_blank``
     (then a blank line after the header is a row of empty fields: a slice with no
     evidence in a one-column file). Raises :class:`InputError`
-    (``FILE:LINE: ...``) for a missing file, a missing required column or a row with
-    more fields than the header.
+    (``FILE:LINE: ...``) for a missing file, a missing required column, a header name
+    holding a control character or a row with more fields than the header.
     """
     lines = read_lines(path, what)
     path = Path(path)
@@ -154,6 +154,9 @@ def read_rows(
         fields = [x.strip() for x in fields]
         if header is None:
             header = fields
+            odd = [c for c in header if any(ord(ch) < 32 and ch != "\t" for ch in c)]
+            if odd:  # a damaged header (a byte flip merged it with the next line, say)
+                raise fail(path, line_no, f"header column {odd[0]!r} holds a control character")
             missing = [c for c in required if c not in header]
             if missing:
                 raise fail(path, line_no, f"missing column(s) {missing}; header is {header}")

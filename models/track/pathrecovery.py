@@ -24,9 +24,9 @@ INPUTS = ("EDGES.csv: from,to,prob[,gap_mean] camera network (with self loops)",
           "[CAMERAS.csv: camera,x,y positions, for the figure]")  # fmt: skip
 
 
-def _start(odb, config: dict) -> tuple[int, np.ndarray]:
+def _start(odb, config: dict, path: str) -> tuple[int, np.ndarray]:
     """The target's camera and feature at ``t = 0``: config ``c0`` and ``f0`` (both), or
-    config ``target_obs``, or the only observation at ``t = 0``."""
+    config ``target_obs``, or the only observation at ``t = 0`` of ``path``'s."""
     given = [k for k in ("c0", "f0", "target_obs") if k in config]
     if given and given not in (["c0", "f0"], ["target_obs"]):
         raise ConfigError(f"config {given}: give c0 and f0 together, or target_obs alone")
@@ -45,9 +45,25 @@ def _start(odb, config: dict) -> tuple[int, np.ndarray]:
     elif hi - lo == 1:
         i = lo
     else:
-        raise InputError(f"t = 0 has {hi - lo} observations: give target_obs (or c0 and f0) "
-                         "in --config")  # fmt: skip
+        raise InputError(f"{path}: t = 0 has {hi - lo} observations: give target_obs "
+                         "(or c0 and f0) in --config")  # fmt: skip
     return int(odb.cam[i]), odb.feat[i]
+
+
+def _feature_cov(feat: np.ndarray, path: str) -> np.ndarray:
+    """The features' covariance (n, d) -> (d, d), the default ``sigma``; an
+    :class:`InputError` naming ``path`` where it is not positive definite (too few
+    observations, or a constant feature), instead of the model's "sigma is not SPD"."""
+    sigma = np.atleast_2d(np.cov(feat.T)) if len(feat) > 1 else np.full((1, 1), np.nan)
+    try:
+        if not np.all(np.isfinite(sigma)):
+            raise np.linalg.LinAlgError
+        np.linalg.cholesky(sigma)
+    except np.linalg.LinAlgError:
+        raise InputError(f"{path}: the covariance of the features of its {len(feat)} "
+                         "observations is not positive definite (too few observations, or a "
+                         "constant feature): give sigma in --config") from None
+    return sigma
 
 
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
@@ -69,8 +85,8 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     if odb.cam.max() >= net.num_cameras:
         raise InputError(f"{inputs[1]}: camera {int(odb.cam.max())} is not in the network "
                          f"{inputs[0]} (cameras 0..{net.num_cameras - 1})")  # fmt: skip
-    c0, f0 = _start(odb, config)
-    sigma = array(config, "sigma") if "sigma" in config else np.atleast_2d(np.cov(odb.feat.T))
+    c0, f0 = _start(odb, config, inputs[1])
+    sigma = array(config, "sigma") if "sigma" in config else _feature_cov(odb.feat, inputs[1])
     model = make_model(net, c0, f0, sigma, fcfg)
     tracker = models.get("pathrecovery").make(model=model)
     T = odb.time_ptr.size - 1

@@ -860,3 +860,33 @@ def test_dbn_slice_column_places_rows_at_their_slices(tmp_path, capsys):
                          ("slice,Rain\n0,yes\n7,no\n", "bad.csv:3: truth has 8 slices")]:
         (tmp_path / "bad.csv").write_text(text)
         _bad(capsys, ["eval", "dbn", str(a / "marginals.csv"), str(tmp_path / "bad.csv")], needle)
+
+
+def test_a_header_merged_with_its_first_row_names_the_file(tmp_path, capsys):
+    """A byte flip of the header's newline (found by the slow random-damage test) merged
+    the header with the first row: its column names held a control character, the
+    reader took them, and the run failed with "t = 0 has 0 observations" naming no file."""
+    d = DATA / "pathrecovery"
+    raw = (d / "observations.csv").read_bytes()
+    i = raw.index(b"\n")
+    bad = tmp_path / "observations.csv"
+    bad.write_bytes(raw[:i] + b"\x01" + raw[i + 1:])
+    _bad(capsys, ["track", "pathrecovery", str(d / "edges.csv"), str(bad), "-o", str(tmp_path)],
+         "observations.csv:1: header column", "control character")  # fmt: skip
+    two = tmp_path / "two.csv"  # two observations at t = 0 and no target in --config
+    lines = raw.decode().splitlines(keepends=True)
+    two.write_text(lines[0] + lines[1] + lines[1].replace("12,", "987654,", 1) + "".join(lines[2:]))
+    _bad(capsys, ["track", "pathrecovery", str(d / "edges.csv"), str(two), "-o", str(tmp_path)],
+         "two.csv: t = 0 has 2 observations")  # fmt: skip
+
+
+def test_pathrecovery_too_few_observations_for_sigma_names_the_file(tmp_path, capsys):
+    """Found by the slow random-damage test (a truncated file): the features' covariance,
+    the default sigma, was not positive definite and the run said only "sigma is not
+    symmetric positive definite"."""
+    d = DATA / "pathrecovery"
+    lines = (d / "observations.csv").read_text().splitlines(keepends=True)
+    few = tmp_path / "few.csv"
+    few.write_text("".join(lines[:3]))  # two observations, four features
+    _bad(capsys, ["track", "pathrecovery", str(d / "edges.csv"), str(few), "-o", str(tmp_path)],
+         "few.csv: the covariance of the features of its 2 observations")  # fmt: skip
