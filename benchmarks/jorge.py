@@ -3,7 +3,8 @@
 S1L1-2, S1L2-2-cropped; ETH ``seq_eth``). ETH has tracks in world metres, no image boxes:
 its boxes come from a SIMULATED camera (:class:`models.jorge.eth.ObliqueView`, settings
 fixed before it was scored), so it is scored as its own split ``simulated_view``, never
-fitted on, and kept out of the pooled accuracy keys of the real views.
+fitted on, and kept out of the pooled accuracy keys of the real views. With ``--quick``
+only its first 240 s are labelled (:data:`QUICK_VIEW_SECONDS`; ``simulated_view_seconds``).
 
 The occlusion gaps and the colours are SIMULATED (seeded): the ground truth has neither.
 The parameters come from :mod:`models.jorge.fit` on its declared training split
@@ -419,7 +420,7 @@ from models.jorge.scoring import (
     score,
     true_links,
 )
-from models.jorge.strokes import PETS2009_FPS, build_strokes
+from models.jorge.strokes import PETS2009_FPS, build_strokes, head
 
 
 def _compare_with_pgmpy(windows, max_windows: int, max_joint: float) -> dict:
@@ -503,6 +504,7 @@ def _summary(split: str, rows: list) -> dict:
         "error_rate_group_3plus": _rate(rows, lo=3)[0],
         "error_by_group_size": by,
         "fps": rows[0]["fps"],
+        "duration_s": float(np.mean([r["duration"] for r in rows])),
         "realtime_factor": float(sum(r["duration"] for r in rows) / sum(r["seconds"] for r in rows)),
         "max_inference_ms": 1e3 * max(r["max_inf"] for r in rows),
         "max_pruned_mass": max(r["pruned"] for r in rows),
@@ -513,6 +515,17 @@ def _summary(split: str, rows: list) -> dict:
         "first_error_share": float(sum(r["first"] for r in rows) / max(1, sum(int(r["wrong"].sum()) for r in rows))),
     }
 
+
+QUICK_VIEW_SECONDS = 240.0
+"""With ``--quick``, only the first 240 s of the SIMULATED-view sequence (ETH ``seq_eth``:
+774 s, :func:`models.jorge.strokes.head`) are labelled, so that the quick run keeps the
+benchmark contract's 60 s on two cores: with the whole sequence it took 72-75 s, 42 s of it
+labelling ETH (its own links and the true-link oracle). Chosen by time alone, before any
+figure of the shorter run was seen; the full run labels the whole sequence. Its keys
+(``error_rate_simulated_view`` and the rest, ETH's ``per_sequence`` entry, whose
+``duration_s`` says how much was labelled) are then of those 240 s; no acceptance key reads
+them, but the cost keys over every sequence (``max_pruned_mass``, ``mean_pruned_mass``,
+``max_domain``, ``max_clique_entries``) do."""
 
 MEETING_SIZES = (3, 4, 5)
 """Group sizes of the SIMULATED meetings (:mod:`models.jorge.meeting`)."""
@@ -585,11 +598,14 @@ def _table(per: dict) -> None:
             f"{s['link_accuracy']:6.2f} {s['first_error_share']:6.2f}  {by}")
 
 
-def _label_sequences(seeds: list, cfg: OnlineConfig) -> tuple[dict, dict, list, bool]:
+def _label_sequences(seeds: list, cfg: OnlineConfig,
+                     view_seconds: float | None = None) -> tuple[dict, dict, list, bool]:
     """Label every sequence of the data folder (train, validation, SIMULATED view) with
-    every seed's strokes. Returns the per-sequence summaries, each sequence's (split, rows),
-    the windows kept for the pgmpy comparison (ms3ggt, first seed) and whether every run
-    passed its checks; a sequence absent from the data folder is skipped."""
+    every seed's strokes (``view_seconds``: only the first seconds of the SIMULATED-view
+    sequences, :data:`QUICK_VIEW_SECONDS`). Returns the per-sequence summaries, each
+    sequence's (split, rows), the windows kept for the pgmpy comparison (ms3ggt, first
+    seed) and whether every run passed its checks; a sequence absent from the data folder
+    is skipped."""
     sequences = ([(f, n, "train") for f, n in TRAIN_SEQUENCES] + [(f, n, "validation") for f, n in VALIDATION_SEQUENCES]
                  + [(f, n, "simulated_view") for f, n in SIMULATED_VIEW_SEQUENCES]
                  + [(f, n, "unlisted") for f, n in unlisted_sequences()])
@@ -607,6 +623,8 @@ def _label_sequences(seeds: list, cfg: OnlineConfig) -> tuple[dict, dict, list, 
                 raise
             log(f"jorge: skipped {folder}/{name}: {exc}")  # e.g. PETS2009's camera View_001.xml
             continue
+        if split == "simulated_view" and view_seconds is not None:
+            truth = head(truth, view_seconds)
         rows = []
         for s in seeds:
             row, wins = _run_one(build_strokes(s, truth), cfg, keep_windows=(name == "ms3ggt.xml.gz" and s == seeds[0]))
@@ -627,7 +645,8 @@ def run(quick: bool, seed: int) -> dict:
     the SIMULATED meetings at 25 and 7 fps, as one JSON-ready dict."""
     seeds = [seed + i for i in range(1 if quick else 5)]
     cfg = OnlineConfig()
-    per, rows_by, windows, ok = _label_sequences(seeds, cfg)
+    view_seconds = QUICK_VIEW_SECONDS if quick else None
+    per, rows_by, windows, ok = _label_sequences(seeds, cfg, view_seconds)
     if not per:
         return {"ok": False, "error": "no ground truth in ../shared/data"}
     _table(per)
@@ -667,6 +686,7 @@ def run(quick: bool, seed: int) -> dict:
         "train_sequences": [n for _, n in TRAIN_SEQUENCES],
         "validation_sequences": [n for _, n in VALIDATION_SEQUENCES],
         "simulated_view_sequences": [f"{f}/{n}" for f, n in SIMULATED_VIEW_SEQUENCES],
+        "simulated_view_seconds": view_seconds,
         "seeds": seeds,
         "simulated": "occlusion gaps and colours (the ground truth has neither); ETH's boxes "
                      "(a camera models.jorge.eth.ObliqueView assumes over its ground positions)",

@@ -65,6 +65,7 @@ __all__ = [
     "load_pets2009",
     "load_ground_truth",
     "resample",
+    "head",
     "check_lower_rate",
     "pairwise_iou",
     "regions",
@@ -332,6 +333,37 @@ def resample(truth: GroundTruth, fps: float) -> GroundTruth:
     keep = keep[keep < truth.num_frames]
     groups = tuple(truth.groups[i] for i in keep) if truth.groups else ()
     return GroundTruth(truth.name, np.arange(keep.size), truth.ids, truth.boxes[keep], groups, fps)
+
+
+def head(truth: GroundTruth, seconds: float) -> GroundTruth:
+    """The first ``seconds`` of the ground truth: its frames ``0 .. ceil(seconds * fps) - 1``
+    (by position), with the people who appear in them; a shorter sequence is returned
+    whole. A smaller size of the same data, e.g. for a benchmark's ``--quick`` run.
+
+    Parameters
+    ----------
+    truth : GroundTruth
+    seconds : float
+        A positive finite number.
+
+    Returns
+    -------
+    GroundTruth
+        ``name``, ``fps`` and frame numbers unchanged.
+
+    Raises
+    ------
+    InputError
+        ``seconds`` not a positive finite number.
+    """
+    if isinstance(seconds, bool) or not isinstance(seconds, int | float | np.integer | np.floating) \
+            or not np.isfinite(seconds) or seconds <= 0:
+        raise InputError(f"head: seconds must be a positive finite number, got {seconds!r}")
+    n = min(truth.num_frames, int(np.ceil(seconds * truth.fps)))
+    present = ~np.isnan(truth.boxes[:n, :, 0]).all(axis=0)
+    groups = truth.groups[:n] if truth.groups else ()
+    return GroundTruth(truth.name, truth.frames[:n], truth.ids[present], truth.boxes[:n][:, present],
+                       groups, truth.fps)
 
 
 def check_lower_rate(fps: object, source_fps: float, where: str) -> float:
