@@ -54,16 +54,23 @@ def _feature_cov(feat: np.ndarray, path: str) -> np.ndarray:
     """The features' covariance (n, d) -> (d, d), the default ``sigma``; an
     :class:`InputError` naming ``path`` where it is not positive definite (too few
     observations, or a constant feature), instead of the model's "sigma is not SPD"."""
-    sigma = np.atleast_2d(np.cov(feat.T)) if len(feat) > 1 else np.full((1, 1), np.nan)
+    sigma = np.atleast_2d(np.cov(feat.T)) if len(feat) > 1 else None
+    if sigma is None or not np.all(np.isfinite(sigma)) or not _positive_definite(sigma):
+        n = f"{len(feat)} observation" + ("" if len(feat) == 1 else "s")
+        raise InputError(f"{path}: the covariance of the features of its {n} is not positive "
+                         "definite (too few observations, or a constant feature): give sigma "
+                         "in --config")
+    return sigma
+
+
+def _positive_definite(sigma: np.ndarray) -> bool:
+    """Whether a finite symmetric matrix has a Cholesky factor (the test ``make_model``
+    applies to ``sigma``)."""
     try:
-        if not np.all(np.isfinite(sigma)):
-            raise np.linalg.LinAlgError
         np.linalg.cholesky(sigma)
     except np.linalg.LinAlgError:
-        raise InputError(f"{path}: the covariance of the features of its {len(feat)} "
-                         "observations is not positive definite (too few observations, or a "
-                         "constant feature): give sigma in --config") from None
-    return sigma
+        return False
+    return True
 
 
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:

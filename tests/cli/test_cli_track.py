@@ -890,3 +890,7 @@ def test_pathrecovery_too_few_observations_for_sigma_names_the_file(tmp_path, ca
     few.write_text("".join(lines[:3]))  # two observations, four features
     _bad(capsys, ["track", "pathrecovery", str(d / "edges.csv"), str(few), "-o", str(tmp_path)],
          "few.csv: the covariance of the features of its 2 observations")  # fmt: skip
+    one = tmp_path / "one.csv"
+    one.write_text("".join(lines[:2]))  # a single observation: no covariance at all
+    _bad(capsys, ["track", "pathrecovery", str(d / "edges.csv"), str(one), "-o", str(tmp_path)],
+         "one.csv: the covariance of the features of its 1 observation is")  # fmt: skip
