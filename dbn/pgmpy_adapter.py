@@ -26,10 +26,10 @@ from typing import Any
 
 import numpy as np
 
-from dbn.bayesnet import BayesNet
+from dbn.bayesnet import BayesNet, check_discrete_net
 from dbn.checks import check_nonnegative
 from dbn.cpds import ROW_TOLERANCE, TabularCPD
-from dbn.dbn import TwoSliceDBN, is_prev, prev, unprev
+from dbn.dbn import TwoSliceDBN, check_two_slice, is_prev, prev, unprev
 from dbn.errors import DBNError, EvidenceError, FileFormatError, InputError, ModelError
 from dbn.variables import DiscreteVariable
 
@@ -93,10 +93,7 @@ def to_pgmpy(bn: BayesNet):
     with _quiet():
         from pgmpy.models import DiscreteBayesianNetwork
 
-    if not isinstance(bn, BayesNet):
-        raise ModelError(f"expected a BayesNet, got {type(bn).__name__}")
-    if not bn.is_discrete:
-        raise ModelError("only discrete Bayes nets convert to pgmpy")
+    check_discrete_net(bn, "to_pgmpy")
     names = {n: bn.variable(n).state_names for n in bn.nodes}
     model = DiscreteBayesianNetwork()
     model.add_nodes_from(bn.nodes)
@@ -252,8 +249,7 @@ def dbn_to_pgmpy(dbn: TwoSliceDBN):
     with _quiet():
         from pgmpy.models import DynamicBayesianNetwork
 
-    if not isinstance(dbn, TwoSliceDBN):
-        raise ModelError(f"expected a TwoSliceDBN, got {type(dbn).__name__}")
+    check_two_slice(dbn, "dbn_to_pgmpy")
     names: dict[Any, tuple[str, ...]] = {}
     for v in dbn.variables:
         if not isinstance(v, DiscreteVariable):
