@@ -70,7 +70,9 @@ class DiscreteVariable:
         """Whether the state names are integers other than the indices (pgmpy's states
         ``[1, 2, 3]`` become ``("1", "2", "3")``): an int there means a name to pgmpy and
         an index to :meth:`index` (pgmpy's own evidence is read as pgmpy reads it:
-        :func:`inference.evidence_columns.columns_from_slices`)."""
+        :func:`inference.evidence_columns.columns_from_slices`). A CSV's fields are read by
+        another rule (``models.io.dbn``); ``docs/formats.md`` ("Numbers as state names")
+        states both."""
         names = self.state_names
         return (all(s.removeprefix("-").isdigit() for s in names)  # type: ignore[union-attr]
                 and names != tuple(str(i) for i in range(self.cardinality)))

@@ -98,7 +98,9 @@ def read_two_slice_bif(path: str | Path) -> TwoSliceDBN:
 
 def _numbered(var: DiscreteVariable) -> bool:
     """Whether a state name of ``var`` is itself a number (then ``"0"`` could be a name or
-    an index, and :func:`_state_index` reads names only)."""
+    an index, and :func:`_state_index` reads names only). Python evidence reads ints by
+    another rule (:meth:`dbn.variables.DiscreteVariable.renumbered`); ``docs/formats.md``
+    ("Numbers as state names") states both."""
     return any(s.strip().lstrip("+-").replace(".", "", 1).isdigit() for s in var.state_names)
 
 
