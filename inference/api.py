@@ -70,16 +70,22 @@ def _check_evidence(
     evidence: Mapping[str, ArrayLike] | None,
     soft: Mapping[str, ArrayLike] | None,
     num_timesteps: int | None,
-) -> None:
+) -> tuple[Mapping[str, ArrayLike] | None, Mapping[str, ArrayLike] | None]:
     """Every column in full, as every engine reads it
     (:func:`~inference.evidence_columns.check_columns`), and its length against
-    ``num_timesteps`` where given, before any engine runs."""
+    ``num_timesteps`` where given, before any engine runs. Returns the evidence and soft
+    evidence as the checked arrays (state names read as indices, in the caller's order),
+    so that the engine does not read the caller's columns a second time."""
     check_mapping("evidence", evidence)
     check_mapping("soft evidence", soft)
     if num_timesteps is not None:
         check_count("num_timesteps", num_timesteps, ShapeError)
-    if evidence or soft:  # without, the exact engine asks for num_timesteps
-        check_columns(dbn, evidence, soft, num_timesteps)
+    if not (evidence or soft):  # without, the exact engine asks for num_timesteps
+        return evidence, soft
+    cols = check_columns(dbn, evidence, soft, num_timesteps)
+    checked = {**cols.discrete, **cols.continuous}
+    return ({name: checked[name] for name in evidence} if evidence else evidence,
+            {name: cols.soft[name] for name in soft} if soft else soft)
 
 
 def _choose(dbn: TwoSliceDBN, evars: Sequence[str], query, max_size: int) -> tuple[str, dict]:
@@ -163,7 +169,7 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
         raise InputError(f"method must be one of {METHODS}, got {method!r}")
     if isinstance(evidence, Mapping) and any(isinstance(k, tuple) for k in evidence):
         evidence = columns_from_slices(dbn, evidence, num_timesteps)  # pgmpy's {(name, t): s}
-    _check_evidence(dbn, evidence, soft_evidence, num_timesteps)
+    evidence, soft_evidence = _check_evidence(dbn, evidence, soft_evidence, num_timesteps)
     max_size = check_max_size(options.get("max_size", MAX_FRONTIER_SIZE))
     info: dict[str, Any] = {}
     allowed = {"max_size"} if method == "auto" else set()

@@ -211,7 +211,7 @@ def test_auto_falls_back_to_boyen_koller_and_says_why(monkeypatch) -> None:
     assert res.method == "bk_filter" and res.info["stub"]
     assert res.info["auto"].startswith("bk") and "67,108,864" in res.info["auto"]
     ((args, kwargs),) = calls
-    assert args[0] is dbn and args[1] is ev and kwargs["clusters"] == [["x0"]]
+    assert args[0] is dbn and _same_columns(args[1], ev) and kwargs["clusters"] == [["x0"]]
     wide = inference.filter(*_chains(64, 3))  # too wide to even plan exactly
     assert wide.method == "bk_filter" and "approximate" in wide.info["auto"]
     small = inference.filter(*_chains(3, 5), max_size=4)  # the limit decides
@@ -230,8 +230,32 @@ def test_particle_and_rbpf_dispatch_with_the_key_first(monkeypatch) -> None:
     )
     inference.filter(dbn, ev, method="rbpf", key="K", query=["x0"], num_particles=7)
     (a1, k1), (a2, k2) = calls
-    assert a1[:3] == ("K", dbn, ev) and k1 == {"num_particles": 50, "method": "auxiliary"}
-    assert a2 == ("K", dbn, ev, ["x0"]) and k2 == {"num_particles": 7}
+    assert a1[:2] == ("K", dbn) and _same_columns(a1[2], ev)
+    assert k1 == {"num_particles": 50, "method": "auxiliary"}
+    assert a2[:2] == ("K", dbn) and _same_columns(a2[2], ev) and a2[3] == ["x0"]
+    assert k2 == {"num_particles": 7}
+
+
+def test_the_engine_gets_the_checked_columns_not_the_callers(monkeypatch) -> None:
+    """inference.filter reads the caller's columns once (check_columns) and hands the
+    engine what it read: a column of state names arrives as indices (-1 = unobserved);
+    the engines read the caller's columns a second time before."""
+    calls: list = []
+    _stub(monkeypatch, "inference.adf.boyen_koller", "bk_filter", calls)
+    dbn, ev = _chains(2, 4)
+    names = {v.name: v for v in dbn.variables}["y0"].state_names
+    given = {"y0": [names[int(s)] for s in ev["y0"][:3]] + [None], "y1": ev["y1"]}
+    inference.filter(dbn, given, method="bk")
+    ((args, _),) = calls
+    assert list(args[1]) == ["y0", "y1"]
+    np.testing.assert_array_equal(args[1]["y0"], [*ev["y0"][:3], -1])
+    assert args[1]["y0"].dtype == np.int64
+
+
+def _same_columns(got, ev) -> bool:
+    """The engine got the checked columns (inference.filter reads the caller's once): the
+    same names in the same order, the same states."""
+    return list(got) == list(ev) and all(np.array_equal(got[n], ev[n]) for n in ev)
 
 
 def _switching_lg() -> TwoSliceDBN:
