@@ -44,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dbn.checks import check_nonnegative
 from dbn.errors import (
     DBNError,
     FileFormatError,
@@ -356,8 +357,8 @@ def head(truth: GroundTruth, seconds: float) -> GroundTruth:
     InputError
         ``seconds`` not a positive finite number.
     """
-    if isinstance(seconds, bool) or not isinstance(seconds, int | float | np.integer | np.floating) \
-            or not np.isfinite(seconds) or seconds <= 0:
+    seconds = check_nonnegative("head: seconds", seconds)  # a real number, not a bool
+    if not 0 < seconds < np.inf:
         raise InputError(f"head: seconds must be a positive finite number, got {seconds!r}")
     n = min(truth.num_frames, int(np.ceil(seconds * truth.fps)))
     present = ~np.isnan(truth.boxes[:n, :, 0]).all(axis=0)

@@ -34,4 +34,3 @@ def test_the_view_is_cut_to_its_first_seconds_only_when_asked(tmp_path, monkeypa
     assert cut["ETH-seq_eth"]["duration_s"] == pytest.approx(20.0)
     assert cut["ETH-seq_eth"]["split"] == "simulated_view"
     assert np.isfinite(cut["ETH-seq_eth"]["error_rate"])
-
