@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import heapq
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
@@ -70,14 +71,29 @@ def _acyclic_graph(vars_: Mapping[str, Variable], cpd_map: Mapping[str, CPD]) ->
             if p not in vars_:
                 raise UnknownVariableError(f"CPD of {name!r}: unknown parent {p!r}")
             graph.add_edge(p, name)
-    try:
-        cycle = nx.find_cycle(graph)
-    except nx.NetworkXNoCycle:
-        cycle = None
-    if cycle:
-        path = " -> ".join([u for u, _ in cycle] + [cycle[0][0]])
-        raise CycleError(f"the graph has a directed cycle: {path}")
-    return graph
+    if nx.is_directed_acyclic_graph(graph):  # the common case, without building a cycle
+        return graph
+    cycle = nx.find_cycle(graph)
+    path = " -> ".join([u for u, _ in cycle] + [cycle[0][0]])
+    raise CycleError(f"the graph has a directed cycle: {path}")
+
+
+def _lexicographic_order(graph: nx.DiGraph) -> tuple[str, ...]:
+    """The topological order of a DAG that takes the smallest name among the nodes whose
+    parents are all placed (Kahn's algorithm with a heap): the order of networkx's
+    ``lexicographical_topological_sort``, without its per-node bookkeeping."""
+    indegree = {n: d for n, d in graph.in_degree()}
+    ready = [n for n, d in indegree.items() if d == 0]
+    heapq.heapify(ready)
+    order = []
+    while ready:
+        n = heapq.heappop(ready)
+        order.append(n)
+        for c in graph.successors(n):
+            indegree[c] -= 1
+            if indegree[c] == 0:
+                heapq.heappush(ready, c)
+    return tuple(order)
 
 
 def _tables(vars_: Mapping[str, Variable], cpd_map: Mapping[str, CPD]) -> dict[str, np.ndarray]:
@@ -141,7 +157,7 @@ class BayesNet:
         self._cpds = cpd_map
         self._graph = graph
         self._tables = tables
-        self._order = tuple(nx.lexicographical_topological_sort(graph))
+        self._order = _lexicographic_order(graph)
 
     # --- read-only views ----------------------------------------------------------------
     @property
