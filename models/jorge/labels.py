@@ -422,9 +422,11 @@ def _format_object(o: int) -> str:
     return str(k) if j == 0 else f"{k}.{j}"
 
 
+@functools.lru_cache(maxsize=1 << 16)
 def format_label(label: Label) -> str:
     """``{1}`` -> ``'1'``, ``{1, 2}`` -> ``'(1,2)'`` (the notation of seed 004, Table 2); the
-    second object born at stroke 7 prints as ``7.1``."""
+    second object born at stroke 7 prints as ``7.1``. Remembered (a window names every
+    label of every active node, again at each inference)."""
     items = sorted(label, key=lambda o: (birth_stroke(o), o))
     names = [_format_object(o) for o in items]
     return names[0] if len(items) == 1 else "(" + ",".join(names) + ")"

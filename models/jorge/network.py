@@ -141,6 +141,7 @@ class LabelGraph(LinkRule):
         self._cpd_memo: dict[int, TableMemo] = {}
         self._evidence_memo: dict[int, EvidenceMemo] = {}
         self._chain_memo: dict[int, ChainMemo] = {}
+        self._rel_memo: dict[int, tuple] = {}  # node -> (strokes seen, config, rel_log_area)
         self._gain_table = np.asarray(self.config.palette_gain_table, dtype=np.float64)
         self._gain_bins = self.config.palette_gain_bins if self._gain_table.ndim == 3 else ()
         self._count_table = np.asarray(self.config.palette_count_table, dtype=np.float64)
@@ -357,8 +358,18 @@ class LabelGraph(LinkRule):
         strokes seen so far whose region's bottom edge (the feet, on the ground plane) is
         nearest in image height to stroke ``k``'s (itself included; people nearer the
         camera are larger). NaN: no recorded size, or fewer than ``size_min_reference``
-        others."""
+        others. Remembered per node until the next stroke (it depends only on the strokes
+        seen so far and the config; a node is scored many times between two strokes)."""
         n = len(self.nodes)
+        hit = self._rel_memo.get(k)
+        if hit is not None and hit[0] == n and hit[1] is self.config:
+            return hit[2]
+        value = self._new_rel_log_area(k, n)
+        self._rel_memo[k] = (n, self.config, value)
+        return value
+
+    def _new_rel_log_area(self, k: int, n: int) -> float:
+        """:meth:`rel_log_area` of stroke ``k`` over the first ``n`` strokes, computed."""
         own = self._log_area[k]
         if not np.isfinite(own):
             return float("nan")
@@ -597,6 +608,7 @@ class LabelGraph(LinkRule):
         self._cpd_memo.pop(k, None)
         self._evidence_memo.pop(k, None)
         self._chain_memo.pop(k, None)
+        self._rel_memo.pop(k, None)
         self._replace_joiners(k, label)
         if len(label) == 1:
             (o,) = label

@@ -169,6 +169,23 @@ def test_relative_log_area_is_against_a_quantile_of_the_strokes_seen():
     np.testing.assert_array_equal(g2.size_loglik(0), np.zeros(len(g2.nodes[0].domain)))
 
 
+def test_remembered_relative_log_area_follows_the_strokes_seen():
+    """rel_log_area is remembered per node until the next stroke: read before and after
+    each new stroke (its reference grows), it equals the value computed afresh."""
+    g = LabelGraph(CFG, fps=25.0)
+    sizes = [SINGLE, PAIR, SINGLE, (90.0, 90.0), SINGLE, PAIR, SINGLE, SINGLE]
+    seen = []
+    for k, size in enumerate(sizes):
+        g.add_stroke(make_stroke(k, 0, 10, (0, 30 * k), (10, 30 * k), [0, 1, 2], size=size))
+        for j in range(k + 1):
+            got = g.rel_log_area(j)
+            fresh = g._new_rel_log_area(j, len(g.nodes))
+            assert got == fresh or (np.isnan(got) and np.isnan(fresh))
+        seen.append(g.rel_log_area(0))
+    finite = [x for x in seen if np.isfinite(x)]
+    assert len(set(finite)) > 1  # the reference moved as strokes came: no stale value
+
+
 def test_window_soft_evidence_is_colour_times_size_times_palette_count():
     g = _graph()
     win = g.window(range(6))
