@@ -206,6 +206,85 @@ def check_key(key: Any) -> None:
     raise InputError(f"key must be one jax PRNG key (jax.random.key(seed)), got {got}")
 
 
+# A first stage: ``(state, observation, action) -> (log_weights, ess, base)``: the log
+# weights ancestors are drawn from, their ESS (which decides the resampling), and
+# ``base(ancestors)``, the log weights of the drawn particles before the new likelihood.
+FirstStage = Callable[[ParticleState, Any, Any], tuple[Array, Array, Callable[[Array], Array]]]
+
+
+def _bootstrap_stage(model: StateSpaceModel, log_n: float, dtype: Any) -> FirstStage:
+    r"""Eq. 1.8: ancestors from :math:`\pi_{k-1}`; the drawn particles weigh :math:`1/N`."""
+
+    def stage(state: ParticleState, observation: Any, action: Any):
+        lw = state.log_weights
+        _, cur_ess = _lse_and_ess(lw)
+        return lw, cur_ess, lambda anc: jnp.full_like(lw, -log_n)
+
+    return stage
+
+
+def _auxiliary_stage(model: StateSpaceModel, log_n: float, dtype: Any) -> FirstStage:
+    r"""Eqs. 1.12-1.13: ancestors from :math:`\pi_{k-1}^i \eta^i`; a drawn particle weighs
+    :math:`\sum_i \pi_{k-1}^i\eta^i / (N \eta^{a^j})`."""
+
+    def stage(state: ParticleState, observation: Any, action: Any):
+        lw = state.log_weights
+        log_eta = _clean(model.log_eta(state.particles, observation, action).astype(dtype))
+        lw1 = lw + log_eta
+        lse1, cur_ess = _lse_and_ess(lw1)
+        # a look-ahead that gives every particle weight zero carries no information: ignore it
+        eta_ok = jnp.isfinite(lse1)
+        log_eta = jnp.where(eta_ok, log_eta, jnp.zeros_like(log_eta))
+        lw1 = jnp.where(eta_ok, lw1, lw)
+        lse1 = jnp.where(eta_ok, lse1, jnp.zeros_like(lse1))
+        cur_ess = jnp.where(eta_ok, cur_ess, _lse_and_ess(lw)[1])
+        return lw1, cur_ess, lambda anc: (lse1 - log_n) - log_eta[anc]
+
+    return stage
+
+
+def _particle_filter(
+    model: StateSpaceModel,
+    num_particles: int,
+    resampler: Resampler,
+    ess_threshold: float,
+    dtype: Any,
+    first_stage: Callable[[StateSpaceModel, float, Any], FirstStage],
+) -> ParticleFilter:
+    """The filter both algorithms share: a first stage (:data:`FirstStage`), adaptive
+    resampling on its ESS, propagation and weighting by the likelihood."""
+    check_threshold(ess_threshold)
+    n = check_num_particles(num_particles)
+    stage = first_stage(model, math.log(n), dtype)
+
+    @scoped(dtype)
+    def init(key: Array) -> ParticleState:
+        return _init(key, model, n, dtype)
+
+    @scoped(dtype)
+    def step(
+        key: Array, state: ParticleState, observation: Any, action: Any = None
+    ) -> tuple[ParticleState, ParticleInfo]:
+        k_res, k_move = jax.random.split(key)
+        lw1, cur_ess, base_of = stage(state, observation, action)
+
+        def resample(_):
+            anc = resampler(k_res, lw1, n)
+            return anc, state.particles[anc], base_of(anc)
+
+        def keep(_):
+            return jnp.arange(n, dtype=jnp.int32), state.particles, state.log_weights
+
+        do = _resample_predicate(cur_ess, ess_threshold, n)
+        anc, x, base = jax.lax.cond(do, resample, keep, None)
+        x_new = model.sample_transition(k_move, x, action).astype(dtype)
+        log_w = _clean(base + model.log_likelihood(x_new, observation).astype(dtype))
+        new_lw, total = _normalise(log_w)
+        return ParticleState(x_new, new_lw), ParticleInfo(total, cur_ess, anc, do)
+
+    return ParticleFilter(init, step, dtype)
+
+
 def bootstrap_filter(
     model: StateSpaceModel,
     num_particles: int,
@@ -238,37 +317,7 @@ def bootstrap_filter(
     ParticleFilter
         ``init(key)`` and ``step(key, state, observation, action=None)``.
     """
-    check_threshold(ess_threshold)
-    n = check_num_particles(num_particles)
-    log_n = math.log(n)
-
-    @scoped(dtype)
-    def init(key: Array) -> ParticleState:
-        return _init(key, model, n, dtype)
-
-    @scoped(dtype)
-    def step(
-        key: Array, state: ParticleState, observation: Any, action: Any = None
-    ) -> tuple[ParticleState, ParticleInfo]:
-        k_res, k_move = jax.random.split(key)
-        lw = state.log_weights
-        _, cur_ess = _lse_and_ess(lw)
-
-        def resample(_):
-            anc = resampler(k_res, lw, n)
-            return anc, state.particles[anc], jnp.full_like(lw, -log_n)
-
-        def keep(_):
-            return jnp.arange(n, dtype=jnp.int32), state.particles, lw
-
-        do = _resample_predicate(cur_ess, ess_threshold, n)
-        anc, x, base = jax.lax.cond(do, resample, keep, None)
-        x_new = model.sample_transition(k_move, x, action).astype(dtype)
-        log_w = _clean(base + model.log_likelihood(x_new, observation).astype(dtype))
-        new_lw, total = _normalise(log_w)
-        return ParticleState(x_new, new_lw), ParticleInfo(total, cur_ess, anc, do)
-
-    return ParticleFilter(init, step, dtype)
+    return _particle_filter(model, num_particles, resampler, ess_threshold, dtype, _bootstrap_stage)
 
 
 def auxiliary_filter(
@@ -294,45 +343,7 @@ def auxiliary_filter(
     Parameters and return as :func:`bootstrap_filter`; the model must also declare a
     look-ahead (``transition_mean``, ``lookahead`` or ``log_eta``).
     """
-    check_threshold(ess_threshold)
-    n = check_num_particles(num_particles)
-    log_n = math.log(n)
-
-    @scoped(dtype)
-    def init(key: Array) -> ParticleState:
-        return _init(key, model, n, dtype)
-
-    @scoped(dtype)
-    def step(
-        key: Array, state: ParticleState, observation: Any, action: Any = None
-    ) -> tuple[ParticleState, ParticleInfo]:
-        k_res, k_move = jax.random.split(key)
-        lw = state.log_weights
-        log_eta = _clean(model.log_eta(state.particles, observation, action).astype(dtype))
-        lw1 = lw + log_eta
-        lse1, cur_ess = _lse_and_ess(lw1)
-        # a look-ahead that gives every particle weight zero carries no information: ignore it
-        eta_ok = jnp.isfinite(lse1)
-        log_eta = jnp.where(eta_ok, log_eta, jnp.zeros_like(log_eta))
-        lw1 = jnp.where(eta_ok, lw1, lw)
-        lse1 = jnp.where(eta_ok, lse1, jnp.zeros_like(lse1))
-        cur_ess = jnp.where(eta_ok, cur_ess, _lse_and_ess(lw)[1])
-
-        def resample(_):
-            anc = resampler(k_res, lw1, n)
-            return anc, state.particles[anc], (lse1 - log_n) - log_eta[anc]
-
-        def keep(_):
-            return jnp.arange(n, dtype=jnp.int32), state.particles, lw
-
-        do = _resample_predicate(cur_ess, ess_threshold, n)
-        anc, x, base = jax.lax.cond(do, resample, keep, None)
-        x_new = model.sample_transition(k_move, x, action).astype(dtype)
-        log_w = _clean(base + model.log_likelihood(x_new, observation).astype(dtype))
-        new_lw, total = _normalise(log_w)
-        return ParticleState(x_new, new_lw), ParticleInfo(total, cur_ess, anc, do)
-
-    return ParticleFilter(init, step, dtype)
+    return _particle_filter(model, num_particles, resampler, ess_threshold, dtype, _auxiliary_stage)
 
 
 @partial(jax.jit, static_argnames=("pf", "summary", "keep_ancestors"))

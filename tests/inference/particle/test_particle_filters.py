@@ -6,10 +6,14 @@ estimate must lie within 4 standard errors of the Kalman value.
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from inference.kalman import LinearGaussianParams, kalman_filter, lgssm_sample
 from inference.particle import (
@@ -177,3 +181,37 @@ def test_error_shrinks_like_one_over_n(algo: str, lg_data) -> None:
         mse.append(np.mean((np.asarray(means) - kf.filtered_means) ** 2))
     # 1/N scaling predicts a ratio of 16; accept anything above 6 (Monte Carlo spread)
     assert mse[0] / mse[1] > 6.0, mse
+
+
+class _FlatLookahead(LinearGaussianSSM):
+    """A look-ahead that says nothing: eta = 1 for every particle."""
+
+    def log_eta(self, particles, observation, action):
+        return jnp.zeros(particles.shape[0], particles.dtype)
+
+
+@functools.cache
+def _sir_and_flat_apf(threshold: float) -> tuple:
+    """One pair of filters per threshold, so that the examples share their compiled runs."""
+    params = _params()
+    return (bootstrap_filter(LinearGaussianSSM(params), 64, ess_threshold=threshold),
+            auxiliary_filter(_FlatLookahead(params), 64, ess_threshold=threshold))
+
+
+@settings(max_examples=12, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), threshold=st.sampled_from([0.0, 0.5, 1.0]))
+def test_apf_with_a_flat_lookahead_is_the_bootstrap_filter(seed: int, threshold: float) -> None:
+    """Eqs. 1.12-1.13 with eta = 1: first-stage weights are pi_{k-1}, a drawn particle
+    weighs 1/N, so the auxiliary filter makes the bootstrap filter's draws (same keys,
+    same ancestors) and its weights up to the rounding of logsumexp(pi_{k-1}) = 0."""
+    _, ys = lgssm_sample(seed % 1000, _params(), 8)
+    key = jax.random.key(seed)
+    runs = [run(key, pf, jnp.asarray(ys), keep_ancestors=True) for pf in _sir_and_flat_apf(threshold)]
+    (sir_final, sir_infos, sir_means), (apf_final, apf_infos, apf_means) = runs
+    np.testing.assert_array_equal(np.asarray(sir_infos.ancestors), np.asarray(apf_infos.ancestors))
+    np.testing.assert_array_equal(np.asarray(sir_infos.resampled), np.asarray(apf_infos.resampled))
+    np.testing.assert_allclose(np.asarray(apf_final.log_weights), np.asarray(sir_final.log_weights),
+                               atol=1e-9)
+    np.testing.assert_allclose(np.asarray(apf_infos.log_likelihood),
+                               np.asarray(sir_infos.log_likelihood), atol=1e-9)
+    np.testing.assert_allclose(np.asarray(apf_means), np.asarray(sir_means), atol=1e-9)
