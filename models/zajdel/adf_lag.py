@@ -92,13 +92,15 @@ def _score_hypotheses(
         score[is_slot] += logw[i, par[is_slot]]
         score[is_new] += logw0[i]
         if is_win.any():  # a chain through earlier window members: prior + path + NIW
-            j, k = idx[ip], idx[i]
+            j, k = idx[:i], idx[i]  # the path density depends only on which member (< i)
             pd = log_p_delta(params.path, o.camera[j], o.border_quit[j], o.t_quit[j],
                              o.camera[k], o.border_enter[k], o.t_enter[k])  # fmt: skip
-            score[is_win] += lp_win + pd[is_win]
-            keys = np.stack([origin[is_win, i], members[is_win, i]], 1)
-            uk, inv = np.unique(keys, axis=0, return_inverse=True)
-            vals = _chain_predictive(params.prior, slot, pos, app, uk[:, 0], uk[:, 1], app[i])
+            score[is_win] += lp_win + pd[ip[is_win]]
+            # one predictive per distinct (origin, members): origin in [-1, S), members < 2**n
+            code = (origin[is_win, i] + 1) * (1 << n) + members[is_win, i]
+            uc, inv = np.unique(code, return_inverse=True)
+            vals = _chain_predictive(params.prior, slot, pos, app, uc // (1 << n) - 1,
+                                     uc % (1 << n), app[i])  # fmt: skip
             score[is_win] += vals[inv.reshape(-1)]
     return score
 
