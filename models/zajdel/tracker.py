@@ -299,13 +299,14 @@ class ZajdelADF:
             w, w0, lz = lag_revision(
                 self.params, self.config, state, o, idx, logw[:n], logw0[:n], float(lp_win)
             )
-            with x64_context():
-                return (
-                    jnp.asarray(w),
-                    jnp.asarray(w0, jnp.float64),
-                    jnp.asarray(lz, jnp.float64),
-                    jnp.asarray(not np.isfinite(lz)),
-                )
+            # host arrays: the driver's compiled projection takes them as they are (the
+            # same float64 / bool types jnp.asarray gave, without an eager op for each)
+            return (
+                np.asarray(w, np.float64),
+                np.float64(w0),
+                np.float64(lz),
+                np.bool_(not np.isfinite(lz)),
+            )
 
         return revise
 
