@@ -51,6 +51,7 @@ __all__ = [
     "StepTracker",
     "seed_from_key",
     "split_run_keys",
+    "step_key_list",
     "next_frame_index",
 ]
 
@@ -132,6 +133,22 @@ def split_run_keys(key: jax.Array, num_steps: int) -> tuple[jax.Array, jax.Array
     return k_init, jax.random.split(k_steps, max(num_steps, 1))
 
 
+def step_key_list(keys: jax.Array) -> list:
+    """The keys of :func:`split_run_keys` as a list of single keys, the same bits.
+
+    Through the host: ``list(keys)`` compiles an unstack for every new number of steps
+    (one to two seconds on a CPU, once per run length: more than the whole labelling of
+    some trackers), this takes milliseconds. Typed keys (``jax.random.key``) stay typed
+    keys of the same implementation; raw ``uint32`` keys (``jax.random.PRNGKey``) stay
+    ``uint32`` arrays of shape ``(2,)``.
+    """
+    if jax.dtypes.issubdtype(keys.dtype, jax.dtypes.prng_key):
+        impl = jax.random.key_impl(keys)
+        rows = np.asarray(jax.random.key_data(keys))
+        return [jax.random.wrap_key_data(row, impl=impl) for row in rows]
+    return [jax.numpy.asarray(row) for row in np.asarray(keys)]
+
+
 class StepTracker:
     """Base class of the adapters: the protocol's ``run`` from ``init`` and ``step``.
 
@@ -199,7 +216,7 @@ class StepTracker:
         """``init``'s state and the ``(key, observation)`` pairs of :meth:`run` (wrapped in
         ``progress`` if given)."""
         k_init, keys = split_run_keys(key, len(observations))
-        steps: Iterable = zip(list(keys), observations, strict=False)  # list(): one unstack
+        steps: Iterable = zip(step_key_list(keys), observations, strict=False)
         return self.init(k_init), steps if progress is None else progress(steps, len(observations))
 
     def fingerprint(self, state: Any) -> Any:

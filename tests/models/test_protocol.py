@@ -19,7 +19,7 @@ import pytest
 
 import models
 from dbn.errors import DBNError, InputError
-from models.protocol import StepTracker, Tracker, split_run_keys
+from models.protocol import StepTracker, Tracker, split_run_keys, step_key_list
 
 NAMES = models.available()
 
@@ -219,3 +219,29 @@ def test_fold_is_run_keeping_the_last_state(name: str) -> None:
     empty, none = tr.fold(jax.random.key(1), [])
     assert none == []
     _assert_same(tr.fingerprint(empty), tr.fingerprint(tr.init(split_run_keys(jax.random.key(1), 0)[0])))
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: jax.random.key(7),
+        lambda: jax.random.key(7, impl="rbg"),
+        lambda: jax.random.PRNGKey(7),
+    ],
+    ids=["threefry", "rbg", "raw"],
+)
+def test_step_key_list_is_list_of_the_split_keys(make) -> None:
+    """The host route gives the keys ``list()`` gives: same bits, same kind of key."""
+    _, keys = split_run_keys(make(), 5)
+    got, want = step_key_list(keys), list(keys)
+    assert len(got) == len(want) == 5
+    for g, w in zip(got, want):
+        assert g.dtype == w.dtype and g.shape == w.shape
+        typed = jax.dtypes.issubdtype(w.dtype, jax.dtypes.prng_key)
+        if typed:
+            assert jax.random.key_impl(g) == jax.random.key_impl(w)
+        bits = (lambda k: np.asarray(jax.random.key_data(k))) if typed else np.asarray
+        np.testing.assert_array_equal(bits(g), bits(w))
+        # a step draws the same numbers from either
+        draws = [np.asarray(jax.random.uniform(k, (3,))) for k in (g, w)]
+        np.testing.assert_array_equal(*draws)
