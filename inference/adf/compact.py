@@ -91,12 +91,12 @@ def compact_rows(rows, valid, size: int, blank):
         raise InputError(f"compact_rows: {keep.size} valid rows do not fit size {size}")
     pad = size - keep.size
 
-    def one(a, b):
-        a = jnp.asarray(a)
-        fill = jnp.broadcast_to(jnp.asarray(b, a.dtype), (pad,) + a.shape[1:])
-        return jnp.concatenate([a[keep], fill])
+    def one(a, b):  # on the host: the kept rows' count changes every call, and each
+        a = np.asarray(a)  # count would compile a gather of its own
+        fill = np.broadcast_to(np.asarray(b, a.dtype), (pad,) + a.shape[1:])
+        return jnp.asarray(np.concatenate([a[keep], fill]))
 
-    new_valid = jnp.concatenate([jnp.ones(keep.size, bool), jnp.zeros(pad, bool)])
+    new_valid = jnp.asarray(np.concatenate([np.ones(keep.size, bool), np.zeros(pad, bool)]))
     return jax.tree_util.tree_map(one, rows, blank), new_valid
 
 

@@ -38,6 +38,7 @@ A run resumed from a saved state gives bit-identical results.
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -69,6 +70,15 @@ STAY_TABLE_SIZE = 1024  # birth-leave filtering form: log g tabulated at this ma
 _NEG_INF = ("last_tq",)  # -inf: no observation yet (log-space fields are finite)
 
 
+_path_lognorm = jax.jit(travel_log_norm)
+"""The path's travel-time normalisers as one compiled program: op by op, each of their
+few dozen operations on (num_cameras, num_cameras) arrays compiles on its own for every
+new camera count (about 2 s on a CPU). The same numbers bit for bit on every model tested
+(7 and 20 cameras, with and without the birth-leave prior). The prior's normaliser and
+digamma sum stay op by op: scalars, compiled once per process, and compiled together
+they round differently in the last bit."""
+
+
 def _adf_params(params: ZajdelParams) -> ADFParams:
     """The hooks' parameter pytree (float64; call inside an x64 context)."""
     r = params.obs_dim
@@ -95,7 +105,7 @@ def _adf_params(params: ZajdelParams) -> ADFParams:
         lognorm0=niw_predictive_lognorm(k0, e0, logdet0, r),
         psi0_next=niw_sum_digamma(e0 + 1.0, r),
         path=path,
-        path_lognorm=travel_log_norm(path),
+        path_lognorm=_path_lognorm(path),
         p_new=jnp.asarray(f64(0.5 if params.p_new is None else params.p_new)),
         close_horizon=jnp.asarray(horizon),
         stay_table=jnp.asarray(table),
@@ -166,29 +176,35 @@ class ZajdelADF:
         m = self._model
         counter = np.zeros(N + 1)
         counter[0] = 1.0
+        f64, i64 = np.float64, np.int64
+
+        def rows(value, shape, dtype=f64):  # on the host: no compiled op per new shape
+            return np.broadcast_to(np.asarray(value, dtype), shape)
+
+        host = ADFState(
+            k=np.int64(0),
+            last_tq=f64(-np.inf),
+            counter=counter,
+            never=np.ones(N),
+            closed=np.zeros(N),
+            slot_valid=np.zeros(S, bool),
+            slot_obs=-np.ones(S, i64),
+            slot_cam=np.zeros(S, i64),
+            slot_bq=np.zeros(S, i64),
+            slot_tq=np.zeros(S),
+            slot_a=rows(m.a0, (S, r)),
+            slot_kappa=rows(m.k0, (S,)),
+            slot_eta=rows(m.e0, (S,)),
+            slot_C=rows(m.C0, (S, r, r)),
+            slot_Cinv=rows(m.Cinv0, (S, r, r)),
+            slot_logdetC=rows(m.logdet0, (S,)),
+            slot_lognorm=rows(m.lognorm0, (S,)),
+            slot_psi_next=rows(m.psi0_next, (S,)),
+            slot_person=np.zeros((S, W), i64),
+            slot_pprob=np.zeros((S, W)),
+        )
         with x64_context():
-            return ADFState(
-                k=jnp.asarray(0, jnp.int64),
-                last_tq=jnp.asarray(np.float64(-np.inf)),
-                counter=jnp.asarray(counter),
-                never=jnp.ones(N, jnp.float64),
-                closed=jnp.zeros(N, jnp.float64),
-                slot_valid=jnp.zeros(S, bool),
-                slot_obs=-jnp.ones(S, jnp.int64),
-                slot_cam=jnp.zeros(S, jnp.int64),
-                slot_bq=jnp.zeros(S, jnp.int64),
-                slot_tq=jnp.zeros(S, jnp.float64),
-                slot_a=jnp.broadcast_to(m.a0, (S, r)),
-                slot_kappa=jnp.broadcast_to(m.k0, (S,)),
-                slot_eta=jnp.broadcast_to(m.e0, (S,)),
-                slot_C=jnp.broadcast_to(m.C0, (S, r, r)),
-                slot_Cinv=jnp.broadcast_to(m.Cinv0, (S, r, r)),
-                slot_logdetC=jnp.broadcast_to(m.logdet0, (S,)),
-                slot_lognorm=jnp.broadcast_to(m.lognorm0, (S,)),
-                slot_psi_next=jnp.broadcast_to(m.psi0_next, (S,)),
-                slot_person=jnp.zeros((S, W), jnp.int64),
-                slot_pprob=jnp.zeros((S, W), jnp.float64),
-            )
+            return ADFState(*(jnp.asarray(v) for v in host))
 
     def _grow(self, st: ADFState, margin: int) -> ADFState:
         """Double the person capacity while the counter could reach it within ``margin``
@@ -205,11 +221,11 @@ class ZajdelADF:
         if newN == N:
             return st
         pad = newN - N
-        with x64_context():
+        with x64_context():  # padded on the host: no compiled op per new size
             return st._replace(
-                counter=jnp.concatenate([st.counter, jnp.zeros(pad, jnp.float64)]),
-                never=jnp.concatenate([st.never, jnp.ones(pad, jnp.float64)]),
-                closed=jnp.concatenate([st.closed, jnp.zeros(pad, jnp.float64)]),
+                counter=jnp.asarray(np.concatenate([np.asarray(st.counter), np.zeros(pad)])),
+                never=jnp.asarray(np.concatenate([np.asarray(st.never), np.ones(pad)])),
+                closed=jnp.asarray(np.concatenate([np.asarray(st.closed), np.zeros(pad)])),
             )
 
     def _validate(self, obs: Observations, st: ADFState) -> Observations:

@@ -22,7 +22,9 @@ from models.zajdel.path import log_p_delta
 from models.zajdel.simulate import simulate_office
 from models.zajdel.tracker import ADFConfig, ZajdelADF
 
-CFG = ADFConfig(max_open=12, persons_per_slot=8, init_persons=32, chunk=8, link_out=12, label_out=12)
+CFG = ADFConfig(
+    max_open=12, persons_per_slot=8, init_persons=32, chunk=8, link_out=12, label_out=12
+)
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +36,8 @@ def belief():
 
 
 def _slot_niw(state, s: int) -> NIW:
-    return NIW(*(np.asarray(getattr(state, f))[s] for f in ("slot_a", "slot_kappa", "slot_eta", "slot_C")))
+    fields = ("slot_a", "slot_kappa", "slot_eta", "slot_C")
+    return NIW(*(np.asarray(getattr(state, f))[s] for f in fields))
 
 
 def _brute_force(params, state, o, idx, combos, logw, logw0, lp_win) -> np.ndarray:
@@ -52,8 +55,10 @@ def _brute_force(params, state, o, idx, combos, logw, logw0, lp_win) -> np.ndarr
                 chain.append(niw_update_np(_slot_niw(state, par), app[i]))
             else:
                 j, k = idx[par - S], idx[i]
-                out[h] += lp_win + log_p_delta(params.path, o.camera[j], o.border_quit[j], o.t_quit[j],
-                                               o.camera[k], o.border_enter[k], o.t_enter[k])  # fmt: skip
+                out[h] += lp_win + log_p_delta(
+                    params.path, o.camera[j], o.border_quit[j], o.t_quit[j],
+                    o.camera[k], o.border_enter[k], o.t_enter[k],
+                )  # fmt: skip
                 out[h] += niw_predictive_logpdf_np(app[i], chain[par - S])
                 chain.append(niw_update_np(chain[par - S], app[i]))
     return out
