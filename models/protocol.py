@@ -127,14 +127,16 @@ def next_frame_index(last: int, t: Any, field: str) -> int:
     return t
 
 
-def split_run_keys(key: jax.Array, num_steps: int) -> tuple[jax.Array, jax.Array]:
-    """``(init_key, step_keys)`` for a run of ``num_steps`` steps (the protocol's ``run``)."""
+def split_run_keys(key: jax.Array, num_steps: int) -> tuple[jax.Array, list]:
+    """``(init_key, step_keys)`` for a run of ``num_steps`` steps (the protocol's ``run``):
+    ``step_keys`` is the list of the ``max(num_steps, 1)`` keys of
+    ``jax.random.split(k_steps, ...)`` (:func:`step_key_list`)."""
     k_init, k_steps = jax.random.split(key)
-    return k_init, jax.random.split(k_steps, max(num_steps, 1))
+    return k_init, step_key_list(jax.random.split(k_steps, max(num_steps, 1)))
 
 
 def step_key_list(keys: jax.Array) -> list:
-    """The keys of :func:`split_run_keys` as a list of single keys, the same bits.
+    """A key array (``jax.random.split``'s) as a list of single keys, the same bits.
 
     Through the host: ``list(keys)`` compiles an unstack for every new number of steps
     (one to two seconds on a CPU, once per run length: more than the whole labelling of
@@ -216,7 +218,7 @@ class StepTracker:
         """``init``'s state and the ``(key, observation)`` pairs of :meth:`run` (wrapped in
         ``progress`` if given)."""
         k_init, keys = split_run_keys(key, len(observations))
-        steps: Iterable = zip(step_key_list(keys), observations, strict=False)
+        steps: Iterable = zip(keys, observations, strict=False)
         return self.init(k_init), steps if progress is None else progress(steps, len(observations))
 
     def fingerprint(self, state: Any) -> Any:

@@ -93,7 +93,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     from models.localization.api import LocalizationStep
     from models.localization.model import circular_mean
     from models.localization.mrclam import mrclam_model
-    from models.protocol import split_run_keys, step_key_list
+    from models.protocol import split_run_keys
 
     opts = _options(config)
     with ctx.timed("read"):
@@ -109,8 +109,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
         raise ConfigError(str(exc)) from None
     obs = seq.observations
     T = len(seq.odometry)
-    k_init, split = split_run_keys(ctx.key(), T)  # the protocol's run, with progress
-    keys = step_key_list(split)
+    k_init, keys = split_run_keys(ctx.key(), T)  # the protocol's run, with progress
     means = np.zeros((T, 3))
     mean_fn = jax.jit(circular_mean)
     with ctx.timed("filter"):

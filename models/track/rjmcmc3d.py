@@ -80,7 +80,7 @@ def _frames(views, scene, min_blob: int):
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     """Track people in 3-D; write ``tracks3d.txt`` and ``tracks3d.png``."""
     import models
-    from models.protocol import split_run_keys, step_key_list
+    from models.protocol import split_run_keys
     from models.rjmcmc3d.model import TrackerParams
 
     check_keys(config, set(TrackerParams._fields) | {"floor", "scale", "min_blob", "sigma_px"})
@@ -98,8 +98,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
         scene = _scene(ctx, views, floor, sigma_px)
     tracker = models.get("rjmcmc3d").make(scene=scene, params=params)
     T = len(views[0].masks)
-    k_init, split = split_run_keys(ctx.key(), T)
-    keys = step_key_list(split)
+    k_init, keys = split_run_keys(ctx.key(), T)
     frames, ids, X, pres = [], [], [], []
     with ctx.timed("track"):
         state = tracker.init(k_init)

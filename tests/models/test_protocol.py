@@ -231,10 +231,19 @@ def test_fold_is_run_keeping_the_last_state(name: str) -> None:
     ids=["threefry", "rbg", "raw"],
 )
 def test_step_key_list_is_list_of_the_split_keys(make) -> None:
-    """The host route gives the keys ``list()`` gives: same bits, same kind of key."""
-    _, keys = split_run_keys(make(), 5)
+    """The host route gives the keys ``list()`` gives: same bits, same kind of key; and
+    split_run_keys' step keys are exactly those of the split."""
+    k_init, k_steps = jax.random.split(make())
+    keys = jax.random.split(k_steps, 5)
     got, want = step_key_list(keys), list(keys)
     assert len(got) == len(want) == 5
+    run_init, run_keys = split_run_keys(make(), 5)
+    assert len(run_keys) == 5
+    for a, b in zip([run_init, *run_keys], [k_init, *got]):
+        assert a.dtype == b.dtype and a.shape == b.shape
+        typed = jax.dtypes.issubdtype(a.dtype, jax.dtypes.prng_key)
+        bits = (lambda k: np.asarray(jax.random.key_data(k))) if typed else np.asarray
+        np.testing.assert_array_equal(bits(a), bits(b))
     for g, w in zip(got, want):
         assert g.dtype == w.dtype and g.shape == w.shape
         typed = jax.dtypes.issubdtype(w.dtype, jax.dtypes.prng_key)
