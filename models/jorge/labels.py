@@ -374,24 +374,50 @@ def label_objects(domain: Sequence[Label], k: int, own: Mapping[int, int] | None
     holds the colours of everyone in its birth label (issue 16, tenth round)."""
     own = {} if own is None else own
     joined = {} if joined is None else joined
+    records: dict[int, tuple[int, int, Label | None]] = {}  # per object, once per domain
     pal: list[int] = []
     known: list[int] = []
     known_counts, is_new = [], []
     for lab in domain:
         new, n_known = False, 0
         for o in lab:
-            b = o % NEW_STRIDE
-            pal.append(own.get(o, b))
-            if b == k:
+            rec = records.get(o)
+            if rec is None:
+                rec = records[o] = _object_record(o, k, own, joined)
+            stroke, kind, needs = rec
+            pal.append(stroke)
+            if kind == _BORN_HERE:
                 new = True
-            elif o in own or (joined[o] <= lab if o in joined else o < NEW_STRIDE or _cohort(o) <= lab):
-                known.append(own.get(o, b))
+            elif kind == _KNOWN or needs <= lab:
+                known.append(stroke)
                 n_known += 1
         known_counts.append(n_known)
         is_new.append(new)
     return LabelObjects(np.array(pal, dtype=np.int64), np.array([len(lab) for lab in domain], dtype=np.int64),
                         np.array(known, dtype=np.int64), np.array(known_counts, dtype=np.int64),
                         np.array(is_new, dtype=bool))
+
+
+_BORN_HERE, _KNOWN, _KNOWN_WITH = 0, 1, 2  # kinds of object of :func:`_object_record`
+
+
+def _object_record(o: int, k: int, own: Mapping[int, int], joined: Mapping[int, Label]
+                   ) -> tuple[int, int, Label | None]:
+    """What :func:`label_objects` needs of object ``o`` at stroke ``k`` whatever its label:
+    ``(palette stroke, kind, needs)``. Kind ``_BORN_HERE``: born at ``k``; ``_KNOWN``:
+    its palette is on record (its own, or born alone); ``_KNOWN_WITH``: on record only in
+    a label holding all of ``needs`` (its birth label as a joiner, else its cohort)."""
+    b = o % NEW_STRIDE
+    stroke = own.get(o, b)
+    if b == k:
+        return stroke, _BORN_HERE, None
+    if o in own:
+        return stroke, _KNOWN, None
+    if o in joined:
+        return stroke, _KNOWN_WITH, joined[o]
+    if o < NEW_STRIDE:
+        return stroke, _KNOWN, None
+    return stroke, _KNOWN_WITH, _cohort(o)
 
 
 def union_rows(palettes: np.ndarray, strokes: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -432,16 +458,24 @@ def format_label(label: Label) -> str:
     return names[0] if len(items) == 1 else "(" + ",".join(names) + ")"
 
 
+@functools.lru_cache(maxsize=1 << 16)
 def _sort_key(label: Label) -> tuple:
     return (len(label), tuple(sorted(label)))
 
 
 def proper_subsets(label: Label) -> list[Label]:
     """Non-empty proper subsets of a label, smallest first."""
+    return list(_proper_subsets(label))
+
+
+@functools.lru_cache(maxsize=1 << 14)
+def _proper_subsets(label: Label) -> tuple[Label, ...]:
+    """:func:`proper_subsets` as a tuple, remembered (the same parent labels are split
+    into their pieces again for every child and every CPD)."""
     items = sorted(label)
-    return [
+    return tuple(
         frozenset(c) for r in range(1, len(items)) for c in itertools.combinations(items, r)
-    ]
+    )
 
 
 def pieces(domain: Sequence[Label], shared: bool, partial: bool = False) -> list[Label]:
@@ -456,7 +490,7 @@ def pieces(domain: Sequence[Label], shared: bool, partial: bool = False) -> list
     out: dict[Label, None] = {}
     for lab in domain:
         out[lab] = None
-        for s in proper_subsets(lab):
+        for s in _proper_subsets(lab):
             out[s] = None
     return list(out)
 
@@ -512,10 +546,7 @@ def admissible_labels(
     for p in parts:
         found.update(p)
     if len(parts) == 2:
-        for a in parts[0]:
-            for b in parts[1]:
-                if not (a & b) and len(a) + len(b) <= max_group_size:
-                    found.add(a | b)
+        found.update(_disjoint_unions(parts[0], parts[1], max_group_size))
     if join and len(new_label) == 1:
         found.update([lab | new_label for lab in found if len(lab) < max_group_size])
     if len(new_label) == 1:
@@ -524,6 +555,26 @@ def admissible_labels(
     found.discard(new_label)
     others = sorted((lab for lab in found if len(lab) <= max_group_size), key=_sort_key)
     return [new_label, *others]
+
+
+def _disjoint_unions(first: Sequence[Label], second: Sequence[Label], max_size: int) -> set[Label]:
+    r"""Eq. 8's merged labels :math:`\{a \cup b\}` over ``a`` of ``first`` and ``b`` of
+    ``second`` that share no object and hold at most ``max_size`` together. Vectorised
+    over the pairs with object bit masks (a merge of two groups pairs hundreds of pieces);
+    a loop past 62 objects."""
+    objects = sorted({o for lab in (*first, *second) for o in lab})
+    if not first or not second:
+        return set()
+    if len(objects) > 62:
+        return {a | b for a in first for b in second
+                if a.isdisjoint(b) and len(a) + len(b) <= max_size}
+    bit = {o: 1 << t for t, o in enumerate(objects)}
+    m0, m1 = ([sum(map(bit.__getitem__, lab)) for lab in side] for side in (first, second))
+    m0, m1 = np.array(m0, dtype=np.int64), np.array(m1, dtype=np.int64)
+    s0, s1 = (np.array([len(lab) for lab in side]) for side in (first, second))
+    ia, ib = np.nonzero(((m0[:, None] & m1[None, :]) == 0) & (s0[:, None] + s1[None, :] <= max_size))
+    _, one = np.unique(m0[ia] | m1[ib], return_index=True)  # one pair per distinct union
+    return {first[i] | second[j] for i, j in zip(ia[one].tolist(), ib[one].tolist())}
 
 
 def root_table(domain: Sequence[Label], new_label: Label, params: LabelParams | None = None) -> np.ndarray:
@@ -559,12 +610,20 @@ def _new_column(domain: Sequence[Label], new_label: Label, params: LabelParams |
     return np.array([weight.get(lab, 0.0) for lab in domain], dtype=np.float64)
 
 
-def _piece_law(label: Label, shared: bool, params: LabelParams) -> list[tuple[Label, float]]:
-    p = params.p_split if shared else params.p_part
+def _piece_law(label: Label, shared: bool, params: LabelParams
+               ) -> tuple[tuple[Label, float], ...]:
+    """The pieces a parent labelled ``label`` hands a child and their weights: all of it,
+    or (:math:`P_{split}` when it is shared, :math:`P_{part}` when not) one of its
+    non-empty proper subsets, uniformly."""
+    return _law(label, params.p_split if shared else params.p_part)
+
+
+@functools.lru_cache(maxsize=1 << 14)
+def _law(label: Label, p: float) -> tuple[tuple[Label, float], ...]:
     if len(label) == 1 or p == 0.0:
-        return [(label, 1.0)]
-    subs = proper_subsets(label)
-    return [(label, 1.0 - p)] + [(s, p / len(subs)) for s in subs]
+        return ((label, 1.0),)
+    subs = _proper_subsets(label)
+    return ((label, 1.0 - p), *((s, p / len(subs)) for s in subs))
 
 
 def child_table(
@@ -714,7 +773,7 @@ def _merge_mass(table: np.ndarray, total: np.ndarray, laws: list, index: dict, p
     bit = {o: 1 << t for t, o in enumerate(objects)}
     flat = []
     for p in (0, 1):
-        pieces_ = [(i, sum(bit[o] for o in piece), w, len(piece))
+        pieces_ = [(i, sum(map(bit.__getitem__, piece)), w, len(piece))
                    for i, law in enumerate(laws[p]) for piece, w in law]
         rows, masks, ws, sizes = zip(*pieces_)
         flat.append((np.array(rows), np.array(masks, dtype=np.int64), np.array(ws), np.array(sizes)))
@@ -723,10 +782,21 @@ def _merge_mass(table: np.ndarray, total: np.ndarray, laws: list, index: dict, p
     w = p_merge * w0[ia] * w1[ib]
     np.add.at(total, (r0[ia], r1[ib]), w)
     universe = frozenset(objects)
-    child = {sum(bit[o] for o in lab): c for lab, c in index.items() if lab <= universe}
-    c = np.array([child.get(u, -1) for u in (m0[ia] | m1[ib]).tolist()], dtype=np.int64)
+    child = {sum(map(bit.__getitem__, lab)): c for lab, c in index.items() if lab <= universe}
+    c = _lookup(np.array(list(child), dtype=np.int64), np.array(list(child.values()), dtype=np.int64),
+                m0[ia] | m1[ib])
     hit = c >= 0
     np.add.at(table, (r0[ia][hit], r1[ib][hit], c[hit]), w[hit])
+
+
+def _lookup(keys: np.ndarray, values: np.ndarray, query: np.ndarray) -> np.ndarray:
+    """``values[keys == q]`` for each ``q`` of ``query`` (distinct ``keys``), -1 where none."""
+    if keys.size == 0:
+        return np.full(query.shape, -1, dtype=np.int64)
+    order = np.argsort(keys)
+    keys, values = keys[order], values[order]
+    pos = np.minimum(np.searchsorted(keys, query), keys.size - 1)
+    return np.where(keys[pos] == query, values[pos], -1)
 
 
 def _merge_mass_loop(table: np.ndarray, total: np.ndarray, laws: list, index: dict, p_merge: float,

@@ -159,3 +159,51 @@ def test_evidence_names_still_importable_from_labels():
     for name in evidence.__all__:
         assert getattr(labels, name) is getattr(evidence, name), name
         assert name in labels.__all__, name
+
+
+# objects of strokes 1-4 (the stroke under test is 3): lone newcomers and members of new
+# groups of 2 and 3 (models.jorge.labels.new_objects)
+def _objects():
+    from models.jorge.labels import new_objects
+
+    return sorted({o for b in range(1, 5) for m in (1, 2, 3) for o in new_objects(b, m)})
+
+
+@settings(max_examples=60, deadline=None)
+@given(data=st.data())
+def test_label_objects_follows_known_objects(data):
+    """Every label of a domain, in :func:`label_objects`' flattened arrays, against the
+    plain definition: its objects' palette strokes in the label's order, the known ones
+    those of :func:`known_objects` (with palettes of their own and joiners' birth labels
+    drawn at random), and whether it holds an object born at the stroke."""
+    from models.jorge.labels import birth_stroke, known_objects, label_objects
+
+    objs = _objects()
+    labels_ = st.frozensets(st.sampled_from(objs), min_size=1, max_size=4)
+    domain = data.draw(st.lists(labels_, min_size=1, max_size=6, unique=True))
+    own = data.draw(st.dictionaries(st.sampled_from(objs), st.integers(5, 9), max_size=4))
+    joined = data.draw(st.dictionaries(st.sampled_from(objs), labels_, max_size=3))
+    k = 3
+    got = label_objects(domain, k, own, joined)
+    assert got.sizes.tolist() == [len(lab) for lab in domain]
+    strokes = [own.get(o, birth_stroke(o)) for lab in domain for o in lab]
+    assert got.palette_strokes.tolist() == strokes
+    assert got.is_new.tolist() == [any(birth_stroke(o) == k for o in lab) for lab in domain]
+    ends = np.cumsum(got.known_counts)
+    for i, lab in enumerate(domain):
+        known = got.known_strokes[ends[i] - got.known_counts[i]: ends[i]]
+        expect = [own.get(o, birth_stroke(o)) for o in known_objects(lab, k, own, joined)]
+        assert sorted(known.tolist()) == sorted(expect), lab
+
+
+@settings(max_examples=60, deadline=None)
+@given(first=st.lists(st.frozensets(st.integers(0, 80), min_size=1, max_size=4), max_size=12),
+       second=st.lists(st.frozensets(st.integers(0, 80), min_size=1, max_size=4), max_size=12),
+       max_size=st.integers(1, 6))
+def test_disjoint_unions_is_the_pairwise_loop(first, second, max_size):
+    """Eq. 8's merged labels, vectorised with bit masks (and the loop past 62 objects),
+    against the plain loop over every pair."""
+    from models.jorge.labels import _disjoint_unions
+
+    expect = {a | b for a in first for b in second if not (a & b) and len(a) + len(b) <= max_size}
+    assert _disjoint_unions(first, second, max_size) == expect
