@@ -458,24 +458,16 @@ def format_label(label: Label) -> str:
     return names[0] if len(items) == 1 else "(" + ",".join(names) + ")"
 
 
-@functools.lru_cache(maxsize=1 << 16)
 def _sort_key(label: Label) -> tuple:
     return (len(label), tuple(sorted(label)))
 
 
 def proper_subsets(label: Label) -> list[Label]:
     """Non-empty proper subsets of a label, smallest first."""
-    return list(_proper_subsets(label))
-
-
-@functools.lru_cache(maxsize=1 << 14)
-def _proper_subsets(label: Label) -> tuple[Label, ...]:
-    """:func:`proper_subsets` as a tuple, remembered (the same parent labels are split
-    into their pieces again for every child and every CPD)."""
     items = sorted(label)
-    return tuple(
+    return [
         frozenset(c) for r in range(1, len(items)) for c in itertools.combinations(items, r)
-    )
+    ]
 
 
 def pieces(domain: Sequence[Label], shared: bool, partial: bool = False) -> list[Label]:
@@ -490,7 +482,7 @@ def pieces(domain: Sequence[Label], shared: bool, partial: bool = False) -> list
     out: dict[Label, None] = {}
     for lab in domain:
         out[lab] = None
-        for s in _proper_subsets(lab):
+        for s in proper_subsets(lab):
             out[s] = None
     return list(out)
 
@@ -562,9 +554,9 @@ def _disjoint_unions(first: Sequence[Label], second: Sequence[Label], max_size: 
     ``second`` that share no object and hold at most ``max_size`` together. Vectorised
     over the pairs with object bit masks (a merge of two groups pairs hundreds of pieces);
     a loop past 62 objects."""
-    objects = sorted({o for lab in (*first, *second) for o in lab})
     if not first or not second:
         return set()
+    objects = sorted({o for lab in (*first, *second) for o in lab})
     if len(objects) > 62:
         return {a | b for a in first for b in second
                 if a.isdisjoint(b) and len(a) + len(b) <= max_size}
@@ -610,20 +602,12 @@ def _new_column(domain: Sequence[Label], new_label: Label, params: LabelParams |
     return np.array([weight.get(lab, 0.0) for lab in domain], dtype=np.float64)
 
 
-def _piece_law(label: Label, shared: bool, params: LabelParams
-               ) -> tuple[tuple[Label, float], ...]:
-    """The pieces a parent labelled ``label`` hands a child and their weights: all of it,
-    or (:math:`P_{split}` when it is shared, :math:`P_{part}` when not) one of its
-    non-empty proper subsets, uniformly."""
-    return _law(label, params.p_split if shared else params.p_part)
-
-
-@functools.lru_cache(maxsize=1 << 14)
-def _law(label: Label, p: float) -> tuple[tuple[Label, float], ...]:
+def _piece_law(label: Label, shared: bool, params: LabelParams) -> list[tuple[Label, float]]:
+    p = params.p_split if shared else params.p_part
     if len(label) == 1 or p == 0.0:
-        return ((label, 1.0),)
-    subs = _proper_subsets(label)
-    return ((label, 1.0 - p), *((s, p / len(subs)) for s in subs))
+        return [(label, 1.0)]
+    subs = proper_subsets(label)
+    return [(label, 1.0 - p)] + [(s, p / len(subs)) for s in subs]
 
 
 def child_table(
