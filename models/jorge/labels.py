@@ -86,7 +86,7 @@ from __future__ import annotations
 
 import functools
 import itertools
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -556,17 +556,35 @@ def _disjoint_unions(first: Sequence[Label], second: Sequence[Label], max_size: 
     a loop past 62 objects."""
     if not first or not second:
         return set()
-    objects = sorted({o for lab in (*first, *second) for o in lab})
-    if len(objects) > 62:
+    bit = _object_bits((*first, *second))
+    if bit is None:
         return {a | b for a in first for b in second
                 if a.isdisjoint(b) and len(a) + len(b) <= max_size}
-    bit = {o: 1 << t for t, o in enumerate(objects)}
-    m0, m1 = ([sum(map(bit.__getitem__, lab)) for lab in side] for side in (first, second))
-    m0, m1 = np.array(m0, dtype=np.int64), np.array(m1, dtype=np.int64)
+    m0, m1 = (np.array([_mask(bit, lab) for lab in side], dtype=np.int64)
+              for side in (first, second))
     s0, s1 = (np.array([len(lab) for lab in side]) for side in (first, second))
-    ia, ib = np.nonzero(((m0[:, None] & m1[None, :]) == 0) & (s0[:, None] + s1[None, :] <= max_size))
+    ia, ib = _disjoint_pairs(m0, s0, m1, s1, max_size)
     _, one = np.unique(m0[ia] | m1[ib], return_index=True)  # one pair per distinct union
     return {first[i] | second[j] for i, j in zip(ia[one].tolist(), ib[one].tolist())}
+
+
+def _object_bits(labels: Iterable[Label]) -> dict[int, int] | None:
+    """One bit per object of ``labels`` (in object order), for int64 masks; None past 62
+    objects."""
+    objects = sorted({o for lab in labels for o in lab})
+    return None if len(objects) > 62 else {o: 1 << t for t, o in enumerate(objects)}
+
+
+def _mask(bit: Mapping[int, int], label: Label) -> int:
+    """The bit mask of ``label`` (:func:`_object_bits`)."""
+    return sum(map(bit.__getitem__, label))
+
+
+def _disjoint_pairs(m0: np.ndarray, s0: np.ndarray, m1: np.ndarray, s1: np.ndarray,
+                    max_size: int) -> tuple[np.ndarray, np.ndarray]:
+    """Indices ``(i, j)``, in row-major order, of the masks ``m0[i]``, ``m1[j]`` that share
+    no object and whose sizes ``s0[i] + s1[j]`` are at most ``max_size``."""
+    return np.nonzero(((m0[:, None] & m1[None, :]) == 0) & (s0[:, None] + s1[None, :] <= max_size))
 
 
 def root_table(domain: Sequence[Label], new_label: Label, params: LabelParams | None = None) -> np.ndarray:
@@ -750,23 +768,22 @@ def _merge_mass(table: np.ndarray, total: np.ndarray, laws: list, index: dict, p
     :math:`P_{merge} w_a w_b` to ``total[i, j]`` and, if ``a | b`` is in ``index``, to
     ``table[i, j, index[a | b]]``. Vectorised over the pairs with object bit masks, in the
     loop's order (so the sums are the same to the last bit); a loop past 62 objects."""
-    objects = sorted({o for law in laws[0] + laws[1] for piece, _ in law for o in piece})
-    if len(objects) > 62:
+    bit = _object_bits(piece for law in laws[0] + laws[1] for piece, _ in law)
+    if bit is None:
         _merge_mass_loop(table, total, laws, index, p_merge, gmax)
         return
-    bit = {o: 1 << t for t, o in enumerate(objects)}
     flat = []
     for p in (0, 1):
-        pieces_ = [(i, sum(map(bit.__getitem__, piece)), w, len(piece))
+        pieces_ = [(i, _mask(bit, piece), w, len(piece))
                    for i, law in enumerate(laws[p]) for piece, w in law]
         rows, masks, ws, sizes = zip(*pieces_)
         flat.append((np.array(rows), np.array(masks, dtype=np.int64), np.array(ws), np.array(sizes)))
     (r0, m0, w0, s0), (r1, m1, w1, s1) = flat
-    ia, ib = np.nonzero(((m0[:, None] & m1[None, :]) == 0) & (s0[:, None] + s1[None, :] <= gmax))
+    ia, ib = _disjoint_pairs(m0, s0, m1, s1, gmax)
     w = p_merge * w0[ia] * w1[ib]
     np.add.at(total, (r0[ia], r1[ib]), w)
-    universe = frozenset(objects)
-    child = {sum(map(bit.__getitem__, lab)): c for lab, c in index.items() if lab <= universe}
+    universe = frozenset(bit)
+    child = {_mask(bit, lab): c for lab, c in index.items() if lab <= universe}
     c = _lookup(np.array(list(child), dtype=np.int64), np.array(list(child.values()), dtype=np.int64),
                 m0[ia] | m1[ib])
     hit = c >= 0
