@@ -30,6 +30,20 @@ domain pruning that bounds it costs: the largest, and the mean per inference of 
 largest, posterior mass of the labels a node's pruning removed, i.e. the probability
 under the window posterior that the true labelling was among them).
 
+Where the right labels are lost (:mod:`models.jorge.recall`; issue 16, forty-fifth round;
+diagnosis, nothing chosen on it), measured against the ground truth, with the default
+labeller's own links and the error rate's matching of objects to people: per sequence,
+``true_label_admissible`` (share of strokes whose parents' labels admit a right label)
+and ``true_label_kept`` (of those, the share whose domain kept one: the recall of the
+instant cap and the windows' pruning); pooled over the real views, ``true_label_kept``
+and, for the strokes of three or more people, ``true_label_admissible_group_3plus``,
+``true_label_kept_group_3plus`` (given admissible), ``true_label_chosen_group_3plus``
+(given kept), ``group_3plus_wrong_parents`` (a parent's label is wrong: the error is
+carried) and ``group_3plus_unrepresentable`` (right parents, yet no admissible right
+label: someone joined unseen, a link is missing or spurious, the group is too large);
+the same six for the SIMULATED meetings, per group size, in ``meeting_sim`` and
+``meeting_sim_7fps``.
+
 Why groups of three and more are still wrong (issue 16 diagnosis, seed 0 / training seed
 100): nearly all such strokes are in the PETS2009 S1 crowds, where a "region" is a chain
 of overlapping boxes (IoU > 0.05, closed transitively) of up to 30 people whose member set
@@ -411,7 +425,9 @@ from models.jorge.fit import (
 from models.jorge.meeting import FPS as MEETING_FPS
 from models.jorge.meeting import simulate_meeting
 from models.jorge.network import node_name
-from models.jorge.online import OnlineConfig, label_online
+from models.jorge.online import OnlineConfig, OnlineResult, label_online
+from models.jorge.recall import DomainRecall, domain_recall
+from models.jorge.reid import object_aliases
 from models.jorge.scoring import (
     after_crowd,
     colour_only_labels,
@@ -447,9 +463,18 @@ def _compare_with_pgmpy(windows, max_windows: int, max_joint: float) -> dict:
             "max_marginal_diff_vs_pgmpy": worst}
 
 
+def _recall(strokes, res: OnlineResult, cfg: OnlineConfig) -> DomainRecall:
+    """:func:`models.jorge.recall.domain_recall` of a labelling, its objects renamed as the
+    re-identification pass renamed them."""
+    g = res.labeller.graph
+    aliases = object_aliases(g, res.network_labels, cfg.reid_prior) if cfg.reid_prior > 0 else None
+    return domain_recall(strokes, g, res.network_labels, aliases)
+
+
 def _run_one(strokes, cfg: OnlineConfig, keep_windows: bool) -> tuple[dict, list]:
     res = label_online(strokes, cfg, keep_windows=keep_windows)
     sc = score(strokes, res.labels)
+    rec = _recall(strokes, res, cfg)
     gmax = cfg.network.labels.max_group_size
     col = score(strokes, colour_only_labels(strokes, gmax, cfg.network.match_prob, cfg.network.pool_size))
     sizes = np.array([len(s.truth) for s in strokes])
@@ -463,6 +488,7 @@ def _run_one(strokes, cfg: OnlineConfig, keep_windows: bool) -> tuple[dict, list
     wrong_links = np.zeros(len(strokes), bool)
     wrong_links[list(score(strokes, oracle.labels).errors)] = True
     ok = bool(np.isfinite([r.log_prob for r in res.records]).all())
+    ok &= bool(np.array_equal(rec.chosen, ~wrong))  # the recall's right labels are the score's
     links = link_accuracy(strokes, [n.parents for n in res.labeller.graph.nodes])
     first = len(first_errors(strokes, sc.errors))
     row = {"strokes": len(strokes), "sizes": sizes, "wrong": wrong, "wrong_col": wrong_col,
@@ -473,15 +499,20 @@ def _run_one(strokes, cfg: OnlineConfig, keep_windows: bool) -> tuple[dict, list
            "pruned_mean": float(np.mean([r.pruned_mass for r in res.records])),
            "max_domain": max(r.max_domain for r in res.records),
            "max_clique": max(r.max_clique_entries for r in res.records),
-           "links": links, "first": first}
+           "links": links, "first": first, "adm": rec.admissible, "kept": rec.kept,
+           "chosen": rec.chosen, "wrong_parents": ~rec.parents_right,
+           "unrepresentable": rec.parents_right & ~rec.admissible}
     return row, (res.labeller.windows if keep_windows else [])
 
 
-def _rate(rows, key="wrong", lo=1, hi=10**9, crowd: bool | None = None) -> tuple[float, int]:
-    """Pooled error rate and stroke count over strokes of ``lo..hi`` people (``crowd``:
-    only those after a crowd, ``True``, or only the others, ``False``)."""
+def _rate(rows, key="wrong", lo=1, hi=10**9, crowd: bool | None = None,
+          given: str | None = None) -> tuple[float, int]:
+    """Pooled error rate (share of ``key``) and stroke count over strokes of ``lo..hi``
+    people (``crowd``: only those after a crowd, ``True``, or only the others, ``False``;
+    ``given``: only those whose ``given`` is True)."""
     def sel(r):
         m = (r["sizes"] >= lo) & (r["sizes"] <= hi)
+        m = m if given is None else m & r[given]
         return m if crowd is None else m & (r["after_crowd"] == crowd)
     n = sum(int(sel(r).sum()) for r in rows)
     e = sum(int((r[key] & sel(r)).sum()) for r in rows)
@@ -513,6 +544,8 @@ def _summary(split: str, rows: list) -> dict:
         "max_clique_entries": max(r["max_clique"] for r in rows),
         "link_accuracy": float(np.mean([r["links"] for r in rows])),
         "first_error_share": float(sum(r["first"] for r in rows) / max(1, sum(int(r["wrong"].sum()) for r in rows))),
+        "true_label_admissible": _rate(rows, "adm")[0],
+        "true_label_kept": _rate(rows, "kept", given="adm")[0],
     }
 
 
@@ -541,18 +574,22 @@ def _meeting_sim(cfg: OnlineConfig, seeds: list, scenes: int, fps: float = MEETI
     out: dict = {"simulated": "SIMULATED meetings (models.jorge.meeting), not real data", "scenes_per_size": scenes,
                  "fps": fps}
     for k in MEETING_SIZES:
-        wrong, sizes = [], []
+        rows = []
         for i in range(scenes):
             truth = simulate_meeting(i, k, fps=fps)
             for s in seeds:
                 strokes = build_strokes([s, i], truth)
-                bad = set(score(strokes, label_online(strokes, cfg).labels).errors)
-                wrong += [st.index in bad for st in strokes]
-                sizes += [len(st.truth) for st in strokes]
-        wrong_a, big = np.array(wrong, bool), np.array(sizes) >= 3
-        out[str(k)] = {"error_rate": float(wrong_a.mean()), "strokes": int(wrong_a.size),
-                       "error_rate_group_3plus": float(wrong_a[big].mean()) if big.any() else float("nan"),
-                       "strokes_group_3plus": int(big.sum())}
+                res = label_online(strokes, cfg)
+                rec = _recall(strokes, res, cfg)
+                wrong = np.zeros(len(strokes), bool)
+                wrong[list(score(strokes, res.labels).errors)] = True
+                rows.append({"sizes": np.array([len(st.truth) for st in strokes]), "wrong": wrong,
+                             "adm": rec.admissible, "kept": rec.kept, "chosen": rec.chosen,
+                             "wrong_parents": ~rec.parents_right,
+                             "unrepresentable": rec.parents_right & ~rec.admissible})
+        (rate, n), (rate3, n3) = _rate(rows), _rate(rows, lo=3)
+        out[str(k)] = {"error_rate": rate, "strokes": n, "error_rate_group_3plus": rate3,
+                       "strokes_group_3plus": n3, **_recall_keys(rows)}
     return out
 
 
@@ -722,4 +759,20 @@ def _error_keys(rows_by: dict, gmax: int) -> dict:
         "strokes_group_3to5_clean": _rate(real_rows, lo=3, hi=gmax, crowd=False)[1],
         "error_rate_group_3to5_clean": _rate(real_rows, lo=3, hi=gmax, crowd=False)[0],
         "error_rate_group_3to5_clean_true_links": _rate(real_rows, "wrong_links", lo=3, hi=gmax, crowd=False)[0],
+        **_recall_keys(real_rows),
+    }
+
+
+def _recall_keys(rows: list) -> dict:
+    """Where the right labels of the real sequences were lost (module docstring,
+    :mod:`models.jorge.recall`), pooled: the pruning's recall over all strokes, and for
+    the strokes of 3+ people the shares admissible, kept and chosen, and the shares with a
+    wrong parent and with right parents but no admissible right label."""
+    return {
+        "true_label_kept": _rate(rows, "kept", given="adm")[0],
+        "true_label_admissible_group_3plus": _rate(rows, "adm", lo=3)[0],
+        "true_label_kept_group_3plus": _rate(rows, "kept", lo=3, given="adm")[0],
+        "true_label_chosen_group_3plus": _rate(rows, "chosen", lo=3, given="kept")[0],
+        "group_3plus_wrong_parents": _rate(rows, "wrong_parents", lo=3)[0],
+        "group_3plus_unrepresentable": _rate(rows, "unrepresentable", lo=3)[0],
     }

@@ -9,7 +9,8 @@ Modules: :mod:`strokes` (ground-truth loaders and the simulated low-level tracke
 (the link rule), :mod:`window` (the Bayes net of an inference window and its exact MAP /
 marginals), :mod:`online` (periodic inference with bounded memory, eq. 12 labelling),
 :mod:`reid` (the final re-identification pass), :mod:`scoring` (label errors, the true
-stroke graph and the colour-only baseline),
+stroke graph and the colour-only baseline), :mod:`recall` (where a stroke's right label was
+lost: not admissible, pruned from its domain, or not chosen),
 :mod:`memo` (what a node remembers of its CPD and evidence between inferences),
 :mod:`api` (the labeller under the tracker protocol), :mod:`fit` (the parameters learned
 on the declared training split), :mod:`confirm` (a change compared on fresh seeds),

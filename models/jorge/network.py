@@ -257,13 +257,13 @@ class LabelGraph(LinkRule):
         node.rel_log_area = self.rel_log_area(k)  # as seen when the stroke starts
         if not self.with_domains:
             return k, []
-        node.domain = self._admissible(k)
+        node.domain = self.admissible(k)
         # a parent that now splits changes its other child's structure: widen that domain
         widened = []
         for p in parents:
             for c in self.nodes[p].children:
                 if c != k and self.nodes[c].frozen is None and len(self.nodes[p].children) == 2:
-                    if self._extend_domain(c, self._admissible(c)):
+                    if self._extend_domain(c, self.admissible(c)):
                         widened.append(c)
         return k, widened
 
@@ -301,12 +301,30 @@ class LabelGraph(LinkRule):
             out += [c for c in self.nodes[p].children if c != k and c not in out]
         return out
 
-    def _admissible(self, k: int) -> tuple[Label, ...]:
+    def admissible(self, k: int, parent_domains: Sequence[Sequence[Label]] | None = None
+                   ) -> tuple[Label, ...]:
+        """Admissible labels of node ``k`` (:func:`~models.jorge.labels.admissible_labels`
+        with this network's label parameters) given ``parent_domains``: one sequence of
+        labels per parent of ``k``, in the order of its ``parents`` (default: their
+        current domains, :meth:`parent_domains`). A node's domain starts as this set.
+
+        Raises
+        ------
+        InputError
+            ``k`` not a node, or not one sequence of labels per parent.
+        """
+        if not 0 <= k < len(self.nodes):
+            raise InputError(f"admissible: no node {k} (the network has {len(self.nodes)})")
+        if parent_domains is None:
+            parent_domains = self.parent_domains(k)
+        elif len(parent_domains) != len(self.nodes[k].parents):
+            raise InputError(f"admissible: node {k} has {len(self.nodes[k].parents)} parents, "
+                             f"got {len(parent_domains)} parent domains")
+        labels = self.config.labels
         return tuple(
-            admissible_labels(self.parent_domains(k), self.shared(k), frozenset({k}),
-                              self.config.labels.max_group_size, self.config.labels.p_part > 0,
-                              max_new=self._max_new(k),
-                              join=self.config.labels.p_join > 0)
+            admissible_labels(parent_domains, self.shared(k), frozenset({k}),
+                              labels.max_group_size, labels.p_part > 0,
+                              max_new=self._max_new(k), join=labels.p_join > 0)
         )
 
     def _max_new(self, k: int) -> int:
@@ -690,7 +708,7 @@ class LabelGraph(LinkRule):
         wanted = [lab for lab in (frozenset(x) for x in labels) if lab not in have]
         if not wanted:  # nothing to add: no enumeration of the admissible labels
             return []
-        admissible = set(self._admissible(k))
+        admissible = set(self.admissible(k))
         return self._extend_domain(k, [lab for lab in wanted if lab in admissible])
 
     def _extend_domain(self, k: int, labels: Iterable[Label]) -> list[Label]:

@@ -28,7 +28,7 @@ from models.jorge.evidence import colour_log_likelihood
 from models.jorge.labels import Label, birth_stroke
 from models.jorge.network import LabelGraph
 
-__all__ = ["reidentify"]
+__all__ = ["reidentify", "object_aliases"]
 
 
 def reidentify(graph: LabelGraph, labels: Sequence[Label], prior: float) -> list[Label]:
@@ -70,24 +70,35 @@ def reidentify(graph: LabelGraph, labels: Sequence[Label], prior: float) -> list
         The labels with renamed objects (a renamed object takes the id of the object it
         continues).
     """
+    alias = object_aliases(graph, labels, prior)
+    return [frozenset(alias.get(o, o) for o in lab) for lab in labels]
+
+
+def object_aliases(graph: LabelGraph, labels: Sequence[Label], prior: float) -> dict[int, int]:
+    """The renaming :func:`reidentify` applies to ``labels``: each renamed object's final
+    id (objects it leaves alone are not keys). Parameters and errors as
+    :func:`reidentify`'s."""
     labels = list(labels)
     if len(labels) != len(graph):
         raise InputError(f"reidentify: {len(labels)} labels for {len(graph)} nodes")
     if not 0.0 < prior < 1.0:
         raise InputError(f"reidentify: prior must be in (0, 1), got {prior}")
-    if not labels:
-        return []
+    total: dict[int, int] = {}
     # one pass can miss a renaming because a candidate set was larger when the object was
     # examined than after later renamings; repeat until nothing changes (each pass only
     # merges objects, so at most num_objects passes)
-    while True:
-        renamed = _reidentify_pass(graph, labels, prior)
-        if renamed == labels:
-            return renamed
-        labels = renamed
+    while labels:
+        alias = _reidentify_pass(graph, labels, prior)
+        if not alias:
+            break
+        labels = [frozenset(alias.get(o, o) for o in lab) for lab in labels]
+        total = {o: alias.get(t, t) for o, t in total.items()} | {
+            o: a for o, a in alias.items() if o not in total}
+    return total
 
 
-def _reidentify_pass(graph: LabelGraph, labels: list, prior: float) -> list:
+def _reidentify_pass(graph: LabelGraph, labels: list, prior: float) -> dict[int, int]:
+    """One pass over the objects in birth order: each renamed object's new id."""
     cfg = graph.config
     starts = np.array([nd.stroke.start for nd in graph.nodes])
     ends = np.array([nd.stroke.end for nd in graph.nodes])
@@ -132,4 +143,4 @@ def _reidentify_pass(graph: LabelGraph, labels: list, prior: float) -> list:
             last[a] = max(last[a], last[b])
         else:
             roots.append(b)
-    return [frozenset(alias.get(o, o) for o in lab) for lab in labels]
+    return alias

@@ -37,6 +37,7 @@ __all__ = [
     "score",
     "object_people",
     "optimal_people",
+    "stands_for",
     "first_errors",
     "after_crowd",
     "true_predecessors",
@@ -109,6 +110,13 @@ def optimal_people(strokes: Sequence[Stroke], labels: Sequence[Label]) -> dict[i
     return out
 
 
+def stands_for(label: Label, people: dict[int, int | None]) -> set:
+    """The people ``label`` stands for under the matching ``people`` (:func:`optimal_people`
+    or :func:`object_people`): an object matched to nobody stands for ``("nobody", o)``, so
+    a label holding one never equals a true set."""
+    return {people[o] if people.get(o) is not None else ("nobody", o) for o in label}
+
+
 def score(strokes: Sequence[Stroke], labels: Sequence[Label], mapping: str = "optimal") -> Score:
     """LE, LE / NT and identity switches of a labelling.
 
@@ -143,11 +151,7 @@ def score(strokes: Sequence[Stroke], labels: Sequence[Label], mapping: str = "op
         people = object_people(strokes)
     else:
         raise InputError(f"score: mapping must be 'optimal' or 'first_seen', got {mapping!r}")
-    errors = []
-    for s, lab in zip(strokes, labels):
-        meant = {people[o] if people.get(o) is not None else ("nobody", o) for o in lab}
-        if meant != set(s.truth):
-            errors.append(s.index)
+    errors = [s.index for s, lab in zip(strokes, labels) if stands_for(lab, people) != set(s.truth)]
     switches = 0
     last: dict[int, Label] = {}
     for s, lab in zip(strokes, labels):

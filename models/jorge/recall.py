@@ -1,0 +1,115 @@
+r"""Does the label network keep the true labelling? (issue 16, deliverable 2: domain
+pruning that keeps the true labelling with high probability, *measured* against the
+ground truth rather than the model's own posterior).
+
+For each stroke :math:`k` with true set :math:`T_k`, a label of the network is *right*
+when, its objects renamed as the re-identification pass renames them
+(:func:`models.jorge.reid.object_aliases`), the people it stands for are :math:`T_k`
+(objects matched one to one with people by :func:`models.jorge.scoring.optimal_people` on
+the final labels, as the error rate matches them; :func:`models.jorge.scoring.stands_for`):
+
+- **admissible**: some right label is admissible given the labels the parents were given
+  (:meth:`models.jorge.network.LabelGraph.admissible` with each parent's label alone): the
+  node could have been labelled right had its parents stayed as they were labelled. False
+  where a parent is wrong, or where the structure admits no right label (someone joined
+  unseen, a missed link, a group beyond ``max_group_size``);
+- **kept**: the node's domain (the last one it was scored on, after the instant cap
+  ``OnlineConfig.max_labels`` and the windows' pruning) holds a right label;
+- **chosen**: the node's own label is right, i.e. the stroke is not a labelling error
+  (its label is in its domain, so chosen implies kept);
+- **parents_right**: every parent's label is right (a root: True). A stroke with right
+  parents and no admissible right label is one the network's structure cannot label
+  right (someone joined unseen, a missed or spurious link, a group too large), whatever
+  the pruning and the inference.
+
+Among the strokes whose right label is admissible, the share kept is the pruning's recall;
+among those kept, the share chosen is the inference's. Diagnosis only: nothing is chosen
+on it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from dbn.errors import InputError
+from models.jorge.labels import Label
+from models.jorge.network import LabelGraph
+from models.jorge.scoring import optimal_people, stands_for
+from models.jorge.strokes import Stroke
+
+__all__ = ["DomainRecall", "domain_recall"]
+
+
+@dataclass(frozen=True)
+class DomainRecall:
+    """Per stroke, whether a right label was admissible, kept in the domain, chosen, and
+    whether its parents' labels were right (module docstring). Each a bool array, shape
+    (num_strokes,)."""
+
+    admissible: np.ndarray
+    kept: np.ndarray
+    chosen: np.ndarray
+    parents_right: np.ndarray
+
+    def kept_given_admissible(self, mask: np.ndarray | None = None) -> tuple[int, int]:
+        """(kept and admissible, admissible) counts over the strokes of ``mask`` (all by
+        default): the pruning's recall is their ratio."""
+        m = np.ones(self.kept.shape, bool) if mask is None else np.asarray(mask, bool)
+        return int((self.kept & self.admissible & m).sum()), int((self.admissible & m).sum())
+
+
+def domain_recall(strokes: Sequence[Stroke], graph: LabelGraph, labels: Sequence[Label],
+                  aliases: Mapping[int, int] | None = None) -> DomainRecall:
+    """Whether each stroke's right label was admissible, kept and chosen (module docstring).
+
+    Parameters
+    ----------
+    strokes : sequence of Stroke, length num_strokes
+        With their true sets, in the order of the graph's nodes.
+    graph : LabelGraph
+        The labelled network (:attr:`models.jorge.online.OnlineResult.labeller`'s graph),
+        one node per stroke.
+    labels : sequence of Label, length num_strokes
+        The network's own labels (:attr:`models.jorge.online.OnlineResult.network_labels`),
+        in the objects its domains hold.
+    aliases : mapping of int to int, optional
+        The renaming of the re-identification pass
+        (:func:`models.jorge.reid.object_aliases` of ``graph`` and ``labels``); ``None``:
+        none (``OnlineConfig.reid_prior`` 0).
+
+    Returns
+    -------
+    DomainRecall
+
+    Raises
+    ------
+    InputError
+        Lengths differ, or a node's stroke is not the stroke at its position.
+    """
+    strokes, labels = list(strokes), list(labels)
+    if not len(strokes) == len(labels) == len(graph):
+        raise InputError(f"domain_recall: {len(strokes)} strokes, {len(labels)} labels, "
+                         f"{len(graph)} nodes")
+    for k, s in enumerate(strokes):
+        if graph.nodes[k].stroke.index != s.index:
+            raise InputError(f"domain_recall: node {k} holds stroke {graph.nodes[k].stroke.index}, "
+                             f"not stroke {s.index}")
+    aliases = {} if aliases is None else dict(aliases)
+
+    def renamed(lab: Label) -> Label:
+        return frozenset(aliases.get(o, o) for o in lab)
+
+    people = optimal_people(strokes, [renamed(lab) for lab in labels])
+    out = np.zeros((4, len(strokes)), bool)
+    for k, s in enumerate(strokes):
+        truth = set(s.truth)
+        node = graph.nodes[k]
+        admissible = graph.admissible(k, [[labels[p]] for p in node.parents])
+        out[0, k] = any(stands_for(renamed(lab), people) == truth for lab in admissible)
+        out[1, k] = any(stands_for(renamed(lab), people) == truth for lab in node.domain)
+        out[2, k] = stands_for(renamed(labels[k]), people) == truth
+    out[3] = [all(out[2, p] for p in graph.nodes[k].parents) for k in range(len(strokes))]
+    return DomainRecall(*out)
