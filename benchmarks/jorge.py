@@ -40,7 +40,8 @@ and, for the strokes of three or more people, ``true_label_admissible_group_3plu
 ``true_label_kept_group_3plus`` (given admissible), ``true_label_chosen_group_3plus``
 (given kept), ``group_3plus_wrong_parents`` (a parent's label is wrong: the error is
 carried) and ``group_3plus_unrepresentable`` (right parents, yet no admissible right
-label: someone joined unseen, a link is missing or spurious, the group is too large);
+label: someone seen before came in without a link, a link is spurious, the group is too
+large);
 the same six for the SIMULATED meetings, per group size, in ``meeting_sim`` and
 ``meeting_sim_7fps``.
 
@@ -764,7 +765,7 @@ def _error_keys(rows_by: dict, gmax: int) -> dict:
 
 
 def _recall_keys(rows: list) -> dict:
-    """Where the right labels of the real sequences were lost (module docstring,
+    """Where the right labels of ``rows`` were lost (module docstring,
     :mod:`models.jorge.recall`), pooled: the pruning's recall over all strokes, and for
     the strokes of 3+ people the shares admissible, kept and chosen, and the shares with a
     wrong parent and with right parents but no admissible right label."""

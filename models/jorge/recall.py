@@ -6,21 +6,28 @@ For each stroke :math:`k` with true set :math:`T_k`, a label of the network is *
 when, its objects renamed as the re-identification pass renames them
 (:func:`models.jorge.reid.object_aliases`), the people it stands for are :math:`T_k`
 (objects matched one to one with people by :func:`models.jorge.scoring.optimal_people` on
-the final labels, as the error rate matches them; :func:`models.jorge.scoring.stands_for`):
+the final labels, as the error rate matches them; :func:`models.jorge.scoring.stands_for`).
+An object born at stroke :math:`k` that no chosen label holds has no person in that
+matching; in a label of node :math:`k` it may stand for a person seen for the first time in
+stroke :math:`k` (a newcomer: a join or a new object), one object per such person. A
+chosen label holds no such object, so a stroke's chosen label is right exactly when the
+stroke is not a labelling error. The matching is the final labelling's: an object it gives
+to someone else cannot stand for this stroke's people, so the flags below ask whether a
+right label existed under that matching, not under every matching.
 
 - **admissible**: some right label is admissible given the labels the parents were given
   (:meth:`models.jorge.network.LabelGraph.admissible` with each parent's label alone): the
   node could have been labelled right had its parents stayed as they were labelled. False
-  where a parent is wrong, or where the structure admits no right label (someone joined
-  unseen, a missed link, a group beyond ``max_group_size``);
+  where a parent is wrong, or where the structure admits no right label (someone seen
+  before came in without a link, a spurious link, more newcomers than a join admits, a
+  group beyond ``max_group_size``);
 - **kept**: the node's domain (the last one it was scored on, after the instant cap
   ``OnlineConfig.max_labels`` and the windows' pruning) holds a right label;
 - **chosen**: the node's own label is right, i.e. the stroke is not a labelling error
   (its label is in its domain, so chosen implies kept);
 - **parents_right**: every parent's label is right (a root: True). A stroke with right
   parents and no admissible right label is one the network's structure cannot label
-  right (someone joined unseen, a missed or spurious link, a group too large), whatever
-  the pruning and the inference.
+  right, whatever the pruning and the inference.
 
 Among the strokes whose right label is admissible, the share kept is the pruning's recall;
 among those kept, the share chosen is the inference's. Diagnosis only: nothing is chosen
@@ -35,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dbn.errors import InputError
-from models.jorge.labels import Label
+from models.jorge.labels import Label, birth_stroke
 from models.jorge.network import LabelGraph
 from models.jorge.scoring import optimal_people, stands_for
 from models.jorge.strokes import Stroke
@@ -103,13 +110,34 @@ def domain_recall(strokes: Sequence[Stroke], graph: LabelGraph, labels: Sequence
         return frozenset(aliases.get(o, o) for o in lab)
 
     people = optimal_people(strokes, [renamed(lab) for lab in labels])
+    first_seen = _first_seen(strokes)
     out = np.zeros((4, len(strokes)), bool)
     for k, s in enumerate(strokes):
         truth = set(s.truth)
+        newcomers = {p for p in truth if first_seen[p] == k}
         node = graph.nodes[k]
         admissible = graph.admissible(k, [[labels[p]] for p in node.parents])
-        out[0, k] = any(stands_for(renamed(lab), people) == truth for lab in admissible)
-        out[1, k] = any(stands_for(renamed(lab), people) == truth for lab in node.domain)
+        out[0, k] = any(_right(renamed(lab), k, truth, newcomers, people) for lab in admissible)
+        out[1, k] = any(_right(renamed(lab), k, truth, newcomers, people) for lab in node.domain)
         out[2, k] = stands_for(renamed(labels[k]), people) == truth
     out[3] = [all(out[2, p] for p in graph.nodes[k].parents) for k in range(len(strokes))]
     return DomainRecall(*out)
+
+
+def _first_seen(strokes: Sequence[Stroke]) -> dict:
+    """Each person's first stroke (position in ``strokes``, which are in start order)."""
+    out: dict = {}
+    for k, s in enumerate(strokes):
+        for p in s.truth:
+            out.setdefault(p, k)
+    return out
+
+
+def _right(label: Label, k: int, truth: set, newcomers: set, people: Mapping) -> bool:
+    """Whether ``label`` (renamed) of node ``k`` stands for ``truth``: its matched objects
+    for people of ``truth``, and its objects born at ``k`` that no chosen label holds (not
+    in ``people``) for the rest, who must all be ``newcomers`` (module docstring)."""
+    fresh = [o for o in label if o not in people and birth_stroke(o) == k]
+    meant = stands_for(label.difference(fresh), people)
+    rest = truth - meant
+    return meant <= truth and len(rest) == len(fresh) and rest <= newcomers

@@ -17,16 +17,20 @@ from models.jorge.reid import object_aliases, reidentify
 from models.jorge.scoring import score
 from models.jorge.strokes import build_strokes, make_stroke
 
-A, B, C = 10, 11, 12  # people
+A, B, C, D = 10, 11, 12, 13  # people
 L = frozenset
 
 
-def _graph():
+def _graph(p_join: float = 0.0, seen_before: bool = False):
     """People A and B walk in apart (0, 1), meet (2: a merge), part (3, 4: a split); then
-    A and B meet again (5) and C, never seen, comes out of their region with them (6: a
-    continuation of 5 holding A, B and C). Right labels: {0}, {1}, {0, 1}, {0}, {1},
-    {0, 1}, none for 6 (C joined unseen)."""
-    g = LabelGraph(NetworkConfig(labels=LabelParams(max_group_size=3, p_part=0.3)), fps=25.0)
+    A and B meet again (5) and a third person comes out of their region with them (6: a
+    continuation of 5). Right labels: {0}, {1}, {0, 1}, {0}, {1}, {0, 1}; for 6 a join
+    {0, 1, 6} when the third person is C, never seen before, and joins are admitted
+    (``p_join``), else none. With ``seen_before``, the third person is D, who walked
+    alone far off in a stroke of their own (6) before, and the continuation is stroke 7."""
+    g = LabelGraph(NetworkConfig(labels=LabelParams(max_group_size=3, p_part=0.3, p_join=p_join)),
+                   fps=25.0)
+    third = D if seen_before else C
     strokes = [
         make_stroke(0, 0, 9, (0, 0), (9, 0), [0, 1, 2], {A}),
         make_stroke(1, 0, 9, (30, 0), (21, 0), [3, 4, 5], {B}),
@@ -34,13 +38,19 @@ def _graph():
         make_stroke(3, 20, 29, (10, 0), (0, 0), [0, 1, 2], {A}),
         make_stroke(4, 20, 29, (20, 0), (30, 0), [3, 4, 5], {B}),
         make_stroke(5, 30, 39, (15, 0), (15, 0), [0, 1, 3, 4], {A, B}),
-        make_stroke(6, 40, 49, (15, 0), (15, 0), [0, 3, 6, 7], {A, B, C}),
     ]
-    parents = [[], [], [0, 1], [2], [2], [3, 4], [5]]
+    parents = [[], [], [0, 1], [2], [2], [3, 4]]
+    if seen_before:
+        strokes.append(make_stroke(6, 30, 35, (900, 0), (900, 0), [8, 9, 10], {D}))
+        parents.append([])
+    n = len(strokes)
+    strokes.append(make_stroke(n, 40, 49, (15, 0), (15, 0), [0, 3, 6, 7], {A, B, third}))
+    parents.append([5])
     for s, par in zip(strokes, parents):
         g.add_stroke(s, par)
-    right = [L({0}), L({1}), L({0, 1}), L({0}), L({1}), L({0, 1}), L({0, 1})]
-    return g, strokes, right
+    right = [L({0}), L({1}), L({0, 1}), L({0}), L({1}), L({0, 1})]
+    right += [L({6})] if seen_before else []
+    return g, strokes, right + [L({0, 1})]  # the last stroke labelled without its third
 
 
 def test_right_labels_are_admissible_kept_and_chosen():
@@ -53,6 +63,18 @@ def test_right_labels_are_admissible_kept_and_chosen():
     assert rec.kept.tolist() == [True] * 6 + [False]
     assert rec.parents_right.all()
     assert list(np.flatnonzero(~rec.chosen)) == list(score(strokes, labels).errors)
+
+
+def test_a_newcomer_is_an_object_born_where_they_are_first_seen():
+    g, strokes, labels = _graph(p_join=0.1)
+    assert L({0, 1, 6}) in g.nodes[6].domain  # the join: A, B and an object born at 6
+    rec = domain_recall(strokes, g, labels)
+    assert rec.admissible[6] and rec.kept[6] and not rec.chosen[6]
+    g, strokes, labels = _graph(p_join=0.1, seen_before=True)
+    assert L({0, 1, 7}) in g.nodes[7].domain
+    rec = domain_recall(strokes, g, labels)  # D has an object of their own: not a join
+    assert rec.chosen[:7].all()
+    assert not rec.admissible[7] and not rec.kept[7] and not rec.chosen[7]
 
 
 def test_a_pruned_right_label_is_admissible_not_kept():
