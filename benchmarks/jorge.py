@@ -41,9 +41,12 @@ and, for the strokes of three or more people, ``true_label_admissible_group_3plu
 (given kept), ``group_3plus_wrong_parents`` (a parent's label is wrong: the error is
 carried) and ``group_3plus_unrepresentable`` (right parents, yet no admissible right
 label: someone seen before came in without a link, a link is spurious, the group is too
-large);
-the same six for the SIMULATED meetings, per group size, in ``meeting_sim`` and
-``meeting_sim_7fps``.
+large); and ``first_mistakes`` (errors none of whose people's true predecessors is an error,
+:func:`models.jorge.scoring.first_errors`) and the shares of them with no right label
+admissible nor kept (``first_mistake_unrepresentable``), admissible but pruned
+(``first_mistake_pruned``), kept but not chosen (``first_mistake_not_chosen``). The same
+nine for the SIMULATED meetings, per group size, in ``meeting_sim`` and
+``meeting_sim_7fps``, and for the unlisted sequences with the suffix ``_unlisted``.
 
 Why groups of three and more are still wrong (issue 16 diagnosis, seed 0 / training seed
 100): nearly all such strokes are in the PETS2009 S1 crowds, where a "region" is a chain
@@ -472,6 +475,23 @@ def _recall(strokes, res: OnlineResult, cfg: OnlineConfig) -> DomainRecall:
     return domain_recall(strokes, g, res.network_labels, aliases)
 
 
+def _first_mask(strokes, errors) -> np.ndarray:
+    """The first mistakes among ``errors`` (:func:`models.jorge.scoring.first_errors`) as a
+    bool mask over the strokes, shape (num_strokes,)."""
+    mask = np.zeros(len(strokes), bool)
+    mask[list(first_errors(strokes, errors))] = True
+    return mask
+
+
+def _recall_row(rec: DomainRecall, first: np.ndarray) -> dict:
+    """The per-stroke masks of :func:`_recall_keys` from a labelling's recall and its first
+    mistakes (bool arrays, shape (num_strokes,))."""
+    return {"adm": rec.admissible, "kept": rec.kept, "chosen": rec.chosen,
+            "wrong_parents": ~rec.parents_right, "unrepresentable": rec.parents_right & ~rec.admissible,
+            "first_mask": first, "first_unrepresentable": first & ~rec.admissible & ~rec.kept,
+            "first_pruned": first & rec.admissible & ~rec.kept, "first_not_chosen": first & rec.kept}
+
+
 def _run_one(strokes, cfg: OnlineConfig, keep_windows: bool) -> tuple[dict, list]:
     res = label_online(strokes, cfg, keep_windows=keep_windows)
     sc = score(strokes, res.labels)
@@ -491,7 +511,7 @@ def _run_one(strokes, cfg: OnlineConfig, keep_windows: bool) -> tuple[dict, list
     ok = bool(np.isfinite([r.log_prob for r in res.records]).all())
     ok &= bool(np.array_equal(rec.chosen, ~wrong))  # the recall's right labels are the score's
     links = link_accuracy(strokes, [n.parents for n in res.labeller.graph.nodes])
-    first = len(first_errors(strokes, sc.errors))
+    first = _first_mask(strokes, sc.errors)
     row = {"strokes": len(strokes), "sizes": sizes, "wrong": wrong, "wrong_col": wrong_col,
            "wrong_links": wrong_links, "after_crowd": after_crowd(strokes, gmax),
            "duration": strokes.duration_s, "seconds": res.seconds, "fps": strokes.fps,
@@ -500,9 +520,7 @@ def _run_one(strokes, cfg: OnlineConfig, keep_windows: bool) -> tuple[dict, list
            "pruned_mean": float(np.mean([r.pruned_mass for r in res.records])),
            "max_domain": max(r.max_domain for r in res.records),
            "max_clique": max(r.max_clique_entries for r in res.records),
-           "links": links, "first": first, "adm": rec.admissible, "kept": rec.kept,
-           "chosen": rec.chosen, "wrong_parents": ~rec.parents_right,
-           "unrepresentable": rec.parents_right & ~rec.admissible}
+           "links": links, "first": int(first.sum()), **_recall_row(rec, first)}
     return row, (res.labeller.windows if keep_windows else [])
 
 
@@ -581,13 +599,11 @@ def _meeting_sim(cfg: OnlineConfig, seeds: list, scenes: int, fps: float = MEETI
             for s in seeds:
                 strokes = build_strokes([s, i], truth)
                 res = label_online(strokes, cfg)
-                rec = _recall(strokes, res, cfg)
+                errors = score(strokes, res.labels).errors
                 wrong = np.zeros(len(strokes), bool)
-                wrong[list(score(strokes, res.labels).errors)] = True
+                wrong[list(errors)] = True
                 rows.append({"sizes": np.array([len(st.truth) for st in strokes]), "wrong": wrong,
-                             "adm": rec.admissible, "kept": rec.kept, "chosen": rec.chosen,
-                             "wrong_parents": ~rec.parents_right,
-                             "unrepresentable": rec.parents_right & ~rec.admissible})
+                             **_recall_row(_recall(strokes, res, cfg), _first_mask(strokes, errors))})
         (rate, n), (rate3, n3) = _rate(rows), _rate(rows, lo=3)
         out[str(k)] = {"error_rate": rate, "strokes": n, "error_rate_group_3plus": rate3,
                        "strokes_group_3plus": n3, **_recall_keys(rows)}
@@ -622,6 +638,7 @@ def _unlisted_keys(rows_by: dict) -> dict:
         "error_rate_unlisted_true_links": _rate(rows, "wrong_links")[0],
         "error_rate_unlisted_group_3plus": group_rate,
         "strokes_unlisted_group_3plus": group_strokes,
+        **{f"{key}_unlisted": value for key, value in _recall_keys(rows).items()},
     }
 
 
@@ -768,7 +785,9 @@ def _recall_keys(rows: list) -> dict:
     """Where the right labels of ``rows`` were lost (module docstring,
     :mod:`models.jorge.recall`), pooled: the pruning's recall over all strokes, and for
     the strokes of 3+ people the shares admissible, kept and chosen, and the shares with a
-    wrong parent and with right parents but no admissible right label."""
+    wrong parent and with right parents but no admissible right label; the first mistakes
+    (their number, and the shares with no right label admissible nor kept, admissible but
+    pruned, kept but not chosen)."""
     return {
         "true_label_kept": _rate(rows, "kept", given="adm")[0],
         "true_label_admissible_group_3plus": _rate(rows, "adm", lo=3)[0],
@@ -776,4 +795,7 @@ def _recall_keys(rows: list) -> dict:
         "true_label_chosen_group_3plus": _rate(rows, "chosen", lo=3, given="kept")[0],
         "group_3plus_wrong_parents": _rate(rows, "wrong_parents", lo=3)[0],
         "group_3plus_unrepresentable": _rate(rows, "unrepresentable", lo=3)[0],
+        "first_mistakes": sum(int(r["first_mask"].sum()) for r in rows),
+        **{f"first_mistake_{kind}": _rate(rows, f"first_{kind}", given="first_mask")[0]
+           for kind in ("unrepresentable", "pruned", "not_chosen")},
     }

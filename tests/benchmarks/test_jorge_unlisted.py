@@ -50,6 +50,8 @@ def test_benchmark_scores_unlisted_sequences_on_their_own(tmp_path, monkeypatch)
     wrong = sum(int(r["wrong"].sum()) for r in rows)
     assert keys["error_rate_unlisted"] == wrong / sum(r["strokes"] for r in rows)
     assert 0.0 <= keys["error_rate_unlisted_colour_only"] <= 1.0
+    assert keys["first_mistakes_unlisted"] == sum(r["first"] for r in rows)
+    assert 0.0 <= keys["true_label_kept_unlisted"] <= 1.0
     # never pooled with the training and validation keys
     assert np.isnan(_error_keys(rows_by, 5)["error_rate_validation"])
     assert _unlisted_keys({}) == {"unlisted_sequences": []}
