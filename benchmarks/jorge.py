@@ -488,8 +488,7 @@ def _recall_row(rec: DomainRecall, first: np.ndarray) -> dict:
     mistakes (bool arrays, shape (num_strokes,))."""
     return {"adm": rec.admissible, "kept": rec.kept, "chosen": rec.chosen,
             "wrong_parents": ~rec.parents_right, "unrepresentable": rec.parents_right & ~rec.admissible,
-            "first_mask": first, "first_unrepresentable": first & ~rec.admissible & ~rec.kept,
-            "first_pruned": first & rec.admissible & ~rec.kept, "first_not_chosen": first & rec.kept}
+            "first_mask": first, **{f"first_{k}": v for k, v in rec.where_lost(first).items()}}
 
 
 def _run_one(strokes, cfg: OnlineConfig, keep_windows: bool) -> tuple[dict, list]:

@@ -8,9 +8,10 @@ ten scenes leave the error of strokes of three and more people uncertain by abou
 built into strokes as :func:`models.jorge.fit.meeting_strokes` builds them: scene ``s``,
 stroke seed ``s``) and reports, per group size, the pooled error rates (label errors /
 strokes, seed 004's Table 3), the mean of the per-scene rates with its standard error, and
-how many scenes are above a given rate. With ``true_links`` the labeller gets the true
-predecessors (:func:`models.jorge.scoring.true_links`) instead of the on-line link rule:
-the share of the error the links cause.
+how many scenes are above a given rate, and where the first mistakes lost their right
+label (:meth:`models.jorge.recall.DomainRecall.where_lost`). With ``true_links`` the
+labeller gets the true predecessors (:func:`models.jorge.scoring.true_links`) instead of
+the on-line link rule: the share of the error the links cause.
 
 It measures, it chooses nothing: use scenes that no fit, search or confirmation has used
 (:data:`models.jorge.fit.CONFIRM_SEEDS` lists those), and nothing here is real data.
@@ -52,6 +53,12 @@ class MeetingEstimate(NamedTuple):
         The same for the 3+ strokes, over the scenes that have any.
     scenes_above : int
         Scenes whose 3+ error rate is above ``above`` (:func:`estimate_meetings`).
+    first_mistakes : int
+        Errors none of whose people's true predecessors is an error
+        (:func:`models.jorge.scoring.first_errors`), over all scenes.
+    first_unrepresentable, first_pruned, first_not_chosen : float
+        Their shares with no right label admissible nor kept, admissible but pruned, kept
+        but not chosen (:mod:`models.jorge.recall`; NaN without first mistakes).
     """
 
     scenes: int
@@ -64,20 +71,35 @@ class MeetingEstimate(NamedTuple):
     scene_mean_3plus: float
     scene_se_3plus: float
     scenes_above: int
+    first_mistakes: int
+    first_unrepresentable: float
+    first_pruned: float
+    first_not_chosen: float
 
 
-def _label_scene(job: tuple) -> tuple[int, int, int, int]:
-    """(strokes, errors, 3+ strokes, 3+ errors) of one scene."""
+def _label_scene(job: tuple) -> tuple[int, ...]:
+    """(strokes, errors, 3+ strokes, 3+ errors, first mistakes, and those unrepresentable,
+    pruned, not chosen) of one scene."""
     from models.jorge.fit import meeting_strokes
     from models.jorge.online import OnlineConfig, label_online
-    from models.jorge.scoring import score, true_links
+    from models.jorge.recall import domain_recall
+    from models.jorge.reid import object_aliases
+    from models.jorge.scoring import first_errors, score, true_links
 
     scene, size, fps, oracle, config = job
     (strokes,) = meeting_strokes((scene,), (size,), fps=fps)
     links = true_links(strokes.strokes) if oracle else None
-    wrong = set(score(strokes, label_online(strokes, OnlineConfig(network=config), links=links).labels).errors)
+    cfg = OnlineConfig(network=config)
+    res = label_online(strokes, cfg, links=links)
+    wrong = set(score(strokes, res.labels).errors)
     big = [i for i, s in enumerate(strokes.strokes) if len(s.truth) >= 3]
-    return len(strokes.strokes), len(wrong), len(big), sum(i in wrong for i in big)
+    g = res.labeller.graph
+    aliases = object_aliases(g, res.network_labels, cfg.reid_prior) if cfg.reid_prior > 0 else None
+    first = np.zeros(len(strokes.strokes), bool)
+    first[list(first_errors(strokes.strokes, wrong))] = True
+    lost = domain_recall(strokes.strokes, g, res.network_labels, aliases).where_lost(first)
+    return (len(strokes.strokes), len(wrong), len(big), sum(i in wrong for i in big), int(first.sum()),
+            *(int(lost[k].sum()) for k in ("unrepresentable", "pruned", "not_chosen")))
 
 
 def mean_and_standard_error(values: np.ndarray) -> tuple[float, float]:
@@ -91,14 +113,16 @@ def mean_and_standard_error(values: np.ndarray) -> tuple[float, float]:
 
 
 def _summarise(rows: np.ndarray, above: float) -> MeetingEstimate:
-    """Rows (strokes, errors, 3+ strokes, 3+ errors), one per scene, as an estimate."""
-    n, e, nb, eb = (int(v) for v in rows.sum(axis=0))
+    """Rows (strokes, errors, 3+ strokes, 3+ errors, first mistakes, and those
+    unrepresentable, pruned, not chosen), one per scene, as an estimate."""
+    n, e, nb, eb, nf, *lost = (int(v) for v in rows.sum(axis=0))
     has = rows[:, 2] > 0
     big = rows[has, 3] / rows[has, 2]
     per_scene = rows[:, 1] / np.maximum(rows[:, 0], 1)
     return MeetingEstimate(
         len(rows), n, e / n if n else math.nan, *mean_and_standard_error(per_scene),
         nb, eb / nb if nb else math.nan, *mean_and_standard_error(big), int(np.sum(big > above)),
+        nf, *(v / nf if nf else math.nan for v in lost),
     )
 
 
@@ -149,7 +173,7 @@ def estimate_meetings(scenes: Sequence[int], sizes: Sequence[int] = (3, 4, 5), f
 
     config = NetworkConfig() if config is None else config
     jobs = [(s, k, fps, bool(true_links), config) for k in sizes for s in scenes]
-    rows = np.array(_map(_label_scene, jobs, workers), dtype=np.int64).reshape(len(sizes), len(scenes), 4)
+    rows = np.array(_map(_label_scene, jobs, workers), dtype=np.int64).reshape(len(sizes), len(scenes), 8)
     return {k: _summarise(rows[i], above) for i, k in enumerate(sizes)}
 
 

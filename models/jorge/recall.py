@@ -61,6 +61,16 @@ class DomainRecall:
     chosen: np.ndarray
     parents_right: np.ndarray
 
+    def where_lost(self, mask: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """Where the right label of each error of ``mask`` (all errors by default) was lost:
+        ``"unrepresentable"`` (neither admissible nor kept), ``"pruned"`` (admissible, not
+        kept), ``"not_chosen"`` (kept, another chosen). Bool arrays, shape (num_strokes,),
+        that partition the errors of ``mask``."""
+        errors = ~self.chosen if mask is None else np.asarray(mask, bool) & ~self.chosen
+        return {"unrepresentable": errors & ~self.admissible & ~self.kept,
+                "pruned": errors & self.admissible & ~self.kept,
+                "not_chosen": errors & self.kept}
+
     def kept_given_admissible(self, mask: np.ndarray | None = None) -> tuple[int, int]:
         """(kept and admissible, admissible) counts over the strokes of ``mask`` (all by
         default): the pruning's recall is their ratio."""

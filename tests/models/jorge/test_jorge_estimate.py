@@ -13,7 +13,7 @@ from dbn.errors import InputError
 from models.jorge.estimate import _summarise, estimate_meetings, main, mean_and_standard_error
 from models.jorge.fit import meeting_strokes
 from models.jorge.online import label_online
-from models.jorge.scoring import score, true_links
+from models.jorge.scoring import first_errors, score, true_links
 
 
 def _direct(scenes, k, fps, oracle):
@@ -23,7 +23,8 @@ def _direct(scenes, k, fps, oracle):
         links = true_links(st.strokes) if oracle else None
         wrong = set(score(st, label_online(st, links=links).labels).errors)
         big = [i for i, x in enumerate(st.strokes) if len(x.truth) >= 3]
-        rows.append((len(st.strokes), len(wrong), len(big), sum(i in wrong for i in big)))
+        rows.append((len(st.strokes), len(wrong), len(big), sum(i in wrong for i in big),
+                     len(first_errors(st.strokes, wrong))))
     return np.array(rows)
 
 
@@ -35,10 +36,16 @@ def test_estimate_pools_what_labelling_each_scene_gives(oracle):
     assert est.strokes == rows[:, 0].sum() and est.strokes_3plus == rows[:, 2].sum()
     assert est.error == rows[:, 1].sum() / rows[:, 0].sum()
     assert est.scene_mean == pytest.approx(np.mean(rows[:, 1] / rows[:, 0]))
+    assert est.first_mistakes == rows[:, 4].sum()
+    shares = np.array([est.first_unrepresentable, est.first_pruned, est.first_not_chosen])
+    if est.first_mistakes:  # they partition the first mistakes
+        assert shares.sum() == pytest.approx(1.0) and ((shares >= 0) & (shares <= 1)).all()
+    else:
+        assert np.isnan(shares).all()
 
 
 def test_summary_of_hand_made_rows():
-    rows = np.array([[10, 1, 4, 2], [20, 2, 0, 0], [30, 9, 6, 1]])
+    rows = np.array([[10, 1, 4, 2, 1, 1, 0, 0], [20, 2, 0, 0, 1, 0, 0, 1], [30, 9, 6, 1, 2, 1, 0, 1]])
     est = _summarise(rows, above=0.35)
     assert (est.strokes, est.strokes_3plus) == (60, 10)
     assert est.error == 12 / 60 and est.error_3plus == 3 / 10
@@ -47,8 +54,12 @@ def test_summary_of_hand_made_rows():
     # the 3+ rates only over the scenes that have 3+ strokes: 0.5 and 1/6
     assert est.scene_mean_3plus == pytest.approx((0.5 + 1 / 6) / 2)
     assert est.scenes_above == 1
+    assert est.first_mistakes == 4
+    assert (est.first_unrepresentable, est.first_pruned, est.first_not_chosen) == (0.5, 0.0, 0.5)
     one = _summarise(rows[:1], above=0.35)
     assert math.isnan(one.scene_se) and math.isnan(one.scene_se_3plus)
+    none = _summarise(np.array([[10, 0, 4, 0, 0, 0, 0, 0]]), above=0.35)
+    assert none.first_mistakes == 0 and math.isnan(none.first_pruned)
 
 
 @pytest.mark.parametrize("kwargs", [

@@ -89,6 +89,10 @@ def test_a_pruned_right_label_is_admissible_not_kept():
     # parents' labels (it was labelled by hand here, as a network could not have)
     assert not rec.parents_right[5] and not rec.admissible[5] and rec.chosen[5]
     assert rec.kept_given_admissible() == (4, 5)  # 0, 1, 2, 4 kept; 3 pruned
+    lost = rec.where_lost()  # the errors: 3 (pruned), 6 (C joined unseen)
+    assert [list(np.flatnonzero(lost[k])) for k in ("unrepresentable", "pruned", "not_chosen")] \
+        == [[6], [3], []]
+    assert not rec.where_lost(np.arange(7) != 3)["pruned"].any()
 
 
 def test_a_wrong_parent_is_carried():
