@@ -429,9 +429,8 @@ from models.jorge.fit import (
 from models.jorge.meeting import FPS as MEETING_FPS
 from models.jorge.meeting import simulate_meeting
 from models.jorge.network import node_name
-from models.jorge.online import OnlineConfig, OnlineResult, label_online
-from models.jorge.recall import DomainRecall, domain_recall
-from models.jorge.reid import object_aliases
+from models.jorge.online import OnlineConfig, label_online
+from models.jorge.recall import DomainRecall, result_recall
 from models.jorge.scoring import (
     after_crowd,
     colour_only_labels,
@@ -467,14 +466,6 @@ def _compare_with_pgmpy(windows, max_windows: int, max_joint: float) -> dict:
             "max_marginal_diff_vs_pgmpy": worst}
 
 
-def _recall(strokes, res: OnlineResult, cfg: OnlineConfig) -> DomainRecall:
-    """:func:`models.jorge.recall.domain_recall` of a labelling, its objects renamed as the
-    re-identification pass renamed them."""
-    g = res.labeller.graph
-    aliases = object_aliases(g, res.network_labels, cfg.reid_prior) if cfg.reid_prior > 0 else None
-    return domain_recall(strokes, g, res.network_labels, aliases)
-
-
 def _first_mask(strokes, errors) -> np.ndarray:
     """The first mistakes among ``errors`` (:func:`models.jorge.scoring.first_errors`) as a
     bool mask over the strokes, shape (num_strokes,)."""
@@ -494,7 +485,7 @@ def _recall_row(rec: DomainRecall, first: np.ndarray) -> dict:
 def _run_one(strokes, cfg: OnlineConfig, keep_windows: bool) -> tuple[dict, list]:
     res = label_online(strokes, cfg, keep_windows=keep_windows)
     sc = score(strokes, res.labels)
-    rec = _recall(strokes, res, cfg)
+    rec = result_recall(strokes, res)
     gmax = cfg.network.labels.max_group_size
     col = score(strokes, colour_only_labels(strokes, gmax, cfg.network.match_prob, cfg.network.pool_size))
     sizes = np.array([len(s.truth) for s in strokes])
@@ -602,7 +593,7 @@ def _meeting_sim(cfg: OnlineConfig, seeds: list, scenes: int, fps: float = MEETI
                 wrong = np.zeros(len(strokes), bool)
                 wrong[list(errors)] = True
                 rows.append({"sizes": np.array([len(st.truth) for st in strokes]), "wrong": wrong,
-                             **_recall_row(_recall(strokes, res, cfg), _first_mask(strokes, errors))})
+                             **_recall_row(result_recall(strokes, res), _first_mask(strokes, errors))})
         (rate, n), (rate3, n3) = _rate(rows), _rate(rows, lo=3)
         out[str(k)] = {"error_rate": rate, "strokes": n, "error_rate_group_3plus": rate3,
                        "strokes_group_3plus": n3, **_recall_keys(rows)}

@@ -82,22 +82,18 @@ def _label_scene(job: tuple) -> tuple[int, ...]:
     pruned, not chosen) of one scene."""
     from models.jorge.fit import meeting_strokes
     from models.jorge.online import OnlineConfig, label_online
-    from models.jorge.recall import domain_recall
-    from models.jorge.reid import object_aliases
+    from models.jorge.recall import result_recall
     from models.jorge.scoring import first_errors, score, true_links
 
     scene, size, fps, oracle, config = job
     (strokes,) = meeting_strokes((scene,), (size,), fps=fps)
     links = true_links(strokes.strokes) if oracle else None
-    cfg = OnlineConfig(network=config)
-    res = label_online(strokes, cfg, links=links)
+    res = label_online(strokes, OnlineConfig(network=config), links=links)
     wrong = set(score(strokes, res.labels).errors)
     big = [i for i, s in enumerate(strokes.strokes) if len(s.truth) >= 3]
-    g = res.labeller.graph
-    aliases = object_aliases(g, res.network_labels, cfg.reid_prior) if cfg.reid_prior > 0 else None
     first = np.zeros(len(strokes.strokes), bool)
     first[list(first_errors(strokes.strokes, wrong))] = True
-    lost = domain_recall(strokes.strokes, g, res.network_labels, aliases).where_lost(first)
+    lost = result_recall(strokes.strokes, res).where_lost(first)
     return (len(strokes.strokes), len(wrong), len(big), sum(i in wrong for i in big), int(first.sum()),
             *(int(lost[k].sum()) for k in ("unrepresentable", "pruned", "not_chosen")))
 

@@ -38,16 +38,21 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from dbn.errors import InputError
 from models.jorge.labels import Label, birth_stroke
 from models.jorge.network import LabelGraph
+from models.jorge.reid import object_aliases
 from models.jorge.scoring import optimal_people, stands_for
 from models.jorge.strokes import Stroke
 
-__all__ = ["DomainRecall", "domain_recall"]
+if TYPE_CHECKING:
+    from models.jorge.online import OnlineResult
+
+__all__ = ["DomainRecall", "domain_recall", "result_recall"]
 
 
 @dataclass(frozen=True)
@@ -132,6 +137,15 @@ def domain_recall(strokes: Sequence[Stroke], graph: LabelGraph, labels: Sequence
         out[2, k] = stands_for(renamed(labels[k]), people) == truth
     out[3] = [all(out[2, p] for p in graph.nodes[k].parents) for k in range(len(strokes))]
     return DomainRecall(*out)
+
+
+def result_recall(strokes: Sequence[Stroke], result: OnlineResult) -> DomainRecall:
+    """:func:`domain_recall` of an on-line labelling (:func:`models.jorge.online.label_online`
+    of ``strokes``), its objects renamed as its re-identification pass renamed them
+    (none when its ``reid_prior`` is 0)."""
+    g, prior = result.labeller.graph, result.labeller.config.reid_prior
+    aliases = object_aliases(g, result.network_labels, prior) if prior > 0 else None
+    return domain_recall(strokes, g, result.network_labels, aliases)
 
 
 def _first_seen(strokes: Sequence[Stroke]) -> dict:

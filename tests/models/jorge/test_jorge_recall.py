@@ -12,7 +12,7 @@ from models.jorge.labels import LabelParams
 from models.jorge.meeting import simulate_meeting
 from models.jorge.network import LabelGraph, NetworkConfig
 from models.jorge.online import OnlineConfig, label_online
-from models.jorge.recall import domain_recall
+from models.jorge.recall import domain_recall, result_recall
 from models.jorge.reid import object_aliases, reidentify
 from models.jorge.scoring import score
 from models.jorge.strokes import build_strokes, make_stroke
@@ -142,3 +142,5 @@ def test_chosen_is_the_score_on_a_labelled_meeting():
     assert not (rec.chosen & ~rec.kept).any()
     roots = np.array([not g.nodes[k].parents for k in range(len(g))])
     assert rec.parents_right[roots].all()
+    again = result_recall(strokes, res)
+    assert all(np.array_equal(getattr(again, f), getattr(rec, f)) for f in rec.__dataclass_fields__)
