@@ -240,10 +240,14 @@ def _settings(result: str, head: dict):
 def evaluate(result: str, truth: str) -> dict:
     """``strokes.csv``: label error rate LE / NT (seed 004, Table 3; objects matched to
     people one to one, as the benchmark's ``error_rate``) against the truth boxes' strokes
-    rebuilt with the file's seed. ``tracks.txt`` (MOTChallenge): MOTA, IDF1 (motmetrics)."""
+    rebuilt with the file's seed, the same over the strokes of three or more people
+    (``error_rate_group_3plus``, null without any, and ``strokes_group_3plus``, as the
+    benchmark's) and the number of first mistakes (errors not carried from an earlier one,
+    :func:`models.jorge.scoring.first_errors`). ``tracks.txt`` (MOTChallenge): MOTA, IDF1
+    (motmetrics)."""
     from types import SimpleNamespace
 
-    from models.jorge.scoring import score
+    from models.jorge.scoring import first_errors, score
     from models.jorge.strokes import build_strokes
 
     if not str(result).endswith(".csv"):
@@ -269,8 +273,13 @@ def evaluate(result: str, truth: str) -> dict:
                              "(or settings) this result was made from")  # fmt: skip
     shown = [SimpleNamespace(index=r["stroke"], truth=s.truth) for r, s in zip(rows, strokes)]
     sc = score(shown, [r["label"] for r in rows])
+    big = [s.index for s in strokes if len(s.truth) >= 3]
+    wrong_big = len(set(big) & set(sc.errors))
     return {"error_rate": sc.error_rate, "label_errors": sc.label_errors,
-            "num_strokes": sc.num_strokes, "id_switches": sc.id_switches}  # fmt: skip
+            "num_strokes": sc.num_strokes, "id_switches": sc.id_switches,
+            "error_rate_group_3plus": wrong_big / len(big) if big else float("nan"),
+            "strokes_group_3plus": len(big),
+            "first_mistakes": len(first_errors(list(strokes), sc.errors))}  # fmt: skip
 
 
 __all__ = ["INPUTS", "track", "evaluate"]

@@ -285,7 +285,7 @@ def test_jorge_track_eval(tmp_path, capsys):
     out = _track(tmp_path, "jorge", [d / "caviar.xml"], "--truth", str(d / "caviar.xml"))
     from models.io.jorge import read_mot, read_strokes
     from models.jorge.online import label_online
-    from models.jorge.scoring import score
+    from models.jorge.scoring import first_errors, score
     from models.jorge.strokes import build_strokes, load_caviar
 
     seed, rows = read_strokes(out / "strokes.csv")
@@ -297,6 +297,8 @@ def test_jorge_track_eval(tmp_path, capsys):
     metrics = json.loads(capsys.readouterr().out)
     assert metrics == json.loads((out / "summary.json").read_text())["metrics"]
     assert metrics["error_rate"] == pytest.approx(ref.error_rate)
+    assert metrics["first_mistakes"] == len(first_errors(list(strokes), ref.errors)) > 0
+    assert metrics["strokes_group_3plus"] == 0 and metrics["error_rate_group_3plus"] is None
     tracks = read_mot(out / "tracks.txt")
     assert tracks.frames.size > 0
     assert main(["eval", "jorge", str(out / "tracks.txt"), str(d / "gt.txt"), "--json"]) == 0
@@ -405,6 +407,37 @@ def test_jorge_tracks_in_metres(tmp_path, capsys):
     bad.parent.mkdir()
     bad.write_text("780 1 0 0 0\n786 1 0 0\n")
     _bad(capsys, ["track", "jorge", str(bad), "-o", str(tmp_path / "b")], "obsmat.txt:2:", "4 columns")
+
+
+def test_jorge_eval_scores_groups_of_three_and_more(tmp_path, capsys):
+    """``dbntrack eval jorge`` on a SIMULATED meeting of five written as a MOTChallenge
+    ground truth: the 3+ error rate and the first mistakes, as computed from the rebuilt
+    strokes and the written labels."""
+    from models.io.jorge import read_boxes, read_strokes
+    from models.jorge.meeting import simulate_meeting
+    from models.jorge.scoring import first_errors, score
+    from models.jorge.strokes import build_strokes
+
+    truth = simulate_meeting(3, 5)
+    gt = tmp_path / "gt.txt"
+    lines = [f"{fr + 1},{pid + 1},{xc - w / 2:.2f},{yc - h / 2:.2f},{w:.2f},{h:.2f},1,1,1"
+             for fr, row in zip(truth.frames, truth.boxes) for pid, (xc, yc, w, h) in zip(truth.ids, row)
+             if np.isfinite(w)]
+    gt.write_text("\n".join(lines) + "\n")
+    out = _track(tmp_path, "jorge", [gt])
+    seed, rows = read_strokes(out / "strokes.csv")
+    strokes = build_strokes(seed, read_boxes(gt))
+    labels = [r["label"] for r in rows]
+    sc = score(strokes, labels)
+    big = [s.index for s in strokes if len(s.truth) >= 3]
+    capsys.readouterr()
+    assert main(["eval", "jorge", str(out / "strokes.csv"), str(gt), "--json"]) == 0
+    m = json.loads(capsys.readouterr().out)
+    assert m["strokes_group_3plus"] == len(big) > 0
+    assert m["error_rate_group_3plus"] == pytest.approx(len(set(big) & set(sc.errors)) / len(big))
+    assert 0.0 < m["error_rate_group_3plus"] < 1.0 and m["error_rate_group_3plus"] != m["error_rate"]
+    assert m["first_mistakes"] == len(first_errors(list(strokes), sc.errors)) > 0
+    assert m["error_rate"] == pytest.approx(sc.error_rate)
 
 
 def test_jorge_eval_rebuilds_the_strokes_of_the_runs_settings(tmp_path, capsys):
