@@ -466,11 +466,11 @@ def _compare_with_pgmpy(windows, max_windows: int, max_joint: float) -> dict:
             "max_marginal_diff_vs_pgmpy": worst}
 
 
-def _first_mask(strokes, errors) -> np.ndarray:
-    """The first mistakes among ``errors`` (:func:`models.jorge.scoring.first_errors`) as a
-    bool mask over the strokes, shape (num_strokes,)."""
-    mask = np.zeros(len(strokes), bool)
-    mask[list(first_errors(strokes, errors))] = True
+def _mask(n: int, indices) -> np.ndarray:
+    """Bool mask of shape (n,), True at ``indices`` (stroke indices: a score's errors,
+    :func:`models.jorge.scoring.first_errors`)."""
+    mask = np.zeros(n, bool)
+    mask[list(indices)] = True
     return mask
 
 
@@ -489,19 +489,15 @@ def _run_one(strokes, cfg: OnlineConfig, keep_windows: bool) -> tuple[dict, list
     gmax = cfg.network.labels.max_group_size
     col = score(strokes, colour_only_labels(strokes, gmax, cfg.network.match_prob, cfg.network.pool_size))
     sizes = np.array([len(s.truth) for s in strokes])
-    wrong = np.zeros(len(strokes), bool)
-    wrong[list(sc.errors)] = True
-    wrong_col = np.zeros(len(strokes), bool)
-    wrong_col[list(col.errors)] = True
+    wrong, wrong_col = _mask(len(strokes), sc.errors), _mask(len(strokes), col.errors)
     # diagnosis: the same network with the true predecessors as links (an oracle)
     net = cfg.network
     oracle = label_online(strokes, cfg, links=true_links(strokes, net.max_parents, net.max_children))
-    wrong_links = np.zeros(len(strokes), bool)
-    wrong_links[list(score(strokes, oracle.labels).errors)] = True
+    wrong_links = _mask(len(strokes), score(strokes, oracle.labels).errors)
     ok = bool(np.isfinite([r.log_prob for r in res.records]).all())
     ok &= bool(np.array_equal(rec.chosen, ~wrong))  # the recall's right labels are the score's
     links = link_accuracy(strokes, [n.parents for n in res.labeller.graph.nodes])
-    first = _first_mask(strokes, sc.errors)
+    first = _mask(len(strokes), first_errors(strokes, sc.errors))
     row = {"strokes": len(strokes), "sizes": sizes, "wrong": wrong, "wrong_col": wrong_col,
            "wrong_links": wrong_links, "after_crowd": after_crowd(strokes, gmax),
            "duration": strokes.duration_s, "seconds": res.seconds, "fps": strokes.fps,
@@ -590,10 +586,10 @@ def _meeting_sim(cfg: OnlineConfig, seeds: list, scenes: int, fps: float = MEETI
                 strokes = build_strokes([s, i], truth)
                 res = label_online(strokes, cfg)
                 errors = score(strokes, res.labels).errors
-                wrong = np.zeros(len(strokes), bool)
-                wrong[list(errors)] = True
-                rows.append({"sizes": np.array([len(st.truth) for st in strokes]), "wrong": wrong,
-                             **_recall_row(result_recall(strokes, res), _first_mask(strokes, errors))})
+                first = _mask(len(strokes), first_errors(strokes, errors))
+                rows.append({"sizes": np.array([len(st.truth) for st in strokes]),
+                             "wrong": _mask(len(strokes), errors),
+                             **_recall_row(result_recall(strokes, res), first)})
         (rate, n), (rate3, n3) = _rate(rows), _rate(rows, lo=3)
         out[str(k)] = {"error_rate": rate, "strokes": n, "error_rate_group_3plus": rate3,
                        "strokes_group_3plus": n3, **_recall_keys(rows)}

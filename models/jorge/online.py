@@ -55,7 +55,7 @@ from dbn.errors import InputError, ModelError
 from inference.exact import JunctionTree, map_assignment
 from models.jorge.labels import Label, prune_labels
 from models.jorge.network import LabelGraph, NetworkConfig, check_frame_rate, node_name
-from models.jorge.reid import reidentify
+from models.jorge.reid import object_aliases, reidentify, renamed
 from models.jorge.scoring import (  # re-exported: these lived here before they had a module
     Score,
     after_crowd,
@@ -217,6 +217,10 @@ class OnlineLabeller:
         With ``clash_free_rank``: the eq. 12 posterior without the siblings' clash, up the
         chain, of each node created since the last inference where it differs from its
         belief (the cap's ranking; dropped at the next inference).
+    aliases : dict int -> int
+        The renaming of the last re-identification pass (:meth:`finish`;
+        :func:`models.jorge.reid.object_aliases`): each renamed object's final id; empty
+        before it, or with ``reid_prior`` 0.
     """
 
     def __init__(self, config: OnlineConfig | None = None, fps: float | None = None,
@@ -234,6 +238,7 @@ class OnlineLabeller:
         self._next_inference: float | None = None
         self._inferred: set[int] = set()
         self.instant_pruned_mass: list[float] = []
+        self.aliases: dict[int, int] = {}
 
     # --- eq. 12 ------------------------------------------------------------------------------
     def belief_of(self, k: int, free: bool = False) -> np.ndarray:
@@ -512,12 +517,14 @@ class OnlineLabeller:
         (:func:`models.jorge.reid.reidentify`, when ``reid_prior > 0``); returns every
         node's label.
 
-        ``self.labels`` keeps the network's own labels (before re-identification)."""
+        ``self.labels`` keeps the network's own labels (before re-identification),
+        ``self.aliases`` the renaming."""
         last = frame if frame is not None else max((nd.stroke.end for nd in self.graph.nodes), default=0)
         self.infer(int(last))
         labels = [self.labels[k] for k in range(len(self.graph))]
         if self.config.reid_prior > 0:
-            labels = reidentify(self.graph, labels, self.config.reid_prior)
+            self.aliases = object_aliases(self.graph, labels, self.config.reid_prior)
+            labels = [renamed(lab, self.aliases) for lab in labels]
         return dict(enumerate(labels))
 
 

@@ -45,7 +45,7 @@ import numpy as np
 from dbn.errors import InputError
 from models.jorge.labels import Label, birth_stroke
 from models.jorge.network import LabelGraph
-from models.jorge.reid import object_aliases
+from models.jorge.reid import renamed
 from models.jorge.scoring import optimal_people, stands_for
 from models.jorge.strokes import Stroke
 
@@ -75,12 +75,6 @@ class DomainRecall:
         return {"unrepresentable": errors & ~self.admissible & ~self.kept,
                 "pruned": errors & self.admissible & ~self.kept,
                 "not_chosen": errors & self.kept}
-
-    def kept_given_admissible(self, mask: np.ndarray | None = None) -> tuple[int, int]:
-        """(kept and admissible, admissible) counts over the strokes of ``mask`` (all by
-        default): the pruning's recall is their ratio."""
-        m = np.ones(self.kept.shape, bool) if mask is None else np.asarray(mask, bool)
-        return int((self.kept & self.admissible & m).sum()), int((self.admissible & m).sum())
 
 
 def domain_recall(strokes: Sequence[Stroke], graph: LabelGraph, labels: Sequence[Label],
@@ -119,12 +113,8 @@ def domain_recall(strokes: Sequence[Stroke], graph: LabelGraph, labels: Sequence
         if graph.nodes[k].stroke.index != s.index:
             raise InputError(f"domain_recall: node {k} holds stroke {graph.nodes[k].stroke.index}, "
                              f"not stroke {s.index}")
-    aliases = {} if aliases is None else dict(aliases)
-
-    def renamed(lab: Label) -> Label:
-        return frozenset(aliases.get(o, o) for o in lab)
-
-    people = optimal_people(strokes, [renamed(lab) for lab in labels])
+    aliases = {} if aliases is None else aliases
+    people = optimal_people(strokes, [renamed(lab, aliases) for lab in labels])
     first_seen = _first_seen(strokes)
     out = np.zeros((4, len(strokes)), bool)
     for k, s in enumerate(strokes):
@@ -132,9 +122,11 @@ def domain_recall(strokes: Sequence[Stroke], graph: LabelGraph, labels: Sequence
         newcomers = {p for p in truth if first_seen[p] == k}
         node = graph.nodes[k]
         admissible = graph.admissible(k, [[labels[p]] for p in node.parents])
-        out[0, k] = any(_right(renamed(lab), k, truth, newcomers, people) for lab in admissible)
-        out[1, k] = any(_right(renamed(lab), k, truth, newcomers, people) for lab in node.domain)
-        out[2, k] = stands_for(renamed(labels[k]), people) == truth
+        out[0, k] = any(_right(renamed(lab, aliases), k, truth, newcomers, people)
+                        for lab in admissible)
+        out[1, k] = any(_right(renamed(lab, aliases), k, truth, newcomers, people)
+                        for lab in node.domain)
+        out[2, k] = stands_for(renamed(labels[k], aliases), people) == truth
     out[3] = [all(out[2, p] for p in graph.nodes[k].parents) for k in range(len(strokes))]
     return DomainRecall(*out)
 
@@ -142,10 +134,9 @@ def domain_recall(strokes: Sequence[Stroke], graph: LabelGraph, labels: Sequence
 def result_recall(strokes: Sequence[Stroke], result: OnlineResult) -> DomainRecall:
     """:func:`domain_recall` of an on-line labelling (:func:`models.jorge.online.label_online`
     of ``strokes``), its objects renamed as its re-identification pass renamed them
-    (none when its ``reid_prior`` is 0)."""
-    g, prior = result.labeller.graph, result.labeller.config.reid_prior
-    aliases = object_aliases(g, result.network_labels, prior) if prior > 0 else None
-    return domain_recall(strokes, g, result.network_labels, aliases)
+    (:attr:`models.jorge.online.OnlineLabeller.aliases`)."""
+    lab = result.labeller
+    return domain_recall(strokes, lab.graph, result.network_labels, lab.aliases)
 
 
 def _first_seen(strokes: Sequence[Stroke]) -> dict:

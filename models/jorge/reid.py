@@ -19,7 +19,7 @@ and on simulated sequences). Objects are renamed in birth order; the network its
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -28,7 +28,7 @@ from models.jorge.evidence import colour_log_likelihood
 from models.jorge.labels import Label, birth_stroke
 from models.jorge.network import LabelGraph
 
-__all__ = ["reidentify", "object_aliases"]
+__all__ = ["reidentify", "object_aliases", "renamed"]
 
 
 def reidentify(graph: LabelGraph, labels: Sequence[Label], prior: float) -> list[Label]:
@@ -71,7 +71,13 @@ def reidentify(graph: LabelGraph, labels: Sequence[Label], prior: float) -> list
         continues).
     """
     alias = object_aliases(graph, labels, prior)
-    return [frozenset(alias.get(o, o) for o in lab) for lab in labels]
+    return [renamed(lab, alias) for lab in labels]
+
+
+def renamed(label: Label, aliases: Mapping[int, int]) -> Label:
+    """``label`` with its objects renamed by ``aliases`` (:func:`object_aliases`; objects
+    not in it keep their ids)."""
+    return frozenset(aliases.get(o, o) for o in label)
 
 
 def object_aliases(graph: LabelGraph, labels: Sequence[Label], prior: float) -> dict[int, int]:
@@ -91,7 +97,7 @@ def object_aliases(graph: LabelGraph, labels: Sequence[Label], prior: float) -> 
         alias = _reidentify_pass(graph, labels, prior)
         if not alias:
             break
-        labels = [frozenset(alias.get(o, o) for o in lab) for lab in labels]
+        labels = [renamed(lab, alias) for lab in labels]
         total = {o: alias.get(t, t) for o, t in total.items()} | {
             o: a for o, a in alias.items() if o not in total}
     return total

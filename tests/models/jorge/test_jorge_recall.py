@@ -88,7 +88,7 @@ def test_a_pruned_right_label_is_admissible_not_kept():
     # its parent 3 is now wrong: 5's right label is no longer admissible given its
     # parents' labels (it was labelled by hand here, as a network could not have)
     assert not rec.parents_right[5] and not rec.admissible[5] and rec.chosen[5]
-    assert rec.kept_given_admissible() == (4, 5)  # 0, 1, 2, 4 kept; 3 pruned
+    assert ((rec.kept & rec.admissible).sum(), rec.admissible.sum()) == (4, 5)  # 3 pruned
     lost = rec.where_lost()  # the errors: 3 (pruned), 6 (C joined unseen)
     assert [list(np.flatnonzero(lost[k])) for k in ("unrepresentable", "pruned", "not_chosen")] \
         == [[6], [3], []]
@@ -136,6 +136,7 @@ def test_chosen_is_the_score_on_a_labelled_meeting():
     res = label_online(strokes, cfg)
     g = res.labeller.graph
     aliases = object_aliases(g, res.network_labels, cfg.reid_prior)
+    assert res.labeller.aliases == aliases  # the labeller's own re-identification pass
     assert reidentify(g, res.network_labels, cfg.reid_prior) == res.labels
     rec = domain_recall(strokes, g, res.network_labels, aliases)
     assert list(np.flatnonzero(~rec.chosen)) == list(score(strokes, res.labels).errors)
