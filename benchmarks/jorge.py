@@ -33,19 +33,24 @@ under the window posterior that the true labelling was among them).
 Where the right labels are lost (:mod:`models.jorge.recall`; issue 16, forty-fifth round;
 diagnosis, nothing chosen on it), measured against the ground truth, with the default
 labeller's own links and the error rate's matching of objects to people: per sequence,
-``true_label_admissible`` (share of strokes whose parents' labels admit a right label)
-and ``true_label_kept`` (of those, the share whose domain kept one: the recall of the
-instant cap and the windows' pruning); pooled over the real views, ``true_label_kept``
-and, for the strokes of three or more people, ``true_label_admissible_group_3plus``,
-``true_label_kept_group_3plus`` (given admissible), ``true_label_chosen_group_3plus``
-(given kept), ``group_3plus_wrong_parents`` (a parent's label is wrong: the error is
-carried) and ``group_3plus_unrepresentable`` (right parents, yet no admissible right
-label: someone seen before came in without a link, a link is spurious, the group is too
-large); and ``first_mistakes`` (errors none of whose people's true predecessors is an error,
-:func:`models.jorge.scoring.first_errors`) and the shares of them with no right label
-admissible nor kept (``first_mistake_unrepresentable``), admissible but pruned
-(``first_mistake_pruned``), kept but not chosen (``first_mistake_not_chosen``). The same
-nine for the SIMULATED meetings, per group size, in ``meeting_sim`` and
+``true_label_admissible`` (share of strokes whose parents' labels admit a right label),
+``true_label_kept`` (of those, the share whose domain kept one: the recall of the instant
+cap and the windows' pruning) and ``missed_links`` (below); pooled over the real views,
+``true_label_kept`` and, for the strokes of three or more people,
+``true_label_admissible_group_3plus``, ``true_label_kept_group_3plus`` (given admissible),
+``true_label_chosen_group_3plus`` (given kept), ``group_3plus_wrong_parents`` (a parent's
+label is wrong: the error is carried) and ``group_3plus_unrepresentable`` (right parents,
+yet no admissible right label: someone seen before came in without a link, a link is
+spurious, the group is too large); ``first_mistakes`` (errors none of whose people's true
+predecessors is an error, :func:`models.jorge.scoring.first_errors`) and the shares of
+them with no right label admissible nor kept (``first_mistake_unrepresentable``),
+admissible but pruned (``first_mistake_pruned``), kept but not chosen
+(``first_mistake_not_chosen``); and the people seen before who entered a stroke without a
+link (:func:`models.jorge.recall.missed_links`; issue 16, forty-sixth round), counted by
+the link rule's reason for not linking their last stroke
+(:data:`models.jorge.links.WHY_NOT_PARENT`: ``gap``, ``reach``, ``slot``, ...) over all
+strokes (``missed_links``) and at the first mistakes (``first_mistake_missed_links``).
+The same eleven for the SIMULATED meetings, per group size, in ``meeting_sim`` and
 ``meeting_sim_7fps``, and for the unlisted sequences with the suffix ``_unlisted``.
 
 Why groups of three and more are still wrong (issue 16 diagnosis, seed 0 / training seed
@@ -426,11 +431,18 @@ from models.jorge.fit import (
     load_sequence,
     unlisted_sequences,
 )
+from models.jorge.links import WHY_NOT_PARENT
 from models.jorge.meeting import FPS as MEETING_FPS
 from models.jorge.meeting import simulate_meeting
 from models.jorge.network import node_name
 from models.jorge.online import OnlineConfig, label_online
-from models.jorge.recall import DomainRecall, result_recall
+from models.jorge.recall import (
+    DomainRecall,
+    MissedLink,
+    missed_link_counts,
+    missed_links,
+    result_recall,
+)
 from models.jorge.scoring import (
     after_crowd,
     colour_only_labels,
@@ -474,10 +486,12 @@ def _mask(n: int, indices) -> np.ndarray:
     return mask
 
 
-def _recall_row(rec: DomainRecall, first: np.ndarray) -> dict:
+def _recall_row(rec: DomainRecall, first: np.ndarray, missed: list[MissedLink]) -> dict:
     """The per-stroke masks of :func:`_recall_keys` from a labelling's recall and its first
-    mistakes (bool arrays, shape (num_strokes,))."""
-    return {"adm": rec.admissible, "kept": rec.kept, "chosen": rec.chosen,
+    mistakes (bool arrays, shape (num_strokes,)), and its missed links counted by reason
+    over all strokes and at the first mistakes."""
+    return {"missed": missed_link_counts(missed), "first_missed": missed_link_counts(missed, first),
+            "adm": rec.admissible, "kept": rec.kept, "chosen": rec.chosen,
             "wrong_parents": ~rec.parents_right, "unrepresentable": rec.parents_right & ~rec.admissible,
             "first_mask": first, **{f"first_{k}": v for k, v in rec.where_lost(first).items()}}
 
@@ -506,7 +520,8 @@ def _run_one(strokes, cfg: OnlineConfig, keep_windows: bool) -> tuple[dict, list
            "pruned_mean": float(np.mean([r.pruned_mass for r in res.records])),
            "max_domain": max(r.max_domain for r in res.records),
            "max_clique": max(r.max_clique_entries for r in res.records),
-           "links": links, "first": int(first.sum()), **_recall_row(rec, first)}
+           "links": links, "first": int(first.sum()),
+           **_recall_row(rec, first, missed_links(strokes, res.labeller.graph))}
     return row, (res.labeller.windows if keep_windows else [])
 
 
@@ -551,6 +566,7 @@ def _summary(split: str, rows: list) -> dict:
         "first_error_share": float(sum(r["first"] for r in rows) / max(1, sum(int(r["wrong"].sum()) for r in rows))),
         "true_label_admissible": _rate(rows, "adm")[0],
         "true_label_kept": _rate(rows, "kept", given="adm")[0],
+        "missed_links": _sum_counts(rows, "missed"),
     }
 
 
@@ -589,7 +605,8 @@ def _meeting_sim(cfg: OnlineConfig, seeds: list, scenes: int, fps: float = MEETI
                 first = _mask(len(strokes), first_errors(strokes, errors))
                 rows.append({"sizes": np.array([len(st.truth) for st in strokes]),
                              "wrong": _mask(len(strokes), errors),
-                             **_recall_row(result_recall(strokes, res), first)})
+                             **_recall_row(result_recall(strokes, res), first,
+                                           missed_links(strokes, res.labeller.graph))})
         (rate, n), (rate3, n3) = _rate(rows), _rate(rows, lo=3)
         out[str(k)] = {"error_rate": rate, "strokes": n, "error_rate_group_3plus": rate3,
                        "strokes_group_3plus": n3, **_recall_keys(rows)}
@@ -767,13 +784,19 @@ def _error_keys(rows_by: dict, gmax: int) -> dict:
     }
 
 
+def _sum_counts(rows: list, key: str) -> dict:
+    """The per-reason counts of ``rows`` (each ``row[key]`` a dict reason -> count) summed."""
+    return {reason: sum(r[key][reason] for r in rows) for reason in WHY_NOT_PARENT}
+
+
 def _recall_keys(rows: list) -> dict:
     """Where the right labels of ``rows`` were lost (module docstring,
     :mod:`models.jorge.recall`), pooled: the pruning's recall over all strokes, and for
     the strokes of 3+ people the shares admissible, kept and chosen, and the shares with a
     wrong parent and with right parents but no admissible right label; the first mistakes
     (their number, and the shares with no right label admissible nor kept, admissible but
-    pruned, kept but not chosen)."""
+    pruned, kept but not chosen); the missed links by reason, over all strokes and at the
+    first mistakes."""
     return {
         "true_label_kept": _rate(rows, "kept", given="adm")[0],
         "true_label_admissible_group_3plus": _rate(rows, "adm", lo=3)[0],
@@ -784,4 +807,6 @@ def _recall_keys(rows: list) -> dict:
         "first_mistakes": sum(int(r["first_mask"].sum()) for r in rows),
         **{f"first_mistake_{kind}": _rate(rows, f"first_{kind}", given="first_mask")[0]
            for kind in ("unrepresentable", "pruned", "not_chosen")},
+        "missed_links": _sum_counts(rows, "missed"),
+        "first_mistake_missed_links": _sum_counts(rows, "first_missed"),
     }

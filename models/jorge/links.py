@@ -26,7 +26,10 @@ from dbn.errors import InputError
 from models.jorge.config import NetworkConfig
 from models.jorge.strokes import Stroke
 
-__all__ = ["LinkRule"]
+__all__ = ["LinkRule", "WHY_NOT_PARENT"]
+
+WHY_NOT_PARENT = ("gap", "reach", "slot", "superseded", "outranked", "merge_test", "given_links")
+"""The reasons :meth:`LinkRule.why_not_parent` gives, in the order the rule applies them."""
 
 
 class LinkRule:
@@ -73,6 +76,60 @@ class LinkRule:
         n = len(self.nodes)
         if n == 0:
             return np.zeros(0, dtype=np.int64)
+        gates, dist = self._gates(stroke, n, self._nchild[:n])
+        cand = np.flatnonzero(gates["gap"] & gates["reach"] & gates["slot"])
+        return self._choose(stroke, n, cand, dist)[0]
+
+    def why_not_parent(self, k: int, i: int) -> str | None:
+        """Why the link rule did not make earlier node ``i`` a parent of node ``k`` (a
+        diagnosis, :func:`models.jorge.recall.missed_links`): the rule of
+        :meth:`candidate_parents` replayed as it ran when stroke ``k`` arrived (``i``'s
+        children then: those before ``k``). The first of
+
+        - ``"gap"``: ``i`` does not end before ``k`` starts, or ends more than
+          ``max_gap_frames`` (at 25 fps) before;
+        - ``"reach"``: too far (the distance or box gate, ``NetworkConfig.gate``);
+        - ``"slot"``: ``i`` had ``max_children`` children, or one child and ``k`` starts
+          more than ``sibling_window`` after ``i`` ends;
+        - ``"superseded"``: a descendant of ``i`` was a candidate too;
+        - ``"outranked"``: ``max_parents`` nearer candidates;
+        - ``"merge_test"``: the farther of two candidates that failed the merge test;
+
+        - ``"given_links"``: the rule would have linked ``i``, but ``k``'s links were
+          given from outside (:meth:`check_links`; e.g. the true ones);
+
+        or ``None`` where ``i`` is a parent of ``k`` (:data:`WHY_NOT_PARENT` lists the
+        reasons in this order).
+
+        Raises
+        ------
+        InputError
+            ``i`` is not a node before ``k``.
+        """
+        if not (0 <= k < len(self.nodes) and 0 <= i < k):
+            raise InputError(f"why_not_parent: need 0 <= i < k < {len(self.nodes)}, "
+                             f"got i={i}, k={k}")
+        if i in self.nodes[k].parents:
+            return None
+        stroke = self.nodes[k].stroke
+        nchild = np.array([sum(c < k for c in self.nodes[j].children) for j in range(k)],
+                          dtype=np.int64)
+        gates, dist = self._gates(stroke, k, nchild)
+        for name in ("gap", "reach", "slot"):
+            if not gates[name][i]:
+                return name
+        cand = np.flatnonzero(gates["gap"] & gates["reach"] & gates["slot"])
+        chosen, superseded, ranked = self._choose(stroke, k, cand, dist)
+        if i in chosen:  # not a parent, yet the replay links it: links from outside
+            return "given_links"
+        return "superseded" if i in superseded else "outranked" if i not in ranked else "merge_test"
+
+    def _gates(self, stroke: Stroke, n: int, nchild: np.ndarray) -> tuple[dict, np.ndarray]:
+        """The per-candidate gates of :meth:`candidate_parents` for the first ``n`` nodes
+        with ``nchild`` children each (shape (n,)): bool arrays ``"gap"`` (ended before
+        the stroke, within ``max_gap_frames``), ``"reach"`` (distance or box gate) and
+        ``"slot"`` (a free child slot within ``sibling_window``), and the distances in
+        pixels from each node's last centre to the stroke's first, shape (n,)."""
         cfg = self.config
         gap = stroke.start - self._end[:n]
         dist = np.linalg.norm(self._end_pos[:n] - stroke.positions[0], axis=1)
@@ -91,39 +148,48 @@ class LinkRule:
         near = dist <= reach
         if cfg.gate == "boxes":
             near = self._boxes_near(stroke, self._box_slack(stroke, slice(0, n)), near)
-        ok = (gap > 0) & (gap <= max_gap) & near
-        ok &= self._nchild[:n] < cfg.max_children
         # a second child (the other part of a split) must start within ``sibling_window``
         # frames of the parent's end
-        ok &= (self._nchild[:n] == 0) | (gap <= window)
-        cand = np.flatnonzero(ok)
+        slot = (nchild < cfg.max_children) & ((nchild == 0) | (gap <= window))
+        return {"gap": (gap > 0) & (gap <= max_gap), "reach": near, "slot": slot}, dist
+
+    def _choose(self, stroke: Stroke, n: int, cand: np.ndarray,
+                dist: np.ndarray) -> tuple[np.ndarray, set, np.ndarray]:
+        """The parents among the candidates ``cand`` that passed the gates (indices into
+        the first ``n`` nodes, ``dist`` as :meth:`_gates` gives it): drop superseded
+        ancestors, take the ``max_parents`` nearest, keep two only if they pass the merge
+        test. Returns the parents (nearest first), the superseded candidates and the
+        ``max_parents`` nearest before the merge test."""
+        cfg = self.config
         # a candidate that is an ancestor of another candidate is superseded by it (the
         # new stroke continues the descendant, it is not its sibling)
         cset = set(cand.tolist())
         superseded = {a for c in cand.tolist() for a in self._ancestors(c, 3) if a in cset}
-        back = {a for a in superseded if self._merges_back(stroke, a, cset)} if cfg.nested_links > 0 else set()
+        back = ({a for a in superseded if self._merges_back(stroke, a, cset, n)}
+                if cfg.nested_links > 0 else set())
         cand = np.array([c for c in cand.tolist() if c not in superseded - back], dtype=np.int64)
         order = np.lexsort((cand, dist[cand]))
-        cand = cand[order][: cfg.max_parents]
+        ranked = cand = cand[order][: cfg.max_parents]
         # a nested pair passed its own merge test in _merges_back
         nested = len(cand) == 2 and self.nested(*sorted(int(c) for c in cand))
         if len(cand) == 2 and not nested and not self._merge_fits(stroke, cand):
             cand = cand[:1]
-        return cand
+        return cand, superseded - back, ranked
 
     def nested(self, i: int, j: int) -> bool:
         """Whether node ``i`` (``i < j``) is a parent of node ``j``: two siblings in a nested
         link (``NetworkConfig.nested_links``; :func:`models.jorge.labels.restriction_allows`)."""
         return i in self.nodes[j].parents
 
-    def _merges_back(self, stroke: Stroke, a: int, cset: set) -> bool:
+    def _merges_back(self, stroke: Stroke, a: int, cset: set, n: int) -> bool:
         """Nested link (``NetworkConfig.nested_links``): candidate ``a``, superseded by its
         only child ``c`` (also a candidate), stays a parent of the new stroke when ``c``
         looks like a part of ``a`` (``a``'s last box at least ``nested_links`` times the
         area of ``c``'s first) and the new stroke's first box passes the merge test
         against ``c``'s last box: the new stroke is the rest of ``a``, alone or merging
-        back with ``c`` (issue 16, twelfth round)."""
-        kids = self.nodes[a].children
+        back with ``c`` (issue 16, twelfth round). ``a``'s children are those of the first
+        ``n`` nodes (the new stroke is node ``n``)."""
+        kids = [c for c in self.nodes[a].children if c < n]
         if len(kids) != 1 or kids[0] not in cset:
             return False
         c = kids[0]
@@ -166,15 +232,16 @@ class LinkRule:
 
     def _boxes_near(self, stroke: Stroke, slack: np.ndarray, fallback: np.ndarray) -> np.ndarray:
         """Box gate: the new stroke's first region box meets each earlier stroke's last
-        box grown by ``slack`` pixels on every side (shape ``(n,)``); where either box is
-        unknown, ``fallback`` (the centre-distance gate).
+        box grown by ``slack`` pixels on every side (``slack`` and the result: shape
+        ``(n,)``, the first ``n`` strokes); where either box is unknown, ``fallback``
+        (the centre-distance gate).
 
         A split part's box lies inside its group's last box and a merged region's box
         covers its parts', wherever their centres are, while a neighbour's box in a crowd
         is apart from it: the gate admits the first two and not the third.
         """
         ext = getattr(stroke, "extent", None)
-        n = len(self.nodes)
+        n = slack.shape[0]
         if ext is None:
             return fallback
         sep = np.abs(self._end_pos[:n] - stroke.positions[0]) - 0.5 * (self._end_ext[:n] + ext[0])

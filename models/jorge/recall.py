@@ -30,20 +30,27 @@ right label existed under that matching, not under every matching.
   right, whatever the pruning and the inference.
 
 Among the strokes whose right label is admissible, the share kept is the pruning's recall;
-among those kept, the share chosen is the inference's. Diagnosis only: nothing is chosen
-on it.
+among those kept, the share chosen is the inference's.
+
+A stroke that someone seen before entered without a link has no right label whatever the
+pruning (issue 16, forty-sixth round: most first mistakes in the PETS2009 crowds and the
+7-fps meetings). :func:`missed_links` lists those entries with the link rule's reason for
+not linking the person's last stroke (:meth:`models.jorge.links.LinkRule.why_not_parent`:
+too long a gap, too far, no free child slot, ...). Diagnosis only: nothing is chosen on
+any of it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from dbn.errors import InputError
 from models.jorge.labels import Label, birth_stroke
+from models.jorge.links import WHY_NOT_PARENT
 from models.jorge.network import LabelGraph
 from models.jorge.reid import renamed
 from models.jorge.scoring import optimal_people, stands_for
@@ -52,7 +59,8 @@ from models.jorge.strokes import Stroke
 if TYPE_CHECKING:
     from models.jorge.online import OnlineResult
 
-__all__ = ["DomainRecall", "domain_recall", "result_recall"]
+__all__ = ["DomainRecall", "domain_recall", "result_recall", "MissedLink", "missed_links",
+           "missed_link_counts"]
 
 
 @dataclass(frozen=True)
@@ -109,10 +117,7 @@ def domain_recall(strokes: Sequence[Stroke], graph: LabelGraph, labels: Sequence
     if not len(strokes) == len(labels) == len(graph):
         raise InputError(f"domain_recall: {len(strokes)} strokes, {len(labels)} labels, "
                          f"{len(graph)} nodes")
-    for k, s in enumerate(strokes):
-        if graph.nodes[k].stroke.index != s.index:
-            raise InputError(f"domain_recall: node {k} holds stroke {graph.nodes[k].stroke.index}, "
-                             f"not stroke {s.index}")
+    strokes = _check_nodes(strokes, graph, "domain_recall")
     aliases = {} if aliases is None else aliases
     people = optimal_people(strokes, [renamed(lab, aliases) for lab in labels])
     first_seen = _first_seen(strokes)
@@ -137,6 +142,86 @@ def result_recall(strokes: Sequence[Stroke], result: OnlineResult) -> DomainReca
     (:attr:`models.jorge.online.OnlineLabeller.aliases`)."""
     lab = result.labeller
     return domain_recall(strokes, lab.graph, result.network_labels, lab.aliases)
+
+
+class MissedLink(NamedTuple):
+    """Someone seen before who entered a stroke without a link (:func:`missed_links`).
+
+    Attributes
+    ----------
+    stroke : int
+        The stroke entered (position in the strokes).
+    person : int
+        The person (ground-truth id).
+    earlier : int
+        The person's last stroke before it: among the earlier strokes holding the person,
+        the one that ends last.
+    reason : str
+        Why the link rule did not link ``earlier`` to ``stroke``
+        (:meth:`models.jorge.links.LinkRule.why_not_parent`).
+    """
+
+    stroke: int
+    person: int
+    earlier: int
+    reason: str
+
+
+def missed_links(strokes: Sequence[Stroke], graph: LabelGraph) -> list[MissedLink]:
+    """Each person of each stroke who is in none of its parents' true sets but was in an
+    earlier stroke (module docstring): the stroke cannot be labelled right from its
+    parents, whatever the pruning. In stroke order, then person order.
+
+    Parameters
+    ----------
+    strokes : sequence of Stroke, length num_strokes
+        With their true sets, in the order of the graph's nodes.
+    graph : LabelGraph
+        The network the strokes were linked in (:attr:`models.jorge.online.OnlineResult.labeller`'s
+        graph).
+
+    Raises
+    ------
+    InputError
+        Lengths differ, or a node's stroke is not the stroke at its position.
+    """
+    strokes = _check_nodes(strokes, graph, "missed_links")
+    out, last = [], {}  # person -> earlier stroke that ends last
+    for k, s in enumerate(strokes):
+        held = set().union(*(strokes[p].truth for p in graph.nodes[k].parents))
+        for person in sorted(set(s.truth) - held):
+            if person in last:
+                j = last[person]
+                out.append(MissedLink(k, person, j, graph.why_not_parent(k, j)))
+        for person in s.truth:
+            j = last.get(person)
+            if j is None or strokes[j].end <= s.end:
+                last[person] = k
+    return out
+
+
+def missed_link_counts(missed: Sequence[MissedLink],
+                       mask: np.ndarray | None = None) -> dict[str, int]:
+    """The number of missed links by reason (every reason of
+    :data:`models.jorge.links.WHY_NOT_PARENT`, zeros included), over the strokes of ``mask``
+    (bool, shape (num_strokes,); all strokes by default)."""
+    counts = dict.fromkeys(WHY_NOT_PARENT, 0)
+    for m in missed:
+        if mask is None or mask[m.stroke]:
+            counts[m.reason] += 1
+    return counts
+
+
+def _check_nodes(strokes: Sequence[Stroke], graph: LabelGraph, where: str) -> list:
+    """``strokes`` as a list, checked to be the graph's nodes' strokes in order."""
+    strokes = list(strokes)
+    if len(strokes) != len(graph):
+        raise InputError(f"{where}: {len(strokes)} strokes, {len(graph)} nodes")
+    for k, s in enumerate(strokes):
+        if graph.nodes[k].stroke.index != s.index:
+            raise InputError(f"{where}: node {k} holds stroke {graph.nodes[k].stroke.index}, "
+                             f"not stroke {s.index}")
+    return strokes
 
 
 def _first_seen(strokes: Sequence[Stroke]) -> dict:

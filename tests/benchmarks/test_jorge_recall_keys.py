@@ -7,14 +7,15 @@ import numpy as np
 import pytest
 
 from benchmarks.jorge import _recall_keys, _recall_row
-from models.jorge.recall import DomainRecall
+from models.jorge.links import WHY_NOT_PARENT
+from models.jorge.recall import DomainRecall, MissedLink
 
 T, F = True, False
 
 
-def _row(sizes, admissible, kept, chosen, parents_right, first) -> dict:
+def _row(sizes, admissible, kept, chosen, parents_right, first, missed=()) -> dict:
     rec = DomainRecall(*(np.array(x, bool) for x in (admissible, kept, chosen, parents_right)))
-    return {"sizes": np.array(sizes), **_recall_row(rec, np.array(first, bool))}
+    return {"sizes": np.array(sizes), **_recall_row(rec, np.array(first, bool), list(missed))}
 
 
 def test_recall_keys_condition_as_documented():
@@ -40,3 +41,16 @@ def test_recall_keys_pool_strokes_over_rows():
     assert keys["true_label_kept"] == pytest.approx(5 / 6)  # not the mean of 3/4 and 1
     assert keys["first_mistakes"] == 1 and keys["first_mistake_pruned"] == 1.0
     assert np.isnan(keys["true_label_admissible_group_3plus"])  # no stroke of 3+
+
+
+def test_missed_links_are_counted_by_reason_over_rows_and_at_first_mistakes():
+    a = _row([1, 3, 3], [T, F, F], [T, F, F], [T, F, F], [T, T, F], [F, T, F],
+             missed=[MissedLink(1, 7, 0, "gap"), MissedLink(1, 8, 0, "reach"),
+                     MissedLink(2, 9, 0, "gap")])
+    b = _row([2, 2], [F, T], [F, T], [F, T], [T, T], [T, F],
+             missed=[MissedLink(0, 4, 0, "gap"), MissedLink(1, 5, 0, "slot")])
+    keys = _recall_keys([a, b])
+    assert list(keys["missed_links"]) == list(WHY_NOT_PARENT)  # every reason, zeros too
+    assert keys["missed_links"] == {**dict.fromkeys(WHY_NOT_PARENT, 0), "gap": 3, "reach": 1, "slot": 1}
+    # at the first mistakes only: a's stroke 1 and b's stroke 0
+    assert keys["first_mistake_missed_links"] == {**dict.fromkeys(WHY_NOT_PARENT, 0), "gap": 2, "reach": 1}
