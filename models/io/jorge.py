@@ -27,6 +27,7 @@ from __future__ import annotations
 import configparser
 import dataclasses
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -270,31 +271,41 @@ def _ids(label) -> str:
     return " ".join(str(int(o)) for o in sorted(label))
 
 
-def write_strokes(path, strokes, labels, seed: int, view=None) -> Path:
+def write_strokes(path, strokes, labels, seed: int, view=None, parents=None, fps=None) -> Path:
     """The header (``# seed=S``, ``# strokes={StrokeConfig fields}`` from the
-    :class:`~models.jorge.strokes.StrokeSet` ``strokes``' config, and ``# view={ObliqueView
-    fields}`` where ``view`` is given) then ``stroke,start,end,label,truth`` rows."""
+    :class:`~models.jorge.strokes.StrokeSet` ``strokes``' config, ``# view={ObliqueView
+    fields}`` where ``view`` is given, ``# fps=F`` where ``fps``, the labeller's frame
+    rate, is given) then ``stroke,start,end,label,truth`` rows, with a ``parents`` column
+    (each stroke's links: earlier stroke indices, space-separated; empty for a root) where
+    ``parents`` (a sequence of int sequences, one per stroke) is given."""
     rows = [(s.index, s.start, s.end, _ids(lab), _ids(s.truth)) for s, lab in zip(strokes, labels)]
+    columns: tuple = ("stroke", "start", "end", "label", "truth")
+    if parents is not None:
+        rows = [(*r, _ids(par)) for r, par in zip(rows, parents)]
+        columns += ("parents",)
     head = [f"seed={int(seed)}", "strokes=" + json.dumps(dataclasses.asdict(strokes.config))]
     if view is not None:
         head.append("view=" + json.dumps(dataclasses.asdict(view)))
-    return write_rows(path, ("stroke", "start", "end", "label", "truth"), rows, head)
+    if fps is not None:
+        head.append(f"fps={float(fps)!r}")
+    return write_rows(path, columns, rows, head)
 
 
-_HEADER_KEYS = {"seed": int, "strokes": dict, "view": dict}
+_HEADER_KEYS = {"seed": int, "strokes": dict, "view": dict, "fps": float}
 
 
 def read_strokes_header(path: str | Path) -> dict:
     """The header of a strokes CSV (:func:`write_strokes`): ``seed`` (int), ``strokes``
-    (the :class:`~models.jorge.strokes.StrokeConfig` fields) and ``view`` (the
-    :class:`~models.jorge.eth.ObliqueView` fields), each where the file has it (files of
-    earlier versions carry only the seed).
+    (the :class:`~models.jorge.strokes.StrokeConfig` fields), ``view`` (the
+    :class:`~models.jorge.eth.ObliqueView` fields) and ``fps`` (float), each where the
+    file has it (files of earlier versions carry only the seed).
 
     Raises
     ------
     InputError
         A ``# seed=`` line that is not an integer, a ``# strokes=`` or ``# view=`` line
-        that is not a JSON object, or one of them twice (naming the file and line).
+        that is not a JSON object, a ``# fps=`` line that is not a finite number > 0, or
+        one of them twice (naming the file and line).
         Other leading ``#`` lines are comments.
     """
     path = require_file(path, "strokes CSV")
@@ -308,15 +319,26 @@ def read_strokes_header(path: str | Path) -> dict:
             continue  # another comment
         if key in out:
             raise fail(path, line_no, f"a second '# {key}=' header line")
-        try:
-            parsed = int(value) if key == "seed" else json.loads(value)
-        except ValueError:
-            parsed = None
-        if not isinstance(parsed, _HEADER_KEYS[key]) or isinstance(parsed, bool):
-            raise fail(path, line_no, f"{key} = {value.strip()!r}: expected "
-                       f"{'an integer' if key == 'seed' else 'a JSON object'}")  # fmt: skip
+        parsed = _header_value(key, value)
+        if parsed is None:
+            kind = {"seed": "an integer", "fps": "a finite number > 0"}.get(key, "a JSON object")
+            raise fail(path, line_no, f"{key} = {value.strip()!r}: expected {kind}")
         out[key] = parsed
     return out
+
+
+def _header_value(key: str, value: str):
+    """A header line's value as :data:`_HEADER_KEYS` types it; ``None`` where it is not."""
+    try:
+        parsed = int(value) if key == "seed" else json.loads(value)
+    except ValueError:
+        return None
+    if isinstance(parsed, bool):
+        return None
+    if key == "fps":
+        ok = isinstance(parsed, int | float) and math.isfinite(parsed) and parsed > 0
+        return float(parsed) if ok else None
+    return parsed if isinstance(parsed, _HEADER_KEYS[key]) else None
 
 
 def read_strokes(path: str | Path) -> tuple[int | None, list[dict]]:
@@ -328,13 +350,15 @@ def read_strokes(path: str | Path) -> tuple[int | None, list[dict]]:
 def read_stroke_rows(path: str | Path) -> list[dict]:
     """The rows of a strokes CSV (:func:`write_strokes`), each ``stroke``, ``start``,
     ``end`` (ints), ``label`` and ``truth`` (frozensets of ints; ``truth`` empty where
-    the file has no such column).
+    the file has no such column) and ``parents`` (a sorted tuple of earlier stroke
+    indices; ``None`` where the file has no such column, as in files of earlier versions).
 
     Raises
     ------
     InputError
-        A missing column, a label or truth that is not ints (>= 0) separated by spaces,
-        or an empty label (naming the file and line).
+        A missing column, a label, truth or parents that is not ints (>= 0) separated by
+        spaces, an empty label, or a parent that is not an earlier stroke (naming the file
+        and line).
     """
     from models.io.table import read_rows
 
@@ -352,8 +376,24 @@ def read_stroke_rows(path: str | Path) -> list[dict]:
         if min(label | truth) < 0:
             raise r.fail(f"label {r['label']!r} / truth {r.get('truth')!r}: objects count from 0")
         out.append({"stroke": r.int("stroke"), "start": r.int("start"), "end": r.int("end"),
-                    "label": label, "truth": truth})  # fmt: skip
+                    "label": label, "truth": truth, "parents": _parents(r)})  # fmt: skip
     return out
+
+
+def _parents(row) -> tuple[int, ...] | None:
+    """A row's ``parents`` (:func:`read_stroke_rows`): distinct earlier strokes, sorted."""
+    if "parents" not in row:
+        return None
+    try:
+        parents = [int(x) for x in (row["parents"] or "").split()]
+    except ValueError:
+        raise row.fail(f"parents {row['parents']!r}: stroke indices separated by spaces "
+                       "expected") from None  # fmt: skip
+    stroke = row.int("stroke")
+    if len(set(parents)) != len(parents) or not all(0 <= p < stroke for p in parents):
+        raise row.fail(f"parents {row['parents']!r}: distinct earlier strokes (0..{stroke - 1}) "
+                       "expected")  # fmt: skip
+    return tuple(sorted(parents))
 
 
 def write_mot_tracks(path, strokes, labels) -> Path:

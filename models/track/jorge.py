@@ -16,8 +16,10 @@ twenty-second round and normalised since the twenty-third, ``LabelParams.split_n
 false: seed 004's eq. 5 alone), and for an obsmat file ``view`` (an object of
 :class:`~models.jorge.eth.ObliqueView` fields, e.g. ``{"tilt_deg": 60}``).
 
-``strokes.csv``'s header keeps the seed, the stroke settings and the view, so
-``dbntrack eval`` (and ``--truth``) rebuilds the same strokes from the box file.
+``strokes.csv``'s header keeps the seed, the stroke settings, the view and the frame rate,
+so ``dbntrack eval`` (and ``--truth``) rebuilds the same strokes from the box file; its
+``parents`` column keeps the links, from which ``eval`` tells who came into a region without
+one (:func:`models.jorge.recall.missed_links`).
 """
 
 from __future__ import annotations
@@ -72,7 +74,8 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
         state, _ = tracker.fold(ctx.key(), strokes, ctx.bar("strokes"))
         final = state.labeller.finish()  # the re-identification pass (the batch's last step)
     labels = [final[k] for k in range(len(strokes))]
-    write_strokes(ctx.outdir / "strokes.csv", strokes, labels, ctx.seed, view)
+    parents = [node.parents for node in state.labeller.graph.nodes]
+    write_strokes(ctx.outdir / "strokes.csv", strokes, labels, ctx.seed, view, parents, fps)
     write_mot_tracks(ctx.outdir / "tracks.txt", strokes, labels)
     _plot(ctx, strokes, labels)
     params = {"num_strokes": len(strokes), "num_groups": strokes.num_groups, "fps": fps, "fps_source": source,
@@ -242,9 +245,12 @@ def evaluate(result: str, truth: str) -> dict:
     people one to one, as the benchmark's ``error_rate``) against the truth boxes' strokes
     rebuilt with the file's seed, the same over the strokes of three or more people
     (``error_rate_group_3plus``, null without any, and ``strokes_group_3plus``, as the
-    benchmark's) and the number of first mistakes (errors not carried from an earlier one,
-    :func:`models.jorge.scoring.first_errors`). ``tracks.txt`` (MOTChallenge): MOTA, IDF1
-    (motmetrics)."""
+    benchmark's), the number of first mistakes (errors not carried from an earlier one,
+    :func:`models.jorge.scoring.first_errors`) and, where the file has its links (a
+    ``parents`` column), the people seen before who came into a stroke without a link,
+    by the link rule's reason, over all strokes and at the first mistakes (``missed_links``,
+    ``first_mistake_missed_links``, as the benchmark's). ``tracks.txt`` (MOTChallenge):
+    MOTA, IDF1 (motmetrics)."""
     from types import SimpleNamespace
 
     from models.jorge.scoring import first_errors, score
@@ -259,6 +265,24 @@ def evaluate(result: str, truth: str) -> dict:
     rows = read_stroke_rows(result)
     scfg, view = _settings(result, head)
     strokes = build_strokes(seed, read_boxes(truth, view), scfg)
+    _check_rows(result, truth, seed, rows, strokes)
+    shown = [SimpleNamespace(index=r["stroke"], truth=s.truth) for r, s in zip(rows, strokes)]
+    sc = score(shown, [r["label"] for r in rows])
+    big = [s.index for s in strokes if len(s.truth) >= 3]
+    wrong_big = len(set(big) & set(sc.errors))
+    first = first_errors(list(strokes), sc.errors)
+    out = {"error_rate": sc.error_rate, "label_errors": sc.label_errors,
+           "num_strokes": sc.num_strokes, "id_switches": sc.id_switches,
+           "error_rate_group_3plus": wrong_big / len(big) if big else float("nan"),
+           "strokes_group_3plus": len(big), "first_mistakes": len(first)}  # fmt: skip
+    if all(r["parents"] is not None for r in rows):
+        out.update(_missed_links(result, rows, strokes, head.get("fps", strokes.fps), first))
+    return out
+
+
+def _check_rows(result: str, truth: str, seed: int, rows: list, strokes) -> None:
+    """The rows of ``result`` are the rebuilt ``strokes``, in order (an :class:`InputError`
+    naming the first that is not)."""
     if len(strokes) != len(rows):
         raise InputError(f"{result}: {len(rows)} strokes, but {truth} gives {len(strokes)} "
                          f"with seed {seed} and the file's stroke settings")  # fmt: skip
@@ -271,15 +295,29 @@ def evaluate(result: str, truth: str) -> dict:
             raise InputError(f"{result}: stroke {r['stroke']} spans frames {r['start']}-{r['end']}, but "
                              f"{truth} gives {s.start}-{s.end} with seed {seed}: not the boxes "
                              "(or settings) this result was made from")  # fmt: skip
-    shown = [SimpleNamespace(index=r["stroke"], truth=s.truth) for r, s in zip(rows, strokes)]
-    sc = score(shown, [r["label"] for r in rows])
-    big = [s.index for s in strokes if len(s.truth) >= 3]
-    wrong_big = len(set(big) & set(sc.errors))
-    return {"error_rate": sc.error_rate, "label_errors": sc.label_errors,
-            "num_strokes": sc.num_strokes, "id_switches": sc.id_switches,
-            "error_rate_group_3plus": wrong_big / len(big) if big else float("nan"),
-            "strokes_group_3plus": len(big),
-            "first_mistakes": len(first_errors(list(strokes), sc.errors))}  # fmt: skip
+
+
+def _missed_links(result: str, rows: list, strokes, fps: float, first) -> dict:
+    """``missed_links`` and ``first_mistake_missed_links`` (:func:`evaluate`): the file's
+    links laid on the rebuilt strokes in the default network's graph (links only), whose
+    rule :func:`models.jorge.recall.missed_links` replays at the labeller's frame rate
+    ``fps`` (links it would have made that the file lacks count as ``given_links``). Links
+    no graph can hold (a parent that does not end before the stroke starts, or one with
+    ``max_children`` children already) are refused, naming the stroke."""
+    from models.jorge.network import LabelGraph
+    from models.jorge.recall import missed_link_counts, missed_links
+
+    graph = LabelGraph(_online_config(True).network, with_domains=False, fps=fps)
+    for r, s in zip(rows, strokes):
+        try:
+            graph.add_stroke(s, r["parents"])
+        except InputError as exc:
+            raise InputError(f"{result}: {exc}") from None
+    missed = missed_links(strokes, graph)
+    mask = np.zeros(len(strokes), bool)
+    mask[list(first)] = True
+    return {"missed_links": missed_link_counts(missed),
+            "first_mistake_missed_links": missed_link_counts(missed, mask)}
 
 
 __all__ = ["INPUTS", "track", "evaluate"]

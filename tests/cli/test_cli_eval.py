@@ -207,6 +207,58 @@ def test_jorge_strokes_eval_refuses_rows_out_of_stroke_order(tmp_path, capsys):
     _bad(capsys, ["eval", "jorge", str(bad), xml], f"negative.csv:{head + 2}:", "count from 0")
 
 
+def test_jorge_strokes_csv_keeps_the_links_and_eval_checks_them(tmp_path, capsys):
+    """``strokes.csv`` has a ``parents`` column and the labeller's frame rate in its
+    header; ``eval`` reports the missed links from them, scores a file of an earlier
+    version (no such column) without them, and refuses bad links naming the line or the
+    stroke."""
+    from models.io.jorge import read_strokes, read_strokes_header
+    from models.jorge.online import OnlineConfig, label_online
+    from models.jorge.recall import missed_link_counts, missed_links
+    from models.jorge.strokes import StrokeConfig, build_strokes, load_caviar
+
+    out = tmp_path / "run"
+    xml = str(DATA / "jorge" / "caviar.xml")
+    cfg = _write(tmp_path / "cfg.json", ['{"gap_min": 20, "gap_max": 30, "gaps_per_100": 8}'])
+    assert main(["track", "jorge", xml, "-o", str(out), "--seed", "3", "--config", str(cfg),
+                 "--quiet"]) == 0  # fmt: skip
+    capsys.readouterr()
+    _, rows = read_strokes(out / "strokes.csv")
+    assert read_strokes_header(out / "strokes.csv")["fps"] == 25.0
+    settings = StrokeConfig(gap_min=20, gap_max=30, gaps_per_100=8.0)
+    strokes = build_strokes(3, load_caviar(xml), settings)
+    graph = label_online(strokes, OnlineConfig()).labeller.graph
+    assert [r["parents"] for r in rows] == [tuple(n.parents) for n in graph.nodes]
+    assert rows[0]["parents"] == () and any(r["parents"] for r in rows)
+    assert main(["eval", "jorge", str(out / "strokes.csv"), xml, "--json"]) == 0
+    m = json.loads(capsys.readouterr().out)
+    # gaps of 20-30 frames: some beyond the rule's 30 at 25 fps, once someone is seen again
+    assert m["missed_links"] == missed_link_counts(missed_links(strokes, graph))
+    assert m["missed_links"]["gap"] > 0 and m["missed_links"]["given_links"] == 0
+    lines = (out / "strokes.csv").read_text().splitlines()
+    head = [i for i, line in enumerate(lines) if line.startswith("stroke,")][0]
+    old = [line for line in lines if not line.startswith("# fps=")]
+    old = old[:head - 1] + [",".join(line.split(",")[:5]) for line in old[head - 1:]]
+    assert main(["eval", "jorge", str(_write(tmp_path / "old.csv", old)), xml, "--json"]) == 0
+    m_old = json.loads(capsys.readouterr().out)
+    assert "missed_links" not in m_old and m_old["error_rate"] == m["error_rate"]
+    linked = next(i for i, r in enumerate(rows) if r["parents"])
+    line = head + 1 + linked
+    for parents, needle in (("x", "parents 'x'"), (f"{linked}", "distinct earlier strokes")):
+        bad = lines.copy()
+        bad[line] = ",".join([*lines[line].split(",")[:5], parents])
+        _bad(capsys, ["eval", "jorge", str(_write(tmp_path / "bad.csv", bad)), xml],
+             f"bad.csv:{line + 1}:", needle)
+    late = next(k for k, r in enumerate(rows) if rows[k - 1]["end"] >= r["start"] and k > 0)
+    bad = lines.copy()
+    bad[head + 1 + late] = ",".join([*lines[head + 1 + late].split(",")[:5], str(late - 1)])
+    _bad(capsys, ["eval", "jorge", str(_write(tmp_path / "late.csv", bad)), xml],
+         "late.csv", f"stroke {late}: parent {late - 1} ends")
+    fps = [line if not line.startswith("# fps=") else "# fps=-7" for line in lines]
+    _bad(capsys, ["eval", "jorge", str(_write(tmp_path / "fps.csv", fps)), xml],
+         "fps.csv:", "fps = '-7'", "finite number > 0")
+
+
 # -- rjmcmc3d: tracks3d.txt ------------------------------------------------------------------
 
 

@@ -411,10 +411,12 @@ def test_jorge_tracks_in_metres(tmp_path, capsys):
 
 def test_jorge_eval_scores_groups_of_three_and_more(tmp_path, capsys):
     """``dbntrack eval jorge`` on a SIMULATED meeting of five written as a MOTChallenge
-    ground truth: the 3+ error rate and the first mistakes, as computed from the rebuilt
-    strokes and the written labels."""
+    ground truth: the 3+ error rate, the first mistakes and the missed links, as computed
+    from the rebuilt strokes, the written labels and the labeller's graph."""
     from models.io.jorge import read_boxes, read_strokes
     from models.jorge.meeting import simulate_meeting
+    from models.jorge.online import OnlineConfig, label_online
+    from models.jorge.recall import missed_link_counts, missed_links
     from models.jorge.scoring import first_errors, score
     from models.jorge.strokes import build_strokes
 
@@ -438,6 +440,14 @@ def test_jorge_eval_scores_groups_of_three_and_more(tmp_path, capsys):
     assert 0.0 < m["error_rate_group_3plus"] < 1.0 and m["error_rate_group_3plus"] != m["error_rate"]
     assert m["first_mistakes"] == len(first_errors(list(strokes), sc.errors)) > 0
     assert m["error_rate"] == pytest.approx(sc.error_rate)
+    # the links written are the labeller's, and eval's replay of the rule on them finds
+    # the labeller's own missed links (none the rule would have made: given_links 0)
+    graph = label_online(strokes, OnlineConfig()).labeller.graph
+    assert [r["parents"] for r in rows] == [tuple(n.parents) for n in graph.nodes]
+    missed = missed_links(strokes, graph)
+    assert m["missed_links"] == missed_link_counts(missed) and m["missed_links"]["given_links"] == 0
+    mask = np.isin(np.arange(len(strokes)), list(first_errors(list(strokes), sc.errors)))
+    assert m["first_mistake_missed_links"] == missed_link_counts(missed, mask)
 
 
 def test_jorge_eval_rebuilds_the_strokes_of_the_runs_settings(tmp_path, capsys):
@@ -461,13 +471,14 @@ def test_jorge_eval_rebuilds_the_strokes_of_the_runs_settings(tmp_path, capsys):
     # would have scored these labels against the wrong strokes
     assert len(strokes) == len(default) and [s.start for s in strokes] != [s.start for s in default]
     csv = out / "strokes.csv"
-    assert read_strokes_header(csv) == {"seed": 3, "strokes": dataclasses.asdict(settings)}
+    want_head = {"seed": 3, "strokes": dataclasses.asdict(settings), "fps": 25.0}
+    assert read_strokes_header(csv) == want_head
     want = score(strokes, label_online(strokes).labels).error_rate
     assert json.loads((out / "summary.json").read_text())["metrics"]["error_rate"] == pytest.approx(want)
     capsys.readouterr()
     assert main(["eval", "jorge", str(csv), str(xml), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["error_rate"] == pytest.approx(want)
-    lines = csv.read_text().splitlines()
+    lines = [line for line in csv.read_text().splitlines() if not line.startswith("# fps=")]
     old = tmp_path / "old.csv"  # an earlier version's file (seed only): default settings
     old.write_text("\n".join([lines[0], *lines[2:]]) + "\n")
     _bad(capsys, ["eval", "jorge", str(old), str(xml)], "old.csv: stroke 0 spans frames 62-87", "gives 62-89",
