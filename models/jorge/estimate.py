@@ -8,10 +8,12 @@ ten scenes leave the error of strokes of three and more people uncertain by abou
 built into strokes as :func:`models.jorge.fit.meeting_strokes` builds them: scene ``s``,
 stroke seed ``s``) and reports, per group size, the pooled error rates (label errors /
 strokes, seed 004's Table 3), the mean of the per-scene rates with its standard error, and
-how many scenes are above a given rate, and where the first mistakes lost their right
-label (:meth:`models.jorge.recall.DomainRecall.where_lost`). With ``true_links`` the
-labeller gets the true predecessors (:func:`models.jorge.scoring.true_links`) instead of
-the on-line link rule: the share of the error the links cause.
+how many scenes are above a given rate, where the first mistakes lost their right
+label (:meth:`models.jorge.recall.DomainRecall.where_lost`) and why the link rule left out
+the people who came into a stroke without a link (:func:`models.jorge.recall.missed_links`).
+With ``true_links`` the labeller gets the true predecessors
+(:func:`models.jorge.scoring.true_links`) instead of the on-line link rule: the share of
+the error the links cause.
 
 It measures, it chooses nothing: use scenes that no fit, search or confirmation has used
 (:data:`models.jorge.fit.CONFIRM_SEEDS` lists those), and nothing here is real data.
@@ -31,6 +33,7 @@ import numpy as np
 
 from dbn.checks import check_count
 from dbn.errors import InputError
+from models.jorge.links import WHY_NOT_PARENT
 from models.jorge.network import NetworkConfig
 
 __all__ = ["MeetingEstimate", "estimate_meetings", "main"]
@@ -59,6 +62,10 @@ class MeetingEstimate(NamedTuple):
     first_unrepresentable, first_pruned, first_not_chosen : float
         Their shares with no right label admissible nor kept, admissible but pruned, kept
         but not chosen (:mod:`models.jorge.recall`; NaN without first mistakes).
+    missed_links, first_mistake_missed_links : dict str -> int
+        People seen before who came into a stroke without a link, by the link rule's
+        reason (every reason of :data:`models.jorge.links.WHY_NOT_PARENT`), over all
+        strokes and at the first mistakes (:func:`models.jorge.recall.missed_links`).
     """
 
     scenes: int
@@ -75,14 +82,21 @@ class MeetingEstimate(NamedTuple):
     first_unrepresentable: float
     first_pruned: float
     first_not_chosen: float
+    missed_links: dict
+    first_mistake_missed_links: dict
+
+
+_COUNTS = 8
+"""Leading counts of a scene's row (:func:`_label_scene`); the missed links follow."""
 
 
 def _label_scene(job: tuple) -> tuple[int, ...]:
     """(strokes, errors, 3+ strokes, 3+ errors, first mistakes, and those unrepresentable,
-    pruned, not chosen) of one scene."""
+    pruned, not chosen) of one scene, then its missed links by reason over all strokes and
+    at the first mistakes (:data:`models.jorge.links.WHY_NOT_PARENT`'s order)."""
     from models.jorge.fit import meeting_strokes
     from models.jorge.online import OnlineConfig, label_online
-    from models.jorge.recall import result_recall
+    from models.jorge.recall import missed_link_counts, missed_links, result_recall
     from models.jorge.scoring import first_errors, score, true_links
 
     scene, size, fps, oracle, config = job
@@ -94,8 +108,10 @@ def _label_scene(job: tuple) -> tuple[int, ...]:
     first = np.zeros(len(strokes.strokes), bool)
     first[list(first_errors(strokes.strokes, wrong))] = True
     lost = result_recall(strokes.strokes, res).where_lost(first)
+    missed = missed_links(strokes.strokes, res.labeller.graph)
     return (len(strokes.strokes), len(wrong), len(big), sum(i in wrong for i in big), int(first.sum()),
-            *(int(lost[k].sum()) for k in ("unrepresentable", "pruned", "not_chosen")))
+            *(int(lost[k].sum()) for k in ("unrepresentable", "pruned", "not_chosen")),
+            *missed_link_counts(missed).values(), *missed_link_counts(missed, first).values())
 
 
 def mean_and_standard_error(values: np.ndarray) -> tuple[float, float]:
@@ -110,15 +126,20 @@ def mean_and_standard_error(values: np.ndarray) -> tuple[float, float]:
 
 def _summarise(rows: np.ndarray, above: float) -> MeetingEstimate:
     """Rows (strokes, errors, 3+ strokes, 3+ errors, first mistakes, and those
-    unrepresentable, pruned, not chosen), one per scene, as an estimate."""
-    n, e, nb, eb, nf, *lost = (int(v) for v in rows.sum(axis=0))
+    unrepresentable, pruned, not chosen, then the missed links by reason over all strokes
+    and at the first mistakes), one per scene, as an estimate."""
+    total = [int(v) for v in rows.sum(axis=0)]
+    n, e, nb, eb, nf, *lost = total[:_COUNTS]
+    r = len(WHY_NOT_PARENT)
+    missed = dict(zip(WHY_NOT_PARENT, total[_COUNTS:_COUNTS + r]))
+    first_missed = dict(zip(WHY_NOT_PARENT, total[_COUNTS + r:]))
     has = rows[:, 2] > 0
     big = rows[has, 3] / rows[has, 2]
     per_scene = rows[:, 1] / np.maximum(rows[:, 0], 1)
     return MeetingEstimate(
         len(rows), n, e / n if n else math.nan, *mean_and_standard_error(per_scene),
         nb, eb / nb if nb else math.nan, *mean_and_standard_error(big), int(np.sum(big > above)),
-        nf, *(v / nf if nf else math.nan for v in lost),
+        nf, *(v / nf if nf else math.nan for v in lost), missed, first_missed,
     )
 
 
@@ -169,7 +190,9 @@ def estimate_meetings(scenes: Sequence[int], sizes: Sequence[int] = (3, 4, 5), f
 
     config = NetworkConfig() if config is None else config
     jobs = [(s, k, fps, bool(true_links), config) for k in sizes for s in scenes]
-    rows = np.array(_map(_label_scene, jobs, workers), dtype=np.int64).reshape(len(sizes), len(scenes), 8)
+    width = _COUNTS + 2 * len(WHY_NOT_PARENT)
+    rows = np.array(_map(_label_scene, jobs, workers), dtype=np.int64)
+    rows = rows.reshape(len(sizes), len(scenes), width)
     return {k: _summarise(rows[i], above) for i, k in enumerate(sizes)}
 
 

@@ -12,8 +12,12 @@ import pytest
 from dbn.errors import InputError
 from models.jorge.estimate import _summarise, estimate_meetings, main, mean_and_standard_error
 from models.jorge.fit import meeting_strokes
+from models.jorge.links import WHY_NOT_PARENT
 from models.jorge.online import label_online
+from models.jorge.recall import missed_link_counts, missed_links
 from models.jorge.scoring import first_errors, score, true_links
+
+R = len(WHY_NOT_PARENT)
 
 
 def _direct(scenes, k, fps, oracle):
@@ -21,10 +25,12 @@ def _direct(scenes, k, fps, oracle):
     for s in scenes:
         (st,) = meeting_strokes((s,), (k,), fps=fps)
         links = true_links(st.strokes) if oracle else None
-        wrong = set(score(st, label_online(st, links=links).labels).errors)
+        res = label_online(st, links=links)
+        wrong = set(score(st, res.labels).errors)
         big = [i for i, x in enumerate(st.strokes) if len(x.truth) >= 3]
         rows.append((len(st.strokes), len(wrong), len(big), sum(i in wrong for i in big),
-                     len(first_errors(st.strokes, wrong))))
+                     len(first_errors(st.strokes, wrong)),
+                     *missed_link_counts(missed_links(st.strokes, res.labeller.graph)).values()))
     return np.array(rows)
 
 
@@ -37,6 +43,11 @@ def test_estimate_pools_what_labelling_each_scene_gives(oracle):
     assert est.error == rows[:, 1].sum() / rows[:, 0].sum()
     assert est.scene_mean == pytest.approx(np.mean(rows[:, 1] / rows[:, 0]))
     assert est.first_mistakes == rows[:, 4].sum()
+    assert list(est.missed_links.values()) == rows[:, 5:].sum(axis=0).tolist()
+    assert est.first_mistake_missed_links.keys() == est.missed_links.keys()
+    assert all(est.first_mistake_missed_links[r] <= est.missed_links[r] for r in WHY_NOT_PARENT)
+    if not oracle:  # at 7 fps the gap limit misses links (module docstring of benchmarks.jorge)
+        assert est.missed_links["gap"] > 0
     shares = np.array([est.first_unrepresentable, est.first_pruned, est.first_not_chosen])
     if est.first_mistakes:  # they partition the first mistakes
         assert shares.sum() == pytest.approx(1.0) and ((shares >= 0) & (shares <= 1)).all()
@@ -46,7 +57,12 @@ def test_estimate_pools_what_labelling_each_scene_gives(oracle):
 
 def test_summary_of_hand_made_rows():
     rows = np.array([[10, 1, 4, 2, 1, 1, 0, 0], [20, 2, 0, 0, 1, 0, 0, 1], [30, 9, 6, 1, 2, 1, 0, 1]])
+    missed = np.zeros((3, 2 * R), np.int64)
+    missed[0, 0], missed[2, 0], missed[1, 2], missed[2, R] = 3, 2, 1, 1  # gap, slot; 1 gap first
+    rows = np.hstack([rows, missed])
     est = _summarise(rows, above=0.35)
+    assert est.missed_links == {**dict.fromkeys(WHY_NOT_PARENT, 0), "gap": 5, "slot": 1}
+    assert est.first_mistake_missed_links == {**dict.fromkeys(WHY_NOT_PARENT, 0), "gap": 1}
     assert (est.strokes, est.strokes_3plus) == (60, 10)
     assert est.error == 12 / 60 and est.error_3plus == 3 / 10
     assert est.scene_mean == pytest.approx((0.1 + 0.1 + 0.3) / 3)
@@ -58,7 +74,7 @@ def test_summary_of_hand_made_rows():
     assert (est.first_unrepresentable, est.first_pruned, est.first_not_chosen) == (0.5, 0.0, 0.5)
     one = _summarise(rows[:1], above=0.35)
     assert math.isnan(one.scene_se) and math.isnan(one.scene_se_3plus)
-    none = _summarise(np.array([[10, 0, 4, 0, 0, 0, 0, 0]]), above=0.35)
+    none = _summarise(np.array([[10, 0, 4, 0, 0, 0, 0, 0] + [0] * 2 * R]), above=0.35)
     assert none.first_mistakes == 0 and math.isnan(none.first_pruned)
 
 
