@@ -87,14 +87,13 @@ class LinkRule:
         children then: those before ``k``). The first of
 
         - ``"gap"``: ``i`` does not end before ``k`` starts, or ends more than
-          ``max_gap_frames`` (at 25 fps) before;
+          ``max_gap_frames`` before (frames at 25 fps under the scaled and box gates);
         - ``"reach"``: too far (the distance or box gate, ``NetworkConfig.gate``);
         - ``"slot"``: ``i`` had ``max_children`` children, or one child and ``k`` starts
           more than ``sibling_window`` after ``i`` ends;
         - ``"superseded"``: a descendant of ``i`` was a candidate too;
         - ``"outranked"``: ``max_parents`` nearer candidates;
         - ``"merge_test"``: the farther of two candidates that failed the merge test;
-
         - ``"given_links"``: the rule would have linked ``i``, but ``k``'s links were
           given from outside (:meth:`check_links`; e.g. the true ones);
 

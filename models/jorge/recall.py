@@ -177,8 +177,8 @@ def missed_links(strokes: Sequence[Stroke], graph: LabelGraph) -> list[MissedLin
     strokes : sequence of Stroke, length num_strokes
         With their true sets, in the order of the graph's nodes.
     graph : LabelGraph
-        The network the strokes were linked in (:attr:`models.jorge.online.OnlineResult.labeller`'s
-        graph).
+        The network the strokes were linked in (the graph of
+        :attr:`models.jorge.online.OnlineResult.labeller`).
 
     Raises
     ------

@@ -51,6 +51,7 @@ def test_missed_links_are_counted_by_reason_over_rows_and_at_first_mistakes():
              missed=[MissedLink(0, 4, 0, "gap"), MissedLink(1, 5, 0, "slot")])
     keys = _recall_keys([a, b])
     assert list(keys["missed_links"]) == list(WHY_NOT_PARENT)  # every reason, zeros too
-    assert keys["missed_links"] == {**dict.fromkeys(WHY_NOT_PARENT, 0), "gap": 3, "reach": 1, "slot": 1}
+    zero = dict.fromkeys(WHY_NOT_PARENT, 0)
+    assert keys["missed_links"] == {**zero, "gap": 3, "reach": 1, "slot": 1}
     # at the first mistakes only: a's stroke 1 and b's stroke 0
-    assert keys["first_mistake_missed_links"] == {**dict.fromkeys(WHY_NOT_PARENT, 0), "gap": 2, "reach": 1}
+    assert keys["first_mistake_missed_links"] == {**zero, "gap": 2, "reach": 1}

@@ -89,8 +89,8 @@ def test_the_replay_gives_back_the_rules_links(fps):
                 assert (why is None) == (i in g.nodes[k].parents), (seed, k, i, why)
                 reasons.add(why)
         net = NetworkConfig()
-        given = label_online(strokes, OnlineConfig(),
-                             links=true_links(strokes, net.max_parents, net.max_children)).labeller.graph
+        truth = true_links(strokes, net.max_parents, net.max_children)
+        given = label_online(strokes, OnlineConfig(), links=truth).labeller.graph
         for m in missed_links(strokes, given):
             assert m.reason in WHY_NOT_PARENT and strokes[m.earlier].end < strokes[m.stroke].start
             assert m.person in strokes[m.earlier].truth and m.person in strokes[m.stroke].truth
