@@ -271,12 +271,15 @@ def _ids(label) -> str:
     return " ".join(str(int(o)) for o in sorted(label))
 
 
-def write_strokes(path, strokes, labels, seed: int, view=None, parents=None, fps=None) -> Path:
+def write_strokes(path, strokes, labels, seed: int, view=None, parents=None, fps=None,
+                  network=None) -> Path:
     """The header (``# seed=S``, ``# strokes={StrokeConfig fields}`` from the
     :class:`~models.jorge.strokes.StrokeSet` ``strokes``' config, ``# view={ObliqueView
     fields}`` where ``view`` is given, ``# fps=F`` where ``fps``, the labeller's frame
-    rate, is given) then ``stroke,start,end,label,truth`` rows, with a ``parents`` column
-    (each stroke's links: earlier stroke indices, space-separated; empty for a root) where
+    rate, is given, ``# network={...}`` where ``network``, the labeller's
+    :class:`~models.jorge.network.NetworkConfig` fields set away from the defaults, is
+    given) then ``stroke,start,end,label,truth`` rows, with a ``parents`` column (each
+    stroke's links: earlier stroke indices, space-separated; empty for a root) where
     ``parents`` (a sequence of int sequences, one per stroke) is given."""
     rows = [(s.index, s.start, s.end, _ids(lab), _ids(s.truth)) for s, lab in zip(strokes, labels)]
     columns: tuple = ("stroke", "start", "end", "label", "truth")
@@ -288,24 +291,27 @@ def write_strokes(path, strokes, labels, seed: int, view=None, parents=None, fps
         head.append("view=" + json.dumps(dataclasses.asdict(view)))
     if fps is not None:
         head.append(f"fps={float(fps)!r}")
+    if network is not None:
+        head.append("network=" + json.dumps(dict(network)))
     return write_rows(path, columns, rows, head)
 
 
-_HEADER_KEYS = {"seed": int, "strokes": dict, "view": dict, "fps": float}
+_HEADER_KEYS = {"seed": int, "strokes": dict, "view": dict, "fps": float, "network": dict}
 
 
 def read_strokes_header(path: str | Path) -> dict:
     """The header of a strokes CSV (:func:`write_strokes`): ``seed`` (int), ``strokes``
     (the :class:`~models.jorge.strokes.StrokeConfig` fields), ``view`` (the
-    :class:`~models.jorge.eth.ObliqueView` fields) and ``fps`` (float), each where the
-    file has it (files of earlier versions carry only the seed).
+    :class:`~models.jorge.eth.ObliqueView` fields), ``fps`` (float) and ``network`` (the
+    :class:`~models.jorge.network.NetworkConfig` fields the run set), each where the file
+    has it (files of earlier versions carry only the seed).
 
     Raises
     ------
     InputError
-        A ``# seed=`` line that is not an integer, a ``# strokes=`` or ``# view=`` line
-        that is not a JSON object, a ``# fps=`` line that is not a finite number > 0, or
-        one of them twice (naming the file and line).
+        A ``# seed=`` line that is not an integer, a ``# strokes=``, ``# view=`` or
+        ``# network=`` line that is not a JSON object, a ``# fps=`` line that is not a
+        finite number > 0, or one of them twice (naming the file and line).
         Other leading ``#`` lines are comments.
     """
     path = require_file(path, "strokes CSV")

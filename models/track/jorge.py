@@ -13,13 +13,19 @@ stroke per protocol step, and its final re-identification pass. Config keys: the
 (true or false, default true: the split prior that prefers partitions,
 :data:`models.jorge.config.FITTED_SPLIT_COVER`, on by default since issue 16's
 twenty-second round and normalised since the twenty-third, ``LabelParams.split_normalise``;
-false: seed 004's eq. 5 alone), and for an obsmat file ``view`` (an object of
-:class:`~models.jorge.eth.ObliqueView` fields, e.g. ``{"tilt_deg": 60}``).
+false: seed 004's eq. 5 alone), for an obsmat file ``view`` (an object of
+:class:`~models.jorge.eth.ObliqueView` fields, e.g. ``{"tilt_deg": 60}``), and the
+labeller's settings laid over its fitted defaults (:func:`labeller_config`): ``network``
+(scalar fields of :class:`~models.jorge.network.NetworkConfig`, e.g.
+``{"max_gap_frames": 45}``), ``labels`` (of :class:`~models.jorge.labels.LabelParams`
+over :data:`~models.jorge.config.FITTED_LABELS`, e.g. ``{"max_group_size": 6}``) and
+``online`` (of :class:`~models.jorge.online.OnlineConfig`, e.g. ``{"max_active": 24}``).
 
 ``strokes.csv``'s header keeps the seed, the stroke settings, the view and the frame rate,
 so ``dbntrack eval`` (and ``--truth``) rebuilds the same strokes from the box file; its
 ``parents`` column keeps the links, from which ``eval`` tells who came into a region without
-one (:func:`models.jorge.recall.missed_links`).
+one (:func:`models.jorge.recall.missed_links`), replaying the link rule of the network the
+header's ``# network=`` line (the config's ``network`` fields, where it has any) sets.
 """
 
 from __future__ import annotations
@@ -41,8 +47,10 @@ from models.io.jorge import (
 )
 from models.jorge.eth import ObliqueView
 from models.track.context import RunContext
-from models.track.options import build, check_keys, flag, number
+from models.track.options import build, check_keys, flag, number, override
 
+LABELLER_KEYS = ("network", "labels", "online")
+"""Config keys of the labeller's settings (:func:`labeller_config`)."""
 INPUTS = ("BOXES: CAVIAR CVML .xml, PETS2009 .xml, MOTChallenge gt.txt or ETH/UCY obsmat.txt (may be .gz)",)
 
 
@@ -53,9 +61,12 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
 
     if len(inputs) != 1:
         raise InputError(f"jorge needs one box file, got {len(inputs)} inputs")
-    check_keys(config, set(StrokeConfig.__dataclass_fields__) | {"fps", "split_cover", "view"})
+    own = {"fps", "split_cover", "view", *LABELLER_KEYS}
+    check_keys(config, set(StrokeConfig.__dataclass_fields__) | own)
     split_cover = flag(config, "split_cover", True)
-    scfg = build(StrokeConfig, {k: v for k, v in config.items() if k not in ("fps", "split_cover", "view")})
+    overrides = {k: config[k] for k in LABELLER_KEYS if k in config}
+    online = labeller_config(split_cover, overrides)
+    scfg = build(StrokeConfig, {k: v for k, v in config.items() if k not in own})
     view = _view(config, inputs[0])
     fps = number(config, "fps") if "fps" in config else None
     if fps is not None and not fps > 0:
@@ -69,19 +80,21 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     if view is not None:
         ctx.note(f"tracks in metres: boxes from a SIMULATED camera, {view!r}")
     fps = truth.fps if fps is None else fps
-    tracker = models.get("jorge").make(_online_config(split_cover), fps=fps)
+    tracker = models.get("jorge").make(online, fps=fps)
     with ctx.timed("label"):  # fold: one labeller stepped in place (run's copies are quadratic)
         state, _ = tracker.fold(ctx.key(), strokes, ctx.bar("strokes"))
         final = state.labeller.finish()  # the re-identification pass (the batch's last step)
     labels = [final[k] for k in range(len(strokes))]
     parents = [node.parents for node in state.labeller.graph.nodes]
-    write_strokes(ctx.outdir / "strokes.csv", strokes, labels, ctx.seed, view, parents, fps)
+    network = {k: getattr(online.network, k) for k in overrides.get("network", {})}
+    write_strokes(ctx.outdir / "strokes.csv", strokes, labels, ctx.seed, view, parents, fps,
+                  network or None)  # fmt: skip
     write_mot_tracks(ctx.outdir / "tracks.txt", strokes, labels)
     _plot(ctx, strokes, labels)
     params = {"num_strokes": len(strokes), "num_groups": strokes.num_groups, "fps": fps, "fps_source": source,
               "num_frames": truth.num_frames, "sequence": truth.name,
               "simulated_view": None if view is None else repr(view),
-              "split_cover": split_cover,
+              "split_cover": split_cover, **_set_fields(online, overrides),
               **{k: getattr(scfg, k) for k in StrokeConfig.__dataclass_fields__}}  # fmt: skip
     return {"parameters": params, "outputs": ["strokes.csv", "tracks.txt", "strokes.png"]}
 
@@ -109,16 +122,31 @@ def _oblique_view(fields: dict) -> ObliqueView:
     return build(ObliqueView, fields)
 
 
-def _online_config(split_cover: bool):
-    """The default on-line labeller (split cover on); without the split cover if asked."""
+def labeller_config(split_cover: bool = True, overrides: dict | None = None):
+    """The on-line labeller's :class:`~models.jorge.online.OnlineConfig`: the fitted
+    defaults (split cover on; off if asked) with the config's ``network``, ``labels`` and
+    ``online`` objects laid over the :class:`~models.jorge.network.NetworkConfig`, its
+    :class:`~models.jorge.labels.LabelParams` and the ``OnlineConfig``
+    (:func:`models.track.options.override`: scalar fields only; a :class:`ConfigError`
+    naming ``network.FIELD`` etc. for a bad one)."""
     from dataclasses import replace
 
     from models.jorge.network import FITTED_LABELS, NetworkConfig
     from models.jorge.online import OnlineConfig
 
-    if split_cover:
-        return OnlineConfig()
-    return OnlineConfig(network=NetworkConfig(labels=replace(FITTED_LABELS, split_cover=())))
+    over = {} if overrides is None else overrides
+    labels = override(FITTED_LABELS, over.get("labels", {}), "labels")
+    if not split_cover:
+        labels = replace(labels, split_cover=())
+    network = override(NetworkConfig(labels=labels), over.get("network", {}), "network")
+    return override(OnlineConfig(network=network), over.get("online", {}), "online")
+
+
+def _set_fields(online, overrides: dict) -> dict:
+    """The labeller's fields the config set, by key (``{"network": {...}, ...}``, each
+    empty where the config has none), with the values the run used."""
+    where = {"network": online.network, "labels": online.network.labels, "online": online}
+    return {k: {f: getattr(where[k], f) for f in overrides.get(k, {})} for k in LABELLER_KEYS}
 
 
 def _plot(ctx: RunContext, strokes, labels) -> None:
@@ -264,6 +292,7 @@ def evaluate(result: str, truth: str) -> dict:
         raise InputError(f"{result}:1: no '# seed=S' line (written by dbntrack track jorge)")
     rows = read_stroke_rows(result)
     scfg, view = _settings(result, head)
+    network = _network(result, head)
     strokes = build_strokes(seed, read_boxes(truth, view), scfg)
     _check_rows(result, truth, seed, rows, strokes)
     shown = [SimpleNamespace(index=r["stroke"], truth=s.truth) for r, s in zip(rows, strokes)]
@@ -276,7 +305,7 @@ def evaluate(result: str, truth: str) -> dict:
            "error_rate_group_3plus": wrong_big / len(big) if big else float("nan"),
            "strokes_group_3plus": len(big), "first_mistakes": len(first)}  # fmt: skip
     if all(r["parents"] is not None for r in rows):
-        out.update(_missed_links(result, rows, strokes, head.get("fps", strokes.fps), first))
+        out.update(_missed_links(result, rows, strokes, head.get("fps", strokes.fps), first, network))
     return out
 
 
@@ -297,17 +326,29 @@ def _check_rows(result: str, truth: str, seed: int, rows: list, strokes) -> None
                              "(or settings) this result was made from")  # fmt: skip
 
 
-def _missed_links(result: str, rows: list, strokes, fps: float, first) -> dict:
+def _network(result: str, head: dict):
+    """The labeller's :class:`~models.jorge.network.NetworkConfig` that the header ``head``
+    of the strokes CSV ``result`` records (``# network=``: the fields the run's config
+    set; the default network where the file has none); an :class:`InputError` naming the
+    file."""
+    try:
+        return labeller_config(overrides={"network": head.get("network", {})}).network
+    except ConfigError as exc:
+        raise InputError(f"{result}: header: {exc}") from None
+
+
+def _missed_links(result: str, rows: list, strokes, fps: float, first, network) -> dict:
     """``missed_links`` and ``first_mistake_missed_links`` (:func:`evaluate`): the file's
-    links laid on the rebuilt strokes in the default network's graph (links only), whose
-    rule :func:`models.jorge.recall.missed_links` replays at the labeller's frame rate
-    ``fps`` (links it would have made that the file lacks count as ``given_links``). Links
-    no graph can hold (a parent that does not end before the stroke starts, or one with
-    ``max_children`` children already) are refused, naming the stroke."""
+    links laid on the rebuilt strokes in a graph (links only) of the run's ``network``,
+    whose rule :func:`models.jorge.recall.missed_links` replays at the labeller's frame
+    rate ``fps`` (links it would have made that the file lacks count as
+    ``given_links``). Links no graph can hold (a parent that does not end before the
+    stroke starts, or one with ``max_children`` children already) are refused, naming
+    the stroke."""
     from models.jorge.network import LabelGraph
     from models.jorge.recall import missed_link_counts, missed_links
 
-    graph = LabelGraph(_online_config(True).network, with_domains=False, fps=fps)
+    graph = LabelGraph(network, with_domains=False, fps=fps)
     for r, s in zip(rows, strokes):
         try:
             graph.add_stroke(s, r["parents"])
@@ -320,4 +361,4 @@ def _missed_links(result: str, rows: list, strokes, fps: float, first) -> dict:
             "first_mistake_missed_links": missed_link_counts(missed, mask)}
 
 
-__all__ = ["INPUTS", "track", "evaluate"]
+__all__ = ["INPUTS", "LABELLER_KEYS", "evaluate", "labeller_config", "track"]

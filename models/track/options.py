@@ -12,7 +12,7 @@ import numpy as np
 
 from dbn.errors import ConfigError
 
-__all__ = ["array", "build", "check_keys", "flag", "integer", "number", "text"]
+__all__ = ["array", "build", "check_keys", "flag", "integer", "number", "override", "text"]
 
 T = TypeVar("T")
 _MISSING = object()
@@ -129,3 +129,37 @@ def build(cls: Callable[..., T], fields: Mapping[str, Any]) -> T:
         raise
     except (TypeError, ValueError) as exc:  # library errors (DBNError) are ValueErrors
         raise ConfigError(f"config {sorted(fields)}: {exc}") from None
+
+
+def override(obj: T, fields: Any, key: str) -> T:
+    """``obj`` (a dataclass instance, e.g. a fitted default) with the config object
+    ``fields`` (``config[key]``, e.g. ``{"max_gap_frames": 45}``) laid over it. Only its
+    scalar fields can be set (those holding a boolean, an integer, a number or a
+    string), each with a value of that type (an integer where it holds one); the others
+    keep ``obj``'s. An unknown or non-scalar field, a wrong type, or a value the class's
+    own check refuses (its constructor) is a :class:`ConfigError` naming
+    ``key.field``."""
+    name = type(obj).__name__
+    if not isinstance(fields, Mapping):
+        raise ConfigError(f"config {key} = {fields!r}: expected an object of {name} fields")
+    scalars = {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)  # type: ignore[arg-type]
+               if isinstance(getattr(obj, f.name), bool | int | float | str)}  # fmt: skip
+    unknown = sorted(set(fields) - set(scalars))
+    if unknown:
+        raise ConfigError(f"config {key}: unknown or non-scalar {name} field(s) {unknown}; "
+                          f"valid: {sorted(scalars)}")  # fmt: skip
+    typed = {}
+    for field, value in fields.items():
+        current, dotted = scalars[field], {f"{key}.{field}": value}
+        if isinstance(current, bool):
+            typed[field] = flag(dotted, f"{key}.{field}", current)
+        elif isinstance(current, int):
+            typed[field] = integer(dotted, f"{key}.{field}")
+        elif isinstance(current, float):
+            typed[field] = number(dotted, f"{key}.{field}")
+        else:
+            typed[field] = text(dotted, f"{key}.{field}", current)
+    try:
+        return dataclasses.replace(obj, **typed)  # type: ignore[type-var]
+    except (TypeError, ValueError) as exc:  # library errors (DBNError) are ValueErrors
+        raise ConfigError(f"config {key}: {exc}") from None

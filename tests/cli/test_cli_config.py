@@ -14,7 +14,7 @@ import pytest
 from dbn.errors import ConfigError
 from models.cli import main
 from models.jorge.strokes import StrokeConfig
-from models.track.options import array, build, check_keys, flag, integer, number, text
+from models.track.options import array, build, check_keys, flag, integer, number, override, text
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 LOC = ["localization/odometry.csv", "localization/measurements.csv",
@@ -137,6 +137,24 @@ def test_option_readers():
         build(StrokeConfig, {"gap_min": 3.5})
     with pytest.raises(ConfigError, match="iou_threshold"):  # the class's own check
         build(StrokeConfig, {"iou_threshold": 2.0})
+
+
+def test_override_lays_scalar_fields_over_an_instance():
+    """``override`` keeps the instance's other fields (not the class defaults), types
+    each value as the field it sets, and names ``key.field`` in every refusal."""
+    base = StrokeConfig(gap_min=3, gap_max=9)
+    got = override(base, {"gap_max": 12, "iou_threshold": 0}, "strokes")
+    assert got.gap_min == 3 and got.gap_max == 12  # gap_min is the instance's, not the default
+    assert isinstance(got.iou_threshold, float) and got.iou_threshold == 0.0
+    assert override(base, {}, "strokes") == base
+    for fields, needle in (({"gap_max": 12.5}, "strokes.gap_max = 12.5"),
+                           ({"gap_max": True}, "strokes.gap_max = True"),
+                           ({"iou_threshold": "0.3"}, "strokes.iou_threshold = '0.3'"),
+                           ({"iou_threshold": 2.0}, "config strokes: .*iou_threshold"),
+                           ({"gap_mn": 1}, r"unknown or non-scalar StrokeConfig field\(s\) \['gap_mn'\]"),
+                           ([1], r"config strokes = \[1\]: expected an object")):
+        with pytest.raises(ConfigError, match=needle):
+            override(base, fields, "strokes")
 
 
 def test_rjmcmc3d_floor_errors_name_their_source(capsys, tmp_path):

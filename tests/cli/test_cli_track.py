@@ -324,13 +324,79 @@ def test_jorge_split_cover_option(tmp_path, capsys):
     off = OnlineConfig(network=NetworkConfig(labels=replace(FITTED_LABELS, split_cover=())))
     want = label_online(strokes, off).labels
     assert [r["label"] for r in rows] == list(want)
-    from models.track.jorge import _online_config  # (this small file labels the same either way)
+    from models.track.jorge import labeller_config  # (this small file labels the same either way)
 
-    assert _online_config(False) == off and _online_config(True) == OnlineConfig()
+    assert labeller_config(False) == off and labeller_config(True) == OnlineConfig()
     assert OnlineConfig().network.labels.split_cover == FITTED_SPLIT_COVER  # on by default
     cfg.write_text('{"split_cover": "yes"}')
     _bad(capsys, ["track", "jorge", str(d / "caviar.xml"), "-o", str(tmp_path / "bad"), "--config", str(cfg)],
          "split_cover")  # fmt: skip
+
+
+def test_jorge_labeller_settings_reach_the_run_and_eval(tmp_path, capsys):
+    """The config's ``network``, ``labels`` and ``online`` objects set the labeller's fields
+    over the fitted defaults; the run records them, labels and links as the batch labeller
+    with the same settings, and ``eval`` replays the link rule of the network the header
+    records (without it, the default network's); bad settings are refused naming the
+    field, before anything is written."""
+    from dataclasses import replace
+
+    from models.io.jorge import read_strokes, read_strokes_header
+    from models.jorge.network import FITTED_LABELS, LabelGraph, NetworkConfig
+    from models.jorge.online import OnlineConfig, label_online
+    from models.jorge.recall import missed_link_counts, missed_links
+    from models.jorge.strokes import StrokeConfig, build_strokes, load_caviar
+
+    xml = DATA / "jorge" / "caviar.xml"
+    cfg = tmp_path / "cfg.json"
+    cfg.write_text('{"gap_min": 20, "gap_max": 30, "gaps_per_100": 8, "network": '
+                   '{"max_gap_frames": 10, "sibling_window": 25}, "labels": {"max_group_size": 6}, '
+                   '"online": {"max_active": 20}}')  # fmt: skip
+    out = _track(tmp_path, "jorge", [xml], "--config", str(cfg), "--truth", str(xml))
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["parameters"]["network"] == {"max_gap_frames": 10, "sibling_window": 25}
+    assert summary["parameters"]["labels"] == {"max_group_size": 6}
+    assert summary["parameters"]["online"] == {"max_active": 20}
+    net = NetworkConfig(max_gap_frames=10, sibling_window=25,
+                        labels=replace(FITTED_LABELS, max_group_size=6))  # fmt: skip
+    strokes = build_strokes(3, load_caviar(xml), StrokeConfig(gap_min=20, gap_max=30, gaps_per_100=8.0))
+    res = label_online(strokes, OnlineConfig(max_active=20, network=net))
+    default = label_online(strokes).labeller.graph
+    _, rows = read_strokes(out / "strokes.csv")
+    assert [r["label"] for r in rows] == list(res.labels)
+    links = [tuple(n.parents) for n in res.labeller.graph.nodes]
+    assert [r["parents"] for r in rows] == links != [tuple(n.parents) for n in default.nodes]
+    csv = out / "strokes.csv"
+    assert read_strokes_header(csv)["network"] == {"max_gap_frames": 10, "sibling_window": 25}
+    m = summary["metrics"]
+    assert m["missed_links"] == missed_link_counts(missed_links(strokes, res.labeller.graph))
+    # the rule replayed is the run's own: the gaps of 20-30 frames are beyond its 10
+    assert m["missed_links"]["given_links"] == 0 and m["missed_links"]["gap"] > 0
+    lines = csv.read_text().splitlines()
+    plain = tmp_path / "plain.csv"  # the header line gone: the default network's rule
+    plain.write_text("\n".join(line for line in lines if not line.startswith("# network=")) + "\n")
+    capsys.readouterr()
+    assert main(["eval", "jorge", str(plain), str(xml), "--json"]) == 0
+    graph = LabelGraph(NetworkConfig(), with_domains=False, fps=25.0)
+    for s, par in zip(strokes, links):
+        graph.add_stroke(s, par)
+    want = missed_link_counts(missed_links(strokes, graph))
+    assert json.loads(capsys.readouterr().out)["missed_links"] == want
+    assert want["given_links"] > 0  # links the default rule makes within 30 frames
+    bad_head = tmp_path / "bad_head.csv"
+    bad_head.write_text("\n".join(line if not line.startswith("# network=") else
+                                  '# network={"max_gap_frames": "x"}' for line in lines) + "\n")
+    _bad(capsys, ["eval", "jorge", str(bad_head), str(xml)], "bad_head.csv: header: config",
+         "network.max_gap_frames = 'x'")  # fmt: skip
+    for text, needles in (('{"network": {"max_gap_frames": 0}}', ("config network", "max_gap_frames")),
+                          ('{"network": {"labels": {}}}', ("non-scalar", "['labels']")),
+                          ('{"labels": {"split_cover": [0.5]}}', ("config labels", "split_cover")),
+                          ('{"online": {"max_active": 2.5}}', ("online.max_active = 2.5", "integer")),
+                          ('{"network": 3}', ("config network = 3", "NetworkConfig fields"))):
+        cfg.write_text(text)
+        bad = tmp_path / "bad"
+        _bad(capsys, ["track", "jorge", str(xml), "-o", str(bad), "--config", str(cfg)], *needles)
+        assert not (bad / "strokes.csv").exists()
 
 
 def test_jorge_frame_rate_from_seqinfo(tmp_path, capsys):
