@@ -113,6 +113,9 @@ def make_grid(
     """
     params = dict(params or {})
     for name, values in params.items():
+        if isinstance(values, Mapping):  # TOML reads an unquoted dotted name as a table
+            raise InputError(f"grid parameter {name!r} is a table, not a list of values; a "
+                             f"name with dots is quoted: \"{name}.FIELD\" = [...]")  # fmt: skip
         if isinstance(values, str | bytes) or not isinstance(values, Sequence) or not values:
             raise InputError(f"grid parameter {name!r} must be a non-empty list of values")
     names = sorted(params)

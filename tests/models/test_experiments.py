@@ -176,3 +176,24 @@ def test_benchmark_dask_flag_needs_a_mapper_and_runs_the_seed_loop_on_it(client)
     assert {k: v for k, v in remote.items() if k != "seconds"} == {
         k: v for k, v in local.items() if k != "seconds"
     }
+
+
+def test_track_runs_on_two_workers_equal_the_serial_run(client, tmp_path) -> None:
+    """``models.track.sweep_task.track_task`` (``dbntrack track`` on files) on a cluster:
+    the same results as in this process, timings aside."""
+    from pathlib import Path
+
+    from models.track.sweep_task import track_task
+
+    xml = Path(__file__).resolve().parent.parent / "data" / "jorge" / "caviar.xml"
+    grid = make_grid(["jorge"], [f"'{xml}' --truth '{xml}'"], seeds=[0, 1],
+                     params={"network.max_gap_frames": [10, 30]})  # fmt: skip
+
+    def results(records):
+        assert [r["status"] for r in records] == ["ok"] * 4, records
+        return [(r["id"], {k: v for k, v in r["result"].items() if k != "timings_s"})
+                for r in records]  # fmt: skip
+
+    serial = results(run_grid(track_task, grid, serial=True, progress=False))
+    assert results(run_grid(track_task, grid, client=client, progress=False)) == serial
+    assert len({json.dumps(r["metrics"], sort_keys=True) for _, r in serial}) > 1

@@ -1,0 +1,135 @@
+"""A sweep task that runs ``dbntrack track`` on your own files, one run per grid point.
+
+In a sweep configuration (:func:`models.experiments.load_sweep`)::
+
+    task = "models.track.sweep_task:track_task"
+    trackers = ["jorge"]                             # the runner (dbntrack list)
+    data = ["caviar/ms3ggt.xml.gz --truth caviar/ms3ggt.xml.gz",
+            "'my video.xml' --truth 'my video.xml'"]
+    seeds = [0, 1, 2]
+    [params]
+    "network.max_gap_frames" = [30, 45]              # a dotted name: a field of an object
+    "labels.max_group_size" = [5, 6]
+
+each point is the command ``dbntrack track TRACKER DATA --seed SEED --config PARAMS``:
+``data`` is the rest of that command line (the inputs and, optionally, ``--truth FILE``;
+shell quoting), the seed is the point's own (0 to 2**32 - 1, as ``--seed``: the grid's
+seed 3 is ``--seed 3``), and the parameters are the config, where a dotted name sets a
+field of a config object (``"network.max_gap_frames" = 45`` is ``{"network":
+{"max_gap_frames": 45}}``). A relative path is relative to the worker's folder (a local
+cluster's is the sweep's). The runner checks the config as ``dbntrack track`` does: a key
+it does not read fails that point, with the error in its record. The task keeps the run's
+summary (``parameters``, ``metrics`` where ``--truth`` is given, ``timings_s``,
+``outputs``); the output files go to a temporary folder, removed after the run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import copy
+import io
+import json
+import shlex
+import tempfile
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from dbn.errors import ConfigError, InputError
+
+__all__ = ["track_task", "nest_params", "data_arguments"]
+
+_KEPT = ("parameters", "metrics", "timings_s", "outputs")
+
+
+def track_task(point) -> dict[str, Any]:
+    """Run ``dbntrack track`` for one :class:`~models.experiments.GridPoint` (module
+    docstring); returns the parts :data:`_KEPT` of its summary that it has, as
+    ``summary.json`` holds them (NaN as null).
+
+    Raises
+    ------
+    InputError
+        ``data`` that is not a command line of inputs (an option other than ``--truth``,
+        no input), a seed outside 0 .. 2**32 - 1, or parameters that clash; and any error
+        of the run itself (bad files, a :class:`~dbn.errors.ConfigError` naming the key).
+    """
+    from models.commands import track
+    from models.track.context import clean
+
+    inputs, truth = data_arguments(point.data)
+    if not 0 <= point.seed < 2**32:
+        raise InputError(f"seed {point.seed}: dbntrack track takes 0 to 2**32 - 1")
+    config = nest_params(point.params)
+    with tempfile.TemporaryDirectory(prefix="dbntrack-sweep-") as tmp:
+        cfg = Path(tmp) / "config.json"
+        cfg.write_text(json.dumps(config))
+        args = argparse.Namespace(name=point.tracker, inputs=inputs, outdir=str(Path(tmp) / "out"),
+                                  seed=point.seed, config=str(cfg), truth=truth, method=None,
+                                  quiet=True)  # fmt: skip
+        with contextlib.redirect_stdout(io.StringIO()):  # the CLI's one-line report
+            summary = track(args)
+    return clean({k: summary[k] for k in _KEPT if k in summary})  # NaN -> None, as summary.json
+
+
+def data_arguments(data: str) -> tuple[list[str], str | None]:
+    """``(inputs, truth)`` of a point's ``data``: a ``dbntrack track`` command line after
+    the tracker's name, without ``-o``, ``--seed`` and ``--config`` (the sweep's own).
+
+    Raises
+    ------
+    InputError
+        Quoting that does not close, an option other than ``--truth FILE``, ``--truth``
+        twice or without a file, or no input.
+    """
+    try:
+        words = shlex.split(data)
+    except ValueError as exc:
+        raise InputError(f"data {data!r}: {exc}") from None
+    inputs, truth = [], None
+    it = iter(words)
+    for w in it:
+        if w == "--truth":
+            if truth is not None:
+                raise InputError(f"data {data!r}: --truth given twice")
+            truth = next(it, None)
+            if truth is None:
+                raise InputError(f"data {data!r}: --truth needs a file")
+        elif w.startswith("-") and w != "-":
+            raise InputError(f"data {data!r}: option {w!r}: data holds the inputs and "
+                             "--truth FILE only (the sweep sets -o, --seed and --config)")  # fmt: skip
+        else:
+            inputs.append(w)
+    if not inputs:
+        raise InputError(f"data {data!r}: no input file")
+    return inputs, truth
+
+
+def nest_params(params: Iterable[tuple[str, Any]]) -> dict[str, Any]:
+    """A config from ``(name, value)`` pairs, a dotted name setting a field of a nested
+    object: ``[("network.max_gap_frames", 45), ("fps", 7)]`` gives ``{"network":
+    {"max_gap_frames": 45}, "fps": 7}``. Values are copied (a grid's values are shared by
+    its points).
+
+    Raises
+    ------
+    ConfigError
+        An empty part of a name, or a name that is also a prefix of another
+        (``"network"`` beside ``"network.max_gap_frames"``: a value and an object).
+    """
+    pairs = [(str(name), value) for name, value in params]
+    names = {name for name, _ in pairs}
+    out: dict[str, Any] = {}
+    for name, value in pairs:
+        parts = name.split(".")
+        if not all(parts):
+            raise ConfigError(f"parameter {name!r}: an empty part")
+        clash = [".".join(parts[:i]) for i in range(1, len(parts)) if ".".join(parts[:i]) in names]
+        if clash:
+            raise ConfigError(f"parameter {name!r}: {clash[0]!r} is also given a value")
+        node = out
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+        node[parts[-1]] = copy.deepcopy(value)
+    return out

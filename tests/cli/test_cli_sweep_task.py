@@ -1,0 +1,104 @@
+"""``models.track.sweep_task.track_task``: a sweep of ``dbntrack track`` runs on files."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from dbn.errors import ConfigError, FileFormatError, InputError
+from models.cli import main
+from models.experiments import GridPoint, load_sweep, run_grid
+from models.track.sweep_task import data_arguments, nest_params, track_task
+
+DATA = Path(__file__).resolve().parent.parent / "data"
+
+
+def test_nest_params_sets_fields_of_objects_and_copies_values():
+    shared = [1, 2]
+    got = nest_params([("fps", 7), ("network.max_gap_frames", 45), ("network.radius", 20.0),
+                       ("view.a.b", shared)])  # fmt: skip
+    assert got == {"fps": 7, "network": {"max_gap_frames": 45, "radius": 20.0}, "view": {"a": {"b": [1, 2]}}}
+    got["view"]["a"]["b"].append(3)
+    assert shared == [1, 2]  # a grid's value is shared by its points: never changed
+    assert nest_params([]) == {}
+    for params, needle in (([("network", {}), ("network.radius", 1)], "'network' is also given a value"),
+                           ([("network..radius", 1)], "an empty part"),
+                           ([(".fps", 1)], "an empty part")):
+        with pytest.raises(ConfigError, match=needle):
+            nest_params(params)
+
+
+def test_data_arguments_are_a_track_command_line():
+    assert data_arguments("a.xml") == (["a.xml"], None)
+    assert data_arguments("'my video.xml' --truth 'my video.xml'") == (["my video.xml"], "my video.xml")
+    assert data_arguments("e.bif ev.csv") == (["e.bif", "ev.csv"], None)
+    for data, needle in (("a.xml -o out", "option '-o'"), ("a.xml --seed 3", "option '--seed'"),
+                         ("a.xml --truth", "--truth needs a file"),
+                         ("a.xml --truth b --truth c", "--truth given twice"),
+                         ("--truth a.xml", "no input file"), ("'a.xml", "closing quotation")):
+        with pytest.raises(InputError, match=needle):
+            data_arguments(data)
+
+
+def _run(tmp_path: Path, xml: Path, config: dict) -> dict:
+    """``dbntrack track jorge`` with ``--seed 3``, ``--truth`` the box file: its metrics."""
+    cfg = tmp_path / "cfg.json"
+    cfg.write_text(json.dumps(config))
+    out = tmp_path / "direct"
+    shutil.rmtree(out, ignore_errors=True)
+    assert main(["track", "jorge", str(xml), "-o", str(out), "--seed", "3", "--config", str(cfg),
+                 "--truth", str(xml), "--quiet"]) == 0  # fmt: skip
+    return json.loads((out / "summary.json").read_text())
+
+
+def test_a_sweep_of_track_runs_equals_the_runs_themselves(tmp_path, capsys):
+    """Each point is the ``dbntrack track`` run its data, seed and parameters spell; a key
+    the runner does not read fails that point alone, naming the key."""
+    xml = tmp_path / "my video.xml"  # a path that needs quoting
+    shutil.copy(DATA / "jorge" / "caviar.xml", xml)
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text('task = "models.track.sweep_task:track_task"\ntrackers = ["jorge"]\n'
+                     f'data = ["\'{xml}\' --truth \'{xml}\'"]\nseeds = [3]\n[params]\n'
+                     '"network.max_gap_frames" = [10, 30]\ngaps_per_100 = [8]\n'
+                     'gap_min = [20]\ngap_max = [30]\n')  # fmt: skip
+    task, grid = load_sweep(sweep)
+    assert task is track_task and len(grid) == 2
+    records = run_grid(task, grid, serial=True, progress=False)
+    assert [r["status"] for r in records] == ["ok", "ok"], records
+    for rec in records:
+        gap = rec["point"]["params"]["network.max_gap_frames"]
+        want = _run(tmp_path, xml, {"gaps_per_100": 8, "gap_min": 20, "gap_max": 30,
+                                    "network": {"max_gap_frames": gap}})  # fmt: skip
+        assert rec["result"]["metrics"] == want["metrics"]
+        assert rec["result"]["parameters"] == want["parameters"]
+        assert rec["result"]["parameters"]["network"] == {"max_gap_frames": gap}
+    short, default = (r["result"]["metrics"]["missed_links"]["gap"] for r in records)
+    assert short > default  # the setting reached the link rule
+    capsys.readouterr()
+    bad = GridPoint("jorge", f"'{xml}'", 3, (("netwrk.max_gap_frames", 10),))
+    (rec,) = run_grid(track_task, [bad], serial=True, progress=False)
+    assert rec["status"] == "error" and "ConfigError" in rec["error"] and "netwrk" in rec["error"]
+    with pytest.raises(InputError, match="seed"):
+        track_task(GridPoint("jorge", f"'{xml}'", 2**32))
+
+
+def test_an_unquoted_dotted_name_is_refused_naming_the_file(tmp_path):
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text('task = "models.track.sweep_task:track_task"\ntrackers = ["jorge"]\n'
+                     'data = ["a.xml"]\n[params]\nnetwork.max_gap_frames = [10, 30]\n')  # fmt: skip
+    with pytest.raises(FileFormatError, match=r"sweep.toml.*'network' is a table.*quoted"):
+        load_sweep(sweep)
+
+
+def test_the_example_sweep_runs_from_the_repository_root(monkeypatch):
+    monkeypatch.chdir(DATA.parent.parent)
+    task, grid = load_sweep(DATA / "sweep_files.toml")
+    assert task is track_task and len(grid) == 4
+    (rec,) = run_grid(task, grid[:1], serial=True, progress=False)
+    assert rec["status"] == "ok", rec["error"]
+    gap = rec["point"]["params"]["network.max_gap_frames"]
+    assert rec["result"]["parameters"]["network"] == {"max_gap_frames": gap}
+    assert 0.0 <= rec["result"]["metrics"]["error_rate"] <= 1.0
