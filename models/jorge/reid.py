@@ -121,7 +121,8 @@ def _reidentify_pass(graph: LabelGraph, labels: list, prior: float) -> dict[int,
     row = {o: i for i, o in enumerate(objects)}
     for i, b in enumerate(objects):
         cands = [a for a in roots if last[a] < first[b]]
-        singles = [int(k) for k in np.flatnonzero(member[i]) if labels[k] == frozenset({b})] if cands else []
+        alone = frozenset({b})
+        singles = [int(k) for k in np.flatnonzero(member[i]) if labels[k] == alone] if cands else []
         if not singles:  # no candidate, or never seen alone: kept as is
             roots.append(b)
             continue
@@ -134,13 +135,15 @@ def _reidentify_pass(graph: LabelGraph, labels: list, prior: float) -> dict[int,
         palettes[-1, graph.nodes[own].stroke.palette] = True
         score = np.full(len(cands), np.log(prior / len(cands)) - np.log1p(-prior))
         # b's palette as one more observation of the object
-        score += colour_log_likelihood(np.flatnonzero(palettes[-1]), palettes[:-1], np.zeros(len(cands), dtype=bool),
-                                       cfg.match_prob, cfg.pool_size, cfg.colour_mode)
+        score += colour_log_likelihood(np.flatnonzero(palettes[-1]), palettes[:-1],
+                                       np.zeros(len(cands), dtype=bool), cfg.match_prob,
+                                       cfg.pool_size, cfg.colour_mode)  # fmt: skip
         for k in singles:
             if k == own:
                 continue  # given b's palette, the stroke it came from says nothing more
-            ll = colour_log_likelihood(graph.nodes[k].stroke.colours, palettes, np.zeros(len(cands) + 1, dtype=bool),
-                                       cfg.match_prob, cfg.pool_size, cfg.colour_mode)
+            ll = colour_log_likelihood(graph.nodes[k].stroke.colours, palettes,
+                                       np.zeros(len(cands) + 1, dtype=bool), cfg.match_prob,
+                                       cfg.pool_size, cfg.colour_mode)  # fmt: skip
             score += ll[:-1] - ll[-1]
         best = int(np.argmax(score))
         if score[best] > 0:
