@@ -271,47 +271,58 @@ def _ids(label) -> str:
     return " ".join(str(int(o)) for o in sorted(label))
 
 
-def write_strokes(path, strokes, labels, seed: int, view=None, parents=None, fps=None,
-                  network=None) -> Path:
-    """The header (``# seed=S``, ``# strokes={StrokeConfig fields}`` from the
-    :class:`~models.jorge.strokes.StrokeSet` ``strokes``' config, ``# view={ObliqueView
-    fields}`` where ``view`` is given, ``# fps=F`` where ``fps``, the labeller's frame
-    rate, is given, ``# network={...}`` where ``network``, the labeller's
-    :class:`~models.jorge.network.NetworkConfig` fields set away from the defaults, is
-    given) then ``stroke,start,end,label,truth`` rows, with a ``parents`` column (each
-    stroke's links: earlier stroke indices, space-separated; empty for a root) where
-    ``parents`` (a sequence of int sequences, one per stroke) is given."""
+def write_strokes(path, strokes, labels, seed: int | None = None, view=None, parents=None,
+                  fps=None, network=None, source: str | None = None) -> Path:
+    """The header (``# seed=S`` where ``seed`` is given, ``# strokes={StrokeConfig fields}``
+    where the :class:`~models.jorge.strokes.StrokeSet` ``strokes`` has a config, ``#
+    view={ObliqueView fields}`` where ``view`` is given, ``# fps=F`` where ``fps``, the
+    labeller's frame rate, is given, ``# network={...}`` where ``network``, the
+    labeller's :class:`~models.jorge.network.NetworkConfig` fields set away from the
+    defaults, is given, ``# input=regions`` where ``source`` says the strokes came from a
+    regions file, :mod:`models.io.jorge_regions`) then ``stroke,start,end,label,truth``
+    rows, with a ``parents`` column (each stroke's links: earlier stroke indices,
+    space-separated; empty for a root) where ``parents`` (a sequence of int sequences, one
+    per stroke) is given."""
+    if source not in (None, "boxes", "regions"):
+        raise InputError(f"write_strokes: source = {source!r}: expected 'boxes' or 'regions'")
     rows = [(s.index, s.start, s.end, _ids(lab), _ids(s.truth)) for s, lab in zip(strokes, labels)]
     columns: tuple = ("stroke", "start", "end", "label", "truth")
     if parents is not None:
         rows = [(*r, _ids(par)) for r, par in zip(rows, parents)]
         columns += ("parents",)
-    head = [f"seed={int(seed)}", "strokes=" + json.dumps(dataclasses.asdict(strokes.config))]
+    head = [] if seed is None else [f"seed={int(seed)}"]
+    if getattr(strokes, "config", None) is not None:
+        head.append("strokes=" + json.dumps(dataclasses.asdict(strokes.config)))
     if view is not None:
         head.append("view=" + json.dumps(dataclasses.asdict(view)))
     if fps is not None:
         head.append(f"fps={float(fps)!r}")
     if network is not None:
         head.append("network=" + json.dumps(dict(network)))
+    if source is not None:
+        head.append(f"input={source}")
     return write_rows(path, columns, rows, head)
 
 
-_HEADER_KEYS = {"seed": int, "strokes": dict, "view": dict, "fps": float, "network": dict}
+_HEADER_KEYS = {"seed": int, "strokes": dict, "view": dict, "fps": float, "network": dict,
+                "input": str}
 
 
 def read_strokes_header(path: str | Path) -> dict:
     """The header of a strokes CSV (:func:`write_strokes`): ``seed`` (int), ``strokes``
     (the :class:`~models.jorge.strokes.StrokeConfig` fields), ``view`` (the
-    :class:`~models.jorge.eth.ObliqueView` fields), ``fps`` (float) and ``network`` (the
-    :class:`~models.jorge.network.NetworkConfig` fields the run set), each where the file
-    has it (files of earlier versions carry only the seed).
+    :class:`~models.jorge.eth.ObliqueView` fields), ``fps`` (float), ``network`` (the
+    :class:`~models.jorge.network.NetworkConfig` fields the run set) and ``input``
+    (``"regions"`` for strokes read from a regions file), each where the file has it
+    (files of earlier versions carry only the seed).
 
     Raises
     ------
     InputError
         A ``# seed=`` line that is not an integer, a ``# strokes=``, ``# view=`` or
         ``# network=`` line that is not a JSON object, a ``# fps=`` line that is not a
-        finite number > 0, or one of them twice (naming the file and line).
+        finite number > 0, an ``# input=`` other than ``boxes`` or ``regions``, or one of
+        them twice (naming the file and line).
         Other leading ``#`` lines are comments.
     """
     path = require_file(path, "strokes CSV")
@@ -327,7 +338,8 @@ def read_strokes_header(path: str | Path) -> dict:
             raise fail(path, line_no, f"a second '# {key}=' header line")
         parsed = _header_value(key, value)
         if parsed is None:
-            kind = {"seed": "an integer", "fps": "a finite number > 0"}.get(key, "a JSON object")
+            kind = {"seed": "an integer", "fps": "a finite number > 0",
+                    "input": "'boxes' or 'regions'"}.get(key, "a JSON object")  # fmt: skip
             raise fail(path, line_no, f"{key} = {value.strip()!r}: expected {kind}")
         out[key] = parsed
     return out
@@ -335,6 +347,8 @@ def read_strokes_header(path: str | Path) -> dict:
 
 def _header_value(key: str, value: str):
     """A header line's value as :data:`_HEADER_KEYS` types it; ``None`` where it is not."""
+    if key == "input":
+        return value.strip() if value.strip() in ("boxes", "regions") else None
     try:
         parsed = int(value) if key == "seed" else json.loads(value)
     except ValueError:

@@ -1,5 +1,10 @@
-"""``dbntrack track jorge BOXES``: group/person labels of the strokes of a video (seed 004;
-formats in :mod:`models.io.jorge`).
+"""``dbntrack track jorge BOXES`` (or ``REGIONS.jsonl``): group/person labels of the strokes
+of a video (seed 004; formats in :mod:`models.io.jorge` and :mod:`models.io.jorge_regions`).
+
+A regions file gives the strokes of your own low-level tracker (boxes per frame, dominant
+colours, optionally the links and the truth): they are checked against the network, then
+labelled as they are, nothing simulated (the stroke builder's settings and ``view`` do
+not apply; ``--seed`` changes nothing), and ``eval`` scores them against the same file.
 
 The boxes (CAVIAR / PETS2009 XML or MOTChallenge; an ETH / UCY ``obsmat`` file's tracks in
 metres through a SIMULATED :class:`~models.jorge.eth.ObliqueView`, the default one or the
@@ -19,7 +24,8 @@ labeller's settings laid over its fitted defaults (:func:`labeller_config`): ``n
 (scalar fields of :class:`~models.jorge.network.NetworkConfig`, e.g.
 ``{"max_gap_frames": 45}``), ``labels`` (of :class:`~models.jorge.labels.LabelParams`
 over :data:`~models.jorge.config.FITTED_LABELS`, e.g. ``{"max_group_size": 6}``) and
-``online`` (of :class:`~models.jorge.online.OnlineConfig`, e.g. ``{"max_active": 24}``).
+``online`` (of :class:`~models.jorge.online.OnlineConfig`, e.g. ``{"max_active": 24}``);
+a fitted table is only switched off, ``[]``.
 
 ``strokes.csv``'s header keeps the seed, the stroke settings, the view and the frame rate,
 so ``dbntrack eval`` (and ``--truth``) rebuilds the same strokes from the box file; its
@@ -36,6 +42,7 @@ import numpy as np
 
 from dbn.errors import ConfigError, InputError
 from models.io.jorge import (
+    MOT_DEFAULT_FPS,
     frame_rate_source,
     is_mot,
     is_obsmat,
@@ -45,58 +52,107 @@ from models.io.jorge import (
     write_mot_tracks,
     write_strokes,
 )
+from models.io.jorge_regions import check_regions, is_regions, read_regions
 from models.jorge.eth import ObliqueView
 from models.track.context import RunContext
 from models.track.options import build, check_keys, flag, number, override
 
 LABELLER_KEYS = ("network", "labels", "online")
 """Config keys of the labeller's settings (:func:`labeller_config`)."""
-INPUTS = ("BOXES: CAVIAR CVML .xml, PETS2009 .xml, MOTChallenge gt.txt or ETH/UCY obsmat.txt (may be .gz)",)
+INPUTS = ("BOXES: CAVIAR CVML .xml, PETS2009 .xml, MOTChallenge gt.txt or ETH/UCY obsmat.txt, "
+          "or REGIONS.jsonl: your own tracker's strokes (may be .gz)",)
 
 
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     """Label the strokes; write ``strokes.csv``, ``tracks.txt`` and ``strokes.png``."""
-    import models
-    from models.jorge.strokes import StrokeConfig, build_strokes
+    from models.jorge.strokes import StrokeConfig
 
     if len(inputs) != 1:
-        raise InputError(f"jorge needs one box file, got {len(inputs)} inputs")
+        raise InputError(f"jorge needs one box or regions file, got {len(inputs)} inputs")
     own = {"fps", "split_cover", "view", *LABELLER_KEYS}
     check_keys(config, set(StrokeConfig.__dataclass_fields__) | own)
     split_cover = flag(config, "split_cover", True)
     overrides = {k: config[k] for k in LABELLER_KEYS if k in config}
     online = labeller_config(split_cover, overrides)
-    scfg = build(StrokeConfig, {k: v for k, v in config.items() if k not in own})
-    view = _view(config, inputs[0])
     fps = number(config, "fps") if "fps" in config else None
     if fps is not None and not fps > 0:
         raise ConfigError(f"config fps = {fps!r}: expected a number > 0")
+    read = _regions if is_regions(inputs[0]) else _boxes
+    strokes, steps, fps, params, head = read(ctx, inputs[0], config, own, fps, online)
+    labels, parents = _label(ctx, online, steps, fps)
+    network = {k: getattr(online.network, k) for k in overrides.get("network", {})}
+    write_strokes(ctx.outdir / "strokes.csv", strokes, labels, parents=parents, fps=fps,
+                  network=network or None, **head)  # fmt: skip
+    write_mot_tracks(ctx.outdir / "tracks.txt", strokes, labels)
+    _plot(ctx, strokes, labels)
+    params = {"num_strokes": len(strokes), "num_groups": sum(len(s.truth) > 1 for s in strokes),
+              "fps": fps, **params, "split_cover": split_cover,
+              **_set_fields(online, overrides)}  # fmt: skip
+    return {"parameters": params, "outputs": ["strokes.csv", "tracks.txt", "strokes.png"]}
+
+
+def _label(ctx: RunContext, online, steps: list, fps: float) -> tuple[list, list]:
+    """The registry's labeller over ``steps`` (strokes, or :class:`LinkedStroke`), then its
+    re-identification pass: ``(labels, parents)``, one per stroke."""
+    import models
+
+    tracker = models.get("jorge").make(online, fps=fps)
+    with ctx.timed("label"):  # fold: one labeller stepped in place (run's copies are quadratic)
+        state, _ = tracker.fold(ctx.key(), steps, ctx.bar("strokes"))
+        final = state.labeller.finish()  # the re-identification pass (the batch's last step)
+    labels = [final[k] for k in range(len(steps))]
+    return labels, [node.parents for node in state.labeller.graph.nodes]
+
+
+def _boxes(ctx: RunContext, path: str, config: dict, own: set, fps: float | None, online):
+    """Strokes built from a box file by the SIMULATED low-level tracker: ``(strokes, steps,
+    fps, parameters, header)``."""
+    from models.jorge.strokes import StrokeConfig, build_strokes
+
+    scfg = build(StrokeConfig, {k: v for k, v in config.items() if k not in own})
+    view = _view(config, path)
     with ctx.timed("read"):
-        truth = read_boxes(inputs[0], view)
+        truth = read_boxes(path, view)
         strokes = build_strokes(ctx.seed, truth, scfg)
-    source = "config" if fps is not None else frame_rate_source(inputs[0])
+    source = "config" if fps is not None else frame_rate_source(path)
     if source.startswith("assumed"):
         ctx.note(source)
     if view is not None:
         ctx.note(f"tracks in metres: boxes from a SIMULATED camera, {view!r}")
-    fps = truth.fps if fps is None else fps
-    tracker = models.get("jorge").make(online, fps=fps)
-    with ctx.timed("label"):  # fold: one labeller stepped in place (run's copies are quadratic)
-        state, _ = tracker.fold(ctx.key(), strokes, ctx.bar("strokes"))
-        final = state.labeller.finish()  # the re-identification pass (the batch's last step)
-    labels = [final[k] for k in range(len(strokes))]
-    parents = [node.parents for node in state.labeller.graph.nodes]
-    network = {k: getattr(online.network, k) for k in overrides.get("network", {})}
-    write_strokes(ctx.outdir / "strokes.csv", strokes, labels, ctx.seed, view, parents, fps,
-                  network or None)  # fmt: skip
-    write_mot_tracks(ctx.outdir / "tracks.txt", strokes, labels)
-    _plot(ctx, strokes, labels)
-    params = {"num_strokes": len(strokes), "num_groups": strokes.num_groups, "fps": fps, "fps_source": source,
-              "num_frames": truth.num_frames, "sequence": truth.name,
-              "simulated_view": None if view is None else repr(view),
-              "split_cover": split_cover, **_set_fields(online, overrides),
+    params = {"fps_source": source, "num_frames": truth.num_frames, "sequence": truth.name,
+              "simulated_view": None if view is None else repr(view), "input": "boxes",
               **{k: getattr(scfg, k) for k in StrokeConfig.__dataclass_fields__}}  # fmt: skip
-    return {"parameters": params, "outputs": ["strokes.csv", "tracks.txt", "strokes.png"]}
+    fps = truth.fps if fps is None else fps
+    return strokes, list(strokes), fps, params, {"seed": ctx.seed, "view": view}
+
+
+def _regions(ctx: RunContext, path: str, config: dict, own: set, fps: float | None, online):
+    """Strokes of your own low-level tracker (:mod:`models.io.jorge_regions`), labelled as
+    they are, with the file's links where it has them: ``(strokes, steps, fps, parameters,
+    header)``. The stroke builder's settings and ``view`` do not apply (a
+    :class:`ConfigError`); the file is checked against the network before any labelling."""
+    from models.jorge.api import LinkedStroke
+
+    builder = sorted(set(config) - own) + (["view"] if "view" in config else [])
+    if builder:
+        raise ConfigError(f"config {builder}: stroke-builder settings apply to box files, not "
+                          f"to a regions file's strokes")  # fmt: skip
+    with ctx.timed("read"):
+        regions = read_regions(path)
+    source = "config" if fps is not None else "file" if regions.fps is not None else None
+    if source is None:
+        source = f"assumed {MOT_DEFAULT_FPS:g} fps (no '# fps=' line in {path})"
+        ctx.note(source)
+    fps = fps if fps is not None else regions.fps if regions.fps is not None else MOT_DEFAULT_FPS
+    check_regions(regions, online.network, fps)
+    strokes = regions.strokes
+    steps = strokes if regions.parents is None else [
+        LinkedStroke(s, p) for s, p in zip(strokes, regions.parents)]
+    params = {"fps_source": source, "input": "regions",
+              "links": "rule" if regions.parents is None else "file",
+              "num_frames": int(strokes[-1].end - strokes[0].start + 1),
+              "sequence": Path(path).name}  # fmt: skip
+    return strokes, list(steps), fps, params, {"seed": None, "view": None, "source": "regions"}
 
 
 def _view(config: dict, path: str) -> ObliqueView | None:
@@ -127,7 +183,7 @@ def labeller_config(split_cover: bool = True, overrides: dict | None = None):
     defaults (split cover on; off if asked) with the config's ``network``, ``labels`` and
     ``online`` objects laid over the :class:`~models.jorge.network.NetworkConfig`, its
     :class:`~models.jorge.labels.LabelParams` and the ``OnlineConfig``
-    (:func:`models.track.options.override`: scalar fields only; a :class:`ConfigError`
+    (:func:`models.track.options.override`: scalar fields, tables off; a :class:`ConfigError`
     naming ``network.FIELD`` etc. for a bad one)."""
     from dataclasses import replace
 
@@ -196,6 +252,9 @@ def _mot(result: str, truth: str) -> dict:
 
     from models.io.jorge import read_mot, read_mot_truth
 
+    if is_regions(truth):
+        raise InputError(f"{truth}: tracks are scored against boxes of each person (a box "
+                         "file); a regions file has the regions' boxes only")  # fmt: skip
     view, ignored = None, {}
     beside = Path(result).with_name("strokes.csv")  # the same run's view, for an obsmat truth
     if is_obsmat(truth) and beside.is_file():
@@ -287,14 +346,21 @@ def evaluate(result: str, truth: str) -> dict:
     if not str(result).endswith(".csv"):
         return _mot(result, truth)
     head = read_strokes_header(result)
-    seed = head.get("seed")
-    if seed is None:
-        raise InputError(f"{result}:1: no '# seed=S' line (written by dbntrack track jorge)")
     rows = read_stroke_rows(result)
-    scfg, view = _settings(result, head)
     network = _network(result, head)
-    strokes = build_strokes(seed, read_boxes(truth, view), scfg)
-    _check_rows(result, truth, seed, rows, strokes)
+    if is_regions(truth):
+        strokes, made = _truth_regions(truth), ""
+    else:
+        seed = head.get("seed")
+        if head.get("input") == "regions":
+            raise InputError(f"{result}: labels of a regions file's strokes (# input=regions): "
+                             f"score them against that file, not the boxes of {truth}")  # fmt: skip
+        if seed is None:
+            raise InputError(f"{result}:1: no '# seed=S' line (written by dbntrack track jorge)")
+        scfg, view = _settings(result, head)
+        strokes = build_strokes(seed, read_boxes(truth, view), scfg)
+        made = f"with seed {seed} and the file's stroke settings"
+    _check_rows(result, truth, made, rows, strokes)
     shown = [SimpleNamespace(index=r["stroke"], truth=s.truth) for r, s in zip(rows, strokes)]
     sc = score(shown, [r["label"] for r in rows])
     big = [s.index for s in strokes if len(s.truth) >= 3]
@@ -305,16 +371,19 @@ def evaluate(result: str, truth: str) -> dict:
            "error_rate_group_3plus": wrong_big / len(big) if big else float("nan"),
            "strokes_group_3plus": len(big), "first_mistakes": len(first)}  # fmt: skip
     if all(r["parents"] is not None for r in rows):
-        out.update(_missed_links(result, rows, strokes, head.get("fps", strokes.fps), first, network))
+        fps = head.get("fps", getattr(strokes, "fps", MOT_DEFAULT_FPS))
+        out.update(_missed_links(result, rows, strokes, fps, first, network))
     return out
 
 
-def _check_rows(result: str, truth: str, seed: int, rows: list, strokes) -> None:
-    """The rows of ``result`` are the rebuilt ``strokes``, in order (an :class:`InputError`
-    naming the first that is not)."""
+def _check_rows(result: str, truth: str, made: str, rows: list, strokes) -> None:
+    """The rows of ``result`` are the ``strokes`` of ``truth`` (rebuilt from its boxes, or
+    read from a regions file: ``made`` says how, ``""`` for a regions file), in order (an
+    :class:`InputError` naming the first that is not)."""
+    what = "boxes (or settings)" if made else "strokes"
     if len(strokes) != len(rows):
         raise InputError(f"{result}: {len(rows)} strokes, but {truth} gives {len(strokes)} "
-                         f"with seed {seed} and the file's stroke settings")  # fmt: skip
+                         f"{made or 'strokes'}")  # fmt: skip
     for k, (r, s) in enumerate(zip(rows, strokes)):
         if r["stroke"] != s.index:  # rows are matched to strokes by position
             raise InputError(f"{result}: row {k + 1} is stroke {r['stroke']}, but stroke "
@@ -322,8 +391,18 @@ def _check_rows(result: str, truth: str, seed: int, rows: list, strokes) -> None
                              "written)")  # fmt: skip
         if (r["start"], r["end"]) != (s.start, s.end):
             raise InputError(f"{result}: stroke {r['stroke']} spans frames {r['start']}-{r['end']}, but "
-                             f"{truth} gives {s.start}-{s.end} with seed {seed}: not the boxes "
-                             "(or settings) this result was made from")  # fmt: skip
+                             f"{truth} gives {s.start}-{s.end}{' ' + made if made else ''}: "
+                             f"not the {what} this result was made from")  # fmt: skip
+
+
+def _truth_regions(truth: str) -> list:
+    """The strokes of a regions file scored against: each must have its ``truth``."""
+    regions = read_regions(truth)
+    if not regions.has_truth:
+        k = next(i for i, s in enumerate(regions.strokes) if not s.truth)
+        raise InputError(f"{truth}:{regions.lines[k]}: stroke {k} has no truth: scoring needs "
+                         "the people of every stroke (a 'truth' list on every line)")  # fmt: skip
+    return regions.strokes
 
 
 def _network(result: str, head: dict):

@@ -133,33 +133,41 @@ def build(cls: Callable[..., T], fields: Mapping[str, Any]) -> T:
 
 def override(obj: T, fields: Any, key: str) -> T:
     """``obj`` (a dataclass instance, e.g. a fitted default) with the config object
-    ``fields`` (``config[key]``, e.g. ``{"max_gap_frames": 45}``) laid over it. Only its
-    scalar fields can be set (those holding a boolean, an integer, a number or a
-    string), each with a value of that type (an integer where it holds one); the others
-    keep ``obj``'s. An unknown or non-scalar field, a wrong type, or a value the class's
-    own check refuses (its constructor) is a :class:`ConfigError` naming
-    ``key.field``."""
+    ``fields`` (``config[key]``, e.g. ``{"max_gap_frames": 45}``) laid over it. Its scalar
+    fields (those holding a boolean, an integer, a number or a string) take a value of
+    that type (an integer where it holds one); a field holding a tuple (a fitted table)
+    can only be switched off, with ``[]`` (the empty tuple); the others keep ``obj``'s. An
+    unknown field, another value for a table, a wrong type, or a value the class's own
+    check refuses (its constructor) is a :class:`ConfigError` naming ``key.field``."""
     name = type(obj).__name__
     if not isinstance(fields, Mapping):
         raise ConfigError(f"config {key} = {fields!r}: expected an object of {name} fields")
-    scalars = {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)  # type: ignore[arg-type]
-               if isinstance(getattr(obj, f.name), bool | int | float | str)}  # fmt: skip
-    unknown = sorted(set(fields) - set(scalars))
+    current = {f.name: getattr(obj, f.name)
+               for f in dataclasses.fields(obj)}  # type: ignore[arg-type]  # fmt: skip
+    settable = {f for f, v in current.items() if isinstance(v, bool | int | float | str | tuple)}
+    unknown = sorted(set(fields) - settable)
     if unknown:
         raise ConfigError(f"config {key}: unknown or non-scalar {name} field(s) {unknown}; "
-                          f"valid: {sorted(scalars)}")  # fmt: skip
-    typed = {}
-    for field, value in fields.items():
-        current, dotted = scalars[field], {f"{key}.{field}": value}
-        if isinstance(current, bool):
-            typed[field] = flag(dotted, f"{key}.{field}", current)
-        elif isinstance(current, int):
-            typed[field] = integer(dotted, f"{key}.{field}")
-        elif isinstance(current, float):
-            typed[field] = number(dotted, f"{key}.{field}")
-        else:
-            typed[field] = text(dotted, f"{key}.{field}", current)
+                          f"valid: {sorted(settable)}")  # fmt: skip
+    typed = {field: _typed(key, field, value, current[field]) for field, value in fields.items()}
     try:
         return dataclasses.replace(obj, **typed)  # type: ignore[type-var]
     except (TypeError, ValueError) as exc:  # library errors (DBNError) are ValueErrors
         raise ConfigError(f"config {key}: {exc}") from None
+
+
+def _typed(key: str, field: str, value: Any, current: Any) -> Any:
+    """``value`` for ``key.field`` as the type of its ``current`` value (:func:`override`)."""
+    dotted, name = {f"{key}.{field}": value}, f"{key}.{field}"
+    if isinstance(current, tuple):
+        if value != []:
+            raise ConfigError(f"config {name} = {value!r}: a table is only switched off "
+                              "here ([]); set another in Python")  # fmt: skip
+        return ()
+    if isinstance(current, bool):
+        return flag(dotted, name, current)
+    if isinstance(current, int):
+        return integer(dotted, name)
+    if isinstance(current, float):
+        return number(dotted, name)
+    return text(dotted, name, current)

@@ -98,7 +98,8 @@ def data_arguments(data: str) -> tuple[list[str], str | None]:
                 raise InputError(f"data {data!r}: --truth needs a file")
         elif w.startswith("-") and w != "-":
             raise InputError(f"data {data!r}: option {w!r}: data holds the inputs and "
-                             "--truth FILE only (the sweep sets -o, --seed and --config)")  # fmt: skip
+                             "--truth FILE only (the sweep sets -o, --seed and "
+                             "--config)")  # fmt: skip
         else:
             inputs.append(w)
     if not inputs:

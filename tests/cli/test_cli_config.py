@@ -151,10 +151,20 @@ def test_override_lays_scalar_fields_over_an_instance():
                            ({"gap_max": True}, "strokes.gap_max = True"),
                            ({"iou_threshold": "0.3"}, "strokes.iou_threshold = '0.3'"),
                            ({"iou_threshold": 2.0}, "config strokes: .*iou_threshold"),
-                           ({"gap_mn": 1}, r"unknown or non-scalar StrokeConfig field\(s\) \['gap_mn'\]"),
+                           ({"gap_mn": 1}, r"unknown or non-scalar StrokeConfig field\(s\) "
+                                           r"\['gap_mn'\]"),
                            ([1], r"config strokes = \[1\]: expected an object")):
         with pytest.raises(ConfigError, match=needle):
             override(base, fields, "strokes")
+    from models.jorge.network import NetworkConfig
+
+    net = NetworkConfig()
+    assert net.palette_missing_table  # a fitted table, switched off with []
+    off = override(net, {"palette_missing_table": []}, "network")
+    assert off.palette_missing_table == () and off.palette_gain_table == net.palette_gain_table
+    for value in ([[0.0]], False):
+        with pytest.raises(ConfigError, match="network.palette_missing_table = .*switched off"):
+            override(net, {"palette_missing_table": value}, "network")
 
 
 def test_rjmcmc3d_floor_errors_name_their_source(capsys, tmp_path):

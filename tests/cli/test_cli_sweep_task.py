@@ -20,11 +20,13 @@ def test_nest_params_sets_fields_of_objects_and_copies_values():
     shared = [1, 2]
     got = nest_params([("fps", 7), ("network.max_gap_frames", 45), ("network.radius", 20.0),
                        ("view.a.b", shared)])  # fmt: skip
-    assert got == {"fps": 7, "network": {"max_gap_frames": 45, "radius": 20.0}, "view": {"a": {"b": [1, 2]}}}
+    assert got == {"fps": 7, "network": {"max_gap_frames": 45, "radius": 20.0},
+                   "view": {"a": {"b": [1, 2]}}}  # fmt: skip
     got["view"]["a"]["b"].append(3)
     assert shared == [1, 2]  # a grid's value is shared by its points: never changed
     assert nest_params([]) == {}
-    for params, needle in (([("network", {}), ("network.radius", 1)], "'network' is also given a value"),
+    clash = [("network", {}), ("network.radius", 1)]
+    for params, needle in ((clash, "'network' is also given a value"),
                            ([("network..radius", 1)], "an empty part"),
                            ([(".fps", 1)], "an empty part")):
         with pytest.raises(ConfigError, match=needle):
@@ -33,7 +35,8 @@ def test_nest_params_sets_fields_of_objects_and_copies_values():
 
 def test_data_arguments_are_a_track_command_line():
     assert data_arguments("a.xml") == (["a.xml"], None)
-    assert data_arguments("'my video.xml' --truth 'my video.xml'") == (["my video.xml"], "my video.xml")
+    quoted = "'my video.xml' --truth 'my video.xml'"
+    assert data_arguments(quoted) == (["my video.xml"], "my video.xml")
     assert data_arguments("e.bif ev.csv") == (["e.bif", "ev.csv"], None)
     for data, needle in (("a.xml -o out", "option '-o'"), ("a.xml --seed 3", "option '--seed'"),
                          ("a.xml --truth", "--truth needs a file"),

@@ -359,7 +359,8 @@ def test_jorge_labeller_settings_reach_the_run_and_eval(tmp_path, capsys):
     assert summary["parameters"]["online"] == {"max_active": 20}
     net = NetworkConfig(max_gap_frames=10, sibling_window=25,
                         labels=replace(FITTED_LABELS, max_group_size=6))  # fmt: skip
-    strokes = build_strokes(3, load_caviar(xml), StrokeConfig(gap_min=20, gap_max=30, gaps_per_100=8.0))
+    settings = StrokeConfig(gap_min=20, gap_max=30, gaps_per_100=8.0)
+    strokes = build_strokes(3, load_caviar(xml), settings)
     res = label_online(strokes, OnlineConfig(max_active=20, network=net))
     default = label_online(strokes).labeller.graph
     _, rows = read_strokes(out / "strokes.csv")
@@ -388,10 +389,12 @@ def test_jorge_labeller_settings_reach_the_run_and_eval(tmp_path, capsys):
                                   '# network={"max_gap_frames": "x"}' for line in lines) + "\n")
     _bad(capsys, ["eval", "jorge", str(bad_head), str(xml)], "bad_head.csv: header: config",
          "network.max_gap_frames = 'x'")  # fmt: skip
-    for text, needles in (('{"network": {"max_gap_frames": 0}}', ("config network", "max_gap_frames")),
+    for text, needles in (('{"network": {"max_gap_frames": 0}}',
+                           ("config network", "max_gap_frames")),
                           ('{"network": {"labels": {}}}', ("non-scalar", "['labels']")),
                           ('{"labels": {"split_cover": [0.5]}}', ("config labels", "split_cover")),
-                          ('{"online": {"max_active": 2.5}}', ("online.max_active = 2.5", "integer")),
+                          ('{"online": {"max_active": 2.5}}',
+                           ("online.max_active = 2.5", "integer")),
                           ('{"network": 3}', ("config network = 3", "NetworkConfig fields"))):
         cfg.write_text(text)
         bad = tmp_path / "bad"

@@ -1,6 +1,8 @@
 """Write the tiny SIMULATED box files of the group labeller (run from the repository root):
 4 people over 240 frames (models.jorge.simulate, seed 3), as CAVIAR CVML XML (with
-grouplists), PETS2009-style XML and MOTChallenge gt.txt."""
+grouplists), PETS2009-style XML and MOTChallenge gt.txt; and regions.jsonl, the strokes
+the SIMULATED low-level tracker makes of caviar.xml with seed 3, as a regions file
+(models.io.jorge_regions: what your own tracker would write)."""
 
 import numpy as np
 
@@ -52,3 +54,9 @@ with open(out + "gt.txt", "w") as f:
                 )
 with open(out + "bad_gt.txt", "w") as f:
     f.write("1,1,10,10,20,40,1,1,1\n2,1,10,10,-5,40,1,1,1\n")
+
+from models.io.jorge_regions import write_regions  # noqa: E402
+from models.jorge.strokes import build_strokes, load_caviar  # noqa: E402
+
+strokes = build_strokes(3, load_caviar(out + "caviar.xml"))
+write_regions(out + "regions.jsonl", strokes, fps=strokes.fps)
