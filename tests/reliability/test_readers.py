@@ -255,6 +255,32 @@ def test_mot_text(data) -> None:
     check_reader(read_boxes, _sane_truth, data.draw(mutations(raw)), "gt.txt")
 
 
+def _sane_regions(regions) -> None:
+    assert regions.strokes and len(regions.lines) == len(regions.strokes)
+    for s in regions.strokes:
+        finite(s.positions, s.extent)
+        assert np.all(s.extent > 0) and np.all(np.diff(s.frames) > 0) and s.colours.size > 0
+    if regions.parents is not None:
+        assert all(p < k for k, par in enumerate(regions.parents) for p in par)
+
+
+@FAST
+@given(data=st.data())
+def test_regions_jsonl(data) -> None:
+    """A regions file (your tracker's strokes), damaged: an error naming the file, or
+    strokes the label network's own checks then take or refuse naming the line."""
+    from models.io.jorge_regions import check_regions, read_regions
+    from models.jorge.network import NetworkConfig
+
+    def read(path):
+        regions = read_regions(path)
+        check_regions(regions, NetworkConfig(), 25.0)
+        return regions
+
+    raw = b"".join((DATA / "jorge" / "regions.jsonl").read_bytes().splitlines(keepends=True)[:5])
+    check_reader(read, _sane_regions, data.draw(mutations(raw)), "regions.jsonl")
+
+
 # --- MRCLAM and the localisation CSVs -----------------------------------------------------
 @pytest.mark.parametrize(
     "name,cols",
@@ -540,6 +566,7 @@ def test_many_mutations_all_readers(data) -> None:
     """Every reader above with many more examples (run with ``-m slow``)."""
     test_bif_readers.hypothesis.inner_test(_read_two_slice, _sane_dbn, data)
     test_box_xml.hypothesis.inner_test("caviar.xml", data)
+    test_regions_jsonl.hypothesis.inner_test(data)
     test_mrclam_dat.hypothesis.inner_test("Robot1_Measurement.dat", 4, data)
     test_tsai_calibration.hypothesis.inner_test(data)
     test_evidence_csv.hypothesis.inner_test(data)
