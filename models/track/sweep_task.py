@@ -12,15 +12,17 @@ In a sweep configuration (:func:`models.experiments.load_sweep`)::
     "labels.max_group_size" = [5, 6]
 
 each point is the command ``dbntrack track TRACKER DATA --seed SEED --config PARAMS``:
-``data`` is the rest of that command line (the inputs and, optionally, ``--truth FILE``;
-shell quoting), the seed is the point's own (0 to 2**32 - 1, as ``--seed``: the grid's
-seed 3 is ``--seed 3``), and the parameters are the config, where a dotted name sets a
-field of a config object (``"network.max_gap_frames" = 45`` is ``{"network":
-{"max_gap_frames": 45}}``). A relative path is relative to the worker's folder (a local
-cluster's is the sweep's). The runner checks the config as ``dbntrack track`` does: a key
-it does not read fails that point, with the error in its record. The task keeps the run's
-summary (``parameters``, ``metrics`` where ``--truth`` is given, ``timings_s``,
-``outputs``); the output files go to a temporary folder, removed after the run.
+``data`` is the rest of that command line (the inputs and, optionally, ``--truth FILE``
+and ``--keep DIR``; shell quoting), the seed is the point's own (0 to 2**32 - 1, as
+``--seed``: the grid's seed 3 is ``--seed 3``), and the parameters are the config, where
+a dotted name sets a field of a config object (``"network.max_gap_frames" = 45`` is
+``{"network": {"max_gap_frames": 45}}``). A relative path is relative to the worker's
+folder (a local cluster's is the sweep's). The runner checks the config as ``dbntrack
+track`` does: a key it does not read fails that point, with the error in its record. The
+task keeps the run's summary (``parameters``, ``metrics`` where ``--truth`` is given,
+``timings_s``, ``outputs``); the output files go to a temporary folder, removed after the
+run, or with ``--keep DIR`` to ``DIR/POINT_ID`` (the record's ``id``; the record's
+``outdir`` names it).
 """
 
 from __future__ import annotations
@@ -58,53 +60,57 @@ def track_task(point) -> dict[str, Any]:
     from models.commands import track
     from models.track.context import clean
 
-    inputs, truth = data_arguments(point.data)
+    inputs, truth, keep = data_arguments(point.data)
     if not 0 <= point.seed < 2**32:
         raise InputError(f"seed {point.seed}: dbntrack track takes 0 to 2**32 - 1")
     config = nest_params(point.params)
     with tempfile.TemporaryDirectory(prefix="dbntrack-sweep-") as tmp:
         cfg = Path(tmp) / "config.json"
         cfg.write_text(json.dumps(config))
-        args = argparse.Namespace(name=point.tracker, inputs=inputs, outdir=str(Path(tmp) / "out"),
+        out = Path(tmp) / "out" if keep is None else Path(keep) / point.id
+        args = argparse.Namespace(name=point.tracker, inputs=inputs, outdir=str(out),
                                   seed=point.seed, config=str(cfg), truth=truth, method=None,
                                   quiet=True)  # fmt: skip
         with contextlib.redirect_stdout(io.StringIO()):  # the CLI's one-line report
             summary = track(args)
-    return clean({k: summary[k] for k in _KEPT if k in summary})  # NaN -> None, as summary.json
+    kept = {} if keep is None else {"outdir": str(out.resolve())}
+    return clean({**{k: summary[k] for k in _KEPT if k in summary}, **kept})  # NaN -> None
 
 
-def data_arguments(data: str) -> tuple[list[str], str | None]:
-    """``(inputs, truth)`` of a point's ``data``: a ``dbntrack track`` command line after
-    the tracker's name, without ``-o``, ``--seed`` and ``--config`` (the sweep's own).
+def data_arguments(data: str) -> tuple[list[str], str | None, str | None]:
+    """``(inputs, truth, keep)`` of a point's ``data``: a ``dbntrack track`` command line
+    after the tracker's name, without ``-o``, ``--seed`` and ``--config`` (the sweep's
+    own), with ``--keep DIR`` where the outputs are to be kept (``None`` where not given).
 
     Raises
     ------
     InputError
-        Quoting that does not close, an option other than ``--truth FILE``, ``--truth``
-        twice or without a file, or no input.
+        Quoting that does not close, an option other than ``--truth FILE`` and ``--keep
+        DIR``, either twice or without its value, or no input.
     """
     try:
         words = shlex.split(data)
     except ValueError as exc:
         raise InputError(f"data {data!r}: {exc}") from None
-    inputs, truth = [], None
+    inputs, options = [], {"--truth": None, "--keep": None}
     it = iter(words)
     for w in it:
-        if w == "--truth":
-            if truth is not None:
-                raise InputError(f"data {data!r}: --truth given twice")
-            truth = next(it, None)
-            if truth is None:
-                raise InputError(f"data {data!r}: --truth needs a file")
+        if w in options:
+            if options[w] is not None:
+                raise InputError(f"data {data!r}: {w} given twice")
+            options[w] = next(it, None)
+            if options[w] is None:
+                what = "a file" if w == "--truth" else "a folder"
+                raise InputError(f"data {data!r}: {w} needs {what}")
         elif w.startswith("-") and w != "-":
-            raise InputError(f"data {data!r}: option {w!r}: data holds the inputs and "
-                             "--truth FILE only (the sweep sets -o, --seed and "
+            raise InputError(f"data {data!r}: option {w!r}: data holds the inputs, --truth "
+                             "FILE and --keep DIR only (the sweep sets -o, --seed and "
                              "--config)")  # fmt: skip
         else:
             inputs.append(w)
     if not inputs:
         raise InputError(f"data {data!r}: no input file")
-    return inputs, truth
+    return inputs, options["--truth"], options["--keep"]
 
 
 def nest_params(params: Iterable[tuple[str, Any]]) -> dict[str, Any]:

@@ -34,12 +34,13 @@ def test_nest_params_sets_fields_of_objects_and_copies_values():
 
 
 def test_data_arguments_are_a_track_command_line():
-    assert data_arguments("a.xml") == (["a.xml"], None)
+    assert data_arguments("a.xml") == (["a.xml"], None, None)
     quoted = "'my video.xml' --truth 'my video.xml'"
-    assert data_arguments(quoted) == (["my video.xml"], "my video.xml")
-    assert data_arguments("e.bif ev.csv") == (["e.bif", "ev.csv"], None)
+    assert data_arguments(quoted) == (["my video.xml"], "my video.xml", None)
+    assert data_arguments("e.bif ev.csv --keep out") == (["e.bif", "ev.csv"], None, "out")
     for data, needle in (("a.xml -o out", "option '-o'"), ("a.xml --seed 3", "option '--seed'"),
                          ("a.xml --truth", "--truth needs a file"),
+                         ("a.xml --keep", "--keep needs a folder"),
                          ("a.xml --truth b --truth c", "--truth given twice"),
                          ("--truth a.xml", "no input file"), ("'a.xml", "closing quotation")):
         with pytest.raises(InputError, match=needle):
@@ -105,3 +106,13 @@ def test_the_example_sweep_runs_from_the_repository_root(monkeypatch):
     gap = rec["point"]["params"]["network.max_gap_frames"]
     assert rec["result"]["parameters"]["network"] == {"max_gap_frames": gap}
     assert 0.0 <= rec["result"]["metrics"]["error_rate"] <= 1.0
+
+
+def test_keep_writes_each_points_outputs_under_its_id(tmp_path):
+    xml = DATA / "jorge" / "caviar.xml"
+    point = GridPoint("jorge", f"'{xml}' --keep '{tmp_path / 'runs'}'", 3)
+    got = track_task(point)
+    out = tmp_path / "runs" / point.id
+    assert got["outdir"] == str(out.resolve()) and "metrics" not in got
+    assert sorted(got["outputs"]) == sorted(p.name for p in out.iterdir() if p.name != "summary.json")
+    assert json.loads((out / "summary.json").read_text())["parameters"] == got["parameters"]
