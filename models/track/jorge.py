@@ -150,7 +150,7 @@ def _regions(ctx: RunContext, path: str, config: dict, own: set, fps: float | No
         LinkedStroke(s, p) for s, p in zip(strokes, regions.parents)]
     params = {"fps_source": source, "input": "regions",
               "links": "rule" if regions.parents is None else "file",
-              "num_frames": int(strokes[-1].end - strokes[0].start + 1),
+              "num_frames": int(max(s.end for s in strokes) - strokes[0].start + 1),
               "sequence": Path(path).name}  # fmt: skip
     return strokes, list(steps), fps, params, {"seed": None, "view": None, "source": "regions"}
 
