@@ -351,7 +351,10 @@ if eth is not None:
 # the evidence), `labels` (`LabelParams`, e.g. the group cap) and `online` (`OnlineConfig`).
 # `strokes.csv` keeps the links and the network's settings, so `dbntrack eval` scores the
 # labels and replays the same link rule to say who came into a region without a link.
-# The defaults are the fit of section 6; other values are yours to validate.
+# The defaults are the fit of section 6; other values are yours to validate. Strokes from
+# your own low-level tracker (boxes per frame, dominant colours, optionally its links) go in
+# as a regions file, `dbntrack track jorge REGIONS.jsonl`, labelled as they are
+# (`models.io.jorge_regions`; `tests/data/jorge/regions.jsonl` is this example's strokes).
 
 # %%
 import json
