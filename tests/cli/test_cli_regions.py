@@ -17,6 +17,7 @@ from models.jorge.network import NetworkConfig
 from models.jorge.online import label_online
 from models.jorge.scoring import score, true_links
 from models.jorge.strokes import build_strokes, load_caviar
+from tests.cli.test_cli_track import _bad
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 XML = DATA / "jorge" / "caviar.xml"
@@ -26,14 +27,6 @@ XML = DATA / "jorge" / "caviar.xml"
 def strokes():
     """SIMULATED strokes of the tiny CAVIAR example (seed 3), at 25 fps."""
     return build_strokes(3, load_caviar(XML))
-
-
-def _bad(capsys, argv: list[str], *needles: str) -> None:
-    assert main(argv) == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1, err
-    for n in needles:
-        assert n in err, err
 
 
 def test_a_regions_file_reads_back_what_was_written(tmp_path, strokes):
