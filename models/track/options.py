@@ -110,16 +110,8 @@ def build(cls: Callable[..., T], fields: Mapping[str, Any]) -> T:
     one); a wrong type, or a value the class's own check refuses (its constructor, and
     its ``validate()`` where it has one), is a :class:`ConfigError`."""
     for key, default in _defaults(cls).items():
-        if key not in fields:
-            continue
-        if isinstance(default, bool):
-            flag(fields, key, default)
-        elif isinstance(default, int):
-            integer(fields, key)
-        elif isinstance(default, float):
-            number(fields, key)
-        elif isinstance(default, str):
-            text(fields, key, default)
+        if key in fields:
+            _as_type_of(default, fields, key)  # checked; the value is passed as given
     try:
         obj = cls(**fields)
         if callable(getattr(obj, "validate", None)):
@@ -157,17 +149,26 @@ def override(obj: T, fields: Any, key: str) -> T:
 
 
 def _typed(key: str, field: str, value: Any, current: Any) -> Any:
-    """``value`` for ``key.field`` as the type of its ``current`` value (:func:`override`)."""
-    dotted, name = {f"{key}.{field}": value}, f"{key}.{field}"
+    """``value`` for ``key.field`` as the type of its ``current`` value (:func:`override`);
+    a table (a tuple) only as ``[]``, switched off."""
+    name = f"{key}.{field}"
     if isinstance(current, tuple):
         if value != []:
             raise ConfigError(f"config {name} = {value!r}: a table is only switched off "
                               "here ([]); set another in Python")  # fmt: skip
         return ()
-    if isinstance(current, bool):
-        return flag(dotted, name, current)
-    if isinstance(current, int):
-        return integer(dotted, name)
-    if isinstance(current, float):
-        return number(dotted, name)
-    return text(dotted, name, current)
+    return _as_type_of(current, {name: value}, name)
+
+
+def _as_type_of(default: Any, config: Mapping[str, Any], key: str) -> Any:
+    """``config[key]`` checked, and converted, as a value of ``default``'s type: a boolean,
+    an integer (a JSON integer only), a number or a string; any other kind as it is."""
+    if isinstance(default, bool):
+        return flag(config, key, default)
+    if isinstance(default, int):
+        return integer(config, key)
+    if isinstance(default, float):
+        return number(config, key)
+    if isinstance(default, str):
+        return text(config, key, default)
+    return config[key]
