@@ -224,10 +224,12 @@ def check_regions(regions: Regions, network, fps: float) -> None:
     from models.jorge.network import LabelGraph
 
     graph = LabelGraph(network, with_domains=False, fps=fps)
-    links = regions.parents or [None] * len(regions.strokes)
+    # without the file's links, roots: the rule's links cannot be refused, so the dry run
+    # does not compute them (the labeller will)
+    links = regions.parents or [()] * len(regions.strokes)
     for stroke, par, line_no in zip(regions.strokes, links, regions.lines):
         try:
-            graph.add_stroke(stroke, par)  # checks the stroke, and the links where given
+            graph.add_stroke(stroke, par)  # checks the stroke, and its links
         except InputError as exc:
             raise fail(regions.path, line_no, str(exc)) from None
 
