@@ -63,7 +63,7 @@ import numpy as np
 from dbn.errors import InputError
 from models.jorge.evidence import palette_gain_bin
 from models.jorge.network import LabelGraph, NetworkConfig
-from models.jorge.strokes import StrokeSet
+from models.jorge.strokes import Stroke, StrokeSet
 
 __all__ = [
     "TRAIN_SEQUENCES",
@@ -74,6 +74,8 @@ __all__ = [
     "EventCounts",
     "count_events",
     "fit_parameters",
+    "fit_counts",
+    "fitted_like",
     "FITTED_FIELDS",
     "load_sequence",
     "training_strokes",
@@ -212,23 +214,31 @@ def _count_child(c: EventCounts, truth: frozenset, parents: list[frozenset], sha
                 c.part_part += proper
 
 
-def count_events(strokes: StrokeSet, config: NetworkConfig | None = None, counts: EventCounts | None = None) -> EventCounts:
+def count_events(strokes: StrokeSet | Sequence[Stroke], config: NetworkConfig | None = None,
+                 counts: EventCounts | None = None, *, links: Sequence[Sequence[int]] | None = None,
+                 fps: float | None = None) -> EventCounts:
     """Add the events of one training stroke set to ``counts`` (module docstring).
 
     The strokes are linked by :class:`LabelGraph` with ``config`` (its link gate), as the
-    labeller links them; the true people of each stroke stand for its label.
+    labeller links them, or by ``links`` (one sequence of parent strokes per stroke: a
+    low-level tracker's own, as the labeller takes them); the true people of each stroke
+    stand for its label.
 
     Raises
     ------
     InputError
-        ``strokes`` not a :class:`StrokeSet` (its frame rate sets the link gate).
+        ``strokes`` not a :class:`StrokeSet` (its frame rate sets the link gate) and no
+        ``fps``; ``links`` not one per stroke, or refused by the graph.
     """
-    if not isinstance(strokes, StrokeSet):
-        raise InputError(f"count_events: expected a StrokeSet (it carries the frame rate), got {type(strokes).__name__}")
+    if not isinstance(strokes, StrokeSet) and fps is None:
+        raise InputError(f"count_events: expected a StrokeSet (it carries the frame rate) or fps=, "
+                         f"got {type(strokes).__name__}")
+    if links is not None and len(links) != len(strokes):
+        raise InputError(f"count_events: {len(links)} links for {len(strokes)} strokes (one per stroke)")
     c = EventCounts() if counts is None else counts
-    g = LabelGraph(config, with_domains=False, fps=strokes.fps)
-    for s in strokes:
-        k, _ = g.add_stroke(s)
+    g = LabelGraph(config, with_domains=False, fps=strokes.fps if fps is None else fps)
+    for i, s in enumerate(strokes):
+        k, _ = g.add_stroke(s, None if links is None else links[i])
         rel = g.rel_log_area(k)
         if np.isfinite(rel):
             c.sizes.append((len(s.truth), rel))
@@ -339,6 +349,18 @@ def fit_parameters(stroke_sets: Iterable[StrokeSet], config: NetworkConfig | Non
     c = EventCounts()
     for strokes in stroke_sets:
         count_events(strokes, config, c)
+    return fit_counts(c, config)
+
+
+def fit_counts(c: EventCounts, config: NetworkConfig) -> NetworkConfig:
+    """:func:`fit_parameters` from the event counts of the training strokes (accumulated
+    by :func:`count_events`, e.g. over files with their own links).
+
+    Raises
+    ------
+    InputError
+        No counted stroke has a parent (nothing to fit the transitions on).
+    """
     if c.children == 0:
         raise InputError("fit_parameters: no training stroke with a parent")
     gmax = config.labels.max_group_size
@@ -376,6 +398,24 @@ def fit_parameters(stroke_sets: Iterable[StrokeSet], config: NetworkConfig | Non
     if fitted.keys() != FITTED_FIELDS:  # a fitted field added here must be named there
         raise RuntimeError(f"fit_parameters: sets {sorted(fitted)}, FITTED_FIELDS names {sorted(FITTED_FIELDS)}")
     return replace(config, **fitted)
+
+
+def fitted_like(base: NetworkConfig, fitted: NetworkConfig) -> NetworkConfig:
+    """``fitted`` (:func:`fit_parameters` with ``base``) with what ``base`` has off kept off:
+    a palette table ``base`` holds none of (the default network's count table: the
+    search's ``"ml_gain"``), new groups of more than one where ``base`` has only
+    ``new_group_probs`` ``(1.0,)`` and joins where its ``p_join`` is 0 (the search's
+    ``new_groups`` cells, :func:`_grid_point`). Fitted on the declared training split with
+    :class:`NetworkConfig` itself as ``base``, this is :class:`NetworkConfig` again (what
+    ``dbntrack fit jorge`` writes: your files' parameters in the default's structure)."""
+    off = {f: () for f in ("palette_count_table", "palette_gain_table", "palette_missing_table")
+           if not getattr(base, f)}
+    labels = fitted.labels
+    if tuple(base.labels.new_group_probs) == (1.0,):
+        labels = replace(labels, new_group_probs=(1.0,))
+    if base.labels.p_join == 0:
+        labels = replace(labels, p_join=0.0)
+    return replace(fitted, labels=labels, **off)
 
 
 def _palette_gain_table(triples: list, gmax: int, pool_size: int, bins: Sequence[int]) -> tuple:

@@ -5,6 +5,7 @@ default network's parameters reproduced by the fit on the real data."""
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,8 +18,10 @@ from models.jorge.fit import (
     VALIDATION_SEQUENCES,
     EventCounts,
     count_events,
+    fit_counts,
     fit_parameters,
     fit_split_cover,
+    fitted_like,
     training_strokes,
 )
 from models.jorge.labels import LabelParams
@@ -29,7 +32,10 @@ from models.jorge.network import (
     FITTED_SPLIT_COVER,
     NetworkConfig,
 )
-from models.jorge.strokes import StrokeSet, make_stroke
+from models.jorge.online import label_online
+from models.jorge.strokes import StrokeSet, build_strokes, load_caviar, make_stroke
+
+CAVIAR_XML = Path(__file__).resolve().parents[2] / "data" / "jorge" / "caviar.xml"
 
 
 def _meet_and_part() -> list:
@@ -126,6 +132,9 @@ def test_default_parameters_are_the_fit_on_the_training_split():
     from models.jorge.confirm import refit
 
     assert refit() == NetworkConfig()
+    # dbntrack fit jorge's network (tests/cli/test_cli_fit.py: the same as the API's) on the
+    # training split with the default as its config is the default again
+    assert fitted_like(NetworkConfig(), fit_parameters(sets, NetworkConfig())) == NetworkConfig()
     assert refit({"max_gap_frames": 45}).max_gap_frames == 45
 
 
@@ -299,3 +308,20 @@ def test_the_command_line_search_says_which_lower_point_it_did_not_keep(monkeypa
     assert len(rows) == np.prod([len(v) for k, v in fit.SEARCH_GRID.items() if k != "gate"])
     assert lowest["lowest_not_kept"]["new_groups"] == "joins" and lowest["error"] == pytest.approx(0.29)
     assert chosen["chosen"] == fit.DEFAULT_POINT
+
+
+def test_count_events_takes_links_and_a_frame_rate():
+    strokes = build_strokes(3, load_caviar(CAVIAR_XML))
+    base = NetworkConfig()
+    rule = [tuple(n.parents) for n in label_online(strokes).labeller.graph.nodes]
+    a = count_events(strokes, base)
+    b = count_events(list(strokes), base, links=rule, fps=strokes.fps)
+    assert (a.children, a.new, a.join, a.sizes, a.palette_gains) == (
+        b.children, b.new, b.join, b.sizes, b.palette_gains)
+    with pytest.raises(InputError, match="StrokeSet .* or fps="):
+        count_events(list(strokes), base)
+    with pytest.raises(InputError, match="2 links for"):
+        count_events(strokes, base, links=rule[:2])
+    assert fit_counts(a, base) == fit_parameters([strokes], base)
+    with pytest.raises(InputError, match="no training stroke with a parent"):
+        fit_counts(EventCounts(), base)
