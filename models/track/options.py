@@ -128,9 +128,10 @@ def override(obj: T, fields: Any, key: str) -> T:
     ``fields`` (``config[key]``, e.g. ``{"max_gap_frames": 45}``) laid over it. Its scalar
     fields (those holding a boolean, an integer, a number or a string) take a value of
     that type (an integer where it holds one); a field holding a tuple (a fitted table)
-    can only be switched off, with ``[]`` (the empty tuple); the others keep ``obj``'s. An
-    unknown field, another value for a table, a wrong type, or a value the class's own
-    check refuses (its constructor) is a :class:`ConfigError` naming ``key.field``."""
+    takes nested lists of numbers (e.g. a table ``dbntrack fit`` wrote), or ``[]`` to
+    switch it off; the others keep ``obj``'s. An unknown field, a wrong type, or a value
+    the class's own check refuses (its constructor: a table of the wrong shape) is a
+    :class:`ConfigError` naming ``key.field``."""
     name = type(obj).__name__
     if not isinstance(fields, Mapping):
         raise ConfigError(f"config {key} = {fields!r}: expected an object of {name} fields")
@@ -150,14 +151,48 @@ def override(obj: T, fields: Any, key: str) -> T:
 
 def _typed(key: str, field: str, value: Any, current: Any) -> Any:
     """``value`` for ``key.field`` as the type of its ``current`` value (:func:`override`);
-    a table (a tuple) only as ``[]``, switched off."""
+    a table (a tuple) as :func:`_table` reads it."""
     name = f"{key}.{field}"
     if isinstance(current, tuple):
-        if value != []:
-            raise ConfigError(f"config {name} = {value!r}: a table is only switched off "
-                              "here ([]); set another in Python")  # fmt: skip
-        return ()
+        return _table(name, value, current)
     return _as_type_of(current, {name: value}, name)
+
+
+def _table(name: str, value: Any, current: tuple) -> tuple:
+    """A table field's value: ``[]`` switches it off (the empty tuple); a list, or nested
+    lists, of numbers sets one (nested tuples; integers where ``current``'s entries are
+    integers). Its shape is the class's own check (:func:`override`)."""
+    if not isinstance(value, list) or _holds_bool(value):
+        raise ConfigError(f"config {name} = {_shown(value)}: expected a table (a list, or "
+                          "lists, of numbers), or [] to switch it off")  # fmt: skip
+    leaf = _first_leaf(current)
+    whole = isinstance(leaf, int) and not isinstance(leaf, bool)
+
+    def entry(v: Any) -> Any:
+        if isinstance(v, list):
+            return tuple(entry(x) for x in v)
+        return integer({name: v}, name) if whole else number({name: v}, name)
+
+    try:
+        return entry(value)
+    except ConfigError:
+        raise ConfigError(f"config {name}: expected {'integers' if whole else 'finite numbers'} "
+                          f"in the table, got {_shown(value)}") from None  # fmt: skip
+
+
+def _first_leaf(table: Any) -> Any:
+    """The first entry of a (nested) tuple that is not a tuple; None if it has none."""
+    while isinstance(table, tuple):
+        if not table:
+            return None
+        table = table[0]
+    return table
+
+
+def _shown(value: Any, width: int = 60) -> str:
+    """``repr(value)``, cut to ``width`` characters (a table can be long)."""
+    text = repr(value)
+    return text if len(text) <= width else text[: width - 3] + "..."
 
 
 def _as_type_of(default: Any, config: Mapping[str, Any], key: str) -> Any:

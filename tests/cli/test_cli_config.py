@@ -159,12 +159,25 @@ def test_override_lays_scalar_fields_over_an_instance():
     from models.jorge.network import NetworkConfig
 
     net = NetworkConfig()
-    assert net.palette_missing_table  # a fitted table, switched off with []
+    assert net.palette_missing_table  # a fitted table: switched off with [], or set
     off = override(net, {"palette_missing_table": []}, "network")
     assert off.palette_missing_table == () and off.palette_gain_table == net.palette_gain_table
-    for value in ([[0.0]], False):
-        with pytest.raises(ConfigError, match="network.palette_missing_table = .*switched off"):
-            override(net, {"palette_missing_table": value}, "network")
+    as_json = json.loads(json.dumps({"palette_missing_table": net.palette_missing_table}))
+    assert override(off, as_json, "network") == net  # nested tuples of floats again, exactly
+    bins = override(net, {"palette_gain_bins": [0, 2, 6, 8, 10]}, "network").palette_gain_bins
+    assert bins == (0, 2, 6, 8, 10) and all(type(b) is int for b in bins)
+    for field, value, needle in (
+            ("palette_missing_table", False, "missing_table = False: expected a table"),
+            ("palette_missing_table", [[[True]]], r"missing_table = \[\[\[True\]\]\]: expected a"),
+            ("palette_missing_table", [[0.0]], "palette_missing_table must be a table of log"),
+            ("palette_missing_table", [[[0.0]], [0.0]], "palette_missing_table must be a table"),
+            ("palette_missing_table", [[["x"]]], "missing_table: expected finite numbers in"),
+            ("palette_gain_bins", [0, 2.5], "palette_gain_bins: expected integers in"),
+            ("palette_gain_bins", [], "palette_gain_bins must rise from 0")):
+        with pytest.raises(ConfigError, match=f"config network.*{needle}"):
+            override(net, {field: value}, "network")
+    with pytest.raises(ConfigError, match="config labels: .*new_group_probs must sum to 1"):
+        override(net.labels, {"new_group_probs": [0.5, 0.6]}, "labels")
 
 
 def test_rjmcmc3d_floor_errors_name_their_source(capsys, tmp_path):

@@ -392,7 +392,8 @@ def test_jorge_labeller_settings_reach_the_run_and_eval(tmp_path, capsys):
     for text, needles in (('{"network": {"max_gap_frames": 0}}',
                            ("config network", "max_gap_frames")),
                           ('{"network": {"labels": {}}}', ("non-scalar", "['labels']")),
-                          ('{"labels": {"split_cover": [0.5]}}', ("config labels", "split_cover")),
+                          ('{"labels": {"split_cover": [1.0, 0.0]}}',
+                           ("config labels", "split_cover must be probabilities")),
                           ('{"online": {"max_active": 2.5}}',
                            ("online.max_active = 2.5", "integer")),
                           ('{"network": 3}', ("config network = 3", "NetworkConfig fields"))):
