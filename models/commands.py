@@ -1,6 +1,7 @@
-"""The sub-commands of ``dbntrack``: ``list``, ``track``, ``eval``, ``demo``.
+"""The sub-commands of ``dbntrack``: ``list``, ``track``, ``fit``, ``eval``, ``demo``,
+``sweep``.
 
-``track`` and ``eval`` go through :mod:`models.track` (one runner per tracker, each built
+``track``, ``fit`` and ``eval`` go through :mod:`models.track` (one runner per tracker, each built
 on the registry :func:`models.get` and the protocol of :mod:`models.protocol`). Bad input
 (any :mod:`dbn.errors` class, a missing file) ends the command with exit status 2 and one
 line on stderr naming the file and the line.
@@ -16,7 +17,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["build_parser", "dispatch", "list_trackers", "track", "evaluate"]
+__all__ = ["build_parser", "dispatch", "list_trackers", "track", "fit", "evaluate"]
 
 _EPILOG = "Input formats: docs/formats.md. Example files: tests/data/."
 
@@ -50,6 +51,25 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
     p.add_argument("--config", metavar="FILE", help="JSON file of tracker options")
     p.add_argument("--truth", metavar="FILE", help="truth file: metrics go into summary.json")
     p.add_argument("--method", help="dbn only: exact (default), auto, bk, particle, rbpf")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p = sub.add_parser(
+        "fit", help="fit a tracker's parameters on your files (jorge)", epilog=_EPILOG,
+        description="Fit tracker NAME's parameters on TRAIN files whose truth you know; write "
+        "OUTDIR/config.json (for `dbntrack track NAME --config`), summary.json and fit.png, with "
+        "the error of the config's and the fitted parameters on the training and the held-out "
+        "(--validate) files.",
+    )  # fmt: skip
+    p.add_argument("name", metavar="NAME", help="tracker with a fit (jorge)")
+    p.add_argument("train", metavar="TRAIN", nargs="+", help="training files")
+    p.add_argument("--validate", metavar="FILE", nargs="+", default=[],
+                   help="held-out files: scored, never fitted on")  # fmt: skip
+    p.add_argument("-o", "--outdir", required=True, help="output folder (created)")
+    p.add_argument("--seed", type=_seed, default=0, help="first seed of the simulated parts "
+                   "(default 0)")  # fmt: skip
+    p.add_argument("--seeds", type=_positive, default=1, help="stroke sets simulated per box "
+                   "file, seeds SEED, SEED + 1, ... (default 1)")  # fmt: skip
+    p.add_argument("--config", metavar="FILE", help="JSON file of tracker options: the "
+                   "settings the fit keeps")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p = sub.add_parser("eval", help="score a result file against a truth file", epilog=_EPILOG,
                        description="Metrics of tracker NAME's RESULT file against TRUTH: "
@@ -145,6 +165,46 @@ def track(args: argparse.Namespace) -> dict:
     return summary
 
 
+def fit(args: argparse.Namespace) -> dict:
+    """Run ``dbntrack fit``; returns the summary written to ``OUTDIR/summary.json``."""
+    from dbn.errors import ConfigError, InputError, in_file
+    from models.track import runner
+    from models.track.context import RunContext, clean, versions, write_summary
+
+    mod = runner(args.name)
+    if not hasattr(mod, "fit"):
+        raise InputError(f"tracker {args.name!r} has no fit here; fit the parameters of "
+                         "jorge, or see the tracker's own fitting in its module")  # fmt: skip
+    config: dict = {}
+    if args.config:
+        from models.io.table import read_json_config
+
+        config = read_json_config(args.config)
+    ctx = RunContext(args.name, Path(args.outdir), args.seed)
+    if args.quiet:
+        ctx.quiet = True
+    t0 = time.perf_counter()
+    summary = {"tracker": args.name, "train": [str(Path(p).resolve()) for p in args.train],
+               "validate": [str(Path(p).resolve()) for p in args.validate],
+               "seed": args.seed, "seeds": args.seeds, "config": dict(config)}  # fmt: skip
+    try:
+        summary.update(mod.fit(ctx, list(args.train), list(args.validate), config, args.seeds))
+    except ConfigError as exc:
+        raise (in_file(exc, args.config) if args.config else exc) from None
+    ctx.timings["total"] = round(time.perf_counter() - t0, 4)
+    summary["timings_s"] = ctx.timings
+    summary["versions"] = versions()
+    write_summary(ctx.outdir / "summary.json", summary)
+    for row in summary["files"]:
+        print(f"{row['split']:>10}  {Path(row['file']).name}: {row['strokes']} strokes, error "
+              f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted)")
+    if not args.validate:
+        print(f"{args.name}: no --validate file: an error on the files fitted on is not a result")
+    print(f"{args.name}: wrote {', '.join(summary['outputs'])}, summary.json to {ctx.outdir}")
+    print(json.dumps(clean(summary["metrics"])))
+    return summary
+
+
 def evaluate(args: argparse.Namespace) -> dict:
     """Run ``dbntrack eval``; prints the metrics."""
     from models.track import runner
@@ -197,6 +257,8 @@ def dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
             track(args)
         elif args.command == "eval":
             evaluate(args)
+        elif args.command == "fit":
+            fit(args)
         elif args.command == "demo":
             unknown = [p for p in args.only or [] if p not in args.demo_names]
             if unknown:  # argparse's error: usage, one line, exit status 2

@@ -79,7 +79,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
         raise ConfigError(f"config fps = {fps!r}: expected a number > 0")
     read = _regions if is_regions(inputs[0]) else _boxes
     strokes, steps, fps, params, head = read(ctx, inputs[0], config, own, fps, online)
-    labels, parents = _label(ctx, online, steps, fps)
+    labels, parents = label_steps(ctx, online, steps, fps)
     network = {k: getattr(online.network, k) for k in overrides.get("network", {})}
     write_strokes(ctx.outdir / "strokes.csv", strokes, labels, parents=parents, fps=fps,
                   network=network or None, **head)  # fmt: skip
@@ -91,13 +91,23 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     return {"parameters": params, "outputs": ["strokes.csv", "tracks.txt", "strokes.png"]}
 
 
-def _label(ctx: RunContext, online, steps: list, fps: float) -> tuple[list, list]:
+def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
+        seeds: int = 1) -> dict:
+    """``dbntrack fit jorge``: the network's parameters fitted on your files
+    (:func:`models.track.jorge_fit.fit`)."""
+    from models.track.jorge_fit import fit as fit_files
+
+    return fit_files(ctx, train, validate, config, seeds)
+
+
+def label_steps(ctx: RunContext, online, steps: list, fps: float,
+           phase: str = "label") -> tuple[list, list]:
     """The registry's labeller over ``steps`` (strokes, or :class:`LinkedStroke`), then its
-    re-identification pass: ``(labels, parents)``, one per stroke."""
+    re-identification pass, timed as ``phase``: ``(labels, parents)``, one per stroke."""
     import models
 
     tracker = models.get("jorge").make(online, fps=fps)
-    with ctx.timed("label"):  # fold: one labeller stepped in place (run's copies are quadratic)
+    with ctx.timed(phase):  # fold: one labeller stepped in place (run's copies are quadratic)
         state, _ = tracker.fold(ctx.key(), steps, ctx.bar("strokes"))
         final = state.labeller.finish()  # the re-identification pass (the batch's last step)
     labels = [final[k] for k in range(len(steps))]
@@ -109,21 +119,31 @@ def _boxes(ctx: RunContext, path: str, config: dict, own: set, fps: float | None
     fps, parameters, header)``."""
     from models.jorge.strokes import StrokeConfig, build_strokes
 
-    scfg = build(StrokeConfig, {k: v for k, v in config.items() if k not in own})
-    view = _view(config, path)
     with ctx.timed("read"):
-        truth = read_boxes(path, view)
+        truth, scfg, view, source = read_box_truth(ctx, path, config, own, fps)
         strokes = build_strokes(ctx.seed, truth, scfg)
-    source = "config" if fps is not None else frame_rate_source(path)
-    if source.startswith("assumed"):
-        ctx.note(source)
-    if view is not None:
-        ctx.note(f"tracks in metres: boxes from a SIMULATED camera, {view!r}")
     params = {"fps_source": source, "num_frames": truth.num_frames, "sequence": truth.name,
               "simulated_view": None if view is None else repr(view), "input": "boxes",
               **{k: getattr(scfg, k) for k in StrokeConfig.__dataclass_fields__}}  # fmt: skip
     fps = truth.fps if fps is None else fps
     return strokes, list(strokes), fps, params, {"seed": ctx.seed, "view": view}
+
+
+def read_box_truth(ctx: RunContext, path: str, config: dict, own: set, fps: float | None):
+    """A box file's people and the SIMULATED stroke builder's settings (the config's keys
+    outside ``own``): ``(truth, stroke config, view, fps source)``; notes an assumed frame
+    rate and a SIMULATED camera."""
+    from models.jorge.strokes import StrokeConfig
+
+    scfg = build(StrokeConfig, {k: v for k, v in config.items() if k not in own})
+    view = _view(config, path)
+    truth = read_boxes(path, view)
+    source = "config" if fps is not None else frame_rate_source(path)
+    if source.startswith("assumed"):
+        ctx.note(source)
+    if view is not None:
+        ctx.note(f"tracks in metres: boxes from a SIMULATED camera, {view!r}")
+    return truth, scfg, view, source
 
 
 def _regions(ctx: RunContext, path: str, config: dict, own: set, fps: float | None, online):
@@ -133,18 +153,8 @@ def _regions(ctx: RunContext, path: str, config: dict, own: set, fps: float | No
     :class:`ConfigError`); the file is checked against the network before any labelling."""
     from models.jorge.api import LinkedStroke
 
-    builder = sorted(set(config) - own) + (["view"] if "view" in config else [])
-    if builder:
-        raise ConfigError(f"config {builder}: stroke-builder settings apply to box files, not "
-                          f"to a regions file's strokes")  # fmt: skip
     with ctx.timed("read"):
-        regions = read_regions(path)
-    source = "config" if fps is not None else "file" if regions.fps is not None else None
-    if source is None:
-        source = f"assumed {MOT_DEFAULT_FPS:g} fps (no '# fps=' line in {path})"
-        ctx.note(source)
-    fps = fps if fps is not None else regions.fps if regions.fps is not None else MOT_DEFAULT_FPS
-    check_regions(regions, online.network, fps)
+        regions, fps, source = read_checked_regions(ctx, path, config, own, fps, online)
     strokes = regions.strokes
     steps = strokes if regions.parents is None else [
         LinkedStroke(s, p) for s, p in zip(strokes, regions.parents)]
@@ -153,6 +163,34 @@ def _regions(ctx: RunContext, path: str, config: dict, own: set, fps: float | No
               "num_frames": int(max(s.end for s in strokes) - strokes[0].start + 1),
               "sequence": Path(path).name}  # fmt: skip
     return strokes, list(steps), fps, params, {"seed": None, "view": None, "source": "regions"}
+
+
+def read_checked_regions(ctx: RunContext, path: str, config: dict, own: set,
+                         fps: float | None, online):
+    """A regions file, checked against ``online``'s network before any labelling: ``(regions,
+    fps, fps source)``. A stroke-builder setting (a config key outside ``own``, or
+    ``view``) is a :class:`ConfigError`: they apply to box files only."""
+    builder = sorted(set(config) - own) + (["view"] if "view" in config else [])
+    if builder:
+        raise ConfigError(f"config {builder}: stroke-builder settings apply to box files, not "
+                          f"to a regions file's strokes")  # fmt: skip
+    regions = read_regions(path)
+    source = "config" if fps is not None else "file" if regions.fps is not None else None
+    if source is None:
+        source = f"assumed {MOT_DEFAULT_FPS:g} fps (no '# fps=' line in {path})"
+        ctx.note(source)
+    fps = fps if fps is not None else regions.fps if regions.fps is not None else MOT_DEFAULT_FPS
+    check_regions(regions, online.network, fps)
+    return regions, fps, source
+
+
+def require_truth(regions, why: str) -> None:
+    """Refuse a regions file without the people of every stroke (``truth``), naming the
+    first line without, for ``why`` (e.g. ``"scoring"``)."""
+    if not regions.has_truth:
+        k = next(i for i, s in enumerate(regions.strokes) if not s.truth)
+        raise InputError(f"{regions.path}:{regions.lines[k]}: stroke {k} has no truth: {why} "
+                         "needs the people of every stroke (a 'truth' list on every line)")
 
 
 def _view(config: dict, path: str) -> ObliqueView | None:
@@ -398,10 +436,7 @@ def _check_rows(result: str, truth: str, made: str, rows: list, strokes) -> None
 def _truth_regions(truth: str) -> list:
     """The strokes of a regions file scored against: each must have its ``truth``."""
     regions = read_regions(truth)
-    if not regions.has_truth:
-        k = next(i for i, s in enumerate(regions.strokes) if not s.truth)
-        raise InputError(f"{truth}:{regions.lines[k]}: stroke {k} has no truth: scoring needs "
-                         "the people of every stroke (a 'truth' list on every line)")  # fmt: skip
+    require_truth(regions, "scoring")
     return regions.strokes
 
 
