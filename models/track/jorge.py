@@ -25,7 +25,8 @@ labeller's settings laid over its fitted defaults (:func:`labeller_config`): ``n
 ``{"max_gap_frames": 45}``), ``labels`` (of :class:`~models.jorge.labels.LabelParams`
 over :data:`~models.jorge.config.FITTED_LABELS`, e.g. ``{"max_group_size": 6}``) and
 ``online`` (of :class:`~models.jorge.online.OnlineConfig`, e.g. ``{"max_active": 24}``);
-a fitted table is only switched off, ``[]``.
+a fitted table is set as nested lists (as ``dbntrack fit jorge`` writes it,
+:mod:`models.track.jorge_fit`) or switched off, ``[]``.
 
 ``strokes.csv``'s header keeps the seed, the stroke settings, the view and the frame rate,
 so ``dbntrack eval`` (and ``--truth``) rebuilds the same strokes from the box file; its
