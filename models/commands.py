@@ -1,8 +1,8 @@
 """The sub-commands of ``dbntrack``: ``list``, ``track``, ``fit``, ``eval``, ``demo``,
 ``sweep``.
 
-``track``, ``fit`` and ``eval`` go through :mod:`models.track` (one runner per tracker, each built
-on the registry :func:`models.get` and the protocol of :mod:`models.protocol`). Bad input
+``track``, ``fit`` and ``eval`` go through :mod:`models.track` (one runner per tracker, each
+built on the registry :func:`models.get` and the protocol of :mod:`models.protocol`). Bad input
 (any :mod:`dbn.errors` class, a missing file) ends the command with exit status 2 and one
 line on stderr naming the file and the line.
 """
@@ -168,13 +168,14 @@ def track(args: argparse.Namespace) -> dict:
 def fit(args: argparse.Namespace) -> dict:
     """Run ``dbntrack fit``; returns the summary written to ``OUTDIR/summary.json``."""
     from dbn.errors import ConfigError, InputError, in_file
-    from models.track import runner
+    from models.track import available, runner
     from models.track.context import RunContext, clean, versions, write_summary
 
     mod = runner(args.name)
     if not hasattr(mod, "fit"):
-        raise InputError(f"tracker {args.name!r} has no fit here; fit the parameters of "
-                         "jorge, or see the tracker's own fitting in its module")  # fmt: skip
+        with_fit = [n for n in available() if hasattr(runner(n), "fit")]
+        raise InputError(f"tracker {args.name!r} has no fit; trackers with one: "
+                         f"{', '.join(with_fit)}")  # fmt: skip
     config: dict = {}
     if args.config:
         from models.io.table import read_json_config

@@ -234,7 +234,8 @@ def count_events(strokes: StrokeSet | Sequence[Stroke], config: NetworkConfig | 
         raise InputError(f"count_events: expected a StrokeSet (it carries the frame rate) or fps=, "
                          f"got {type(strokes).__name__}")
     if links is not None and len(links) != len(strokes):
-        raise InputError(f"count_events: {len(links)} links for {len(strokes)} strokes (one per stroke)")
+        raise InputError(f"count_events: {len(links)} links for {len(strokes)} strokes "
+                         "(one per stroke)")
     c = EventCounts() if counts is None else counts
     g = LabelGraph(config, with_domains=False, fps=strokes.fps if fps is None else fps)
     for i, s in enumerate(strokes):

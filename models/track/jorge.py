@@ -102,7 +102,7 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
 
 
 def label_steps(ctx: RunContext, online, steps: list, fps: float,
-           phase: str = "label") -> tuple[list, list]:
+                phase: str = "label") -> tuple[list, list]:
     """The registry's labeller over ``steps`` (strokes, or :class:`LinkedStroke`), then its
     re-identification pass, timed as ``phase``: ``(labels, parents)``, one per stroke."""
     import models

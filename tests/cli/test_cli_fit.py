@@ -67,9 +67,11 @@ def test_fit_writes_the_fitted_network_and_track_runs_it(tmp_path, capsys):
     out = tmp_path / "run"
     conf = tmp_path / "fitted.json"
     conf.write_text(json.dumps({k: v for k, v in written.items() if k != "gaps_per_100"}))
-    assert main(["track", "jorge", str(held), "-o", str(out), "--config", str(conf), "--quiet"]) == 0
+    argv = ["track", "jorge", str(held), "-o", str(out), "--config", str(conf), "--quiet"]
+    assert main(argv) == 0
     _, got = read_strokes(out / "strokes.csv")
-    assert [r["label"] for r in got] == list(label_online(strokes, OnlineConfig(network=want)).labels)
+    want_labels = label_online(strokes, OnlineConfig(network=want)).labels
+    assert [r["label"] for r in got] == list(want_labels)
 
 
 def test_fit_counts_a_regions_files_own_links(tmp_path):
@@ -115,12 +117,14 @@ def test_fit_refusals(tmp_path, capsys):
     lonely.write_text(lines[0] + "\n" + lines[1] + "\n")
     _bad(capsys, ["fit", "jorge", str(lonely), "-o", str(out)], "has a parent", "nothing to fit")
     cfg = tmp_path / "cfg.json"
-    for text, needles in (('{"gap_min": 3}', ("cfg.json", "['gap_min']", "every file is a regions")),
-                          ('{"network": {"size_sigma": -1.0}}', ("cfg.json", "size_sigma")),
-                          ('{"nope": 1}', ("cfg.json", "unknown config key(s) ['nope']"))):
+    for text, needles in (
+            ('{"gap_min": 3}', ("cfg.json", "['gap_min']", "every file is a regions")),
+            ('{"network": {"size_sigma": -1.0}}', ("cfg.json", "size_sigma")),
+            ('{"nope": 1}', ("cfg.json", "unknown config key(s) ['nope']"))):
         cfg.write_text(text)
         _bad(capsys, ["fit", "jorge", str(plain), "-o", str(out), "--config", str(cfg)], *needles)
-    _bad(capsys, ["fit", "localization", str(plain), "-o", str(out)], "'localization' has no fit")
+    _bad(capsys, ["fit", "localization", str(plain), "-o", str(out)],
+         "'localization' has no fit; trackers with one: jorge")  # fmt: skip
     assert not (out / "config.json").exists() and not (out / "summary.json").exists()
     with pytest.raises(SystemExit):  # argparse: usage and exit status 2
         main(["fit", "jorge", str(XML), "-o", str(out), "--seeds", "0"])
