@@ -101,7 +101,8 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
 
 def list_trackers(as_json: bool = False) -> None:
     """Print the registry (and the generic ``dbn`` runner): what each tracks, the files
-    ``dbntrack track`` reads and what one protocol step takes."""
+    ``dbntrack track`` reads, what one protocol step takes and whether ``dbntrack fit``
+    fits it."""
     import models
     from models.track import available, runner
 
@@ -114,7 +115,9 @@ def list_trackers(as_json: bool = False) -> None:
             e = models.get(name)
             info = {"name": name, "seed_paper": e.seed_paper, "tracks": e.tracks,
                     "step_input": list(e.input_formats)}  # fmt: skip
-        info["track_inputs"] = list(runner(name).INPUTS) if name in runners else []
+        mod = runner(name) if name in runners else None
+        info["track_inputs"] = list(mod.INPUTS) if mod is not None else []
+        info["fit"] = hasattr(mod, "fit")  # dbntrack fit NAME
         if as_json:
             print(json.dumps(info))
             continue
@@ -123,6 +126,8 @@ def list_trackers(as_json: bool = False) -> None:
         print("  dbntrack track inputs: " + "\n                         ".join(files))
         for fmt in info["step_input"]:
             print(f"  protocol step input: {fmt}")
+        if info["fit"]:
+            print("  dbntrack fit: yes (its parameters fitted on your files)")
 
 
 def track(args: argparse.Namespace) -> dict:

@@ -40,8 +40,11 @@ def _bad(capsys, argv: list[str], *needles: str) -> None:
 
 def test_list_names_every_runner(capsys):
     assert main(["list", "--json"]) == 0
-    names = [json.loads(line)["name"] for line in capsys.readouterr().out.splitlines()]
-    assert {"dbn", "localization"} <= set(names)
+    rows = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert {"dbn", "localization"} <= {r["name"] for r in rows}
+    assert [r["name"] for r in rows if r["fit"]] == ["jorge"]  # dbntrack fit NAME
+    assert main(["list"]) == 0
+    assert "dbntrack fit: yes" in capsys.readouterr().out.split("\njorge\n")[1]
 
 
 def test_unknown_tracker_and_demo_part_exit_2(capsys, tmp_path):
@@ -697,7 +700,7 @@ def test_rjmcmc3d_bad_files(tmp_path, capsys):
          "different numbers of masks", "view0: 6", f"{short}: 5")
 
 
-@pytest.mark.parametrize("command", ["track", "eval", "list", "demo"])
+@pytest.mark.parametrize("command", ["track", "fit", "eval", "list", "demo", "sweep"])
 def test_every_subcommand_has_help(capsys, command):
     with pytest.raises(SystemExit) as exc:
         main([command, "--help"])
