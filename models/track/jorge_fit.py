@@ -193,12 +193,16 @@ def _plain(value):
 
 def _plot(ctx: RunContext, files: list[dict]) -> None:
     """``fit.png``: each file's error with the config's and the fitted network."""
-    size = (max(4.0, 0.9 * len(files) + 2), 3.2)
+    size = (min(14.0, max(4.0, 0.45 * len(files) + 2)), 4.0)
     with ctx.figure("fit.png", figsize=size) as (_, ax):
         x = np.arange(len(files))
         for dx, name in ((-0.2, "config"), (0.2, "fitted")):
             ax.bar(x + dx, [f[f"error_{name}"] for f in files], 0.4, label=f"{name} network")
         ax.set_xticks(x, [("" if f["split"] == "train" else "held out\n") + Path(f["file"]).name
                           for f in files], rotation=30, ha="right", fontsize=7)  # fmt: skip
+        held = [i for i, f in enumerate(files) if f["split"] != "train"]
+        if held and held[0] > 0:  # the training files first, then the held-out ones
+            ax.axvline(held[0] - 0.5, color="0.5", lw=0.8, ls="--")
         ax.set_ylabel("labelling error")
+        ax.set_title("dbntrack fit: each file's error, config's and fitted network", fontsize=9)
         ax.legend(fontsize=7)
