@@ -1,4 +1,5 @@
-"""A sweep task that runs ``dbntrack track`` on your own files, one run per grid point.
+"""Sweep tasks that run ``dbntrack track`` (:func:`track_task`) or ``dbntrack fit``
+(:func:`fit_task`) on your own files, one run per grid point.
 
 In a sweep configuration (:func:`models.experiments.load_sweep`)::
 
@@ -40,9 +41,10 @@ from typing import Any
 
 from dbn.errors import ConfigError, InputError
 
-__all__ = ["track_task", "nest_params", "data_arguments"]
+__all__ = ["track_task", "fit_task", "nest_params", "data_arguments", "fit_arguments"]
 
 _KEPT = ("parameters", "metrics", "timings_s", "outputs")
+_KEPT_FIT = (*_KEPT, "files")
 
 
 def track_task(point) -> dict[str, Any]:
@@ -111,6 +113,86 @@ def data_arguments(data: str) -> tuple[list[str], str | None, str | None]:
     if not inputs:
         raise InputError(f"data {data!r}: no input file")
     return inputs, options["--truth"], options["--keep"]
+
+
+def fit_task(point) -> dict[str, Any]:
+    """Run ``dbntrack fit`` for one :class:`~models.experiments.GridPoint`: ``data`` is the
+    rest of a fit command line, ``TRAIN... [--validate HELD...] [--seeds N]`` (and ``--keep
+    DIR`` to keep each point's ``config.json`` in ``DIR/POINT_ID``), the seed is ``--seed``
+    (the first of a box file's SIMULATED stroke sets), and the parameters are the config:
+    the settings the fit keeps (dotted names as for :func:`track_task`). The record keeps
+    the summary's ``parameters``, ``metrics`` (the training and held-out errors of the
+    config's and the fitted network), ``files``, ``timings_s`` and ``outputs``.
+
+    Settings chosen by the held-out error have seen the held-out files: score the chosen
+    ones on files that took no part before quoting an error.
+
+    Raises
+    ------
+    InputError
+        ``data`` that is not a fit command line (:func:`fit_arguments`), a seed outside
+        0 .. 2**32 - 1; and any error of the fit itself.
+    """
+    from models.commands import fit
+    from models.track.context import clean
+
+    train, validate, seeds, keep = fit_arguments(point.data)
+    if not 0 <= point.seed < 2**32:
+        raise InputError(f"seed {point.seed}: dbntrack fit takes 0 to 2**32 - 1")
+    config = nest_params(point.params)
+    with tempfile.TemporaryDirectory(prefix="dbntrack-sweep-") as tmp:
+        cfg = Path(tmp) / "config.json"
+        cfg.write_text(json.dumps(config))
+        out = Path(tmp) / "out" if keep is None else Path(keep) / point.id
+        args = argparse.Namespace(name=point.tracker, train=train, validate=validate,
+                                  outdir=str(out), seed=point.seed, seeds=seeds,
+                                  config=str(cfg), quiet=True)  # fmt: skip
+        with contextlib.redirect_stdout(io.StringIO()):  # the CLI's report
+            summary = fit(args)
+    kept = {} if keep is None else {"outdir": str(out.resolve())}
+    return clean({**{k: summary[k] for k in _KEPT_FIT if k in summary}, **kept})
+
+
+class _DataParser(argparse.ArgumentParser):
+    """An argument parser whose errors are :class:`InputError` (argparse's own exit the
+    process; a sweep point fails in its record instead)."""
+
+    def error(self, message: str):  # type: ignore[override]
+        raise InputError(message)
+
+
+def fit_arguments(data: str) -> tuple[list[str], list[str], int, str | None]:
+    """``(train, validate, seeds, keep)`` of a :func:`fit_task` point's ``data``: a
+    ``dbntrack fit`` command line after the tracker's name, without ``-o``, ``--seed`` and
+    ``--config`` (the sweep's own), with ``--keep DIR`` where the outputs are kept.
+
+    Raises
+    ------
+    InputError
+        Quoting that does not close, an option other than ``--validate``, ``--seeds`` and
+        ``--keep``, a value missing or not valid, no training file.
+    """
+    parser = _DataParser(prog="data", add_help=False, allow_abbrev=False)
+    parser.add_argument("train", nargs="+")
+    parser.add_argument("--validate", nargs="+", default=[])
+    parser.add_argument("--seeds", type=int, default=1)
+    parser.add_argument("--keep")
+    try:
+        words = shlex.split(data)
+    except ValueError as exc:
+        raise InputError(f"data {data!r}: {exc}") from None
+    own = [w for w in words if w.split("=")[0] in ("-o", "--outdir", "--seed", "--config")]
+    if own:
+        raise InputError(f"data {data!r}: option {own[0]!r}: the sweep sets -o, --seed and "
+                         "--config")  # fmt: skip
+    try:
+        args = parser.parse_args(words)
+    except InputError as exc:
+        raise InputError(f"data {data!r}: {exc} (a fit command line: TRAIN... "
+                         "[--validate HELD...] [--seeds N] [--keep DIR])") from None
+    if args.seeds < 1:
+        raise InputError(f"data {data!r}: --seeds {args.seeds}: at least 1")
+    return args.train, args.validate, args.seeds, args.keep
 
 
 def nest_params(params: Iterable[tuple[str, Any]]) -> dict[str, Any]:

@@ -11,7 +11,13 @@ import pytest
 from dbn.errors import ConfigError, FileFormatError, InputError
 from models.cli import main
 from models.experiments import GridPoint, load_sweep, run_grid
-from models.track.sweep_task import data_arguments, nest_params, track_task
+from models.track.sweep_task import (
+    data_arguments,
+    fit_arguments,
+    fit_task,
+    nest_params,
+    track_task,
+)
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 
@@ -116,3 +122,40 @@ def test_keep_writes_each_points_outputs_under_its_id(tmp_path):
     assert got["outdir"] == str(out.resolve()) and "metrics" not in got
     assert sorted(got["outputs"]) == sorted(p.name for p in out.iterdir() if p.name != "summary.json")
     assert json.loads((out / "summary.json").read_text())["parameters"] == got["parameters"]
+
+
+def test_fit_arguments_are_a_fit_command_line():
+    got = fit_arguments("'my a.jsonl' b.xml --validate c.jsonl --seeds 2 --keep k")
+    assert got == (["my a.jsonl", "b.xml"], ["c.jsonl"], 2, "k")
+    assert fit_arguments("a.jsonl") == (["a.jsonl"], [], 1, None)
+    for data, needle in (("a --seed 3", "option '--seed'"), ("a --seed=3", "option '--seed=3'"),
+                         ("a -o out", "option '-o'"), ("--validate c", "required: train"),
+                         ("a --seeds x", "invalid int value: 'x'"), ("a --seeds 0", "at least 1"),
+                         ("a --val c", "unrecognized arguments: --val"),
+                         ("a --validate", "expected at least one"), ("'a", "closing quotation")):
+        with pytest.raises(InputError, match=needle):
+            fit_arguments(data)
+
+
+def test_a_sweep_of_fits_equals_the_fits_themselves(tmp_path):
+    """Each point is the ``dbntrack fit`` its data, seed and parameters spell."""
+    xml = DATA / "jorge" / "caviar.xml"
+    held = tmp_path / "held.jsonl"
+    shutil.copy(DATA / "jorge" / "regions.jsonl", held)
+    grid = [GridPoint("jorge", f"'{xml}' --validate '{held}' --seeds 2 --keep '{tmp_path}/k'",
+                      5, (("labels.max_group_size", g),)) for g in (3, 5)]
+    records = run_grid(fit_task, grid, serial=True, progress=False)
+    assert [r["status"] for r in records] == ["ok", "ok"], records
+    for rec, point, g in zip(records, grid, (3, 5)):
+        cfg = tmp_path / "cfg.json"
+        cfg.write_text(json.dumps({"labels": {"max_group_size": g}}))
+        out = tmp_path / f"direct{g}"
+        assert main(["fit", "jorge", str(xml), "--validate", str(held), "--seeds", "2",
+                     "--seed", "5", "--config", str(cfg), "-o", str(out), "--quiet"]) == 0
+        want = json.loads((out / "summary.json").read_text())
+        for key in ("metrics", "files", "parameters"):
+            assert rec["result"][key] == want[key], key
+        kept = json.loads((Path(rec["result"]["outdir"]) / "config.json").read_text())
+        assert Path(rec["result"]["outdir"]) == (tmp_path / "k" / point.id).resolve()
+        assert kept == json.loads((out / "config.json").read_text())
+        assert kept["labels"]["max_group_size"] == g
