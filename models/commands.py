@@ -70,6 +70,9 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
                    "file, seeds SEED, SEED + 1, ... (default 1)")  # fmt: skip
     p.add_argument("--config", metavar="FILE", help="JSON file of tracker options: the "
                    "settings the fit keeps")  # fmt: skip
+    p.add_argument("--prior-strength", type=_non_negative, default=0.0, metavar="LAMBDA",
+                   help="pseudo-observations per parameter row of the config's network as a "
+                   "prior, for fits on little data (default 0: the plain fit)")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p = sub.add_parser("eval", help="score a result file against a truth file", epilog=_EPILOG,
                        description="Metrics of tracker NAME's RESULT file against TRUTH: "
@@ -192,9 +195,11 @@ def fit(args: argparse.Namespace) -> dict:
     t0 = time.perf_counter()
     summary = {"tracker": args.name, "train": [str(Path(p).resolve()) for p in args.train],
                "validate": [str(Path(p).resolve()) for p in args.validate],
-               "seed": args.seed, "seeds": args.seeds, "config": dict(config)}  # fmt: skip
+               "seed": args.seed, "seeds": args.seeds, "prior_strength": args.prior_strength,
+               "config": dict(config)}  # fmt: skip
     try:
-        summary.update(mod.fit(ctx, list(args.train), list(args.validate), config, args.seeds))
+        summary.update(mod.fit(ctx, list(args.train), list(args.validate), config, args.seeds,
+                               args.prior_strength))  # fmt: skip
     except ConfigError as exc:
         raise (in_file(exc, args.config) if args.config else exc) from None
     ctx.timings["total"] = round(time.perf_counter() - t0, 4)
@@ -239,6 +244,17 @@ def _int_in(lo: int, hi: int | None):
         return value
 
     return parse
+
+
+def _non_negative(text: str) -> float:
+    """An argparse type: a finite float >= 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value >= 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text} is not a finite number >= 0")
+    return value
 
 
 # --seed: numpy's generators refuse a negative seed, and some of the trackers' seed

@@ -1,4 +1,4 @@
-"""``dbntrack fit jorge TRAIN... --validate HELD...``: the label network's parameters fitted on
+r"""``dbntrack fit jorge TRAIN... --validate HELD...``: the label network's parameters fitted on
 your files, written as a config for ``dbntrack track jorge --config`` (seed 004; the fit is
 :mod:`models.jorge.fit`).
 
@@ -14,9 +14,14 @@ tables (:data:`models.jorge.fit.FITTED_FIELDS`).
 
 The network fitted is the config's (:func:`models.track.jorge.labeller_config`: the link
 rule, ``labels.max_group_size``, a table switched off, which stays off,
-:func:`models.jorge.fit.fitted_like`). ``OUTDIR/config.json`` is the config with the fitted
-fields written over its ``network`` and ``labels``, its other keys kept, so the same
-stroke settings build the strokes you label with it.
+:func:`models.jorge.fit.fitted_like`). On a few files, ``--prior-strength`` :math:`\lambda`
+shrinks every CPD row towards the config's network (the default: the fit on the shared
+data's training split) with :math:`\lambda` pseudo-observations
+(:mod:`models.jorge.fit_prior`): 0, the default, is the plain fit.
+
+``OUTDIR/config.json`` is the config with the fitted fields written over its ``network``
+and ``labels``, its other keys kept, so the same stroke settings build the strokes you
+label with it.
 
 Hold files out (``--validate``): the summary gives each file's labelling error with the
 config's network and with the fitted one, and their means over the training and the
@@ -67,11 +72,14 @@ class FitSet(NamedTuple):
 
 
 def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
-        seeds: int = 1) -> dict:
+        seeds: int = 1, prior_strength: float = 0.0) -> dict:
     """Fit on ``train``, score on ``train`` and ``validate``; write ``config.json`` and
-    ``fit.png``. Returns ``parameters``, ``metrics``, ``files`` (one row per file) and
-    ``outputs`` for ``summary.json``."""
+    ``fit.png``. ``prior_strength`` > 0 shrinks each CPD row towards the config's network
+    with that many pseudo-observations (:func:`models.jorge.fit_prior.shrink`). Returns
+    ``parameters``, ``metrics``, ``files`` (one row per file) and ``outputs`` for
+    ``summary.json``."""
     from models.jorge.fit import EventCounts, count_events, fit_counts, fitted_like
+    from models.jorge.fit_prior import shrink
     from models.jorge.strokes import StrokeConfig
 
     own = {"fps", "split_cover", "view", *LABELLER_KEYS}
@@ -94,14 +102,16 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
         if counts.children == 0:
             raise InputError(f"no stroke of the training files {train} has a parent (a link "
                              "to an earlier stroke): nothing to fit the network's transitions on")
-        fitted = replace(base, network=fitted_like(base.network, fit_counts(counts, base.network)))
+        ml = fit_counts(counts, base.network)
+        shrunk = shrink(ml, base.network, counts, prior_strength)
+        fitted = replace(base, network=fitted_like(base.network, shrunk))
     files = [_score_file(ctx, p, read[p], base, fitted, "train" if p in train else "validation")
              for p in ctx.progress(read, len(read), "files")]  # fmt: skip
     out = fitted_config(config, fitted.network)
     (ctx.outdir / "config.json").write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
     _plot(ctx, files)
     gmax = base.network.labels.max_group_size
-    params = {"seeds": seeds, "split_cover": split_cover,
+    params = {"seeds": seeds, "split_cover": split_cover, "prior_strength": prior_strength,
               "training_strokes": sum(len(fs.strokes) for p in train for fs in read[p]),
               "counted_children": counts.children,
               "strokes_beyond_max_group_size": sum(len(s.truth) > gmax for p in train

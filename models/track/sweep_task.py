@@ -37,11 +37,11 @@ import shlex
 import tempfile
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from dbn.errors import ConfigError, InputError
 
-__all__ = ["track_task", "fit_task", "nest_params", "data_arguments", "fit_arguments"]
+__all__ = ["track_task", "fit_task", "nest_params", "data_arguments", "fit_arguments", "FitData"]
 
 _KEPT = ("parameters", "metrics", "timings_s", "outputs")
 _KEPT_FIT = (*_KEPT, "files")
@@ -117,8 +117,9 @@ def data_arguments(data: str) -> tuple[list[str], str | None, str | None]:
 
 def fit_task(point) -> dict[str, Any]:
     """Run ``dbntrack fit`` for one :class:`~models.experiments.GridPoint`: ``data`` is the
-    rest of a fit command line, ``TRAIN... [--validate HELD...] [--seeds N]`` (and ``--keep
-    DIR`` to keep each point's ``config.json`` in ``DIR/POINT_ID``), the seed is ``--seed``
+    rest of a fit command line, ``TRAIN... [--validate HELD...] [--seeds N]
+    [--prior-strength LAMBDA]`` (and ``--keep DIR`` to keep each point's ``config.json`` in
+    ``DIR/POINT_ID``), the seed is ``--seed``
     (the first of a box file's SIMULATED stroke sets), and the parameters are the config:
     the settings the fit keeps (dotted names as for :func:`track_task`). The record keeps
     the summary's ``parameters``, ``metrics`` (the training and held-out errors of the
@@ -136,20 +137,21 @@ def fit_task(point) -> dict[str, Any]:
     from models.commands import fit
     from models.track.context import clean
 
-    train, validate, seeds, keep = fit_arguments(point.data)
+    d = fit_arguments(point.data)
     if not 0 <= point.seed < 2**32:
         raise InputError(f"seed {point.seed}: dbntrack fit takes 0 to 2**32 - 1")
     config = nest_params(point.params)
     with tempfile.TemporaryDirectory(prefix="dbntrack-sweep-") as tmp:
         cfg = Path(tmp) / "config.json"
         cfg.write_text(json.dumps(config))
-        out = Path(tmp) / "out" if keep is None else Path(keep) / point.id
-        args = argparse.Namespace(name=point.tracker, train=train, validate=validate,
-                                  outdir=str(out), seed=point.seed, seeds=seeds,
-                                  config=str(cfg), quiet=True)  # fmt: skip
+        out = Path(tmp) / "out" if d.keep is None else Path(d.keep) / point.id
+        args = argparse.Namespace(name=point.tracker, train=d.train, validate=d.validate,
+                                  outdir=str(out), seed=point.seed, seeds=d.seeds,
+                                  prior_strength=d.prior_strength, config=str(cfg),
+                                  quiet=True)  # fmt: skip
         with contextlib.redirect_stdout(io.StringIO()):  # the CLI's report
             summary = fit(args)
-    kept = {} if keep is None else {"outdir": str(out.resolve())}
+    kept = {} if d.keep is None else {"outdir": str(out.resolve())}
     return clean({**{k: summary[k] for k in _KEPT_FIT if k in summary}, **kept})
 
 
@@ -161,21 +163,33 @@ class _DataParser(argparse.ArgumentParser):
         raise InputError(message)
 
 
-def fit_arguments(data: str) -> tuple[list[str], list[str], int, str | None]:
-    """``(train, validate, seeds, keep)`` of a :func:`fit_task` point's ``data``: a
-    ``dbntrack fit`` command line after the tracker's name, without ``-o``, ``--seed`` and
-    ``--config`` (the sweep's own), with ``--keep DIR`` where the outputs are kept.
+class FitData(NamedTuple):
+    """A :func:`fit_task` point's ``data`` read (:func:`fit_arguments`); ``keep`` None
+    where the outputs are not kept."""
+
+    train: list[str]
+    validate: list[str]
+    seeds: int
+    prior_strength: float
+    keep: str | None
+
+
+def fit_arguments(data: str) -> FitData:
+    """A :func:`fit_task` point's ``data``: a ``dbntrack fit`` command line after the
+    tracker's name, without ``-o``, ``--seed`` and ``--config`` (the sweep's own), with
+    ``--keep DIR`` where the outputs are kept.
 
     Raises
     ------
     InputError
-        Quoting that does not close, an option other than ``--validate``, ``--seeds`` and
-        ``--keep``, a value missing or not valid, no training file.
+        Quoting that does not close, an option other than ``--validate``, ``--seeds``,
+        ``--prior-strength`` and ``--keep``, a value missing or not valid, no training file.
     """
     parser = _DataParser(prog="data", add_help=False, allow_abbrev=False)
     parser.add_argument("train", nargs="+")
     parser.add_argument("--validate", nargs="+", default=[])
     parser.add_argument("--seeds", type=int, default=1)
+    parser.add_argument("--prior-strength", type=float, default=0.0)
     parser.add_argument("--keep")
     try:
         words = shlex.split(data)
@@ -188,11 +202,14 @@ def fit_arguments(data: str) -> tuple[list[str], list[str], int, str | None]:
     try:
         args = parser.parse_args(words)
     except InputError as exc:
-        raise InputError(f"data {data!r}: {exc} (a fit command line: TRAIN... "
-                         "[--validate HELD...] [--seeds N] [--keep DIR])") from None
+        raise InputError(f"data {data!r}: {exc} (a fit command line: TRAIN... [--validate "
+                         "HELD...] [--seeds N] [--prior-strength L] [--keep DIR])") from None
     if args.seeds < 1:
         raise InputError(f"data {data!r}: --seeds {args.seeds}: at least 1")
-    return args.train, args.validate, args.seeds, args.keep
+    if not 0 <= args.prior_strength < float("inf"):
+        raise InputError(f"data {data!r}: --prior-strength {args.prior_strength}: a finite "
+                         "number >= 0")  # fmt: skip
+    return FitData(args.train, args.validate, args.seeds, args.prior_strength, args.keep)
 
 
 def nest_params(params: Iterable[tuple[str, Any]]) -> dict[str, Any]:

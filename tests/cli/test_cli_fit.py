@@ -130,3 +130,18 @@ def test_fit_refusals(tmp_path, capsys):
         main(["fit", "jorge", str(XML), "-o", str(out), "--seeds", "0"])
     assert "--seeds: 0 is not >= 1" in capsys.readouterr().err
 
+
+
+def test_a_prior_strength_shrinks_the_fit_towards_the_configs_network(tmp_path, capsys):
+    plain_summary, plain = _fit(tmp_path, "plain", str(XML))
+    summary, strong = _fit(tmp_path, "strong", str(XML), "--prior-strength", "1e12")
+    base = labeller_config().network
+    assert plain_summary["prior_strength"] == 0.0 and summary["prior_strength"] == 1e12
+    assert summary["parameters"]["prior_strength"] == 1e12
+    for name in ("p_new", "p_join", "p_part"):
+        assert getattr(_network(strong).labels, name) == pytest.approx(getattr(base.labels, name))
+        assert getattr(_network(plain).labels, name) != pytest.approx(getattr(base.labels, name))
+    for bad in ("-1", "inf", "x"):
+        with pytest.raises(SystemExit):
+            main(["fit", "jorge", str(XML), "-o", str(tmp_path / "b"), "--prior-strength", bad])
+        assert "--prior-strength" in capsys.readouterr().err

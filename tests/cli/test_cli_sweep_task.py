@@ -125,14 +125,17 @@ def test_keep_writes_each_points_outputs_under_its_id(tmp_path):
 
 
 def test_fit_arguments_are_a_fit_command_line():
-    got = fit_arguments("'my a.jsonl' b.xml --validate c.jsonl --seeds 2 --keep k")
-    assert got == (["my a.jsonl", "b.xml"], ["c.jsonl"], 2, "k")
-    assert fit_arguments("a.jsonl") == (["a.jsonl"], [], 1, None)
+    got = fit_arguments("'my a.jsonl' b.xml --validate c.jsonl --seeds 2 --keep k "
+                        "--prior-strength 50")  # fmt: skip
+    assert got == (["my a.jsonl", "b.xml"], ["c.jsonl"], 2, 50.0, "k")
+    assert fit_arguments("a.jsonl") == (["a.jsonl"], [], 1, 0.0, None)
     for data, needle in (("a --seed 3", "option '--seed'"), ("a --seed=3", "option '--seed=3'"),
                          ("a -o out", "option '-o'"), ("--validate c", "required: train"),
                          ("a --seeds x", "invalid int value: 'x'"), ("a --seeds 0", "at least 1"),
                          ("a --val c", "unrecognized arguments: --val"),
-                         ("a --validate", "expected at least one"), ("'a", "closing quotation")):
+                         ("a --validate", "expected at least one"), ("'a", "closing quotation"),
+                         ("a --prior-strength -1", "a finite number >= 0"),
+                         ("a --prior-strength inf", "a finite number >= 0")):
         with pytest.raises(InputError, match=needle):
             fit_arguments(data)
 
