@@ -405,7 +405,10 @@ for gap in (10, 30):
 # default and the fitted network. Here the tracker's palettes are noisy (each stroke's
 # dominant colours), and the files are SIMULATED strokes of the tiny example with other
 # seeds: hold out whole recordings of yours instead. On the shared data, the same fit on the
-# six training sequences took the held-out ones from 0.634 to 0.447 (README).
+# six training sequences took the held-out ones from 0.634 to 0.447 (README). On little data,
+# `--prior-strength LAMBDA` shrinks each parameter row towards the config's network with
+# LAMBDA pseudo-observations (`models.jorge.fit_prior`); choose it on held-out files of yours
+# (`models.track.sweep_task.fit_task` sweeps it).
 
 # %%
 from dataclasses import replace
