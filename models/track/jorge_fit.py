@@ -82,6 +82,8 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
     from models.jorge.fit_prior import shrink
     from models.jorge.strokes import StrokeConfig
 
+    if not (np.isfinite(prior_strength) and prior_strength >= 0):
+        raise InputError(f"prior strength {prior_strength!r}: expected a finite number >= 0")
     own = {"fps", "split_cover", "view", *LABELLER_KEYS}
     check_keys(config, set(StrokeConfig.__dataclass_fields__) | own)
     split_cover = flag(config, "split_cover", True)
@@ -110,16 +112,21 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
     out = fitted_config(config, fitted.network)
     (ctx.outdir / "config.json").write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
     _plot(ctx, files)
-    gmax = base.network.labels.max_group_size
+    training = [fs for p in train for fs in read[p]]
     params = {"seeds": seeds, "split_cover": split_cover, "prior_strength": prior_strength,
-              "training_strokes": sum(len(fs.strokes) for p in train for fs in read[p]),
-              "counted_children": counts.children,
-              "strokes_beyond_max_group_size": sum(len(s.truth) > gmax for p in train
-                                                   for fs in read[p] for s in fs.strokes),
+              **_counted(training, counts.children, base.network.labels.max_group_size),
               "fitted": {k: v for k, v in out["labels"].items() if isinstance(v, float)}
               | {k: out["network"][k] for k in ("size_mu_single", "size_slope", "size_sigma")}}
     return {"parameters": params, "metrics": _means(files), "files": files,
             "outputs": ["config.json", "fit.png"]}
+
+
+def _counted(training: list[FitSet], children: int, gmax: int) -> dict:
+    """What the fit counted: the training strokes, those with a parent, and those of more
+    people than the largest group (off the model, not counted)."""
+    strokes = [s for fs in training for s in fs.strokes]
+    return {"training_strokes": len(strokes), "counted_children": children,
+            "strokes_beyond_max_group_size": sum(len(s.truth) > gmax for s in strokes)}
 
 
 def _check_disjoint(train: list[str], validate: list[str]) -> None:

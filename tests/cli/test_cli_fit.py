@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from dbn.errors import InputError
 from models.cli import main
 from models.io.jorge import read_strokes
 from models.io.jorge_regions import write_regions
@@ -125,6 +126,11 @@ def test_fit_refusals(tmp_path, capsys):
         _bad(capsys, ["fit", "jorge", str(plain), "-o", str(out), "--config", str(cfg)], *needles)
     _bad(capsys, ["fit", "localization", str(plain), "-o", str(out)],
          "'localization' has no fit; trackers with one: jorge")  # fmt: skip
+    from models.track.context import RunContext
+    from models.track.jorge_fit import fit
+
+    with pytest.raises(InputError, match=r"prior strength -1.0: expected a finite number >= 0"):
+        fit(RunContext("jorge", out, 0, quiet=True), [str(XML)], [], {}, 1, -1.0)
     assert not (out / "config.json").exists() and not (out / "summary.json").exists()
     with pytest.raises(SystemExit):  # argparse: usage and exit status 2
         main(["fit", "jorge", str(XML), "-o", str(out), "--seeds", "0"])
