@@ -60,23 +60,31 @@ def track_task(point) -> dict[str, Any]:
         of the run itself (bad files, a :class:`~dbn.errors.ConfigError` naming the key).
     """
     from models.commands import track
-    from models.track.context import clean
 
     inputs, truth, keep = data_arguments(point.data)
+    return _run(track, point, keep, _KEPT, inputs=inputs, truth=truth, method=None)
+
+
+def _run(command, point, keep: str | None, kept: tuple, **fields) -> dict[str, Any]:
+    """Run the CLI's ``command`` (:func:`models.commands.track` or ``fit``) for ``point``
+    with ``fields`` of its command line: the config from the point's parameters, in a
+    temporary file; the outputs in a temporary folder, or ``keep/POINT_ID``. Returns the
+    summary's ``kept`` parts (NaN as null), and ``outdir`` where kept."""
+    from models.track.context import clean
+
     if not 0 <= point.seed < 2**32:
-        raise InputError(f"seed {point.seed}: dbntrack track takes 0 to 2**32 - 1")
+        raise InputError(f"seed {point.seed}: dbntrack {command.__name__} takes 0 to 2**32 - 1")
     config = nest_params(point.params)
     with tempfile.TemporaryDirectory(prefix="dbntrack-sweep-") as tmp:
         cfg = Path(tmp) / "config.json"
         cfg.write_text(json.dumps(config))
         out = Path(tmp) / "out" if keep is None else Path(keep) / point.id
-        args = argparse.Namespace(name=point.tracker, inputs=inputs, outdir=str(out),
-                                  seed=point.seed, config=str(cfg), truth=truth, method=None,
-                                  quiet=True)  # fmt: skip
-        with contextlib.redirect_stdout(io.StringIO()):  # the CLI's one-line report
-            summary = track(args)
-    kept = {} if keep is None else {"outdir": str(out.resolve())}
-    return clean({**{k: summary[k] for k in _KEPT if k in summary}, **kept})  # NaN -> None
+        args = argparse.Namespace(name=point.tracker, outdir=str(out), seed=point.seed,
+                                  config=str(cfg), quiet=True, **fields)  # fmt: skip
+        with contextlib.redirect_stdout(io.StringIO()):  # the CLI's report
+            summary = command(args)
+    extra = {} if keep is None else {"outdir": str(out.resolve())}
+    return clean({**{k: summary[k] for k in kept if k in summary}, **extra})  # NaN -> None
 
 
 def data_arguments(data: str) -> tuple[list[str], str | None, str | None]:
@@ -135,24 +143,10 @@ def fit_task(point) -> dict[str, Any]:
         0 .. 2**32 - 1; and any error of the fit itself.
     """
     from models.commands import fit
-    from models.track.context import clean
 
     d = fit_arguments(point.data)
-    if not 0 <= point.seed < 2**32:
-        raise InputError(f"seed {point.seed}: dbntrack fit takes 0 to 2**32 - 1")
-    config = nest_params(point.params)
-    with tempfile.TemporaryDirectory(prefix="dbntrack-sweep-") as tmp:
-        cfg = Path(tmp) / "config.json"
-        cfg.write_text(json.dumps(config))
-        out = Path(tmp) / "out" if d.keep is None else Path(d.keep) / point.id
-        args = argparse.Namespace(name=point.tracker, train=d.train, validate=d.validate,
-                                  outdir=str(out), seed=point.seed, seeds=d.seeds,
-                                  prior_strength=d.prior_strength, config=str(cfg),
-                                  quiet=True)  # fmt: skip
-        with contextlib.redirect_stdout(io.StringIO()):  # the CLI's report
-            summary = fit(args)
-    kept = {} if d.keep is None else {"outdir": str(out.resolve())}
-    return clean({**{k: summary[k] for k in _KEPT_FIT if k in summary}, **kept})
+    return _run(fit, point, d.keep, _KEPT_FIT, train=d.train, validate=d.validate,
+                seeds=d.seeds, prior_strength=d.prior_strength)
 
 
 class _DataParser(argparse.ArgumentParser):
