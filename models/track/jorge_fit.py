@@ -53,7 +53,7 @@ from models.track.jorge import (
 )
 from models.track.options import check_keys, flag, number
 
-__all__ = ["fit", "FITTED_LABEL_FIELDS"]
+__all__ = ["fit", "fitted_config", "FitSet", "FITTED_LABEL_FIELDS"]
 
 FITTED_LABEL_FIELDS = ("p_new", "p_merge", "p_merge_one_split", "p_merge_both_split", "p_split",
                        "p_part", "p_join", "new_group_probs", "split_cover")
@@ -181,10 +181,10 @@ def _score_file(ctx: RunContext, path: str, sets: list[FitSet], base, fitted, sp
 def _means(files: list[dict]) -> dict:
     """Mean errors over the training and the held-out files (NaN where there are none)."""
     out = {}
-    for split, key in (("train", "train"), ("validation", "validation")):
+    for split in ("train", "validation"):
         rows = [f for f in files if f["split"] == split]
         for name in ("config", "fitted"):
-            out[f"error_{key}_{name}"] = float(np.mean([f[f"error_{name}"] for f in rows])
+            out[f"error_{split}_{name}"] = float(np.mean([f[f"error_{name}"] for f in rows])
                                                if rows else np.nan)  # fmt: skip
     return out
 
