@@ -13,7 +13,8 @@ stroke graph and the colour-only baseline), :mod:`recall` (where a stroke's righ
 lost: not admissible, pruned from its domain, or not chosen),
 :mod:`memo` (what a node remembers of its CPD and evidence between inferences),
 :mod:`api` (the labeller under the tracker protocol), :mod:`fit` (the parameters learned
-on the declared training split), :mod:`confirm` (a change compared on fresh seeds),
+on the declared training split), :mod:`fit_prior` (a fit on little data shrunk towards a
+prior network), :mod:`confirm` (a change compared on fresh seeds),
 :mod:`estimate` (the error on many SIMULATED meeting scenes, with standard errors),
 :mod:`simulate` (a synthetic sequence when the real ground truth is absent),
 :mod:`meeting` (SIMULATED meetings of 3-5 people), :mod:`demo` (``dbntrack demo``'s part),
