@@ -135,38 +135,27 @@ def list_trackers(as_json: bool = False) -> None:
 
 def track(args: argparse.Namespace) -> dict:
     """Run ``dbntrack track``; returns the summary written to ``OUTDIR/summary.json``."""
-    from dbn.errors import ConfigError, InputError, in_file
+    from dbn.errors import InputError
     from models.track import runner
-    from models.track.context import RunContext, clean, versions, write_summary
+    from models.track.context import clean
 
     mod = runner(args.name)
-    config: dict = {}
-    if args.config:
-        from models.io.table import read_json_config
-
-        config = read_json_config(args.config)
+    config = _read_config(args.config)
     if args.method:
         if args.name != "dbn":
             raise InputError(f"--method applies to dbn only, not {args.name!r}")
         config["method"] = args.method
-    ctx = RunContext(args.name, Path(args.outdir), args.seed)
-    if args.quiet:
-        ctx.quiet = True
-    t0 = time.perf_counter()
     summary = {"tracker": args.name, "inputs": [str(Path(p).resolve()) for p in args.inputs],
                "seed": args.seed, "config": dict(config)}  # fmt: skip
-    try:
-        summary.update(mod.track(ctx, list(args.inputs), config))
-    except ConfigError as exc:  # the option's key is named; name the file it came from
-        raise (in_file(exc, args.config) if args.config else exc) from None
-    if args.truth:
-        with ctx.timed("eval"):
-            summary["truth"] = str(Path(args.truth).resolve())
-            summary["metrics"] = mod.evaluate(str(ctx.outdir / summary["outputs"][0]), args.truth)
-    ctx.timings["total"] = round(time.perf_counter() - t0, 4)
-    summary["timings_s"] = ctx.timings
-    summary["versions"] = versions()
-    write_summary(ctx.outdir / "summary.json", summary)
+
+    def score_truth(ctx, summary: dict) -> None:
+        if args.truth:
+            with ctx.timed("eval"):
+                summary["truth"] = str(Path(args.truth).resolve())
+                result = str(ctx.outdir / summary["outputs"][0])
+                summary["metrics"] = mod.evaluate(result, args.truth)
+
+    ctx = _run(args, summary, lambda ctx: mod.track(ctx, list(args.inputs), config), score_truth)
     print(f"{args.name}: wrote {', '.join(summary['outputs'])}, summary.json to {ctx.outdir}")
     if "metrics" in summary:
         print(json.dumps(clean(summary["metrics"])))
@@ -175,37 +164,22 @@ def track(args: argparse.Namespace) -> dict:
 
 def fit(args: argparse.Namespace) -> dict:
     """Run ``dbntrack fit``; returns the summary written to ``OUTDIR/summary.json``."""
-    from dbn.errors import ConfigError, InputError, in_file
+    from dbn.errors import InputError
     from models.track import available, runner
-    from models.track.context import RunContext, clean, versions, write_summary
+    from models.track.context import clean
 
     mod = runner(args.name)
     if not hasattr(mod, "fit"):
         with_fit = [n for n in available() if hasattr(runner(n), "fit")]
         raise InputError(f"tracker {args.name!r} has no fit; trackers with one: "
                          f"{', '.join(with_fit)}")  # fmt: skip
-    config: dict = {}
-    if args.config:
-        from models.io.table import read_json_config
-
-        config = read_json_config(args.config)
-    ctx = RunContext(args.name, Path(args.outdir), args.seed)
-    if args.quiet:
-        ctx.quiet = True
-    t0 = time.perf_counter()
+    config = _read_config(args.config)
     summary = {"tracker": args.name, "train": [str(Path(p).resolve()) for p in args.train],
                "validate": [str(Path(p).resolve()) for p in args.validate],
                "seed": args.seed, "seeds": args.seeds, "prior_strength": args.prior_strength,
                "config": dict(config)}  # fmt: skip
-    try:
-        summary.update(mod.fit(ctx, list(args.train), list(args.validate), config, args.seeds,
-                               args.prior_strength))  # fmt: skip
-    except ConfigError as exc:
-        raise (in_file(exc, args.config) if args.config else exc) from None
-    ctx.timings["total"] = round(time.perf_counter() - t0, 4)
-    summary["timings_s"] = ctx.timings
-    summary["versions"] = versions()
-    write_summary(ctx.outdir / "summary.json", summary)
+    ctx = _run(args, summary, lambda ctx: mod.fit(ctx, list(args.train), list(args.validate),
+                                                  config, args.seeds, args.prior_strength))
     for row in summary["files"]:
         print(f"{row['split']:>10}  {Path(row['file']).name}: {row['strokes']} strokes, error "
               f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted)")
@@ -214,6 +188,40 @@ def fit(args: argparse.Namespace) -> dict:
     print(f"{args.name}: wrote {', '.join(summary['outputs'])}, summary.json to {ctx.outdir}")
     print(json.dumps(clean(summary["metrics"])))
     return summary
+
+
+def _read_config(path: str | None) -> dict:
+    """The ``--config`` JSON file's options (none without one)."""
+    if not path:
+        return {}
+    from models.io.table import read_json_config
+
+    return read_json_config(path)
+
+
+def _run(args: argparse.Namespace, summary: dict, run: Callable, then: Callable | None = None):
+    """``run(ctx)`` in a :class:`~models.track.context.RunContext` of ``args`` (outdir,
+    seed, quiet), its result laid into ``summary`` (a :class:`~dbn.errors.ConfigError`
+    names the ``--config`` file), then ``then(ctx, summary)``; the total time, timings and
+    versions added and ``OUTDIR/summary.json`` written. Returns the context."""
+    from dbn.errors import ConfigError, in_file
+    from models.track.context import RunContext, versions, write_summary
+
+    ctx = RunContext(args.name, Path(args.outdir), args.seed)
+    if args.quiet:
+        ctx.quiet = True
+    t0 = time.perf_counter()
+    try:
+        summary.update(run(ctx))
+    except ConfigError as exc:  # the option's key is named; name the file it came from
+        raise (in_file(exc, args.config) if args.config else exc) from None
+    if then is not None:
+        then(ctx, summary)
+    ctx.timings["total"] = round(time.perf_counter() - t0, 4)
+    summary["timings_s"] = ctx.timings
+    summary["versions"] = versions()
+    write_summary(ctx.outdir / "summary.json", summary)
+    return ctx
 
 
 def evaluate(args: argparse.Namespace) -> dict:
