@@ -38,6 +38,7 @@ header's ``# network=`` line (the config's ``network`` fields, where it has any)
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -64,13 +65,25 @@ INPUTS = ("BOXES: CAVIAR CVML .xml, PETS2009 .xml, MOTChallenge gt.txt or ETH/UC
           "or REGIONS.jsonl: your own tracker's strokes (may be .gz)",)
 
 
-def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
-    """Label the strokes; write ``strokes.csv``, ``tracks.txt`` and ``strokes.png``."""
+class Options(NamedTuple):
+    """A jorge config read (:func:`read_options`): ``own`` (its keys that are not the
+    stroke builder's), the split cover flag, the labeller's ``overrides`` (the
+    :data:`LABELLER_KEYS` objects it has), the labeller's config they give and the
+    config's frame rate (None: the file's)."""
+
+    own: frozenset
+    split_cover: bool
+    overrides: dict
+    online: Any
+    fps: float | None
+
+
+def read_options(config: dict) -> Options:
+    """The config of ``dbntrack track jorge`` and ``fit``, checked before any file is read
+    (an unknown key, a bad value: a :class:`ConfigError` naming it)."""
     from models.jorge.strokes import StrokeConfig
 
-    if len(inputs) != 1:
-        raise InputError(f"jorge needs one box or regions file, got {len(inputs)} inputs")
-    own = {"fps", "split_cover", "view", *LABELLER_KEYS}
+    own = frozenset({"fps", "split_cover", "view", *LABELLER_KEYS})
     check_keys(config, set(StrokeConfig.__dataclass_fields__) | own)
     split_cover = flag(config, "split_cover", True)
     overrides = {k: config[k] for k in LABELLER_KEYS if k in config}
@@ -78,8 +91,23 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     fps = number(config, "fps") if "fps" in config else None
     if fps is not None and not fps > 0:
         raise ConfigError(f"config fps = {fps!r}: expected a number > 0")
+    return Options(own, split_cover, overrides, online, fps)
+
+
+def builder_keys(config: dict, own: frozenset) -> list[str]:
+    """The config's stroke-builder settings (keys outside ``own``, and ``view``), which
+    apply to box files only."""
+    return sorted(set(config) - own) + (["view"] if "view" in config else [])
+
+
+def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
+    """Label the strokes; write ``strokes.csv``, ``tracks.txt`` and ``strokes.png``."""
+    if len(inputs) != 1:
+        raise InputError(f"jorge needs one box or regions file, got {len(inputs)} inputs")
+    opt = read_options(config)
+    online, overrides = opt.online, opt.overrides
     read = _regions if is_regions(inputs[0]) else _boxes
-    strokes, steps, fps, params, head = read(ctx, inputs[0], config, own, fps, online)
+    strokes, steps, fps, params, head = read(ctx, inputs[0], config, opt.own, opt.fps, online)
     labels, parents = label_steps(ctx, online, steps, fps)
     network = {k: getattr(online.network, k) for k in overrides.get("network", {})}
     write_strokes(ctx.outdir / "strokes.csv", strokes, labels, parents=parents, fps=fps,
@@ -87,7 +115,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     write_mot_tracks(ctx.outdir / "tracks.txt", strokes, labels)
     _plot(ctx, strokes, labels)
     params = {"num_strokes": len(strokes), "num_groups": sum(len(s.truth) > 1 for s in strokes),
-              "fps": fps, **params, "split_cover": split_cover,
+              "fps": fps, **params, "split_cover": opt.split_cover,
               **_set_fields(online, overrides)}  # fmt: skip
     return {"parameters": params, "outputs": ["strokes.csv", "tracks.txt", "strokes.png"]}
 
@@ -152,18 +180,15 @@ def _regions(ctx: RunContext, path: str, config: dict, own: set, fps: float | No
     they are, with the file's links where it has them: ``(strokes, steps, fps, parameters,
     header)``. The stroke builder's settings and ``view`` do not apply (a
     :class:`ConfigError`); the file is checked against the network before any labelling."""
-    from models.jorge.api import LinkedStroke
-
     with ctx.timed("read"):
         regions, fps, source = read_checked_regions(ctx, path, config, own, fps, online)
     strokes = regions.strokes
-    steps = strokes if regions.parents is None else [
-        LinkedStroke(s, p) for s, p in zip(strokes, regions.parents)]
+    steps = linked_steps(strokes, regions.parents)
     params = {"fps_source": source, "input": "regions",
               "links": "rule" if regions.parents is None else "file",
               "num_frames": int(max(s.end for s in strokes) - strokes[0].start + 1),
               "sequence": Path(path).name}  # fmt: skip
-    return strokes, list(steps), fps, params, {"seed": None, "view": None, "source": "regions"}
+    return strokes, steps, fps, params, {"seed": None, "view": None, "source": "regions"}
 
 
 def read_checked_regions(ctx: RunContext, path: str, config: dict, own: set,
@@ -171,7 +196,7 @@ def read_checked_regions(ctx: RunContext, path: str, config: dict, own: set,
     """A regions file, checked against ``online``'s network before any labelling: ``(regions,
     fps, fps source)``. A stroke-builder setting (a config key outside ``own``, or
     ``view``) is a :class:`ConfigError`: they apply to box files only."""
-    builder = sorted(set(config) - own) + (["view"] if "view" in config else [])
+    builder = builder_keys(config, own)
     if builder:
         raise ConfigError(f"config {builder}: stroke-builder settings apply to box files, not "
                           f"to a regions file's strokes")  # fmt: skip
@@ -183,6 +208,14 @@ def read_checked_regions(ctx: RunContext, path: str, config: dict, own: set,
     fps = fps if fps is not None else regions.fps if regions.fps is not None else MOT_DEFAULT_FPS
     check_regions(regions, online.network, fps)
     return regions, fps, source
+
+
+def linked_steps(strokes: list, links: list | None) -> list:
+    """The labeller's steps: the strokes, each with its links
+    (:class:`~models.jorge.api.LinkedStroke`) where ``links`` (one per stroke) is given."""
+    from models.jorge.api import LinkedStroke
+
+    return list(strokes) if links is None else [LinkedStroke(s, p) for s, p in zip(strokes, links)]
 
 
 def require_truth(regions, why: str) -> None:
@@ -222,8 +255,8 @@ def labeller_config(split_cover: bool = True, overrides: dict | None = None):
     defaults (split cover on; off if asked) with the config's ``network``, ``labels`` and
     ``online`` objects laid over the :class:`~models.jorge.network.NetworkConfig`, its
     :class:`~models.jorge.labels.LabelParams` and the ``OnlineConfig``
-    (:func:`models.track.options.override`: scalar fields, tables off; a :class:`ConfigError`
-    naming ``network.FIELD`` etc. for a bad one)."""
+    (:func:`models.track.options.override`: scalar fields, and tables set or switched off;
+    a :class:`ConfigError` naming ``network.FIELD`` etc. for a bad one)."""
     from dataclasses import replace
 
     from models.jorge.network import FITTED_LABELS, NetworkConfig
@@ -476,4 +509,6 @@ def _missed_links(result: str, rows: list, strokes, fps: float, first, network) 
             "first_mistake_missed_links": missed_link_counts(missed, mask)}
 
 
-__all__ = ["INPUTS", "LABELLER_KEYS", "evaluate", "labeller_config", "track"]
+__all__ = ["INPUTS", "LABELLER_KEYS", "Options", "builder_keys", "evaluate", "fit",
+           "label_steps", "labeller_config", "linked_steps", "read_box_truth",
+           "read_checked_regions", "read_options", "require_truth", "track"]

@@ -44,14 +44,14 @@ from dbn.errors import ConfigError, InputError
 from models.io.jorge_regions import is_regions
 from models.track.context import RunContext
 from models.track.jorge import (
-    LABELLER_KEYS,
+    builder_keys,
     label_steps,
-    labeller_config,
+    linked_steps,
     read_box_truth,
     read_checked_regions,
+    read_options,
     require_truth,
 )
-from models.track.options import check_keys, flag, number
 
 __all__ = ["fit", "fitted_config", "FitSet", "FITTED_LABEL_FIELDS"]
 
@@ -80,23 +80,17 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
     ``summary.json``."""
     from models.jorge.fit import EventCounts, count_events, fit_counts, fitted_like
     from models.jorge.fit_prior import shrink
-    from models.jorge.strokes import StrokeConfig
 
     if not (np.isfinite(prior_strength) and prior_strength >= 0):
         raise InputError(f"prior strength {prior_strength!r}: expected a finite number >= 0")
-    own = {"fps", "split_cover", "view", *LABELLER_KEYS}
-    check_keys(config, set(StrokeConfig.__dataclass_fields__) | own)
-    split_cover = flag(config, "split_cover", True)
-    base = labeller_config(split_cover, {k: config[k] for k in LABELLER_KEYS if k in config})
-    fps = number(config, "fps") if "fps" in config else None
-    if fps is not None and not fps > 0:
-        raise ConfigError(f"config fps = {fps!r}: expected a number > 0")
+    opt = read_options(config)
+    base, own, split_cover = opt.online, opt.own, opt.split_cover
     _check_disjoint(train, validate)
-    builder = sorted(set(config) - own) + (["view"] if "view" in config else [])
+    builder = builder_keys(config, own)
     if builder and all(map(is_regions, [*train, *validate])):
         raise ConfigError(f"config {builder}: stroke-builder settings apply to box files, and "
                           "every file is a regions file")  # fmt: skip
-    read = {p: _sets(ctx, p, config, own, fps, base, seeds) for p in [*train, *validate]}
+    read = {p: _sets(ctx, p, config, own, opt.fps, base, seeds) for p in [*train, *validate]}
     counts = EventCounts()
     with ctx.timed("fit"):
         for fs in (fs for p in train for fs in read[p]):
@@ -161,15 +155,13 @@ def _sets(ctx: RunContext, path: str, config: dict, own: set, fps: float | None,
 def _score_file(ctx: RunContext, path: str, sets: list[FitSet], base, fitted, split: str) -> dict:
     """One file's row: its strokes and the labelling error (mean over its stroke sets) with
     the config's network and the fitted one."""
-    from models.jorge.api import LinkedStroke
     from models.jorge.scoring import score
 
     errors = {}
     for name, online in (("config", base), ("fitted", fitted)):
         rates = []
         for fs in sets:
-            steps = fs.strokes if fs.links is None else [
-                LinkedStroke(s, p) for s, p in zip(fs.strokes, fs.links)]
+            steps = linked_steps(fs.strokes, fs.links)
             labels, _ = label_steps(ctx, online, steps, fs.fps, phase=f"label_{name}")
             rates.append(score(fs.strokes, labels).error_rate)
         errors[name] = float(np.mean(rates))
