@@ -130,13 +130,17 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
 
 
 def label_steps(ctx: RunContext, online, steps: list, fps: float,
-                phase: str = "label") -> tuple[list, list]:
+                phase: str | None = "label") -> tuple[list, list]:
     """The registry's labeller over ``steps`` (strokes, or :class:`LinkedStroke`), then its
-    re-identification pass, timed as ``phase``: ``(labels, parents)``, one per stroke."""
+    re-identification pass, timed as ``phase`` (None: the caller times it): ``(labels,
+    parents)``, one per stroke."""
+    import contextlib
+
     import models
 
     tracker = models.get("jorge").make(online, fps=fps)
-    with ctx.timed(phase):  # fold: one labeller stepped in place (run's copies are quadratic)
+    timed = contextlib.nullcontext() if phase is None else ctx.timed(phase)
+    with timed:  # fold: one labeller stepped in place (run's copies are quadratic)
         state, _ = tracker.fold(ctx.key(), steps, ctx.bar("strokes"))
         final = state.labeller.finish()  # the re-identification pass (the batch's last step)
     labels = [final[k] for k in range(len(steps))]

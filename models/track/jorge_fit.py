@@ -90,7 +90,8 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
     if builder and all(map(is_regions, [*train, *validate])):
         raise ConfigError(f"config {builder}: stroke-builder settings apply to box files, and "
                           "every file is a regions file")  # fmt: skip
-    read = {p: _sets(ctx, p, config, own, opt.fps, base, seeds) for p in [*train, *validate]}
+    with ctx.timed("read"):
+        read = {p: _sets(ctx, p, config, own, opt.fps, base, seeds) for p in [*train, *validate]}
     counts = EventCounts()
     with ctx.timed("fit"):
         for fs in (fs for p in train for fs in read[p]):
@@ -101,8 +102,9 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
         ml = fit_counts(counts, base.network)
         shrunk = shrink(ml, base.network, counts, prior_strength)
         fitted = replace(base, network=fitted_like(base.network, shrunk))
-    files = [_score_file(ctx, p, read[p], base, fitted, "train" if p in train else "validation")
-             for p in ctx.progress(read, len(read), "files")]  # fmt: skip
+    with ctx.timed("score"):  # every file labelled with both networks
+        files = [_score_file(ctx, p, read[p], base, fitted, "train" if p in train else
+                             "validation") for p in ctx.progress(read, len(read), "files")]
     out = fitted_config(config, fitted.network)
     (ctx.outdir / "config.json").write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
     _plot(ctx, files)
@@ -162,7 +164,7 @@ def _score_file(ctx: RunContext, path: str, sets: list[FitSet], base, fitted, sp
         rates = []
         for fs in sets:
             steps = linked_steps(fs.strokes, fs.links)
-            labels, _ = label_steps(ctx, online, steps, fs.fps, phase=f"label_{name}")
+            labels, _ = label_steps(ctx, online, steps, fs.fps, phase=None)
             rates.append(score(fs.strokes, labels).error_rate)
         errors[name] = float(np.mean(rates))
     return {"file": str(Path(path).resolve()), "split": split,
