@@ -185,21 +185,14 @@ def _means(files: list[dict]) -> dict:
 
 def fitted_config(config: dict, network) -> dict:
     """``config`` with ``network``'s fitted fields over its ``network`` and ``labels``
-    objects (tables as nested lists): a config for ``dbntrack track jorge``, whose
-    :func:`~models.track.jorge.labeller_config` is ``network``."""
+    objects (tables as nested tuples, which JSON writes as lists): a config for ``dbntrack
+    track jorge``, whose :func:`~models.track.jorge.labeller_config` is ``network``."""
     from models.jorge.fit import FITTED_FIELDS
 
-    net = {f: _plain(getattr(network, f)) for f in sorted(FITTED_FIELDS - {"labels"})}
-    labels = {f: _plain(getattr(network.labels, f)) for f in FITTED_LABEL_FIELDS}
+    net = {f: getattr(network, f) for f in sorted(FITTED_FIELDS - {"labels"})}
+    labels = {f: getattr(network.labels, f) for f in FITTED_LABEL_FIELDS}
     return {**config, "network": {**config.get("network", {}), **net},
             "labels": {**config.get("labels", {}), **labels}}
-
-
-def _plain(value):
-    """A field's value for JSON: tuples as lists, numpy numbers as Python ones."""
-    if isinstance(value, tuple | list):
-        return [_plain(v) for v in value]
-    return value.item() if isinstance(value, np.generic) else value
 
 
 def _plot(ctx: RunContext, files: list[dict]) -> None:
