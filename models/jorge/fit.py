@@ -76,6 +76,7 @@ __all__ = [
     "fit_parameters",
     "fit_counts",
     "fitted_like",
+    "as_config_table",
     "FITTED_FIELDS",
     "load_sequence",
     "training_strokes",
@@ -446,7 +447,7 @@ def _given_newcomers_and_known(triples: list, gmax: int, bins: Sequence[int], wi
     for m, u, col in triples:
         counts[min(m, gmax), int(palette_gain_bin(bins, u)), col] += 1.0
     table = np.log(counts / counts.sum(axis=2, keepdims=True))
-    return tuple(tuple(tuple(float(v) for v in row) for row in block) for block in table)
+    return as_config_table(table)
 
 
 def _palette_count_table(pairs: list, gmax: int, pool_size: int) -> tuple:
@@ -462,7 +463,13 @@ def _palette_count_table(pairs: list, gmax: int, pool_size: int) -> tuple:
             continue
         counts[k - 1, min(cnt, pool_size)] += 1.0
     table = np.log(counts / counts.sum(axis=1, keepdims=True))
-    return tuple(tuple(float(v) for v in row) for row in table)
+    return as_config_table(table)
+
+
+def as_config_table(a: np.ndarray) -> tuple:
+    """A float array as nested tuples of Python floats, as :class:`NetworkConfig` holds a
+    table."""
+    return tuple(as_config_table(x) for x in a) if a.ndim > 1 else tuple(float(v) for v in a)
 
 
 def training_strokes(sequences: Sequence[tuple[str, str]] = TRAIN_SEQUENCES,

@@ -34,7 +34,7 @@ import numpy as np
 
 from dbn.errors import InputError
 from models.jorge.evidence import palette_gain_bin
-from models.jorge.fit import EventCounts
+from models.jorge.fit import EventCounts, as_config_table
 from models.jorge.network import NetworkConfig
 
 __all__ = ["shrink"]
@@ -140,9 +140,4 @@ def _shrunk_table(name: str, mine: np.ndarray, theirs: np.ndarray, totals: np.nd
     t = totals[..., None]
     p = (t * np.exp(mine) + lam * p0) / (t + lam)
     table = np.log(p / p.sum(axis=-1, keepdims=True))
-    return _nested(table)
-
-
-def _nested(a: np.ndarray):
-    """A float array as nested tuples of floats (a :class:`NetworkConfig` table)."""
-    return tuple(_nested(x) for x in a) if a.ndim > 1 else tuple(float(v) for v in a)
+    return as_config_table(table)
