@@ -1,0 +1,85 @@
+"""K-fold cross-validation over files (``models.crossval``): folds, no leak, the choice."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from dbn.errors import InputError
+from models.crossval import cross_validate, fold_blocks
+
+
+@given(n=st.integers(2, 30), data=st.data())
+@settings(max_examples=60, deadline=None)
+def test_folds_are_contiguous_blocks_of_near_equal_size(n, data):
+    k = data.draw(st.integers(2, n))
+    items = [f"file{i}" for i in range(n)]
+    folds = fold_blocks(items, k)
+    assert len(folds) == k and [x for f in folds for x in f] == items
+    sizes = [len(f) for f in folds]
+    assert max(sizes) - min(sizes) <= 1 and sizes == sorted(sizes, reverse=True)
+
+
+@given(values=st.lists(st.floats(-100, 100), min_size=2, max_size=12), data=st.data())
+@settings(max_examples=60, deadline=None)
+def test_every_item_is_scored_once_by_a_fit_that_never_saw_it(values, data):
+    """The oracle: each item's error is that of the fit (a shifted mean) on the items of
+    the other folds, recomputed here from the folds; every fit saw none of its fold."""
+    items = list(range(len(values)))
+    k = data.draw(st.integers(2, len(items)))
+    shifts = data.draw(st.lists(st.integers(-3, 3), min_size=1, max_size=4, unique=True))
+    seen = []
+
+    def fit(train, shift):
+        seen.append(set(train))
+        return np.mean([values[i] for i in train]) + shift
+
+    cv = cross_validate(items, k, shifts, fit, lambda model, i: abs(model - values[i]))
+    assert len(seen) == k * len(shifts)
+    for shift in shifts:
+        assert sorted(cv.errors[shift]) == items
+        for fold in cv.folds:
+            rest = [i for i in items if i not in fold]
+            for i in fold:
+                want = abs(np.mean([values[j] for j in rest]) + shift - values[i])
+                assert cv.errors[shift][i] == pytest.approx(want)
+        assert cv.mean[shift] == pytest.approx(np.mean(list(cv.errors[shift].values())))
+    fits = iter(seen)
+    for _ in shifts:
+        for fold in cv.folds:
+            assert not next(fits) & set(fold)
+    assert cv.mean[cv.chosen] == min(cv.mean.values())
+    assert cv.chosen == next(s for s in shifts if cv.mean[s] == min(cv.mean.values()))
+
+
+def test_a_tie_chooses_the_first_candidate_given():
+    cv = cross_validate(["a", "b", "c"], 3, [5, 1, 2], lambda train, c: c,
+                        lambda c, item: 0.0 if c != 2 else 1.0)  # fmt: skip
+    assert cv.chosen == 5 and cv.mean == {5: 0.0, 1: 0.0, 2: 1.0}
+
+
+def test_the_progress_wraps_every_fit():
+    calls = []
+
+    def progress(jobs, total):
+        calls.append(total)
+        return jobs
+
+    cross_validate(list("abcd"), 2, [0, 1, 2], lambda t, c: c, lambda m, x: 0.0, progress)
+    assert calls == [6]
+
+
+@pytest.mark.parametrize("items, k, candidates, needle", [
+    (["a", "b"], 1, [0], "folds 1: expected an integer from 2 to the number"),
+    (["a", "b"], 3, [0], r"folds 3: .*\(2\)"),
+    (["a", "b"], 2.0, [0], "folds 2.0"),
+    (["a", "b"], True, [0], "folds True"),
+    (["a", "b", "a"], 2, [0], "'a' given twice"),
+    (["a", "b"], 2, [], "expected at least one"),
+    (["a", "b"], 2, [1, 1], "none twice"),
+])  # fmt: skip
+def test_refusals(items, k, candidates, needle):
+    with pytest.raises(InputError, match=needle):
+        cross_validate(items, k, candidates, lambda t, c: 0, lambda m, x: 0.0)
