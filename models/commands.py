@@ -17,7 +17,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["build_parser", "dispatch", "list_trackers", "track", "fit", "evaluate"]
+__all__ = ["build_parser", "dispatch", "list_trackers", "track", "fit", "evaluate",
+           "prior_strengths"]
 
 _EPILOG = "Input formats: docs/formats.md. Example files: tests/data/."
 
@@ -70,9 +71,14 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
                    "file, seeds SEED, SEED + 1, ... (default 1)")  # fmt: skip
     p.add_argument("--config", metavar="FILE", help="JSON file of tracker options: the "
                    "settings the fit keeps")  # fmt: skip
-    p.add_argument("--prior-strength", type=_non_negative, default=0.0, metavar="LAMBDA",
-                   help="pseudo-observations per parameter row of the config's network as a "
-                   "prior, for fits on little data (default 0: the plain fit)")  # fmt: skip
+    p.add_argument("--prior-strength", type=prior_strengths, default=(0.0,),
+                   metavar="LAMBDA[,LAMBDA...]", help="pseudo-observations per parameter row "
+                   "of the config's network as a prior, for fits on little data (default 0: "
+                   "the plain fit); several are chosen among by --folds")  # fmt: skip
+    p.add_argument("--folds", type=_int_in(2, None), default=0, metavar="K",
+                   help="K-fold cross-validation over the training files, cut in the order "
+                   "given (keep a recording's files together): the error of fits on the "
+                   "other folds, and the prior strength with the lowest")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p = sub.add_parser("eval", help="score a result file against a truth file", epilog=_EPILOG,
                        description="Metrics of tracker NAME's RESULT file against TRUTH: "
@@ -174,15 +180,24 @@ def fit(args: argparse.Namespace) -> dict:
         raise InputError(f"tracker {args.name!r} has no fit; trackers with one: "
                          f"{', '.join(with_fit)}")  # fmt: skip
     config = _read_config(args.config)
+    strengths = list(args.prior_strength)
     summary = {"tracker": args.name, "train": [str(Path(p).resolve()) for p in args.train],
                "validate": [str(Path(p).resolve()) for p in args.validate],
-               "seed": args.seed, "seeds": args.seeds, "prior_strength": args.prior_strength,
+               "seed": args.seed, "seeds": args.seeds, "folds": args.folds,
+               "prior_strength": strengths[0] if len(strengths) == 1 else strengths,
                "config": dict(config)}  # fmt: skip
     ctx = _run(args, summary, lambda ctx: mod.fit(ctx, list(args.train), list(args.validate),
-                                                  config, args.seeds, args.prior_strength))
+                                                  config, args.seeds, strengths, args.folds))
     for row in summary["files"]:
+        cv = f" (other folds' fit {row['error_cv']:.3f})" if "error_cv" in row else ""
         print(f"{row['split']:>10}  {Path(row['file']).name}: {row['strokes']} strokes, error "
-              f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted)")
+              f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted){cv}")
+    if "cross_validation" in summary["parameters"]:
+        cv = summary["parameters"]["cross_validation"]
+        errors = ", ".join(f"{r['prior_strength']:g}: {r['error']:.3f}" for r in cv["errors"])
+        print(f"{args.name}: {args.folds}-fold cross-validation error by prior strength: "
+              f"{errors}; chosen {cv['chosen']:g} (the config's network on the training "
+              f"files: {summary['metrics']['error_train_config']:.3f})")
     if not args.validate:
         print(f"{args.name}: no --validate file: an error on the files fitted on is not a result")
     print(f"{args.name}: wrote {', '.join(summary['outputs'])}, summary.json to {ctx.outdir}")
@@ -263,6 +278,11 @@ def _non_negative(text: str) -> float:
     if not (value >= 0 and value < float("inf")):
         raise argparse.ArgumentTypeError(f"{text} is not a finite number >= 0")
     return value
+
+
+def prior_strengths(text: str) -> tuple[float, ...]:
+    """An argparse type: comma-separated finite floats >= 0 (``--prior-strength``)."""
+    return tuple(_non_negative(part.strip()) for part in text.split(","))
 
 
 # --seed: numpy's generators refuse a negative seed, and some of the trackers' seed

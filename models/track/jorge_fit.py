@@ -19,6 +19,16 @@ shrinks every CPD row towards the config's network (the default: the fit on the 
 data's training split) with :math:`\lambda` pseudo-observations
 (:mod:`models.jorge.fit_prior`): 0, the default, is the plain fit.
 
+How strong a prior your files need depends on how many there are and how like the
+shared data they are. ``--folds K`` with several strengths (``--prior-strength
+0,30,100,300,1000``) chooses among them by K-fold cross-validation over the training
+files alone (:mod:`models.crossval`: the files cut in the order given into K contiguous
+folds, each labelled with the network fitted on the others; keep one recording's files
+together): the strength whose fits have the lowest mean error on the folds they were not
+fitted on is the one fitted on all the training files. With one strength, ``--folds``
+reports that error (``error_cv_fitted``) beside the config's network's on the same files
+(``error_train_config``: it was fitted on none of them).
+
 ``OUTDIR/config.json`` is the config with the fitted fields written over its ``network``
 and ``labels``, its other keys kept, so the same stroke settings build the strokes you
 label with it.
@@ -34,6 +44,7 @@ default network's parameters again.
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import NamedTuple
@@ -41,6 +52,7 @@ from typing import NamedTuple
 import numpy as np
 
 from dbn.errors import ConfigError, InputError
+from models.crossval import CrossValidation, cross_validate, fold_blocks
 from models.io.jorge_regions import is_regions
 from models.track.context import RunContext
 from models.track.jorge import (
@@ -72,19 +84,16 @@ class FitSet(NamedTuple):
 
 
 def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
-        seeds: int = 1, prior_strength: float = 0.0) -> dict:
+        seeds: int = 1, prior_strength: float | Sequence[float] = 0.0, folds: int = 0) -> dict:
     """Fit on ``train``, score on ``train`` and ``validate``; write ``config.json`` and
     ``fit.png``. ``prior_strength`` > 0 shrinks each CPD row towards the config's network
-    with that many pseudo-observations (:func:`models.jorge.fit_prior.shrink`). Returns
-    ``parameters``, ``metrics``, ``files`` (one row per file) and ``outputs`` for
-    ``summary.json``."""
-    from models.jorge.fit import EventCounts, count_events, fit_counts, fitted_like
-    from models.jorge.fit_prior import shrink
-
-    if not (np.isfinite(prior_strength) and prior_strength >= 0):
-        raise InputError(f"prior strength {prior_strength!r}: expected a finite number >= 0")
+    with that many pseudo-observations (:func:`models.jorge.fit_prior.shrink`); several
+    strengths are chosen among by ``folds``-fold cross-validation over the training files
+    (:func:`models.crossval.cross_validate`, module docstring). Returns ``parameters``,
+    ``metrics``, ``files`` (one row per file) and ``outputs`` for ``summary.json``."""
+    strengths = _strengths(prior_strength, folds, train)
     opt = read_options(config)
-    base, own, split_cover = opt.online, opt.own, opt.split_cover
+    base, own = opt.online, opt.own
     _check_disjoint(train, validate)
     builder = builder_keys(config, own)
     if builder and all(map(is_regions, [*train, *validate])):
@@ -92,29 +101,87 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
                           "every file is a regions file")  # fmt: skip
     with ctx.timed("read"):
         read = {p: _sets(ctx, p, config, own, opt.fps, base, seeds) for p in [*train, *validate]}
-    counts = EventCounts()
+    cv = None
+    if folds:
+        with ctx.timed("cross-validate"):
+            cv = _cross_validate(ctx, read, train, base, strengths, folds)
+    strength = strengths[0] if cv is None else cv.chosen
     with ctx.timed("fit"):
-        for fs in (fs for p in train for fs in read[p]):
-            count_events(fs.strokes, base.network, counts, links=fs.links, fps=fs.fps)
-        if counts.children == 0:
-            raise InputError(f"no stroke of the training files {train} has a parent (a link "
-                             "to an earlier stroke): nothing to fit the network's transitions on")
-        ml = fit_counts(counts, base.network)
-        shrunk = shrink(ml, base.network, counts, prior_strength)
-        fitted = replace(base, network=fitted_like(base.network, shrunk))
+        fitted, counts = _fitted(read, train, base, strength)
     with ctx.timed("score"):  # every file labelled with both networks
         files = [_score_file(ctx, p, read[p], base, fitted, "train" if p in train else
-                             "validation") for p in ctx.progress(read, len(read), "files")]
+                             "validation", cv) for p in ctx.progress(read, len(read), "files")]
     out = fitted_config(config, fitted.network)
     (ctx.outdir / "config.json").write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
     _plot(ctx, files)
     training = [fs for p in train for fs in read[p]]
-    params = {"seeds": seeds, "split_cover": split_cover, "prior_strength": prior_strength,
+    params = {"seeds": seeds, "split_cover": opt.split_cover, "prior_strength": strength,
+              "folds": folds, **({} if cv is None else {"cross_validation": _cv_record(cv)}),
               **_counted(training, counts.children, base.network.labels.max_group_size),
               "fitted": {k: v for k, v in out["labels"].items() if isinstance(v, float)}
               | {k: out["network"][k] for k in ("size_mu_single", "size_slope", "size_sigma")}}
-    return {"parameters": params, "metrics": _means(files), "files": files,
+    metrics = _means(files) | ({} if cv is None else {"error_cv_fitted": cv.mean[strength]})
+    return {"parameters": params, "metrics": metrics, "files": files,
             "outputs": ["config.json", "fit.png"]}
+
+
+def _strengths(prior_strength: float | Sequence[float], folds: int, train: list[str]) -> list:
+    """The prior strengths as a list, each a finite number >= 0, none twice; several only
+    with ``folds`` to choose among them, and ``folds`` 0 or 2 .. ``len(train)``. Checked
+    before any file is read."""
+    one = np.ndim(prior_strength) == 0
+    strengths = [prior_strength] if one else list(prior_strength)  # type: ignore[arg-type]
+    for lam in strengths:
+        if isinstance(lam, bool) or not isinstance(lam, (int, float, np.number)) or not (
+                np.isfinite(lam) and lam >= 0):  # fmt: skip
+            raise InputError(f"prior strength {lam!r}: expected a finite number >= 0")
+    if not strengths or len(set(strengths)) != len(strengths):
+        raise InputError(f"prior strengths {strengths!r}: expected at least one, none twice")
+    if folds:
+        fold_blocks(train, folds)  # refuses a bad number of folds
+    elif len(strengths) > 1:
+        raise InputError(f"prior strengths {strengths!r}: choosing among several needs "
+                         "cross-validation (folds >= 2)")  # fmt: skip
+    return [float(lam) for lam in strengths]
+
+
+def _fitted(read: dict, files: list[str], base, strength: float):
+    """``(online, counts)``: the config's labeller ``base`` with its network fitted on the
+    stroke sets of ``files`` (``read[path]``) and shrunk with ``strength``, and the events
+    counted."""
+    from models.jorge.fit import EventCounts, count_events, fit_counts, fitted_like
+    from models.jorge.fit_prior import shrink
+
+    counts = EventCounts()
+    for fs in (fs for p in files for fs in read[p]):
+        count_events(fs.strokes, base.network, counts, links=fs.links, fps=fs.fps)
+    if counts.children == 0:
+        raise InputError(f"no stroke of the training files {files} has a parent (a link to "
+                         "an earlier stroke): nothing to fit the network's transitions on")
+    shrunk = shrink(fit_counts(counts, base.network), base.network, counts, strength)
+    return replace(base, network=fitted_like(base.network, shrunk)), counts
+
+
+def _cross_validate(ctx: RunContext, read: dict, train: list[str], base, strengths: list,
+                    folds: int) -> CrossValidation:
+    """Each training file labelled with the network fitted on the other folds, for every
+    strength (:func:`models.crossval.cross_validate`)."""
+
+    def fit_on(files: list[str], strength: float):
+        return _fitted(read, files, base, strength)[0]
+
+    def error(online, path: str) -> float:
+        return _error(ctx, online, read[path])
+
+    return cross_validate(train, folds, strengths, fit_on, error, ctx.bar("fits"))
+
+
+def _cv_record(cv: CrossValidation) -> dict:
+    """The cross-validation for ``summary.json``: each fold's files (resolved, as in
+    ``files``), and each strength's mean error of the fits on the other folds."""
+    return {"folds": [[str(Path(p).resolve()) for p in fold] for fold in cv.folds],
+            "errors": [{"prior_strength": lam, "error": e} for lam, e in cv.mean.items()],
+            "chosen": cv.chosen}
 
 
 def _counted(training: list[FitSet], children: int, gmax: int) -> dict:
@@ -154,22 +221,29 @@ def _sets(ctx: RunContext, path: str, config: dict, own: set, fps: float | None,
             for i in range(seeds)]  # fmt: skip
 
 
-def _score_file(ctx: RunContext, path: str, sets: list[FitSet], base, fitted, split: str) -> dict:
+def _score_file(ctx: RunContext, path: str, sets: list[FitSet], base, fitted, split: str,
+                cv: CrossValidation | None = None) -> dict:
     """One file's row: its strokes and the labelling error (mean over its stroke sets) with
-    the config's network and the fitted one."""
+    the config's network and the fitted one, and for a training file under
+    cross-validation ``cv``, the error of the fit on the other folds (``error_cv``)."""
+    row = {"file": str(Path(path).resolve()), "split": split,
+           "strokes": int(np.mean([len(fs.strokes) for fs in sets])),
+           "error_config": _error(ctx, base, sets), "error_fitted": _error(ctx, fitted, sets)}
+    if cv is not None and split == "train":
+        row["error_cv"] = cv.errors[cv.chosen][path]
+    return row
+
+
+def _error(ctx: RunContext, online, sets: list[FitSet]) -> float:
+    """The labelling error of ``online`` on a file's stroke sets (their mean)."""
     from models.jorge.scoring import score
 
-    errors = {}
-    for name, online in (("config", base), ("fitted", fitted)):
-        rates = []
-        for fs in sets:
-            steps = linked_steps(fs.strokes, fs.links)
-            labels, _ = label_steps(ctx, online, steps, fs.fps, phase=None)
-            rates.append(score(fs.strokes, labels).error_rate)
-        errors[name] = float(np.mean(rates))
-    return {"file": str(Path(path).resolve()), "split": split,
-            "strokes": int(np.mean([len(fs.strokes) for fs in sets])),
-            "error_config": errors["config"], "error_fitted": errors["fitted"]}  # fmt: skip
+    rates = []
+    for fs in sets:
+        labels, _ = label_steps(ctx, online, linked_steps(fs.strokes, fs.links), fs.fps,
+                                phase=None)  # fmt: skip
+        rates.append(score(fs.strokes, labels).error_rate)
+    return float(np.mean(rates))
 
 
 def _means(files: list[dict]) -> dict:
@@ -196,12 +270,17 @@ def fitted_config(config: dict, network) -> dict:
 
 
 def _plot(ctx: RunContext, files: list[dict]) -> None:
-    """``fit.png``: each file's error with the config's and the fitted network."""
+    """``fit.png``: each file's error with the config's and the fitted network (and, for
+    the training files under cross-validation, with the fit on the other folds)."""
     size = (min(14.0, max(4.0, 0.45 * len(files) + 2)), 4.0)
+    bars = [("config", "config's network"), ("fitted", "fitted network")]
+    if any("error_cv" in f for f in files):
+        bars.append(("cv", "fitted on the other folds"))
     with ctx.figure("fit.png", figsize=size) as (_, ax):
-        x = np.arange(len(files))
-        for dx, name in ((-0.2, "config"), (0.2, "fitted")):
-            ax.bar(x + dx, [f[f"error_{name}"] for f in files], 0.4, label=f"{name} network")
+        x, width = np.arange(len(files)), 0.8 / len(bars)
+        for i, (name, label) in enumerate(bars):
+            ax.bar(x + (i - (len(bars) - 1) / 2) * width,
+                   [f.get(f"error_{name}", np.nan) for f in files], width, label=label)
         ax.set_xticks(x, [("" if f["split"] == "train" else "held out\n") + Path(f["file"]).name
                           for f in files], rotation=30, ha="right", fontsize=7)  # fmt: skip
         held = [i for i, f in enumerate(files) if f["split"] != "train"]

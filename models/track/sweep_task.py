@@ -126,8 +126,8 @@ def data_arguments(data: str) -> tuple[list[str], str | None, str | None]:
 def fit_task(point) -> dict[str, Any]:
     """Run ``dbntrack fit`` for one :class:`~models.experiments.GridPoint`: ``data`` is the
     rest of a fit command line, ``TRAIN... [--validate HELD...] [--seeds N]
-    [--prior-strength LAMBDA]`` (and ``--keep DIR`` to keep each point's ``config.json`` in
-    ``DIR/POINT_ID``), the seed is ``--seed``
+    [--prior-strength LAMBDA[,LAMBDA...]] [--folds K]`` (and ``--keep DIR`` to keep each
+    point's ``config.json`` in ``DIR/POINT_ID``), the seed is ``--seed``
     (the first of a box file's SIMULATED stroke sets), and the parameters are the config:
     the settings the fit keeps (dotted names as for :func:`track_task`). The record keeps
     the summary's ``parameters``, ``metrics`` (the training and held-out errors of the
@@ -146,7 +146,7 @@ def fit_task(point) -> dict[str, Any]:
 
     d = fit_arguments(point.data)
     return _run(fit, point, d.keep, _KEPT_FIT, train=d.train, validate=d.validate,
-                seeds=d.seeds, prior_strength=d.prior_strength)
+                seeds=d.seeds, prior_strength=d.prior_strength, folds=d.folds)
 
 
 class _DataParser(argparse.ArgumentParser):
@@ -164,7 +164,8 @@ class FitData(NamedTuple):
     train: list[str]
     validate: list[str]
     seeds: int
-    prior_strength: float
+    prior_strength: tuple[float, ...]
+    folds: int
     keep: str | None
 
 
@@ -177,13 +178,17 @@ def fit_arguments(data: str) -> FitData:
     ------
     InputError
         Quoting that does not close, an option other than ``--validate``, ``--seeds``,
-        ``--prior-strength`` and ``--keep``, a value missing or not valid, no training file.
+        ``--prior-strength``, ``--folds`` and ``--keep``, a value missing or not valid, no
+        training file.
     """
+    from models.commands import prior_strengths
+
     parser = _DataParser(prog="data", add_help=False, allow_abbrev=False)
     parser.add_argument("train", nargs="+")
     parser.add_argument("--validate", nargs="+", default=[])
     parser.add_argument("--seeds", type=int, default=1)
-    parser.add_argument("--prior-strength", type=float, default=0.0)
+    parser.add_argument("--prior-strength", type=prior_strengths, default=(0.0,))
+    parser.add_argument("--folds", type=int, default=0)
     parser.add_argument("--keep")
     try:
         words = shlex.split(data)
@@ -197,13 +202,14 @@ def fit_arguments(data: str) -> FitData:
         args = parser.parse_args(words)
     except InputError as exc:
         raise InputError(f"data {data!r}: {exc} (a fit command line: TRAIN... [--validate "
-                         "HELD...] [--seeds N] [--prior-strength L] [--keep DIR])") from None
+                         "HELD...] [--seeds N] [--prior-strength L[,L...]] [--folds K] "
+                         "[--keep DIR])") from None
     if args.seeds < 1:
         raise InputError(f"data {data!r}: --seeds {args.seeds}: at least 1")
-    if not 0 <= args.prior_strength < float("inf"):
-        raise InputError(f"data {data!r}: --prior-strength {args.prior_strength}: a finite "
-                         "number >= 0")  # fmt: skip
-    return FitData(args.train, args.validate, args.seeds, args.prior_strength, args.keep)
+    if args.folds == 1 or args.folds < 0:
+        raise InputError(f"data {data!r}: --folds {args.folds}: at least 2 (0: none)")
+    return FitData(args.train, args.validate, args.seeds, args.prior_strength, args.folds,
+                   args.keep)
 
 
 def nest_params(params: Iterable[tuple[str, Any]]) -> dict[str, Any]:

@@ -4,8 +4,10 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from dbn.errors import InputError
@@ -13,6 +15,7 @@ from models.cli import main
 from models.io.jorge import read_strokes
 from models.io.jorge_regions import write_regions
 from models.jorge.fit import EventCounts, count_events, fit_counts, fit_parameters, fitted_like
+from models.jorge.fit_prior import shrink
 from models.jorge.network import NetworkConfig
 from models.jorge.online import OnlineConfig, label_online
 from models.jorge.scoring import score, true_links
@@ -151,3 +154,76 @@ def test_a_prior_strength_shrinks_the_fit_towards_the_configs_network(tmp_path, 
         with pytest.raises(SystemExit):
             main(["fit", "jorge", str(XML), "-o", str(tmp_path / "b"), "--prior-strength", bad])
         assert "--prior-strength" in capsys.readouterr().err
+
+
+def _noisy(seed: int) -> list:
+    """The SIMULATED strokes of the tiny CAVIAR file, each with its noisy colours as its
+    palette (where the default palette tables, fitted on clean palettes, mislead)."""
+    return [replace(s, palette=s.colours) for s in build_strokes(seed, load_caviar(XML))]
+
+
+def _cv_files(tmp_path: Path, seeds) -> list[Path]:
+    """Regions files of :func:`_noisy` strokes, one per seed."""
+    return [write_regions(tmp_path / f"s{s}.jsonl", _noisy(s), fps=25.0) for s in seeds]
+
+
+def test_cross_validation_chooses_the_prior_strength(tmp_path, capsys):
+    """Each training file's error is that of the fit on the other folds (recomputed with
+    the API); the strength with the lowest mean (here the second given) is chosen and
+    fitted on every file; a fit pulled onto the config's network (1e12) errs as it."""
+    seeds = (3, 4, 5, 6)
+    files = _cv_files(tmp_path, seeds)
+    held = write_regions(tmp_path / "held.jsonl", _noisy(9), fps=25.0)
+    summary, written = _fit(tmp_path, "cv", *map(str, files), "--validate", str(held),
+                            "--folds", "2", "--prior-strength", "1e12,0")  # fmt: skip
+    base = labeller_config().network
+    sets = {f.name: _noisy(s) for f, s in zip(files, seeds)}
+
+    def fitted(names, lam):
+        c = EventCounts()
+        for n in names:
+            count_events(sets[n], base, c, fps=25.0)
+        return fitted_like(base, shrink(fit_counts(c, base), base, c, lam))
+
+    def error(net, name):
+        strokes = sets[name]
+        labels = label_online(strokes, OnlineConfig(network=net), fps=25.0).labels
+        return score(strokes, labels).error_rate
+
+    cv = summary["parameters"]["cross_validation"]
+    assert cv["folds"] == [[str(f.resolve()) for f in fold] for fold in (files[:2], files[2:])]
+    cv["folds"] = [[Path(f).name for f in fold] for fold in cv["folds"]]
+    rows = {Path(r["file"]).name: r for r in summary["files"]}
+    want = {}
+    for lam in (1e12, 0.0):
+        per = {n: error(fitted([m for f in cv["folds"] if n not in f for m in f], lam), n)
+               for n in sets}  # fmt: skip
+        want[lam] = per
+        assert {"prior_strength": lam, "error": pytest.approx(np.mean(list(per.values())))} \
+            in cv["errors"]
+    assert want[1e12] == {n: rows[n]["error_config"] for n in sets}
+    means = {lam: np.mean(list(per.values())) for lam, per in want.items()}
+    assert means[0.0] < means[1e12]  # the noisy palettes: the fit helps
+    assert cv["chosen"] == summary["parameters"]["prior_strength"] == 0.0
+    assert {n: rows[n]["error_cv"] for n in sets} == want[0.0]
+    assert "error_cv" not in rows["held.jsonl"]
+    assert summary["metrics"]["error_cv_fitted"] == pytest.approx(means[0.0])
+    assert _network(written) == fitted(list(sets), 0.0)
+    assert summary["prior_strength"] == [1e12, 0.0] and summary["folds"] == 2
+    assert "2-fold cross-validation error by prior strength: 1e+12: " in capsys.readouterr().out
+
+
+def test_cross_validation_refusals(tmp_path, capsys):
+    files = [str(f) for f in _cv_files(tmp_path, (3, 4))]
+    out = tmp_path / "out"
+    _bad(capsys, ["fit", "jorge", *files, "-o", str(out), "--prior-strength", "0,30"],
+         "choosing among several needs cross-validation")  # fmt: skip
+    _bad(capsys, ["fit", "jorge", *files, "-o", str(out), "--folds", "3"],
+         "folds 3: expected an integer from 2 to the number of training files (2)")  # fmt: skip
+    _bad(capsys, ["fit", "jorge", *files, "-o", str(out), "--folds", "2", "--prior-strength",
+                  "30,30"], "none twice")  # fmt: skip
+    assert not out.exists() or not any(out.iterdir())
+    for bad in ("1", "x"):
+        with pytest.raises(SystemExit):
+            main(["fit", "jorge", *files, "-o", str(out), "--folds", bad])
+        assert "--folds" in capsys.readouterr().err
