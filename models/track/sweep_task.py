@@ -134,7 +134,9 @@ def fit_task(point) -> dict[str, Any]:
     config's and the fitted network), ``files``, ``timings_s`` and ``outputs``.
 
     Settings chosen by the held-out error have seen the held-out files: score the chosen
-    ones on files that took no part before quoting an error.
+    ones on files that took no part before quoting an error, or choose by the
+    cross-validation error over the training files (``--folds K`` in ``data``: the
+    metric ``error_cv_fitted``), which leaves the held-out files out of the choice.
 
     Raises
     ------
