@@ -27,7 +27,8 @@ folds, each labelled with the network fitted on the others; keep one recording's
 together): the strength whose fits have the lowest mean error on the folds they were not
 fitted on is the one fitted on all the training files. With one strength, ``--folds``
 reports that error (``error_cv_fitted``) beside the config's network's on the same files
-(``error_train_config``: it was fitted on none of them).
+(``error_train_config``: a held-out error too, unless the config's network was fitted on
+these files, as the default network was on the shared data's training split).
 
 ``OUTDIR/config.json`` is the config with the fitted fields written over its ``network``
 and ``labels``, its other keys kept, so the same stroke settings build the strokes you
