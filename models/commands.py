@@ -179,24 +179,28 @@ def fit(args: argparse.Namespace) -> dict:
         with_fit = [n for n in available() if hasattr(runner(n), "fit")]
         raise InputError(f"tracker {args.name!r} has no fit; trackers with one: "
                          f"{', '.join(with_fit)}")  # fmt: skip
+    from models.track.context import shown_strength
+
     config = _read_config(args.config)
     strengths = list(args.prior_strength)
     summary = {"tracker": args.name, "train": [str(Path(p).resolve()) for p in args.train],
                "validate": [str(Path(p).resolve()) for p in args.validate],
                "seed": args.seed, "seeds": args.seeds, "folds": args.folds,
-               "prior_strength": strengths[0] if len(strengths) == 1 else strengths,
+               "prior_strength": shown_strength(strengths[0]) if len(strengths) == 1
+               else [shown_strength(v) for v in strengths],
                "config": dict(config)}  # fmt: skip
     ctx = _run(args, summary, lambda ctx: mod.fit(ctx, list(args.train), list(args.validate),
                                                   config, args.seeds, strengths, args.folds))
     for row in summary["files"]:
-        cv = f" (other folds' fit {row['error_cv']:.3f})" if "error_cv" in row else ""
+        other = f" (other folds' fit {row['error_cv']:.3f})" if "error_cv" in row else ""
         print(f"{row['split']:>10}  {Path(row['file']).name}: {row['strokes']} strokes, error "
-              f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted){cv}")
+              f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted){other}")
     if "cross_validation" in summary["parameters"]:
         cv = summary["parameters"]["cross_validation"]
-        errors = ", ".join(f"{r['prior_strength']:g}: {r['error']:.3f}" for r in cv["errors"])
+        g = lambda v: v if isinstance(v, str) else f"{v:g}"  # noqa: E731  ("inf" a str)
+        errors = ", ".join(f"{g(r['prior_strength'])}: {r['error']:.3f}" for r in cv["errors"])
         print(f"{args.name}: {args.folds}-fold cross-validation error by prior strength: "
-              f"{errors}; chosen {cv['chosen']:g} (the config's network on the training "
+              f"{errors}; chosen {g(cv['chosen'])} (the config's network on the training "
               f"files: {summary['metrics']['error_train_config']:.3f})")
     if not args.validate:
         print(f"{args.name}: no --validate file: an error on the files fitted on is not a result")
@@ -281,8 +285,18 @@ def _non_negative(text: str) -> float:
 
 
 def prior_strengths(text: str) -> tuple[float, ...]:
-    """An argparse type: comma-separated finite floats >= 0 (``--prior-strength``)."""
-    return tuple(_non_negative(part.strip()) for part in text.split(","))
+    """An argparse type: comma-separated numbers >= 0, ``inf`` among them (the prior
+    itself: the config's parameters as they are) (``--prior-strength``)."""
+    values = []
+    for part in text.split(","):
+        try:
+            value = float(part)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a number: {part.strip()!r}") from None
+        if not value >= 0:  # NaN too
+            raise argparse.ArgumentTypeError(f"{part.strip()} is not a number >= 0 (or inf)")
+        values.append(value)
+    return tuple(values)
 
 
 # --seed: numpy's generators refuse a negative seed, and some of the trackers' seed

@@ -17,7 +17,7 @@ from typing import Any
 
 from dbn.errors import InputError
 
-__all__ = ["RunContext", "clean", "versions", "write_summary"]
+__all__ = ["RunContext", "clean", "shown_strength", "versions", "write_summary"]
 
 
 @dataclass
@@ -115,6 +115,12 @@ def clean(x: Any) -> Any:
     if isinstance(x, float) and not math.isfinite(x):
         return None
     return x
+
+
+def shown_strength(value: float) -> float | str:
+    """A prior strength (``dbntrack fit --prior-strength``) for JSON: ``"inf"`` for the
+    prior itself, as JSON has no infinity (:func:`clean` would make it ``null``)."""
+    return value if math.isfinite(value) else "inf"
 
 
 def write_summary(path: Path, summary: dict) -> Path:

@@ -17,11 +17,13 @@ rule, ``labels.max_group_size``, a table switched off, which stays off,
 :func:`models.jorge.fit.fitted_like`). On a few files, ``--prior-strength`` :math:`\lambda`
 shrinks every CPD row towards the config's network (the default: the fit on the shared
 data's training split) with :math:`\lambda` pseudo-observations
-(:mod:`models.jorge.fit_prior`): 0, the default, is the plain fit.
+(:mod:`models.jorge.fit_prior`): 0, the default, is the plain fit; ``inf`` is the prior
+itself, the config's network as it is (its region-size likelihood too, which a finite
+strength leaves as fitted).
 
 How strong a prior your files need depends on how many there are and how like the
 shared data they are. ``--folds K`` with several strengths (``--prior-strength
-0,30,100,300,1000``) chooses among them by K-fold cross-validation over the training
+0,30,100,300,1000,inf``) chooses among them by K-fold cross-validation over the training
 files alone (:mod:`models.crossval`: the files cut in the order given into K contiguous
 folds, each labelled with the network fitted on the others; keep one recording's files
 together): the strength whose fits have the lowest mean error on the folds they were not
@@ -55,7 +57,7 @@ import numpy as np
 from dbn.errors import ConfigError, InputError
 from models.crossval import CrossValidation, cross_validate, fold_blocks
 from models.io.jorge_regions import is_regions
-from models.track.context import RunContext
+from models.track.context import RunContext, shown_strength
 from models.track.jorge import (
     builder_keys,
     label_steps,
@@ -116,7 +118,8 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
     (ctx.outdir / "config.json").write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
     _plot(ctx, files)
     training = [fs for p in train for fs in read[p]]
-    params = {"seeds": seeds, "split_cover": opt.split_cover, "prior_strength": strength,
+    params = {"seeds": seeds, "split_cover": opt.split_cover,
+              "prior_strength": shown_strength(strength),
               "folds": folds, **({} if cv is None else {"cross_validation": _cv_record(cv)}),
               **_counted(training, counts.children, base.network.labels.max_group_size),
               "fitted": {k: v for k, v in out["labels"].items() if isinstance(v, float)}
@@ -127,15 +130,14 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
 
 
 def _strengths(prior_strength: float | Sequence[float], folds: int, train: list[str]) -> list:
-    """The prior strengths as a list, each a finite number >= 0, none twice; several only
+    """The prior strengths as a list, each a number >= 0 or inf, none twice; several only
     with ``folds`` to choose among them, and ``folds`` 0 or 2 .. ``len(train)``. Checked
     before any file is read."""
     one = np.ndim(prior_strength) == 0
     strengths = [prior_strength] if one else list(prior_strength)  # type: ignore[arg-type]
     for lam in strengths:
-        if isinstance(lam, bool) or not isinstance(lam, (int, float, np.number)) or not (
-                np.isfinite(lam) and lam >= 0):  # fmt: skip
-            raise InputError(f"prior strength {lam!r}: expected a finite number >= 0")
+        if isinstance(lam, bool) or not isinstance(lam, (int, float, np.number)) or not lam >= 0:
+            raise InputError(f"prior strength {lam!r}: expected a number >= 0 (or inf)")
     if not strengths or len(set(strengths)) != len(strengths):
         raise InputError(f"prior strengths {strengths!r}: expected at least one, none twice")
     if folds:
@@ -149,7 +151,8 @@ def _strengths(prior_strength: float | Sequence[float], folds: int, train: list[
 def _fitted(read: dict, files: list[str], base, strength: float):
     """``(online, counts)``: the config's labeller ``base`` with its network fitted on the
     stroke sets of ``files`` (``read[path]``) and shrunk with ``strength``, and the events
-    counted."""
+    counted; ``strength`` inf gives ``base`` itself (the limit: the region-size likelihood,
+    which the prior does not shrink, is the config's too)."""
     from models.jorge.fit import EventCounts, count_events, fit_counts, fitted_like
     from models.jorge.fit_prior import shrink
 
@@ -159,6 +162,8 @@ def _fitted(read: dict, files: list[str], base, strength: float):
     if counts.children == 0:
         raise InputError(f"no stroke of the training files {files} has a parent (a link to "
                          "an earlier stroke): nothing to fit the network's transitions on")
+    if np.isinf(strength):
+        return base, counts
     shrunk = shrink(fit_counts(counts, base.network), base.network, counts, strength)
     return replace(base, network=fitted_like(base.network, shrunk)), counts
 
@@ -181,8 +186,9 @@ def _cv_record(cv: CrossValidation) -> dict:
     """The cross-validation for ``summary.json``: each fold's files (resolved, as in
     ``files``), and each strength's mean error of the fits on the other folds."""
     return {"folds": [[str(Path(p).resolve()) for p in fold] for fold in cv.folds],
-            "errors": [{"prior_strength": lam, "error": e} for lam, e in cv.mean.items()],
-            "chosen": cv.chosen}
+            "errors": [{"prior_strength": shown_strength(lam), "error": e}
+                       for lam, e in cv.mean.items()],
+            "chosen": shown_strength(cv.chosen)}
 
 
 def _counted(training: list[FitSet], children: int, gmax: int) -> dict:

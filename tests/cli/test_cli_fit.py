@@ -132,7 +132,7 @@ def test_fit_refusals(tmp_path, capsys):
     from models.track.context import RunContext
     from models.track.jorge_fit import fit
 
-    with pytest.raises(InputError, match=r"prior strength -1.0: expected a finite number >= 0"):
+    with pytest.raises(InputError, match=r"prior strength -1.0: expected a number >= 0 \(or inf"):
         fit(RunContext("jorge", out, 0, quiet=True), [str(XML)], [], {}, 1, -1.0)
     assert not (out / "config.json").exists() and not (out / "summary.json").exists()
     with pytest.raises(SystemExit):  # argparse: usage and exit status 2
@@ -150,10 +150,14 @@ def test_a_prior_strength_shrinks_the_fit_towards_the_configs_network(tmp_path, 
     for name in ("p_new", "p_join", "p_part"):
         assert getattr(_network(strong).labels, name) == pytest.approx(getattr(base.labels, name))
         assert getattr(_network(plain).labels, name) != pytest.approx(getattr(base.labels, name))
-    for bad in ("-1", "inf", "x"):
+    for bad in ("-1", "nan", "x", "1,,2"):
         with pytest.raises(SystemExit):
             main(["fit", "jorge", str(XML), "-o", str(tmp_path / "b"), "--prior-strength", bad])
         assert "--prior-strength" in capsys.readouterr().err
+    summary, limit = _fit(tmp_path, "limit", str(XML), "--prior-strength", "inf")
+    assert _network(limit) == base  # the prior itself: the size likelihood too
+    assert summary["prior_strength"] == summary["parameters"]["prior_strength"] == "inf"
+    assert summary["metrics"]["error_train_fitted"] == summary["metrics"]["error_train_config"]
 
 
 def _noisy(seed: int) -> list:
@@ -169,13 +173,13 @@ def _cv_files(tmp_path: Path, seeds) -> list[Path]:
 
 def test_cross_validation_chooses_the_prior_strength(tmp_path, capsys):
     """Each training file's error is that of the fit on the other folds (recomputed with
-    the API); the strength with the lowest mean (here the second given) is chosen and
-    fitted on every file; a fit pulled onto the config's network (1e12) errs as it."""
+    the API); the strength with the lowest mean (here the third given) is chosen and
+    fitted on every file; the prior itself (inf) errs as the config's network."""
     seeds = (3, 4, 5, 6)
     files = _cv_files(tmp_path, seeds)
     held = write_regions(tmp_path / "held.jsonl", _noisy(9), fps=25.0)
     summary, written = _fit(tmp_path, "cv", *map(str, files), "--validate", str(held),
-                            "--folds", "2", "--prior-strength", "1e12,0")  # fmt: skip
+                            "--folds", "2", "--prior-strength", "inf,1e12,0")  # fmt: skip
     base = labeller_config().network
     sets = {f.name: _noisy(s) for f, s in zip(files, seeds)}
 
@@ -183,7 +187,8 @@ def test_cross_validation_chooses_the_prior_strength(tmp_path, capsys):
         c = EventCounts()
         for n in names:
             count_events(sets[n], base, c, fps=25.0)
-        return fitted_like(base, shrink(fit_counts(c, base), base, c, lam))
+        return base if lam == np.inf else fitted_like(base, shrink(fit_counts(c, base), base,
+                                                                   c, lam))  # fmt: skip
 
     def error(net, name):
         strokes = sets[name]
@@ -195,22 +200,23 @@ def test_cross_validation_chooses_the_prior_strength(tmp_path, capsys):
     cv["folds"] = [[Path(f).name for f in fold] for fold in cv["folds"]]
     rows = {Path(r["file"]).name: r for r in summary["files"]}
     want = {}
-    for lam in (1e12, 0.0):
+    for lam in (np.inf, 1e12, 0.0):
         per = {n: error(fitted([m for f in cv["folds"] if n not in f for m in f], lam), n)
                for n in sets}  # fmt: skip
         want[lam] = per
-        assert {"prior_strength": lam, "error": pytest.approx(np.mean(list(per.values())))} \
+        shown = "inf" if lam == np.inf else lam
+        assert {"prior_strength": shown, "error": pytest.approx(np.mean(list(per.values())))} \
             in cv["errors"]
-    assert want[1e12] == {n: rows[n]["error_config"] for n in sets}
+    assert want[np.inf] == {n: rows[n]["error_config"] for n in sets}
     means = {lam: np.mean(list(per.values())) for lam, per in want.items()}
-    assert means[0.0] < means[1e12]  # the noisy palettes: the fit helps
+    assert means[0.0] < min(means[1e12], means[np.inf])  # the noisy palettes: the fit helps
     assert cv["chosen"] == summary["parameters"]["prior_strength"] == 0.0
     assert {n: rows[n]["error_cv"] for n in sets} == want[0.0]
     assert "error_cv" not in rows["held.jsonl"]
     assert summary["metrics"]["error_cv_fitted"] == pytest.approx(means[0.0])
     assert _network(written) == fitted(list(sets), 0.0)
-    assert summary["prior_strength"] == [1e12, 0.0] and summary["folds"] == 2
-    assert "2-fold cross-validation error by prior strength: 1e+12: " in capsys.readouterr().out
+    assert summary["prior_strength"] == ["inf", 1e12, 0.0] and summary["folds"] == 2
+    assert "2-fold cross-validation error by prior strength: inf: " in capsys.readouterr().out
 
 
 def test_cross_validation_refusals(tmp_path, capsys):

@@ -129,15 +129,15 @@ def test_fit_arguments_are_a_fit_command_line():
                         "--prior-strength 50")  # fmt: skip
     assert got == (["my a.jsonl", "b.xml"], ["c.jsonl"], 2, (50.0,), 0, "k")
     assert fit_arguments("a.jsonl") == (["a.jsonl"], [], 1, (0.0,), 0, None)
-    got = fit_arguments("a b c --prior-strength 0,30,1e3 --folds 3")
-    assert (got.prior_strength, got.folds) == ((0.0, 30.0, 1000.0), 3)
+    got = fit_arguments("a b c --prior-strength 0,30,1e3,inf --folds 3")
+    assert (got.prior_strength, got.folds) == ((0.0, 30.0, 1000.0, float("inf")), 3)
     for data, needle in (("a --seed 3", "option '--seed'"), ("a --seed=3", "option '--seed=3'"),
                          ("a -o out", "option '-o'"), ("--validate c", "required: train"),
                          ("a --seeds x", "invalid int value: 'x'"), ("a --seeds 0", "at least 1"),
                          ("a --val c", "unrecognized arguments: --val"),
                          ("a --validate", "expected at least one"), ("'a", "closing quotation"),
-                         ("a --prior-strength -1", "a finite number >= 0"),
-                         ("a --prior-strength inf", "a finite number >= 0"),
+                         ("a --prior-strength -1", "-1 is not a number >= 0"),
+                         ("a --prior-strength nan", "nan is not a number >= 0"),
                          ("a --prior-strength 1,x", "not a number: 'x'"),
                          ("a --folds 1", "at least 2"), ("a --folds -2", "at least 2"),
                          ("a --folds two", "invalid int value: 'two'")):
