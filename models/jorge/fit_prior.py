@@ -21,9 +21,27 @@ so :math:`\lambda = 0` is the fit itself and :math:`\lambda \to \infty` the prio
 with many events keeps its own frequencies, a row with few moves to the prior's. This
 holds for :math:`P_{new}`, the three :math:`P_{merge}`, :math:`P_{split}`,
 :math:`P_{part}`, :math:`P_{join}`, :math:`q_m`, the split cover and every row of the
-palette tables. The region-size likelihood (three least-squares numbers) is kept as
-fitted. The prior's tables index rows as the evidence does: a row beyond its last takes
-its last.
+palette tables. The prior's tables index rows as the evidence does: a row beyond its last
+takes its last.
+
+The region-size likelihood is a linear regression, :math:`a = \beta_0 + \beta_1 \log k +
+\varepsilon`, :math:`\varepsilon \sim N(0, \sigma^2)`, of a stroke's relative log area on
+its number of people (``size_mu_single``, ``size_slope``, ``size_sigma``), fitted by least
+squares on :math:`N` strokes with design :math:`X`. Its prior is the conjugate
+Normal-Inverse-Gamma one centred on the prior network's :math:`(\beta^0, \sigma_0^2)` with
+the weight of :math:`\lambda` strokes like the training ones, :math:`\beta \mid \sigma^2
+\sim N(\beta^0, \sigma^2 / (\lambda S))` with :math:`S = X^T X / N`, and
+:math:`\sigma^2 \sim IG(\lambda / 2, \lambda \sigma_0^2 / 2)`. The posterior mean of
+:math:`\beta` and the inverse posterior mean of :math:`\sigma^{-2}` are, with
+:math:`d = \hat\beta - \beta^0`,
+
+.. math::
+
+    \tilde\beta = \frac{N \hat\beta + \lambda \beta^0}{N + \lambda}, \qquad
+    \tilde\sigma^2 = \frac{N \hat\sigma^2 + \lambda \sigma_0^2
+                      + \frac{N \lambda}{N + \lambda} d^T S d}{N + \lambda},
+
+the same limits: the fit at :math:`\lambda = 0`, the prior as :math:`\lambda \to \infty`.
 """
 
 from __future__ import annotations
@@ -45,8 +63,9 @@ _TABLES = ("palette_count_table", "palette_gain_table", "palette_missing_table")
 def shrink(fitted: NetworkConfig, prior: NetworkConfig, counts: EventCounts,
            strength: float) -> NetworkConfig:
     """``fitted`` (:func:`~models.jorge.fit.fit_counts` of ``counts``) shrunk towards
-    ``prior`` with ``strength`` :math:`\\lambda` pseudo-observations per row (module
-    docstring). A table the prior has off (empty) is kept as fitted.
+    ``prior`` with ``strength`` :math:`\\lambda` pseudo-observations per row, and per
+    region-size regression (module docstring). A table the prior has off (empty) is kept
+    as fitted.
 
     Raises
     ------
@@ -60,15 +79,35 @@ def shrink(fitted: NetworkConfig, prior: NetworkConfig, counts: EventCounts,
         return fitted
     gmax = fitted.labels.max_group_size
     labels = _labels(fitted.labels, prior.labels, counts, strength, gmax)
-    tables = {}
+    fields = _size(fitted, prior, counts, strength, gmax)
     totals = _table_totals(counts, fitted, gmax)
     for name in _TABLES:
         mine, theirs = getattr(fitted, name), getattr(prior, name)
         if not mine or not theirs:
             continue
-        tables[name] = _shrunk_table(name, np.asarray(mine), np.asarray(theirs), totals[name],
+        fields[name] = _shrunk_table(name, np.asarray(mine), np.asarray(theirs), totals[name],
                                      strength)  # fmt: skip
-    return replace(fitted, labels=labels, **tables)
+    return replace(fitted, labels=labels, **fields)
+
+
+def _size(fitted: NetworkConfig, prior: NetworkConfig, c: EventCounts, lam: float,
+          gmax: int) -> dict:
+    """The region-size likelihood's Normal-Inverse-Gamma posterior (module docstring):
+    ``size_mu_single``, ``size_slope`` and ``size_sigma`` shrunk towards the prior's."""
+    k = np.minimum(np.array([n for n, _ in c.sizes], dtype=np.float64), gmax)
+    n = float(k.size)
+    beta = np.array([fitted.size_mu_single, fitted.size_slope])
+    beta0 = np.array([prior.size_mu_single, prior.size_slope])
+    if n == 0:  # nothing fitted: the prior's
+        beta, var = beta0, prior.size_sigma**2
+    else:
+        x = np.stack([np.ones_like(k), np.log(k)], axis=1)
+        d = beta - beta0
+        spread = float(d @ (x.T @ x / n) @ d) * n * lam / (n + lam)
+        beta = (n * beta + lam * beta0) / (n + lam)
+        var = (n * fitted.size_sigma**2 + lam * prior.size_sigma**2 + spread) / (n + lam)
+    return {"size_mu_single": float(beta[0]), "size_slope": float(beta[1]),
+            "size_sigma": float(np.sqrt(var))}
 
 
 def _mean(p: float, total: float, p0: float, lam: float) -> float:

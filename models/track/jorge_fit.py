@@ -15,11 +15,10 @@ tables (:data:`models.jorge.fit.FITTED_FIELDS`).
 The network fitted is the config's (:func:`models.track.jorge.labeller_config`: the link
 rule, ``labels.max_group_size``, a table switched off, which stays off,
 :func:`models.jorge.fit.fitted_like`). On a few files, ``--prior-strength`` :math:`\lambda`
-shrinks every CPD row towards the config's network (the default: the fit on the shared
-data's training split) with :math:`\lambda` pseudo-observations
-(:mod:`models.jorge.fit_prior`): 0, the default, is the plain fit; ``inf`` is the prior
-itself, the config's network as it is (its region-size likelihood too, which a finite
-strength leaves as fitted).
+shrinks every CPD row and the region-size regression towards the config's network (the
+default: the fit on the shared data's training split) with :math:`\lambda`
+pseudo-observations (:mod:`models.jorge.fit_prior`): 0, the default, is the plain fit;
+``inf`` is the prior itself, the config's network as it is.
 
 How strong a prior your files need depends on how many there are and how like the
 shared data they are. ``--folds K`` with several strengths (``--prior-strength
@@ -151,8 +150,7 @@ def _strengths(prior_strength: float | Sequence[float], folds: int, train: list[
 def _fitted(read: dict, files: list[str], base, strength: float):
     """``(online, counts)``: the config's labeller ``base`` with its network fitted on the
     stroke sets of ``files`` (``read[path]``) and shrunk with ``strength``, and the events
-    counted; ``strength`` inf gives ``base`` itself (the limit: the region-size likelihood,
-    which the prior does not shrink, is the config's too)."""
+    counted; ``strength`` inf gives ``base`` itself (the limit of the shrinkage)."""
     from models.jorge.fit import EventCounts, count_events, fit_counts, fitted_like
     from models.jorge.fit_prior import shrink
 

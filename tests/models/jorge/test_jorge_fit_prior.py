@@ -42,7 +42,28 @@ def test_zero_is_the_fit_and_a_huge_strength_the_prior(fit):
     for name in ("palette_gain_table", "palette_missing_table"):
         np.testing.assert_allclose(np.exp(getattr(big, name)), np.exp(getattr(prior, name)),
                                    atol=1e-9, err_msg=name)  # fmt: skip
-    assert (big.size_mu_single, big.size_sigma) == (fitted.size_mu_single, fitted.size_sigma)
+    for name in ("size_mu_single", "size_slope", "size_sigma"):
+        assert getattr(big, name) == pytest.approx(getattr(prior, name), rel=1e-9), name
+
+
+def test_the_size_likelihood_takes_the_normal_inverse_gamma_posterior(fit):
+    """The textbook conjugate update (precision form, from the strokes' own areas) gives
+    the posterior mean of the coefficients and 1 / E[1 / sigma^2]."""
+    counts, fitted, prior = fit
+    lam, gmax = 25.0, prior.labels.max_group_size
+    k, y = (np.array(v, dtype=np.float64) for v in zip(*counts.sizes))
+    x = np.stack([np.ones_like(k), np.log(np.minimum(k, gmax))], axis=1)
+    n = len(y)
+    s0 = lam * x.T @ x / n  # the prior precision of beta, in units of sigma^-2
+    b0 = np.array([prior.size_mu_single, prior.size_slope])
+    prec = x.T @ x + s0
+    beta = np.linalg.solve(prec, s0 @ b0 + x.T @ y)
+    a_n = lam / 2 + n / 2
+    b_n = lam * prior.size_sigma**2 / 2 + (y @ y + b0 @ s0 @ b0 - beta @ prec @ beta) / 2
+    got = shrink(fitted, prior, counts, lam)
+    assert (got.size_mu_single, got.size_slope) == pytest.approx(tuple(beta), rel=1e-10)
+    assert got.size_sigma == pytest.approx(np.sqrt(b_n / a_n), rel=1e-10)
+    assert n > 2 and abs(fitted.size_slope - prior.size_slope) > 0.01  # not the prior's alone
 
 
 def test_the_posterior_mean_of_a_rate_and_of_a_table_row(fit):
@@ -77,6 +98,9 @@ def test_each_estimate_lies_between_the_fit_and_the_prior(fit, lam):
         hi = np.maximum(np.exp(getattr(fitted, name)), np.exp(getattr(prior, name)))
         assert np.all(p >= lo * (1 - 1e-9)) and np.all(p <= hi * (1 + 1e-9)), name
     assert sum(got.labels.new_group_probs) == pytest.approx(1.0)
+    for name in ("size_mu_single", "size_slope"):
+        a, b = getattr(fitted, name), getattr(prior, name)
+        assert min(a, b) - 1e-12 <= getattr(got, name) <= max(a, b) + 1e-12, name
 
 
 def test_a_larger_group_cap_takes_the_priors_last_row_and_bad_priors_are_refused():
