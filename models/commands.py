@@ -197,16 +197,21 @@ def fit(args: argparse.Namespace) -> dict:
               f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted){other}")
     if "cross_validation" in summary["parameters"]:
         cv = summary["parameters"]["cross_validation"]
-        g = lambda v: v if isinstance(v, str) else f"{v:g}"  # noqa: E731  ("inf" a str)
-        errors = ", ".join(f"{g(r['prior_strength'])}: {r['error']:.3f}" for r in cv["errors"])
+        errors = ", ".join(f"{_number(r['prior_strength'])}: {r['error']:.3f}"
+                           for r in cv["errors"])  # fmt: skip
         print(f"{args.name}: {args.folds}-fold cross-validation error by prior strength: "
-              f"{errors}; chosen {g(cv['chosen'])} (the config's network on the training "
+              f"{errors}; chosen {_number(cv['chosen'])} (the config's network on the training "
               f"files: {summary['metrics']['error_train_config']:.3f})")
     if not args.validate:
         print(f"{args.name}: no --validate file: an error on the files fitted on is not a result")
     print(f"{args.name}: wrote {', '.join(summary['outputs'])}, summary.json to {ctx.outdir}")
     print(json.dumps(clean(summary["metrics"])))
     return summary
+
+
+def _number(value: float | str) -> str:
+    """A summary's number for the terminal (``"inf"``, JSON's stand-in, as it is)."""
+    return value if isinstance(value, str) else f"{value:g}"
 
 
 def _read_config(path: str | None) -> dict:

@@ -88,8 +88,9 @@ class FitSet(NamedTuple):
 def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
         seeds: int = 1, prior_strength: float | Sequence[float] = 0.0, folds: int = 0) -> dict:
     """Fit on ``train``, score on ``train`` and ``validate``; write ``config.json`` and
-    ``fit.png``. ``prior_strength`` > 0 shrinks each CPD row towards the config's network
-    with that many pseudo-observations (:func:`models.jorge.fit_prior.shrink`); several
+    ``fit.png``. ``prior_strength`` > 0 shrinks each CPD row and the size regression towards
+    the config's network with that many pseudo-observations
+    (:func:`models.jorge.fit_prior.shrink`; inf: the config's network itself); several
     strengths are chosen among by ``folds``-fold cross-validation over the training files
     (:func:`models.crossval.cross_validate`, module docstring). Returns ``parameters``,
     ``metrics``, ``files`` (one row per file) and ``outputs`` for ``summary.json``."""
