@@ -442,4 +442,4 @@ print({k: round(v, 3) for k, v in fitted["labels"].items() if isinstance(v, floa
 main(["fit", "jorge", *train, "--validate", *held, "-o", str(tmp / "cv"), "--folds", "3",
       "--prior-strength", "0,100,1000,inf", "--quiet"])
 cv = json.loads((tmp / "cv" / "summary.json").read_text())
-print(cv["parameters"]["cross_validation"])
+print({k: cv["parameters"]["cross_validation"][k] for k in ("errors", "chosen")})
