@@ -173,7 +173,13 @@ def _cross_validate(ctx: RunContext, read: dict, train: list[str], base, strengt
     strength (:func:`models.crossval.cross_validate`)."""
 
     def fit_on(files: list[str], strength: float):
-        return _fitted(read, files, base, strength)[0]
+        try:
+            return _fitted(read, files, base, strength)[0]
+        except InputError as exc:
+            held = [p for p in train if p not in files]
+            raise InputError(f"cross-validation, the fit for the fold of {held}: {exc}; give "
+                             "fewer folds or order the files so that every fold's complement "
+                             "has links") from None
 
     def error(online, path: str) -> float:
         return _error(ctx, online, read[path])

@@ -228,6 +228,11 @@ def test_cross_validation_refusals(tmp_path, capsys):
          "folds 3: expected an integer from 2 to the number of training files (2)")  # fmt: skip
     _bad(capsys, ["fit", "jorge", *files, "-o", str(out), "--folds", "2", "--prior-strength",
                   "30,30"], "none twice")  # fmt: skip
+    lonely = tmp_path / "lonely.jsonl"
+    lonely.write_text("\n".join(Path(files[0]).read_text().splitlines()[:2]) + "\n")
+    _bad(capsys, ["fit", "jorge", files[0], str(lonely), "-o", str(out), "--folds", "2"],
+         f"cross-validation, the fit for the fold of ['{files[0]}']: no stroke of the "
+         f"training files ['{lonely}'] has a parent")  # fmt: skip
     assert not out.exists() or not any(out.iterdir())
     for bad in ("1", "x"):
         with pytest.raises(SystemExit):
