@@ -172,15 +172,13 @@ def fit(args: argparse.Namespace) -> dict:
     """Run ``dbntrack fit``; returns the summary written to ``OUTDIR/summary.json``."""
     from dbn.errors import InputError
     from models.track import available, runner
-    from models.track.context import clean
+    from models.track.context import clean, shown_strength
 
     mod = runner(args.name)
     if not hasattr(mod, "fit"):
         with_fit = [n for n in available() if hasattr(runner(n), "fit")]
         raise InputError(f"tracker {args.name!r} has no fit; trackers with one: "
                          f"{', '.join(with_fit)}")  # fmt: skip
-    from models.track.context import shown_strength
-
     config = _read_config(args.config)
     strengths = list(args.prior_strength)
     summary = {"tracker": args.name, "train": [str(Path(p).resolve()) for p in args.train],
@@ -276,17 +274,6 @@ def _int_in(lo: int, hi: int | None):
         return value
 
     return parse
-
-
-def _non_negative(text: str) -> float:
-    """An argparse type: a finite float >= 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (value >= 0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"{text} is not a finite number >= 0")
-    return value
 
 
 def prior_strengths(text: str) -> tuple[float, ...]:

@@ -79,7 +79,6 @@ class FitSet(NamedTuple):
     """One stroke set of a file: its strokes, their links (the file's, or None: the link
     rule) and frame rate."""
 
-    path: str
     strokes: list
     links: list | None
     fps: float
@@ -226,10 +225,10 @@ def _sets(ctx: RunContext, path: str, config: dict, own: set, fps: float | None,
         mine = {k: v for k, v in config.items() if k in own and k != "view"}
         regions, rate, _ = read_checked_regions(ctx, path, mine, own, fps, base)
         require_truth(regions, "fitting")
-        return [FitSet(path, regions.strokes, regions.parents, rate)]
+        return [FitSet(regions.strokes, regions.parents, rate)]
     truth, scfg, _, _ = read_box_truth(ctx, path, config, own, fps)
     rate = truth.fps if fps is None else fps
-    return [FitSet(path, list(build_strokes(ctx.seed + i, truth, scfg)), None, rate)
+    return [FitSet(list(build_strokes(ctx.seed + i, truth, scfg)), None, rate)
             for i in range(seeds)]  # fmt: skip
 
 
