@@ -68,8 +68,6 @@ class Regions(NamedTuple):
         The line number of each stroke.
     fps : float or None
         The header's ``# fps=``, where it has one.
-    has_truth : bool
-        Every line has a non-empty ``truth``.
     """
 
     path: Path
@@ -77,7 +75,11 @@ class Regions(NamedTuple):
     parents: list | None
     lines: list
     fps: float | None
-    has_truth: bool
+
+    @property
+    def has_truth(self) -> bool:
+        """Every line has a non-empty ``truth``."""
+        return all(s.truth for s in self.strokes)
 
 
 def is_regions(path: str | Path) -> bool:
@@ -119,8 +121,7 @@ def read_regions(path: str | Path) -> Regions:
         lines.append(line_no)
     if not strokes:
         raise fail(path, 0, "no stroke (one JSON object per line expected)")
-    has_truth = all(s.truth for s in strokes)
-    return Regions(path, strokes, None if parents[0] is None else parents, lines, fps, has_truth)
+    return Regions(path, strokes, None if parents[0] is None else parents, lines, fps)
 
 
 def _header(path: Path, line_no: int, text: str, fps: float | None, late: bool) -> float | None:

@@ -205,11 +205,14 @@ def read_checked_regions(ctx: RunContext, path: str, config: dict, own: set,
         raise ConfigError(f"config {builder}: stroke-builder settings apply to box files, not "
                           f"to a regions file's strokes")  # fmt: skip
     regions = read_regions(path)
-    source = "config" if fps is not None else "file" if regions.fps is not None else None
-    if source is None:
-        source = f"assumed {MOT_DEFAULT_FPS:g} fps (no '# fps=' line in {path})"
+    if fps is not None:
+        source = "config"
+    elif regions.fps is not None:
+        fps, source = regions.fps, "file"
+    else:
+        fps = MOT_DEFAULT_FPS
+        source = f"assumed {fps:g} fps (no '# fps=' line in {path})"
         ctx.note(source)
-    fps = fps if fps is not None else regions.fps if regions.fps is not None else MOT_DEFAULT_FPS
     check_regions(regions, online.network, fps)
     return regions, fps, source
 
