@@ -79,6 +79,10 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
                    help="K-fold cross-validation over the training files, cut in the order "
                    "given (keep a recording's files together): the error of fits on the "
                    "other folds, and the prior strength with the lowest")  # fmt: skip
+    p.add_argument("--fold-by", metavar="PATTERN", help="keep in one fold the training files "
+                   "whose paths share the first match of this regular expression (its first "
+                   "group where it has one), e.g. " r"'(\w+)_seed\d+'" " or '^.*/' (by "
+                   "folder)")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p = sub.add_parser("eval", help="score a result file against a truth file", epilog=_EPILOG,
                        description="Metrics of tracker NAME's RESULT file against TRUTH: "
@@ -184,11 +188,13 @@ def fit(args: argparse.Namespace) -> dict:
     summary = {"tracker": args.name, "train": [str(Path(p).resolve()) for p in args.train],
                "validate": [str(Path(p).resolve()) for p in args.validate],
                "seed": args.seed, "seeds": args.seeds, "folds": args.folds,
+               "fold_by": args.fold_by,
                "prior_strength": shown_strength(strengths[0]) if len(strengths) == 1
                else [shown_strength(v) for v in strengths],
                "config": dict(config)}  # fmt: skip
     ctx = _run(args, summary, lambda ctx: mod.fit(ctx, list(args.train), list(args.validate),
-                                                  config, args.seeds, strengths, args.folds))
+                                                  config, args.seeds, strengths, args.folds,
+                                                  args.fold_by))
     for row in summary["files"]:
         other = f" (other folds' fit {row['error_cv']:.3f})" if "error_cv" in row else ""
         print(f"{row['split']:>10}  {Path(row['file']).name}: {row['strokes']} strokes, error "

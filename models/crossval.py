@@ -5,8 +5,11 @@ minimises it.
 The items (training files) are cut, in the order given, into ``k`` contiguous folds as
 equal as can be (the first ``n mod k`` folds one item longer, as
 :func:`numpy.array_split`); each fold's items are scored by the fit on the other
-``k - 1`` folds. Keep the files of one recording next to each other, so that a fold
-holds whole recordings: a scene in two folds leaks into its own score.
+``k - 1`` folds. A scene in two folds leaks into its own score, so a fold must hold whole
+recordings: keep the files of one recording next to each other, or give each item its
+group (``groups``, e.g. :func:`group_keys` of the file names): the groups, in the order
+they first appear, are then cut as the items would be, and a fold holds every item of its
+groups (as group K-fold).
 
 For every candidate ``c`` the cross-validation error is the mean over items (each weighs
 the same) of ``error(fit(other folds, c), item)``; :func:`cross_validate` chooses the
@@ -16,6 +19,7 @@ in the choice still give the error to quote.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Hashable, Iterable, Sequence
 from typing import Any, NamedTuple
 
@@ -23,7 +27,7 @@ import numpy as np
 
 from dbn.errors import InputError
 
-__all__ = ["CrossValidation", "cross_validate", "fold_blocks"]
+__all__ = ["CrossValidation", "cross_validate", "fold_blocks", "group_keys"]
 
 
 class CrossValidation(NamedTuple):
@@ -47,32 +51,87 @@ class CrossValidation(NamedTuple):
     chosen: Hashable
 
 
-def fold_blocks(items: Sequence[Hashable], k: int) -> list[list]:
+def fold_blocks(items: Sequence[Hashable], k: int,
+                groups: Sequence[Hashable] | None = None) -> list[list]:
     """``items`` cut in order into ``k`` contiguous folds, the first ``len(items) mod k``
-    one item longer.
+    one item longer; with ``groups`` (one per item), the distinct groups in the order they
+    first appear are so cut, and each fold holds its groups' items in the order given.
 
     Raises
     ------
     InputError
-        ``k`` not an integer from 2 to ``len(items)``, or an item given twice.
+        ``k`` not an integer from 2 to the number of items (of groups), an item given
+        twice, or ``groups`` not one per item.
     """
     items = list(items)
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 2 <= k <= len(items):
-        raise InputError(f"folds {k!r}: expected an integer from 2 to the number of training "
-                         f"files ({len(items)}), each fold scored by a fit on the others")  # fmt: skip
+    _check_unique(items)
+    units = items if groups is None else list(dict.fromkeys(_per_item(items, groups)))
+    what = "training files" if groups is None else "groups of training files"
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 2 <= k <= len(units):
+        raise InputError(f"folds {k!r}: expected an integer from 2 to the number of {what} "
+                         f"({len(units)}), each fold scored by a fit on the others")  # fmt: skip
+    cuts = np.cumsum([0] + [len(b) for b in np.array_split(np.arange(len(units)), int(k))])
+    if groups is None:
+        return [items[a:b] for a, b in zip(cuts[:-1], cuts[1:])]
+    fold_of = {u: i for i, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])) for u in units[a:b]}
+    folds: list[list] = [[] for _ in range(int(k))]
+    for item, group in zip(items, groups):
+        folds[fold_of[group]].append(item)
+    return folds
+
+
+def _check_unique(items: list) -> None:
+    """An :class:`InputError` for the first item given twice (scored by a fit on itself)."""
     seen: set = set()
     for item in items:
         if item in seen:
             raise InputError(f"cross-validation: {item!r} given twice (it would be scored by "
                              "a fit on itself)")  # fmt: skip
         seen.add(item)
-    cuts = np.cumsum([0] + [len(b) for b in np.array_split(np.arange(len(items)), int(k))])
-    return [items[a:b] for a, b in zip(cuts[:-1], cuts[1:])]
+
+
+def _per_item(items: list, groups: Sequence[Hashable]) -> list:
+    """``groups`` as a list, checked to hold one group per item."""
+    groups = list(groups)
+    if len(groups) != len(items):
+        raise InputError(f"cross-validation: {len(groups)} groups for {len(items)} items "
+                         "(expected one group per item)")  # fmt: skip
+    return groups
+
+
+def group_keys(items: Sequence[str], pattern: str) -> list[str]:
+    r"""The group of each item (a file path, as given) for :func:`fold_blocks`: the part
+    the regular expression ``pattern`` first matches (:func:`re.search`), its first group
+    where it has one. E.g. ``r"(.*)_seed\d+"`` puts ``walk_seed0.jsonl`` and
+    ``walk_seed1.jsonl`` in the group ``walk``; ``r"^.*/"`` groups files by folder.
+
+    Raises
+    ------
+    InputError
+        ``pattern`` not a regular expression, or an item it does not match (or whose first
+        group takes no part in the match).
+    """
+    try:
+        rx = re.compile(pattern)
+    except (re.error, TypeError) as exc:
+        raise InputError(f"fold groups {pattern!r}: not a regular expression ({exc})") from None
+    keys = []
+    for item in items:
+        m = rx.search(str(item))
+        if m is None:
+            raise InputError(f"fold groups {pattern!r}: no match in {str(item)!r} (every "
+                             "training file needs a group)")  # fmt: skip
+        if rx.groups and m.group(1) is None:
+            raise InputError(f"fold groups {pattern!r}: its first group takes no part in the "
+                             f"match in {str(item)!r}")  # fmt: skip
+        keys.append(m.group(1) if rx.groups else m.group(0))
+    return keys
 
 
 def cross_validate(items: Sequence[Hashable], k: int, candidates: Sequence[Hashable],
                    fit: Callable[[list, Hashable], Any], error: Callable[[Any, Hashable], float],
-                   progress: Callable[[Iterable, int], Iterable] | None = None) -> CrossValidation:
+                   progress: Callable[[Iterable, int], Iterable] | None = None,
+                   groups: Sequence[Hashable] | None = None) -> CrossValidation:
     """``k``-fold cross-validation of ``fit`` over ``items`` for each of ``candidates``
     (module docstring).
 
@@ -90,6 +149,9 @@ def cross_validate(items: Sequence[Hashable], k: int, candidates: Sequence[Hasha
         ``error(model, item) -> float``: the item's error under ``model``.
     progress : callable, optional
         ``progress(iterable, total)`` wrapping the ``len(candidates) * k`` fits.
+    groups : sequence of hashable, optional
+        Each item's group (e.g. its recording): no group is split between folds
+        (:func:`fold_blocks`).
 
     Returns
     -------
@@ -98,9 +160,10 @@ def cross_validate(items: Sequence[Hashable], k: int, candidates: Sequence[Hasha
     Raises
     ------
     InputError
-        A bad ``k`` or a repeated item (:func:`fold_blocks`), no candidate or one twice.
+        A bad ``k``, a repeated item or bad ``groups`` (:func:`fold_blocks`), no candidate
+        or one twice.
     """
-    folds = fold_blocks(items, k)
+    folds = fold_blocks(items, k, groups)
     candidates = list(candidates)
     if not candidates or len(set(candidates)) != len(candidates):
         raise InputError(f"cross-validation: candidates {candidates!r}: expected at least one, "

@@ -431,7 +431,8 @@ print({k: round(v, 3) for k, v in fitted["labels"].items() if isinstance(v, floa
 # %% [markdown]
 # How strong a prior? Choose it on the training files alone: `--folds K` with several
 # strengths cuts the training files, in the order given, into K folds (keep one recording's
-# files together), labels each fold with the fits on the others, and fits the strength with
+# files together, or name each file's recording with `--fold-by PATTERN`, a regular
+# expression), labels each fold with the fits on the others, and fits the strength with
 # the lowest mean error on all of them (`models.crossval`); `inf` is the prior itself, the
 # config's network unchanged, so the choice can also be to keep it. The held-out files take
 # no part in the choice, so their error is still a result. Here the noisy palettes make the

@@ -121,12 +121,13 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
 
 
 def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
-        seeds: int = 1, prior_strength: float | list[float] = 0.0, folds: int = 0) -> dict:
+        seeds: int = 1, prior_strength: float | list[float] = 0.0, folds: int = 0,
+        fold_by: str | None = None) -> dict:
     """``dbntrack fit jorge``: the network's parameters fitted on your files
     (:func:`models.track.jorge_fit.fit`)."""
     from models.track.jorge_fit import fit as fit_files
 
-    return fit_files(ctx, train, validate, config, seeds, prior_strength, folds)
+    return fit_files(ctx, train, validate, config, seeds, prior_strength, folds, fold_by)
 
 
 def label_steps(ctx: RunContext, online, steps: list, fps: float,

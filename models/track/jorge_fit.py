@@ -20,16 +20,18 @@ default: the fit on the shared data's training split) with :math:`\lambda`
 pseudo-observations (:mod:`models.jorge.fit_prior`): 0, the default, is the plain fit;
 ``inf`` is the prior itself, the config's network as it is.
 
-How strong a prior your files need depends on how many there are and how like the
-shared data they are. ``--folds K`` with several strengths (``--prior-strength
+How strong a prior your files need depends on how many there are and how like the shared
+data they are. ``--folds K`` with several strengths (``--prior-strength
 0,30,100,300,1000,inf``) chooses among them by K-fold cross-validation over the training
 files alone (:mod:`models.crossval`: the files cut in the order given into K contiguous
 folds, each labelled with the network fitted on the others; keep one recording's files
-together): the strength whose fits have the lowest mean error on the folds they were not
-fitted on is the one fitted on all the training files. With one strength, ``--folds``
-reports that error (``error_cv_fitted``) beside the config's network's on the same files
-(``error_train_config``: a held-out error too, unless the config's network was fitted on
-these files, as the default network was on the shared data's training split).
+together, or name each file's recording with ``--fold-by PATTERN``, a regular expression
+whose first match in the file's path, its first group where it has one, keeps the files that
+share it in one fold): the strength whose fits have the lowest mean error on the folds they
+were not fitted on is the one fitted on all the training files. With one strength,
+``--folds`` reports that error (``error_cv_fitted``) beside the config's network's on the
+same files (``error_train_config``: a held-out error too, unless the config's network was
+fitted on these files, as the default network was on the shared data's training split).
 
 ``OUTDIR/config.json`` is the config with the fitted fields written over its ``network``
 and ``labels``, its other keys kept, so the same stroke settings build the strokes you
@@ -54,7 +56,7 @@ from typing import NamedTuple
 import numpy as np
 
 from dbn.errors import ConfigError, InputError
-from models.crossval import CrossValidation, cross_validate, fold_blocks
+from models.crossval import CrossValidation, cross_validate, fold_blocks, group_keys
 from models.io.jorge_regions import is_regions
 from models.track.context import RunContext, shown_strength
 from models.track.jorge import (
@@ -85,15 +87,19 @@ class FitSet(NamedTuple):
 
 
 def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
-        seeds: int = 1, prior_strength: float | Sequence[float] = 0.0, folds: int = 0) -> dict:
+        seeds: int = 1, prior_strength: float | Sequence[float] = 0.0, folds: int = 0,
+        fold_by: str | None = None) -> dict:
     """Fit on ``train``, score on ``train`` and ``validate``; write ``config.json`` and
     ``fit.png``. ``prior_strength`` > 0 shrinks each CPD row and the size regression towards
     the config's network with that many pseudo-observations
     (:func:`models.jorge.fit_prior.shrink`; inf: the config's network itself); several
     strengths are chosen among by ``folds``-fold cross-validation over the training files
-    (:func:`models.crossval.cross_validate`, module docstring). Returns ``parameters``,
+    (:func:`models.crossval.cross_validate`, module docstring), whose folds keep together
+    the files that share the match of the regular expression ``fold_by``
+    (:func:`models.crossval.group_keys`) where it is given. Returns ``parameters``,
     ``metrics``, ``files`` (one row per file) and ``outputs`` for ``summary.json``."""
-    strengths = _strengths(prior_strength, folds, train)
+    groups = _fold_groups(train, folds, fold_by)
+    strengths = _strengths(prior_strength, folds, train, groups)
     opt = read_options(config)
     base, own = opt.online, opt.own
     _check_disjoint(train, validate)
@@ -106,7 +112,7 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
     cv = None
     if folds:
         with ctx.timed("cross-validate"):
-            cv = _cross_validate(ctx, read, train, base, strengths, folds)
+            cv = _cross_validate(ctx, read, train, base, strengths, folds, groups)
     strength = strengths[0] if cv is None else cv.chosen
     with ctx.timed("fit"):
         fitted, counts = _fitted(read, train, base, strength)
@@ -119,7 +125,8 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
     training = [fs for p in train for fs in read[p]]
     params = {"seeds": seeds, "split_cover": opt.split_cover,
               "prior_strength": shown_strength(strength),
-              "folds": folds, **({} if cv is None else {"cross_validation": _cv_record(cv)}),
+              "folds": folds, "fold_by": fold_by,
+              **({} if cv is None else {"cross_validation": _cv_record(cv)}),
               **_counted(training, counts.children, base.network.labels.max_group_size),
               "fitted": {k: v for k, v in out["labels"].items() if isinstance(v, float)}
               | {k: out["network"][k] for k in ("size_mu_single", "size_slope", "size_sigma")}}
@@ -128,10 +135,22 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
             "outputs": ["config.json", "fit.png"]}
 
 
-def _strengths(prior_strength: float | Sequence[float], folds: int, train: list[str]) -> list:
+def _fold_groups(train: list[str], folds: int, fold_by: str | None) -> list[str] | None:
+    """Each training file's group (:func:`models.crossval.group_keys`) where ``fold_by`` is
+    given, which needs ``folds``; None without it. Checked before any file is read."""
+    if fold_by is None:
+        return None
+    if not folds:
+        raise InputError(f"fold groups {fold_by!r}: they group the folds of a cross-validation "
+                         "(give folds >= 2)")  # fmt: skip
+    return group_keys(train, fold_by)
+
+
+def _strengths(prior_strength: float | Sequence[float], folds: int, train: list[str],
+               groups: list[str] | None = None) -> list:
     """The prior strengths as a list, each a number >= 0 or inf, none twice; several only
-    with ``folds`` to choose among them, and ``folds`` 0 or 2 .. ``len(train)``. Checked
-    before any file is read."""
+    with ``folds`` to choose among them, and ``folds`` 0 or 2 .. the number of training
+    files (of their ``groups``). Checked before any file is read."""
     one = np.ndim(prior_strength) == 0
     strengths = [prior_strength] if one else list(prior_strength)  # type: ignore[arg-type]
     for lam in strengths:
@@ -140,7 +159,7 @@ def _strengths(prior_strength: float | Sequence[float], folds: int, train: list[
     if not strengths or len(set(strengths)) != len(strengths):
         raise InputError(f"prior strengths {strengths!r}: expected at least one, none twice")
     if folds:
-        fold_blocks(train, folds)  # refuses a bad number of folds
+        fold_blocks(train, folds, groups)  # refuses a bad number of folds
     elif len(strengths) > 1:
         raise InputError(f"prior strengths {strengths!r}: choosing among several needs "
                          "cross-validation (folds >= 2)")  # fmt: skip
@@ -167,9 +186,10 @@ def _fitted(read: dict, files: list[str], base, strength: float):
 
 
 def _cross_validate(ctx: RunContext, read: dict, train: list[str], base, strengths: list,
-                    folds: int) -> CrossValidation:
-    """Each training file labelled with the network fitted on the other folds, for every
-    strength (:func:`models.crossval.cross_validate`)."""
+                    folds: int, groups: list[str] | None) -> CrossValidation:
+    """Each training file labelled with the network fitted on the other folds (no group of
+    ``groups`` split between folds), for every strength
+    (:func:`models.crossval.cross_validate`)."""
 
     def fit_on(files: list[str], strength: float):
         try:
@@ -183,7 +203,7 @@ def _cross_validate(ctx: RunContext, read: dict, train: list[str], base, strengt
     def error(online, path: str) -> float:
         return _error(ctx, online, read[path])
 
-    return cross_validate(train, folds, strengths, fit_on, error, ctx.bar("fits"))
+    return cross_validate(train, folds, strengths, fit_on, error, ctx.bar("fits"), groups)
 
 
 def _cv_record(cv: CrossValidation) -> dict:

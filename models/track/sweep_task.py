@@ -126,7 +126,8 @@ def data_arguments(data: str) -> tuple[list[str], str | None, str | None]:
 def fit_task(point) -> dict[str, Any]:
     """Run ``dbntrack fit`` for one :class:`~models.experiments.GridPoint`: ``data`` is the
     rest of a fit command line, ``TRAIN... [--validate HELD...] [--seeds N]
-    [--prior-strength LAMBDA[,LAMBDA...]] [--folds K]`` (and ``--keep DIR`` to keep each
+    [--prior-strength LAMBDA[,LAMBDA...]] [--folds K [--fold-by PATTERN]]`` (and ``--keep
+    DIR`` to keep each
     point's ``config.json`` in ``DIR/POINT_ID``), the seed is ``--seed``
     (the first of a box file's SIMULATED stroke sets), and the parameters are the config:
     the settings the fit keeps (dotted names as for :func:`track_task`). The record keeps
@@ -148,7 +149,8 @@ def fit_task(point) -> dict[str, Any]:
 
     d = fit_arguments(point.data)
     return _run(fit, point, d.keep, _KEPT_FIT, train=d.train, validate=d.validate,
-                seeds=d.seeds, prior_strength=d.prior_strength, folds=d.folds)
+                seeds=d.seeds, prior_strength=d.prior_strength, folds=d.folds,
+                fold_by=d.fold_by)
 
 
 class _DataParser(argparse.ArgumentParser):
@@ -168,6 +170,7 @@ class FitData(NamedTuple):
     seeds: int
     prior_strength: tuple[float, ...]
     folds: int
+    fold_by: str | None
     keep: str | None
 
 
@@ -180,8 +183,8 @@ def fit_arguments(data: str) -> FitData:
     ------
     InputError
         Quoting that does not close, an option other than ``--validate``, ``--seeds``,
-        ``--prior-strength``, ``--folds`` and ``--keep``, a value missing or not valid, no
-        training file.
+        ``--prior-strength``, ``--folds``, ``--fold-by`` and ``--keep``, a value missing or
+        not valid, no training file.
     """
     from models.commands import prior_strengths
 
@@ -191,6 +194,7 @@ def fit_arguments(data: str) -> FitData:
     parser.add_argument("--seeds", type=int, default=1)
     parser.add_argument("--prior-strength", type=prior_strengths, default=(0.0,))
     parser.add_argument("--folds", type=int, default=0)
+    parser.add_argument("--fold-by")
     parser.add_argument("--keep")
     try:
         words = shlex.split(data)
@@ -205,13 +209,13 @@ def fit_arguments(data: str) -> FitData:
     except InputError as exc:
         raise InputError(f"data {data!r}: {exc} (a fit command line: TRAIN... [--validate "
                          "HELD...] [--seeds N] [--prior-strength L[,L...]] [--folds K] "
-                         "[--keep DIR])") from None
+                         "[--fold-by PATTERN] [--keep DIR])") from None
     if args.seeds < 1:
         raise InputError(f"data {data!r}: --seeds {args.seeds}: at least 1")
     if args.folds == 1 or args.folds < 0:
         raise InputError(f"data {data!r}: --folds {args.folds}: at least 2 (0: none)")
     return FitData(args.train, args.validate, args.seeds, args.prior_strength, args.folds,
-                   args.keep)
+                   args.fold_by, args.keep)
 
 
 def nest_params(params: Iterable[tuple[str, Any]]) -> dict[str, Any]:

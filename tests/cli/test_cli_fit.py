@@ -171,6 +171,22 @@ def _cv_files(tmp_path: Path, seeds) -> list[Path]:
     return [write_regions(tmp_path / f"s{s}.jsonl", _noisy(s), fps=25.0) for s in seeds]
 
 
+def _fitted_on(stroke_sets: list, lam: float) -> NetworkConfig:
+    """The default network fitted on ``stroke_sets`` (25 fps) with prior strength ``lam``,
+    with the API (inf: the default network)."""
+    base = labeller_config().network
+    c = EventCounts()
+    for strokes in stroke_sets:
+        count_events(strokes, base, c, fps=25.0)
+    return base if lam == np.inf else fitted_like(base, shrink(fit_counts(c, base), base, c, lam))
+
+
+def _error_of(network: NetworkConfig, strokes: list) -> float:
+    """The error rate of the on-line labeller with ``network`` on ``strokes`` (25 fps)."""
+    labels = label_online(strokes, OnlineConfig(network=network), fps=25.0).labels
+    return score(strokes, labels).error_rate
+
+
 def test_cross_validation_chooses_the_prior_strength(tmp_path, capsys):
     """Each training file's error is that of the fit on the other folds (recomputed with
     the API); the strength with the lowest mean (here the third given) is chosen and
@@ -180,20 +196,13 @@ def test_cross_validation_chooses_the_prior_strength(tmp_path, capsys):
     held = write_regions(tmp_path / "held.jsonl", _noisy(9), fps=25.0)
     summary, written = _fit(tmp_path, "cv", *map(str, files), "--validate", str(held),
                             "--folds", "2", "--prior-strength", "inf,1e12,0")  # fmt: skip
-    base = labeller_config().network
     sets = {f.name: _noisy(s) for f, s in zip(files, seeds)}
 
     def fitted(names, lam):
-        c = EventCounts()
-        for n in names:
-            count_events(sets[n], base, c, fps=25.0)
-        return base if lam == np.inf else fitted_like(base, shrink(fit_counts(c, base), base,
-                                                                   c, lam))  # fmt: skip
+        return _fitted_on([sets[n] for n in names], lam)
 
     def error(net, name):
-        strokes = sets[name]
-        labels = label_online(strokes, OnlineConfig(network=net), fps=25.0).labels
-        return score(strokes, labels).error_rate
+        return _error_of(net, sets[name])
 
     cv = summary["parameters"]["cross_validation"]
     assert cv["folds"] == [[str(f.resolve()) for f in fold] for fold in (files[:2], files[2:])]
@@ -219,6 +228,24 @@ def test_cross_validation_chooses_the_prior_strength(tmp_path, capsys):
     assert "2-fold cross-validation error by prior strength: inf: " in capsys.readouterr().out
 
 
+def test_fold_by_keeps_a_recordings_files_in_one_fold(tmp_path):
+    """Files given out of order: ``--fold-by`` puts each recording's files in one fold,
+    and each file is scored by the fit on the other recording's files alone."""
+    named = {"recA_3.jsonl": 3, "recB_4.jsonl": 4, "recA_5.jsonl": 5, "recB_6.jsonl": 6}
+    files = [write_regions(tmp_path / n, _noisy(s), fps=25.0) for n, s in named.items()]
+    summary, _ = _fit(tmp_path, "grouped", *map(str, files), "--folds", "2",
+                      "--fold-by", r"rec(\w)_")  # fmt: skip
+    cv = summary["parameters"]["cross_validation"]
+    assert [[Path(f).name for f in fold] for fold in cv["folds"]] == [
+        ["recA_3.jsonl", "recA_5.jsonl"], ["recB_4.jsonl", "recB_6.jsonl"]]
+    assert summary["fold_by"] == summary["parameters"]["fold_by"] == r"rec(\w)_"
+    rows = {Path(r["file"]).name: r for r in summary["files"]}
+    for name, other in (("recA_3.jsonl", "B"), ("recB_6.jsonl", "A")):
+        net = _fitted_on([_noisy(s) for n, s in named.items() if n.startswith(f"rec{other}")],
+                         0.0)  # fmt: skip
+        assert rows[name]["error_cv"] == _error_of(net, _noisy(named[name]))
+
+
 def test_cross_validation_refusals(tmp_path, capsys):
     files = [str(f) for f in _cv_files(tmp_path, (3, 4))]
     out = tmp_path / "out"
@@ -233,6 +260,12 @@ def test_cross_validation_refusals(tmp_path, capsys):
     _bad(capsys, ["fit", "jorge", files[0], str(lonely), "-o", str(out), "--folds", "2"],
          f"cross-validation, the fit for the fold of ['{files[0]}']: no stroke of the "
          f"training files ['{lonely}'] has a parent")  # fmt: skip
+    for argv, needle in ((["--fold-by", "s"], "they group the folds of a cross-validation"),
+                         (["--folds", "2", "--fold-by", "zz"], "fold groups 'zz': no match in"),
+                         (["--folds", "2", "--fold-by", "("], "not a regular expression"),
+                         (["--folds", "2", "--fold-by", "jsonl"],
+                          "number of groups of training files (1)")):
+        _bad(capsys, ["fit", "jorge", *files, "-o", str(out), *argv], needle)
     assert not out.exists() or not any(out.iterdir())
     for bad in ("1", "x"):
         with pytest.raises(SystemExit):

@@ -127,10 +127,11 @@ def test_keep_writes_each_points_outputs_under_its_id(tmp_path):
 def test_fit_arguments_are_a_fit_command_line():
     got = fit_arguments("'my a.jsonl' b.xml --validate c.jsonl --seeds 2 --keep k "
                         "--prior-strength 50")  # fmt: skip
-    assert got == (["my a.jsonl", "b.xml"], ["c.jsonl"], 2, (50.0,), 0, "k")
-    assert fit_arguments("a.jsonl") == (["a.jsonl"], [], 1, (0.0,), 0, None)
-    got = fit_arguments("a b c --prior-strength 0,30,1e3,inf --folds 3")
+    assert got == (["my a.jsonl", "b.xml"], ["c.jsonl"], 2, (50.0,), 0, None, "k")
+    assert fit_arguments("a.jsonl") == (["a.jsonl"], [], 1, (0.0,), 0, None, None)
+    got = fit_arguments(r"a b c --prior-strength 0,30,1e3,inf --folds 3 --fold-by '(\w)_\d'")
     assert (got.prior_strength, got.folds) == ((0.0, 30.0, 1000.0, float("inf")), 3)
+    assert got.fold_by == r"(\w)_\d"
     for data, needle in (("a --seed 3", "option '--seed'"), ("a --seed=3", "option '--seed=3'"),
                          ("a -o out", "option '-o'"), ("--validate c", "required: train"),
                          ("a --seeds x", "invalid int value: 'x'"), ("a --seeds 0", "at least 1"),

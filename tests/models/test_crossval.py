@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dbn.errors import InputError
-from models.crossval import cross_validate, fold_blocks
+from models.crossval import cross_validate, fold_blocks, group_keys
 
 
 @given(n=st.integers(2, 30), data=st.data())
@@ -83,3 +83,52 @@ def test_the_progress_wraps_every_fit():
 def test_refusals(items, k, candidates, needle):
     with pytest.raises(InputError, match=needle):
         cross_validate(items, k, candidates, lambda t, c: 0, lambda m, x: 0.0)
+
+
+@given(groups=st.lists(st.integers(0, 6), min_size=2, max_size=25), data=st.data())
+@settings(max_examples=80, deadline=None)
+def test_grouped_folds_hold_whole_groups(groups, data):
+    """With groups, the distinct groups (in the order they first appear) are cut as items
+    would be, and every item lands in its group's fold, in the order given."""
+    distinct = list(dict.fromkeys(groups))
+    if len(distinct) < 2:
+        with pytest.raises(InputError, match=r"number of groups of training files \(1\)"):
+            fold_blocks(list(range(len(groups))), 2, groups)
+        return
+    k = data.draw(st.integers(2, len(distinct)))
+    items = [f"file{i}" for i in range(len(groups))]
+    folds = fold_blocks(items, k, groups)
+    group_of = dict(zip(items, groups))
+    assert len(folds) == k and sorted(x for f in folds for x in f) == sorted(items)
+    for fold in folds:
+        assert fold == [x for x in items if x in fold]  # the order given
+    held = [list(dict.fromkeys(group_of[x] for x in fold)) for fold in folds]
+    assert [g for h in held for g in h] == distinct  # each group in one fold, in order
+    assert held == fold_blocks(distinct, k)
+    assert fold_blocks(items, k, items) == fold_blocks(items, k)  # one group per item
+
+
+def test_a_grouped_cross_validation_never_fits_on_a_group_it_scores():
+    items, groups = ["a0", "b0", "a1", "c0", "b1", "c1"], list("abacbc")
+    seen = []
+
+    def fit(train, c):
+        seen.append(train)
+        return c
+
+    cv = cross_validate(items, 3, [0], fit, lambda m, x: 0.0, groups=groups)
+    assert cv.folds == [["a0", "a1"], ["b0", "b1"], ["c0", "c1"]]
+    assert seen == [["b0", "b1", "c0", "c1"], ["a0", "a1", "c0", "c1"], ["a0", "a1", "b0", "b1"]]
+    with pytest.raises(InputError, match="2 groups for 6 items"):
+        cross_validate(items, 2, [0], fit, lambda m, x: 0.0, groups=["a", "b"])
+
+
+def test_group_keys_take_the_first_group_or_the_whole_match():
+    files = ["runs/walk_seed0.jsonl", "runs/walk_seed1.jsonl", "other/meet_seed0.jsonl"]
+    assert group_keys(files, r"(\w+)_seed\d+") == ["walk", "walk", "meet"]
+    assert group_keys(files, r"^.*/") == ["runs/", "runs/", "other/"]
+    for pattern, needle in ((r"(\w+", "not a regular expression"),
+                            (r"(x)?walk", "first group takes no part in the match in 'runs/w"),
+                            (r"_seed\d+$", "no match in 'runs/walk_seed0.jsonl'")):
+        with pytest.raises(InputError, match=needle):
+            group_keys(files, pattern)
