@@ -197,8 +197,12 @@ def fit(args: argparse.Namespace) -> dict:
                                                   args.fold_by))
     for row in summary["files"]:
         other = f" (other folds' fit {row['error_cv']:.3f})" if "error_cv" in row else ""
+        big = (f"; {row['strokes_group_3plus']} strokes of 3+ people: "
+               f"{row['error_group_3plus_config']:.3f} -> {row['error_group_3plus_fitted']:.3f}"
+               if row["strokes_group_3plus"] else "")  # fmt: skip
         print(f"{row['split']:>10}  {Path(row['file']).name}: {row['strokes']} strokes, error "
-              f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted){other}")
+              f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted)"
+              f"{other}{big}")
     if "cross_validation" in summary["parameters"]:
         cv = summary["parameters"]["cross_validation"]
         errors = ", ".join(f"{_number(r['prior_strength'])}: {r['error']:.3f}"

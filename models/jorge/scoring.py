@@ -39,6 +39,7 @@ __all__ = [
     "optimal_people",
     "stands_for",
     "first_errors",
+    "group_errors",
     "after_crowd",
     "true_predecessors",
     "true_links",
@@ -162,6 +163,15 @@ def score(strokes: Sequence[Stroke], labels: Sequence[Label], mapping: str = "op
             last[p] = lab
     n = len(strokes)
     return Score(len(errors), n, len(errors) / n if n else 0.0, switches, tuple(errors))
+
+
+def group_errors(strokes: Sequence[Stroke], errors: Iterable[int],
+                 min_people: int = 3) -> tuple[int, int]:
+    """``(wrong, total)``: the number of strokes whose true group has ``min_people`` or more
+    people, and of those among ``errors`` (stroke indices, :attr:`Score.errors`); issue 16's
+    ``error_rate_group_3plus`` is ``wrong / total`` with the default."""
+    big = {s.index for s in strokes if len(s.truth) >= min_people}
+    return len(big & {int(e) for e in errors}), len(big)
 
 
 def first_errors(strokes: Sequence[Stroke], errors: Iterable[int]) -> tuple:

@@ -420,7 +420,7 @@ def evaluate(result: str, truth: str) -> dict:
     MOTA, IDF1 (motmetrics)."""
     from types import SimpleNamespace
 
-    from models.jorge.scoring import first_errors, score
+    from models.jorge.scoring import first_errors, group_errors, score
     from models.jorge.strokes import build_strokes
 
     if not str(result).endswith(".csv"):
@@ -443,13 +443,12 @@ def evaluate(result: str, truth: str) -> dict:
     _check_rows(result, truth, made, rows, strokes)
     shown = [SimpleNamespace(index=r["stroke"], truth=s.truth) for r, s in zip(rows, strokes)]
     sc = score(shown, [r["label"] for r in rows])
-    big = [s.index for s in strokes if len(s.truth) >= 3]
-    wrong_big = len(set(big) & set(sc.errors))
+    wrong_big, big = group_errors(strokes, sc.errors)
     first = first_errors(list(strokes), sc.errors)
     out = {"error_rate": sc.error_rate, "label_errors": sc.label_errors,
            "num_strokes": sc.num_strokes, "id_switches": sc.id_switches,
-           "error_rate_group_3plus": wrong_big / len(big) if big else float("nan"),
-           "strokes_group_3plus": len(big), "first_mistakes": len(first)}  # fmt: skip
+           "error_rate_group_3plus": wrong_big / big if big else float("nan"),
+           "strokes_group_3plus": big, "first_mistakes": len(first)}  # fmt: skip
     if all(r["parents"] is not None for r in rows):
         fps = head.get("fps", getattr(strokes, "fps", MOT_DEFAULT_FPS))
         out.update(_missed_links(result, rows, strokes, fps, first, network))

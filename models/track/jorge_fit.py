@@ -38,11 +38,12 @@ and ``labels``, its other keys kept, so the same stroke settings build the strok
 label with it.
 
 Hold files out (``--validate``): the summary gives each file's labelling error with the
-config's network and with the fitted one, and their means over the training and the
-held-out files (each file weighs the same). The error on the files fitted on is not a
-result. Fitting the shared data's declared training split
-(:data:`models.jorge.fit.TRAIN_SEQUENCES`) with ``--seed 100 --seeds 10`` writes the
-default network's parameters again.
+config's network and with the fitted one, and their means over the training and the held-out
+files (each file weighs the same); and the same over the strokes of three and more people
+(issue 16's crowd figure, pooled over those strokes). The error on the files fitted on is
+not a result. Fitting the shared data's declared training split
+(:data:`models.jorge.fit.TRAIN_SEQUENCES`) with ``--seed 100 --seeds 10`` writes the default
+network's parameters again.
 """
 
 from __future__ import annotations
@@ -201,7 +202,7 @@ def _cross_validate(ctx: RunContext, read: dict, train: list[str], base, strengt
                              "has links") from None
 
     def error(online, path: str) -> float:
-        return _error(ctx, online, read[path])
+        return _errors(ctx, online, read[path]).rate
 
     return cross_validate(train, folds, strengths, fit_on, error, ctx.bar("fits"), groups)
 
@@ -254,37 +255,61 @@ def _sets(ctx: RunContext, path: str, config: dict, own: set, fps: float | None,
 
 def _score_file(ctx: RunContext, path: str, sets: list[FitSet], base, fitted, split: str,
                 cv: CrossValidation | None = None) -> dict:
-    """One file's row: its strokes and the labelling error (mean over its stroke sets) with
-    the config's network and the fitted one, and for a training file under
-    cross-validation ``cv``, the error of the fit on the other folds (``error_cv``)."""
+    """One file's row: its strokes (per stroke set) and the labelling error (mean over its
+    stroke sets) with the config's network and the fitted one; its strokes of three and
+    more people (over all its stroke sets) and their error with each (NaN: none); for a
+    training file under cross-validation ``cv``, the error of the fit on the other folds
+    (``error_cv``)."""
+    mine, new = _errors(ctx, base, sets), _errors(ctx, fitted, sets)
+    n = mine.strokes_3plus
     row = {"file": str(Path(path).resolve()), "split": split,
            "strokes": int(np.mean([len(fs.strokes) for fs in sets])),
-           "error_config": _error(ctx, base, sets), "error_fitted": _error(ctx, fitted, sets)}
+           "error_config": mine.rate, "error_fitted": new.rate, "strokes_group_3plus": n,
+           "error_group_3plus_config": mine.wrong_3plus / n if n else np.nan,
+           "error_group_3plus_fitted": new.wrong_3plus / n if n else np.nan}  # fmt: skip
     if cv is not None and split == "train":
         row["error_cv"] = cv.errors[cv.chosen][path]
     return row
 
 
-def _error(ctx: RunContext, online, sets: list[FitSet]) -> float:
-    """The labelling error of ``online`` on a file's stroke sets (their mean)."""
-    from models.jorge.scoring import score
+class _Errors(NamedTuple):
+    """A labeller's errors on a file's stroke sets: the mean error rate, and the strokes of
+    three and more people, wrong and in all, summed over the sets."""
 
-    rates = []
+    rate: float
+    wrong_3plus: int
+    strokes_3plus: int
+
+
+def _errors(ctx: RunContext, online, sets: list[FitSet]) -> _Errors:
+    """The labelling errors of ``online`` on a file's stroke sets."""
+    from models.jorge.scoring import group_errors, score
+
+    rates, wrong, big = [], 0, 0
     for fs in sets:
         labels, _ = label_steps(ctx, online, linked_steps(fs.strokes, fs.links), fs.fps,
                                 phase=None)  # fmt: skip
-        rates.append(score(fs.strokes, labels).error_rate)
-    return float(np.mean(rates))
+        sc = score(fs.strokes, labels)
+        rates.append(sc.error_rate)
+        w, n = group_errors(fs.strokes, sc.errors)
+        wrong, big = wrong + w, big + n
+    return _Errors(float(np.mean(rates)), wrong, big)
 
 
 def _means(files: list[dict]) -> dict:
-    """Mean errors over the training and the held-out files (NaN where there are none)."""
+    """Mean errors over the training and the held-out files (each file weighs the same),
+    and the error over their strokes of three and more people, pooled (NaN where there
+    are none)."""
     out = {}
     for split in ("train", "validation"):
         rows = [f for f in files if f["split"] == split]
+        big = sum(f["strokes_group_3plus"] for f in rows)
         for name in ("config", "fitted"):
             out[f"error_{split}_{name}"] = float(np.mean([f[f"error_{name}"] for f in rows])
                                                if rows else np.nan)  # fmt: skip
+            wrong = sum(f[f"error_group_3plus_{name}"] * f["strokes_group_3plus"]
+                        for f in rows if f["strokes_group_3plus"])  # fmt: skip
+            out[f"error_{split}_group_3plus_{name}"] = wrong / big if big else np.nan
     return out
 
 

@@ -18,7 +18,7 @@ from models.jorge.fit import EventCounts, count_events, fit_counts, fit_paramete
 from models.jorge.fit_prior import shrink
 from models.jorge.network import NetworkConfig
 from models.jorge.online import OnlineConfig, label_online
-from models.jorge.scoring import score, true_links
+from models.jorge.scoring import group_errors, score, true_links
 from models.jorge.strokes import build_strokes, load_caviar
 from models.track.jorge import LABELLER_KEYS, labeller_config
 from tests.cli.test_cli_track import _bad
@@ -244,6 +244,33 @@ def test_fold_by_keeps_a_recordings_files_in_one_fold(tmp_path):
         net = _fitted_on([_noisy(s) for n, s in named.items() if n.startswith(f"rec{other}")],
                          0.0)  # fmt: skip
         assert rows[name]["error_cv"] == _error_of(net, _noisy(named[name]))
+
+
+def test_fit_scores_the_strokes_of_three_and_more_people(tmp_path, capsys):
+    """SIMULATED meetings of four: each file's error over its strokes of 3+ people, with
+    the config's and the fitted network, is a recomputation with the API; the training
+    and held-out means pool those strokes."""
+    from models.jorge.fit import meeting_strokes
+
+    sets = {f"meet{s}.jsonl": meeting_strokes((s,), (4,))[0] for s in (701, 702, 703)}
+    paths = [str(write_regions(tmp_path / n, ss.strokes, fps=ss.fps)) for n, ss in sets.items()]
+    summary, written = _fit(tmp_path, "big", *paths[1:], "--validate", paths[0])
+    rows = {Path(r["file"]).name: r for r in summary["files"]}
+    for which, net in (("config", labeller_config().network), ("fitted", _network(written))):
+        counts = {}
+        for name, ss in sets.items():
+            labels = label_online(ss, OnlineConfig(network=net)).labels
+            counts[name] = group_errors(ss.strokes, score(ss.strokes, labels).errors)
+            wrong, n = counts[name]
+            assert n > 0 and rows[name]["strokes_group_3plus"] == n
+            assert rows[name][f"error_group_3plus_{which}"] == pytest.approx(wrong / n)
+        train = [counts["meet702.jsonl"], counts["meet703.jsonl"]]  # 14 and 18 such strokes
+        assert summary["metrics"][f"error_train_group_3plus_{which}"] == pytest.approx(
+            sum(w for w, _ in train) / sum(n for _, n in train))
+        wrong, n = counts["meet701.jsonl"]
+        assert summary["metrics"][f"error_validation_group_3plus_{which}"] == pytest.approx(
+            wrong / n)
+    assert "strokes of 3+ people: " in capsys.readouterr().out
 
 
 def test_cross_validation_refusals(tmp_path, capsys):

@@ -16,6 +16,7 @@ from models.jorge.scoring import (
     after_crowd,
     colour_only_labels,
     first_errors,
+    group_errors,
     link_accuracy,
     object_people,
     optimal_people,
@@ -200,6 +201,18 @@ def test_first_errors_by_hand():
     assert first_errors(s, []) == ()
     with pytest.raises(InputError):
         first_errors(s, [6])
+
+
+def test_group_errors_by_hand():
+    s = [make_stroke(0, 0, 10, (0, 0), (1, 0), [0, 1], {0, 1, 2}),
+         make_stroke(1, 0, 20, (50, 0), (51, 0), [0, 1], {7, 8}),
+         make_stroke(2, 12, 20, (0, 0), (1, 0), [0, 1], {0, 3, 4, 5}),
+         make_stroke(3, 12, 20, (9, 0), (9, 0), [0, 1], {6})]
+    assert group_errors(s, [0, 1, 3]) == (1, 2)  # strokes 0 and 2 hold 3+; 0 is wrong
+    assert group_errors(s, [1, 3]) == (0, 2)
+    assert group_errors(s, [1, 2], min_people=2) == (2, 3)
+    assert group_errors(s, [2], min_people=4) == (1, 1)
+    assert group_errors(s[1:2], [1]) == (0, 0)
 
 
 def test_after_crowd_by_hand():
