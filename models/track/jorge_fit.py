@@ -300,7 +300,7 @@ def _means(files: list[dict]) -> dict:
     """Mean errors over the training and the held-out files (each file weighs the same),
     and the error over their strokes of three and more people, pooled (NaN where there
     are none)."""
-    out = {}
+    out, crowd = {}, {}
     for split in ("train", "validation"):
         rows = [f for f in files if f["split"] == split]
         big = sum(f["strokes_group_3plus"] for f in rows)
@@ -309,8 +309,8 @@ def _means(files: list[dict]) -> dict:
                                                if rows else np.nan)  # fmt: skip
             wrong = sum(f[f"error_group_3plus_{name}"] * f["strokes_group_3plus"]
                         for f in rows if f["strokes_group_3plus"])  # fmt: skip
-            out[f"error_{split}_group_3plus_{name}"] = wrong / big if big else np.nan
-    return out
+            crowd[f"error_{split}_group_3plus_{name}"] = wrong / big if big else np.nan
+    return out | crowd
 
 
 def fitted_config(config: dict, network) -> dict:
