@@ -167,9 +167,9 @@ def score(strokes: Sequence[Stroke], labels: Sequence[Label], mapping: str = "op
 
 def group_errors(strokes: Sequence[Stroke], errors: Iterable[int],
                  min_people: int = 3) -> tuple[int, int]:
-    """``(wrong, total)``: the number of strokes whose true group has ``min_people`` or more
-    people, and of those among ``errors`` (stroke indices, :attr:`Score.errors`); issue 16's
-    ``error_rate_group_3plus`` is ``wrong / total`` with the default."""
+    """``(wrong, total)``: of the strokes whose true group has ``min_people`` or more people,
+    the number among ``errors`` (stroke indices, :attr:`Score.errors`) and the number in
+    all; issue 16's ``error_rate_group_3plus`` is ``wrong / total`` with the default."""
     big = {s.index for s in strokes if len(s.truth) >= min_people}
     return len(big & {int(e) for e in errors}), len(big)
 

@@ -127,12 +127,12 @@ def fit_task(point) -> dict[str, Any]:
     """Run ``dbntrack fit`` for one :class:`~models.experiments.GridPoint`: ``data`` is the
     rest of a fit command line, ``TRAIN... [--validate HELD...] [--seeds N]
     [--prior-strength LAMBDA[,LAMBDA...]] [--folds K [--fold-by PATTERN]]`` (and ``--keep
-    DIR`` to keep each
-    point's ``config.json`` in ``DIR/POINT_ID``), the seed is ``--seed``
+    DIR`` to keep each point's ``config.json`` in ``DIR/POINT_ID``), the seed is ``--seed``
     (the first of a box file's SIMULATED stroke sets), and the parameters are the config:
     the settings the fit keeps (dotted names as for :func:`track_task`). The record keeps
     the summary's ``parameters``, ``metrics`` (the training and held-out errors of the
-    config's and the fitted network), ``files``, ``timings_s`` and ``outputs``.
+    config's and the fitted network, over all strokes and those of three and more people),
+    ``files``, ``timings_s`` and ``outputs``.
 
     Settings chosen by the held-out error have seen the held-out files: score the chosen
     ones on files that took no part before quoting an error, or choose by the
