@@ -110,16 +110,17 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
                           "every file is a regions file")  # fmt: skip
     with ctx.timed("read"):
         read = {p: _sets(ctx, p, config, own, opt.fps, base, seeds) for p in [*train, *validate]}
-    cv = None
+    cv, held = None, {}
     if folds:
         with ctx.timed("cross-validate"):
-            cv = _cross_validate(ctx, read, train, base, strengths, folds, groups)
+            cv, held = _cross_validate(ctx, read, train, base, strengths, folds, groups)
     strength = strengths[0] if cv is None else cv.chosen
     with ctx.timed("fit"):
         fitted, counts = _fitted(read, train, base, strength)
     with ctx.timed("score"):  # every file labelled with both networks
-        files = [_score_file(ctx, p, read[p], base, fitted, "train" if p in train else
-                             "validation", cv) for p in ctx.progress(read, len(read), "files")]
+        split = {p: "train" if p in train else "validation" for p in read}
+        files = [_score_file(ctx, p, read[p], base, fitted, split[p], held.get(p))
+                 for p in ctx.progress(read, len(read), "files")]
     out = fitted_config(config, fitted.network)
     (ctx.outdir / "config.json").write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
     _plot(ctx, files)
@@ -131,8 +132,7 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
               **_counted(training, counts.children, base.network.labels.max_group_size),
               "fitted": {k: v for k, v in out["labels"].items() if isinstance(v, float)}
               | {k: out["network"][k] for k in ("size_mu_single", "size_slope", "size_sigma")}}
-    metrics = _means(files) | ({} if cv is None else {"error_cv_fitted": cv.mean[strength]})
-    return {"parameters": params, "metrics": metrics, "files": files,
+    return {"parameters": params, "metrics": _means(files), "files": files,
             "outputs": ["config.json", "fit.png"]}
 
 
@@ -187,24 +187,29 @@ def _fitted(read: dict, files: list[str], base, strength: float):
 
 
 def _cross_validate(ctx: RunContext, read: dict, train: list[str], base, strengths: list,
-                    folds: int, groups: list[str] | None) -> CrossValidation:
+                    folds: int, groups: list[str] | None) -> tuple[CrossValidation, dict]:
     """Each training file labelled with the network fitted on the other folds (no group of
     ``groups`` split between folds), for every strength
-    (:func:`models.crossval.cross_validate`)."""
+    (:func:`models.crossval.cross_validate`); and each training file's :class:`_Errors`
+    under the chosen strength's fit on the other folds."""
+    seen: dict = {}
 
     def fit_on(files: list[str], strength: float):
         try:
-            return _fitted(read, files, base, strength)[0]
+            return strength, _fitted(read, files, base, strength)[0]
         except InputError as exc:
             held = [p for p in train if p not in files]
             raise InputError(f"cross-validation, the fit for the fold of {held}: {exc}; give "
                              "fewer folds or order the files so that every fold's complement "
                              "has links") from None
 
-    def error(online, path: str) -> float:
-        return _errors(ctx, online, read[path]).rate
+    def error(model: tuple, path: str) -> float:
+        strength, online = model
+        seen[strength, path] = _errors(ctx, online, read[path])
+        return seen[strength, path].rate
 
-    return cross_validate(train, folds, strengths, fit_on, error, ctx.bar("fits"), groups)
+    cv = cross_validate(train, folds, strengths, fit_on, error, ctx.bar("fits"), groups)
+    return cv, {p: seen[cv.chosen, p] for p in train}
 
 
 def _cv_record(cv: CrossValidation) -> dict:
@@ -254,12 +259,12 @@ def _sets(ctx: RunContext, path: str, config: dict, own: set, fps: float | None,
 
 
 def _score_file(ctx: RunContext, path: str, sets: list[FitSet], base, fitted, split: str,
-                cv: CrossValidation | None = None) -> dict:
+                held: _Errors | None = None) -> dict:
     """One file's row: its strokes (per stroke set) and the labelling error (mean over its
     stroke sets) with the config's network and the fitted one; its strokes of three and
     more people (over all its stroke sets) and their error with each (NaN: none); for a
-    training file under cross-validation ``cv``, the error of the fit on the other folds
-    (``error_cv``)."""
+    training file under cross-validation, ``held``, the errors of the fit on the other
+    folds (``error_cv``, ``error_cv_group_3plus``)."""
     mine, new = _errors(ctx, base, sets), _errors(ctx, fitted, sets)
     n = mine.strokes_3plus
     row = {"file": str(Path(path).resolve()), "split": split,
@@ -267,8 +272,9 @@ def _score_file(ctx: RunContext, path: str, sets: list[FitSet], base, fitted, sp
            "error_config": mine.rate, "error_fitted": new.rate, "strokes_group_3plus": n,
            "error_group_3plus_config": mine.wrong_3plus / n if n else np.nan,
            "error_group_3plus_fitted": new.wrong_3plus / n if n else np.nan}  # fmt: skip
-    if cv is not None and split == "train":
-        row["error_cv"] = cv.errors[cv.chosen][path]
+    if held is not None:
+        row["error_cv"] = held.rate
+        row["error_cv_group_3plus"] = held.wrong_3plus / n if n else np.nan
     return row
 
 
@@ -299,18 +305,28 @@ def _errors(ctx: RunContext, online, sets: list[FitSet]) -> _Errors:
 def _means(files: list[dict]) -> dict:
     """Mean errors over the training and the held-out files (each file weighs the same),
     and the error over their strokes of three and more people, pooled (NaN where there
-    are none)."""
+    are none); under cross-validation the same of the training files' fits on the other
+    folds (``error_cv_fitted``: the chosen strength's cross-validation error)."""
     out, crowd = {}, {}
     for split in ("train", "validation"):
         rows = [f for f in files if f["split"] == split]
-        big = sum(f["strokes_group_3plus"] for f in rows)
         for name in ("config", "fitted"):
             out[f"error_{split}_{name}"] = float(np.mean([f[f"error_{name}"] for f in rows])
                                                if rows else np.nan)  # fmt: skip
-            wrong = sum(f[f"error_group_3plus_{name}"] * f["strokes_group_3plus"]
-                        for f in rows if f["strokes_group_3plus"])  # fmt: skip
-            crowd[f"error_{split}_group_3plus_{name}"] = wrong / big if big else np.nan
+            crowd[f"error_{split}_group_3plus_{name}"] = _pooled(rows, f"error_group_3plus_{name}")
+    rows = [f for f in files if "error_cv" in f]
+    if rows:
+        out["error_cv_fitted"] = float(np.mean([f["error_cv"] for f in rows]))
+        crowd["error_cv_group_3plus_fitted"] = _pooled(rows, "error_cv_group_3plus")
     return out | crowd
+
+
+def _pooled(rows: list[dict], key: str) -> float:
+    """The error ``key`` of the rows' strokes of three and more people, pooled over them
+    (NaN where there are none)."""
+    big = sum(f["strokes_group_3plus"] for f in rows)
+    wrong = sum(f[key] * f["strokes_group_3plus"] for f in rows if f["strokes_group_3plus"])
+    return wrong / big if big else np.nan
 
 
 def fitted_config(config: dict, network) -> dict:

@@ -247,29 +247,39 @@ def test_fold_by_keeps_a_recordings_files_in_one_fold(tmp_path):
 
 
 def test_fit_scores_the_strokes_of_three_and_more_people(tmp_path, capsys):
-    """SIMULATED meetings of four: each file's error over its strokes of 3+ people, with
-    the config's and the fitted network, is a recomputation with the API; the training
-    and held-out means pool those strokes."""
+    """SIMULATED meetings of five: each file's error over its strokes of 3+ people, with
+    the config's and the fitted network and (training files, 2 folds) with the fit on the
+    other fold, is a recomputation with the API; the means pool those strokes."""
     from models.jorge.fit import meeting_strokes
 
-    sets = {f"meet{s}.jsonl": meeting_strokes((s,), (4,))[0] for s in (701, 702, 703)}
+    sets = {f"meet{s}.jsonl": meeting_strokes((s,), (5,))[0] for s in (701, 704, 705)}
     paths = [str(write_regions(tmp_path / n, ss.strokes, fps=ss.fps)) for n, ss in sets.items()]
-    summary, written = _fit(tmp_path, "big", *paths[1:], "--validate", paths[0])
+    summary, written = _fit(tmp_path, "big", *paths[1:], "--validate", paths[0], "--folds", "2")
     rows = {Path(r["file"]).name: r for r in summary["files"]}
+    metrics = summary["metrics"]
+
+    def errors(name, net):
+        labels = label_online(sets[name], OnlineConfig(network=net)).labels
+        return group_errors(sets[name].strokes, score(sets[name].strokes, labels).errors)
+
+    def pooled(counts):
+        return sum(w for w, _ in counts) / sum(n for _, n in counts)
+
+    train, held = ["meet704.jsonl", "meet705.jsonl"], "meet701.jsonl"  # 37 and 28 such strokes
     for which, net in (("config", labeller_config().network), ("fitted", _network(written))):
-        counts = {}
-        for name, ss in sets.items():
-            labels = label_online(ss, OnlineConfig(network=net)).labels
-            counts[name] = group_errors(ss.strokes, score(ss.strokes, labels).errors)
-            wrong, n = counts[name]
+        counts = {name: errors(name, net) for name in sets}
+        for name, (wrong, n) in counts.items():
             assert n > 0 and rows[name]["strokes_group_3plus"] == n
             assert rows[name][f"error_group_3plus_{which}"] == pytest.approx(wrong / n)
-        train = [counts["meet702.jsonl"], counts["meet703.jsonl"]]  # 14 and 18 such strokes
-        assert summary["metrics"][f"error_train_group_3plus_{which}"] == pytest.approx(
-            sum(w for w, _ in train) / sum(n for _, n in train))
-        wrong, n = counts["meet701.jsonl"]
-        assert summary["metrics"][f"error_validation_group_3plus_{which}"] == pytest.approx(
-            wrong / n)
+        want = pooled([counts[t] for t in train])
+        assert metrics[f"error_train_group_3plus_{which}"] == pytest.approx(want)
+        want = pooled([counts[held]])
+        assert metrics[f"error_validation_group_3plus_{which}"] == pytest.approx(want)
+    cv = {a: errors(a, _fitted_on([sets[b].strokes], 0.0)) for a, b in zip(train, train[::-1])}
+    for name, (wrong, n) in cv.items():
+        assert rows[name]["error_cv_group_3plus"] == pytest.approx(wrong / n)
+    assert "error_cv_group_3plus" not in rows[held]
+    assert metrics["error_cv_group_3plus_fitted"] == pytest.approx(pooled(list(cv.values())))
     assert "strokes of 3+ people: " in capsys.readouterr().out
 
 
