@@ -206,6 +206,8 @@ def fit(args: argparse.Namespace) -> dict:
     if "cross_validation" in summary["parameters"]:
         cv = summary["parameters"]["cross_validation"]
         errors = ", ".join(f"{_number(r['prior_strength'])}: {r['error']:.3f}"
+                           + (f" ({r['versus_chosen']:+.3f} +- {r['versus_chosen_se']:.3f})"
+                              if r["prior_strength"] != cv["chosen"] else "")
                            for r in cv["errors"])  # fmt: skip
         print(f"{args.name}: {args.folds}-fold cross-validation error by prior strength: "
               f"{errors}; chosen {_number(cv['chosen'])} (the config's network on the training "

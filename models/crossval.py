@@ -13,8 +13,10 @@ groups (as group K-fold).
 
 For every candidate ``c`` the cross-validation error is the mean over items (each weighs
 the same) of ``error(fit(other folds, c), item)``; :func:`cross_validate` chooses the
-candidate with the lowest, the first given on a tie. Held-out files that took no part
-in the choice still give the error to quote.
+candidate with the lowest (the first given on a tie), and
+:meth:`CrossValidation.versus_chosen` says how far each other candidate is from it (the
+paired difference over the items, and its standard error). Held-out files that took no
+part in the choice still give the error to quote.
 """
 
 from __future__ import annotations
@@ -49,6 +51,15 @@ class CrossValidation(NamedTuple):
     errors: dict[Any, dict[Any, float]]
     mean: dict[Any, float]
     chosen: Hashable
+
+    def versus_chosen(self, candidate: Hashable) -> tuple[float, float]:
+        """``(mean, standard error)`` over the items of ``candidate``'s error minus the
+        chosen one's, paired item by item (both are scored on the same items, so their
+        difference varies less than either mean): how far a candidate is from the choice,
+        against the noise of the items. ``(0, 0)`` for the chosen one."""
+        items = list(self.errors[self.chosen])
+        diff = np.array([self.errors[candidate][x] - self.errors[self.chosen][x] for x in items])
+        return float(np.mean(diff)), float(np.std(diff, ddof=1) / np.sqrt(diff.size))
 
 
 def fold_blocks(items: Sequence[Hashable], k: int,

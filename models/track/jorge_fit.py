@@ -214,11 +214,16 @@ def _cross_validate(ctx: RunContext, read: dict, train: list[str], base, strengt
 
 def _cv_record(cv: CrossValidation) -> dict:
     """The cross-validation for ``summary.json``: each fold's files (resolved, as in
-    ``files``), and each strength's mean error of the fits on the other folds."""
+    ``files``), and each strength's mean error of the fits on the other folds, with its
+    paired difference from the chosen one's and that difference's standard error over
+    the files (:meth:`models.crossval.CrossValidation.versus_chosen`)."""
+    rows = []
+    for lam, e in cv.mean.items():
+        d, se = cv.versus_chosen(lam)
+        rows.append({"prior_strength": shown_strength(lam), "error": e,
+                     "versus_chosen": d, "versus_chosen_se": se})
     return {"folds": [[str(Path(p).resolve()) for p in fold] for fold in cv.folds],
-            "errors": [{"prior_strength": shown_strength(lam), "error": e}
-                       for lam, e in cv.mean.items()],
-            "chosen": shown_strength(cv.chosen)}
+            "errors": rows, "chosen": shown_strength(cv.chosen)}
 
 
 def _counted(training: list[FitSet], children: int, gmax: int) -> dict:

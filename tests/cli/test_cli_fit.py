@@ -213,9 +213,14 @@ def test_cross_validation_chooses_the_prior_strength(tmp_path, capsys):
         per = {n: error(fitted([m for f in cv["folds"] if n not in f for m in f], lam), n)
                for n in sets}  # fmt: skip
         want[lam] = per
-        shown = "inf" if lam == np.inf else lam
-        assert {"prior_strength": shown, "error": pytest.approx(np.mean(list(per.values())))} \
-            in cv["errors"]
+    for lam, per in want.items():  # each strength's mean, and its difference from the choice
+        diff = [per[n] - want[0.0][n] for n in sets]
+        row = next(r for r in cv["errors"] if r["prior_strength"] == ("inf" if lam == np.inf
+                                                                       else lam))  # fmt: skip
+        assert row == {"prior_strength": row["prior_strength"],
+                       "error": pytest.approx(np.mean(list(per.values()))),
+                       "versus_chosen": pytest.approx(np.mean(diff)),
+                       "versus_chosen_se": pytest.approx(np.std(diff, ddof=1) / 2)}
     assert want[np.inf] == {n: rows[n]["error_config"] for n in sets}
     means = {lam: np.mean(list(per.values())) for lam, per in want.items()}
     assert means[0.0] < min(means[1e12], means[np.inf])  # the noisy palettes: the fit helps

@@ -52,6 +52,12 @@ def test_every_item_is_scored_once_by_a_fit_that_never_saw_it(values, data):
             assert not next(fits) & set(fold)
     assert cv.mean[cv.chosen] == min(cv.mean.values())
     assert cv.chosen == next(s for s in shifts if cv.mean[s] == min(cv.mean.values()))
+    for shift in shifts:  # the paired difference from the choice, item by item
+        diff = [cv.errors[shift][i] - cv.errors[cv.chosen][i] for i in items]
+        d, se = cv.versus_chosen(shift)
+        assert d == pytest.approx(np.mean(diff), abs=1e-9) and d >= -1e-9
+        assert se == pytest.approx(np.std(diff, ddof=1) / np.sqrt(len(items)), abs=1e-9)
+    assert cv.versus_chosen(cv.chosen) == (0.0, 0.0)
 
 
 def test_a_tie_chooses_the_first_candidate_given():
