@@ -203,6 +203,11 @@ def fit(args: argparse.Namespace) -> dict:
         print(f"{row['split']:>10}  {Path(row['file']).name}: {row['strokes']} strokes, error "
               f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted)"
               f"{other}{big}")
+    shared = summary["parameters"].get("validation_of_training_recordings")
+    if shared:
+        print(f"{args.name}: held-out files of recordings the training files hold too "
+              f"(--fold-by): {', '.join(Path(p).name for p in shared)}: their errors are not "
+              "held out from those recordings")  # fmt: skip
     if "cross_validation" in summary["parameters"]:
         cv = summary["parameters"]["cross_validation"]
         errors = ", ".join(f"{_number(r['prior_strength'])}: {r['error']:.3f}"

@@ -27,11 +27,12 @@ files alone (:mod:`models.crossval`: the files cut in the order given into K con
 folds, each labelled with the network fitted on the others; keep one recording's files
 together, or name each file's recording with ``--fold-by PATTERN``, a regular expression
 whose first match in the file's path, its first group where it has one, keeps the files that
-share it in one fold): the strength whose fits have the lowest mean error on the folds they
-were not fitted on is the one fitted on all the training files. With one strength,
-``--folds`` reports that error (``error_cv_fitted``) beside the config's network's on the
-same files (``error_train_config``: a held-out error too, unless the config's network was
-fitted on these files, as the default network was on the shared data's training split).
+share it in one fold, and the summary names the held-out files of a training recording): the
+strength whose fits have the lowest mean error on the folds they were not fitted on is the
+one fitted on all the training files. With one strength, ``--folds`` reports that error
+(``error_cv_fitted``) beside the config's network's on the same files
+(``error_train_config``: a held-out error too, unless the config's network was fitted on
+these files, as the default network was on the shared data's training split).
 
 ``OUTDIR/config.json`` is the config with the fitted fields written over its ``network``
 and ``labels``, its other keys kept, so the same stroke settings build the strokes you
@@ -128,6 +129,8 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
     params = {"seeds": seeds, "split_cover": opt.split_cover,
               "prior_strength": shown_strength(strength),
               "folds": folds, "fold_by": fold_by,
+              **({} if groups is None else {"validation_of_training_recordings":
+                                            _held_of_training(validate, fold_by, groups)}),
               **({} if cv is None else {"cross_validation": _cv_record(cv)}),
               **_counted(training, counts.children, base.network.labels.max_group_size),
               "fitted": {k: v for k, v in out["labels"].items() if isinstance(v, float)}
@@ -145,6 +148,22 @@ def _fold_groups(train: list[str], folds: int, fold_by: str | None) -> list[str]
         raise InputError(f"fold groups {fold_by!r}: they group the folds of a cross-validation "
                          "(give folds >= 2)")  # fmt: skip
     return group_keys(train, fold_by)
+
+
+def _held_of_training(validate: list[str], fold_by: str, groups: list[str]) -> list[str]:
+    """The held-out files (resolved) whose recording, the match of ``fold_by``, a training
+    file's is too (``groups``): their error is not held out from that recording. Held-out
+    files the pattern does not match are not compared."""
+    train = set(groups)
+    out = []
+    for p in validate:
+        try:
+            (key,) = group_keys([p], fold_by)
+        except InputError:
+            continue
+        if key in train:
+            out.append(str(Path(p).resolve()))
+    return out
 
 
 def _strengths(prior_strength: float | Sequence[float], folds: int, train: list[str],

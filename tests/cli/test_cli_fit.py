@@ -233,13 +233,19 @@ def test_cross_validation_chooses_the_prior_strength(tmp_path, capsys):
     assert "2-fold cross-validation error by prior strength: inf: " in capsys.readouterr().out
 
 
-def test_fold_by_keeps_a_recordings_files_in_one_fold(tmp_path):
+def test_fold_by_keeps_a_recordings_files_in_one_fold(tmp_path, capsys):
     """Files given out of order: ``--fold-by`` puts each recording's files in one fold,
-    and each file is scored by the fit on the other recording's files alone."""
+    and each file is scored by the fit on the other recording's files alone; a held-out
+    file of a training recording is named."""
     named = {"recA_3.jsonl": 3, "recB_4.jsonl": 4, "recA_5.jsonl": 5, "recB_6.jsonl": 6}
     files = [write_regions(tmp_path / n, _noisy(s), fps=25.0) for n, s in named.items()]
+    held = [write_regions(tmp_path / n, _noisy(s), fps=25.0)
+            for n, s in (("recA_9.jsonl", 9), ("recC_7.jsonl", 7), ("other.jsonl", 8))]
     summary, _ = _fit(tmp_path, "grouped", *map(str, files), "--folds", "2",
-                      "--fold-by", r"rec(\w)_")  # fmt: skip
+                      "--fold-by", r"rec(\w)_", "--validate", *map(str, held))  # fmt: skip
+    assert summary["parameters"]["validation_of_training_recordings"] == [str(held[0].resolve())]
+    assert "training files hold too (--fold-by): recA_9.jsonl: their errors" in \
+        capsys.readouterr().out
     cv = summary["parameters"]["cross_validation"]
     assert [[Path(f).name for f in fold] for fold in cv["folds"]] == [
         ["recA_3.jsonl", "recA_5.jsonl"], ["recB_4.jsonl", "recB_6.jsonl"]]
