@@ -176,7 +176,7 @@ def fit(args: argparse.Namespace) -> dict:
     """Run ``dbntrack fit``; returns the summary written to ``OUTDIR/summary.json``."""
     from dbn.errors import InputError
     from models.track import available, runner
-    from models.track.context import clean, shown_strength
+    from models.track.context import clean, short_names, shown_strength
 
     mod = runner(args.name)
     if not hasattr(mod, "fit"):
@@ -195,18 +195,19 @@ def fit(args: argparse.Namespace) -> dict:
     ctx = _run(args, summary, lambda ctx: mod.fit(ctx, list(args.train), list(args.validate),
                                                   config, args.seeds, strengths, args.folds,
                                                   args.fold_by))
+    names = short_names([row["file"] for row in summary["files"]])
     for row in summary["files"]:
         other = f" (other folds' fit {row['error_cv']:.3f})" if "error_cv" in row else ""
         big = (f"; {row['strokes_group_3plus']} strokes of 3+ people: "
                f"{row['error_group_3plus_config']:.3f} -> {row['error_group_3plus_fitted']:.3f}"
                if row["strokes_group_3plus"] else "")  # fmt: skip
-        print(f"{row['split']:>10}  {Path(row['file']).name}: {row['strokes']} strokes, error "
+        print(f"{row['split']:>10}  {names[row['file']]}: {row['strokes']} strokes, error "
               f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted)"
               f"{other}{big}")
     shared = summary["parameters"].get("validation_of_training_recordings")
     if shared:
         print(f"{args.name}: held-out files of recordings the training files hold too "
-              f"(--fold-by): {', '.join(Path(p).name for p in shared)}: their errors are not "
+              f"(--fold-by): {', '.join(names[p] for p in shared)}: their errors are not "
               "held out from those recordings")  # fmt: skip
     if "cross_validation" in summary["parameters"]:
         cv = summary["parameters"]["cross_validation"]

@@ -17,7 +17,7 @@ from typing import Any
 
 from dbn.errors import InputError
 
-__all__ = ["RunContext", "clean", "shown_strength", "versions", "write_summary"]
+__all__ = ["RunContext", "clean", "short_names", "shown_strength", "versions", "write_summary"]
 
 
 @dataclass
@@ -115,6 +115,22 @@ def clean(x: Any) -> Any:
     if isinstance(x, float) and not math.isfinite(x):
         return None
     return x
+
+
+def short_names(paths: list[str]) -> dict[str, str]:
+    """Each path's shortest tail of path parts that tells it from the others (two
+    ``gt.txt`` in ``MOT17-02/gt/`` and ``MOT17-04/gt/`` show as ``MOT17-02/gt/gt.txt`` and
+    ``MOT17-04/gt/gt.txt``; a path every tail of which ends another shows whole): the names
+    a terminal or a figure shows files by."""
+    parts = {str(p): Path(p).parts for p in paths}
+    out = {}
+    for p, q in parts.items():
+        others = [o for r, o in parts.items() if r != p]
+        n = 1
+        while n < len(q) and any(o[-n:] == q[-n:] for o in others):
+            n += 1
+        out[p] = "/".join(q[-n:]) if n < len(q) else p
+    return out
 
 
 def shown_strength(value: float) -> float | str:

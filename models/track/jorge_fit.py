@@ -60,7 +60,7 @@ import numpy as np
 from dbn.errors import ConfigError, InputError
 from models.crossval import CrossValidation, cross_validate, fold_blocks, group_keys
 from models.io.jorge_regions import is_regions
-from models.track.context import RunContext, shown_strength
+from models.track.context import RunContext, short_names, shown_strength
 from models.track.jorge import (
     builder_keys,
     label_steps,
@@ -377,7 +377,8 @@ def _plot(ctx: RunContext, files: list[dict]) -> None:
         for i, (name, label) in enumerate(bars):
             ax.bar(x + (i - (len(bars) - 1) / 2) * width,
                    [f.get(f"error_{name}", np.nan) for f in files], width, label=label)
-        ax.set_xticks(x, [("" if f["split"] == "train" else "held out\n") + Path(f["file"]).name
+        names = short_names([f["file"] for f in files])
+        ax.set_xticks(x, [("" if f["split"] == "train" else "held out\n") + names[f["file"]]
                           for f in files], rotation=30, ha="right", fontsize=7)  # fmt: skip
         held = [i for i, f in enumerate(files) if f["split"] != "train"]
         if held and held[0] > 0:  # the training files first, then the held-out ones

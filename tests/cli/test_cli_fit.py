@@ -257,6 +257,15 @@ def test_fold_by_keeps_a_recordings_files_in_one_fold(tmp_path, capsys):
         assert rows[name]["error_cv"] == _error_of(net, _noisy(named[name]))
 
 
+def test_files_of_one_name_are_shown_by_their_folders(tmp_path, capsys):
+    (tmp_path / "r1").mkdir(), (tmp_path / "r2").mkdir()
+    files = [str(write_regions(tmp_path / r / "gt.jsonl", _noisy(s), fps=25.0))
+             for r, s in (("r1", 3), ("r2", 4))]
+    _fit(tmp_path, "names", *files)
+    out = capsys.readouterr().out
+    assert "train  r1/gt.jsonl: " in out and "train  r2/gt.jsonl: " in out
+
+
 def test_fit_scores_the_strokes_of_three_and_more_people(tmp_path, capsys):
     """SIMULATED meetings of five: each file's error over its strokes of 3+ people, with
     the config's and the fitted network and (training files, 2 folds) with the fit on the
