@@ -56,7 +56,11 @@ class CrossValidation(NamedTuple):
         """``(mean, standard error)`` over the items of ``candidate``'s error minus the
         chosen one's, paired item by item (both are scored on the same items, so their
         difference varies less than either mean): how far a candidate is from the choice,
-        against the noise of the items. ``(0, 0)`` for the chosen one."""
+        against the noise of the items. ``(0, 0)`` for the chosen one; an
+        :class:`InputError` for a candidate that was not scored."""
+        if candidate not in self.errors:
+            raise InputError(f"versus_chosen: {candidate!r} is not one of the candidates "
+                             f"{list(self.errors)}")  # fmt: skip
         items = list(self.errors[self.chosen])
         diff = np.array([self.errors[candidate][x] - self.errors[self.chosen][x] for x in items])
         return float(np.mean(diff)), float(np.std(diff, ddof=1) / np.sqrt(diff.size))

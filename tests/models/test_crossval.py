@@ -64,6 +64,9 @@ def test_a_tie_chooses_the_first_candidate_given():
     cv = cross_validate(["a", "b", "c"], 3, [5, 1, 2], lambda train, c: c,
                         lambda c, item: 0.0 if c != 2 else 1.0)  # fmt: skip
     assert cv.chosen == 5 and cv.mean == {5: 0.0, 1: 0.0, 2: 1.0}
+    assert cv.versus_chosen(2) == (1.0, 0.0) and cv.versus_chosen(1) == (0.0, 0.0)
+    with pytest.raises(InputError, match=r"7 is not one of the candidates \[5, 1, 2\]"):
+        cv.versus_chosen(7)
 
 
 def test_the_progress_wraps_every_fit():
