@@ -106,11 +106,17 @@ def _check_unique(items: list) -> None:
 
 
 def _per_item(items: list, groups: Sequence[Hashable]) -> list:
-    """``groups`` as a list, checked to hold one group per item."""
+    """``groups`` as a list, checked to hold one hashable group per item."""
     groups = list(groups)
     if len(groups) != len(items):
         raise InputError(f"cross-validation: {len(groups)} groups for {len(items)} items "
                          "(expected one group per item)")  # fmt: skip
+    for item, group in zip(items, groups):
+        try:
+            hash(group)
+        except TypeError:
+            raise InputError(f"cross-validation: the group {group!r} of {item!r} is not "
+                             "hashable (a string or a number names a group)") from None
     return groups
 
 

@@ -130,6 +130,8 @@ def test_a_grouped_cross_validation_never_fits_on_a_group_it_scores():
     assert seen == [["b0", "b1", "c0", "c1"], ["a0", "a1", "c0", "c1"], ["a0", "a1", "b0", "b1"]]
     with pytest.raises(InputError, match="2 groups for 6 items"):
         cross_validate(items, 2, [0], fit, lambda m, x: 0.0, groups=["a", "b"])
+    with pytest.raises(InputError, match=r"the group \['b'\] of 'b0' is not hashable"):
+        fold_blocks(items, 2, ["a", ["b"], "a", "c", "b", "c"])
 
 
 def test_group_keys_take_the_first_group_or_the_whole_match():
