@@ -96,9 +96,15 @@ def fold_blocks(items: Sequence[Hashable], k: int,
 
 
 def _check_unique(items: list) -> None:
-    """An :class:`InputError` for the first item given twice (scored by a fit on itself)."""
+    """An :class:`InputError` for the first item given twice (scored by a fit on itself),
+    or one that is not hashable."""
     seen: set = set()
     for item in items:
+        try:
+            hash(item)
+        except TypeError:
+            raise InputError(f"cross-validation: item {item!r} is not hashable (a file path "
+                             "names an item)") from None
         if item in seen:
             raise InputError(f"cross-validation: {item!r} given twice (it would be scored by "
                              "a fit on itself)")  # fmt: skip

@@ -86,6 +86,7 @@ def test_the_progress_wraps_every_fit():
     (["a", "b"], 2.0, [0], "folds 2.0"),
     (["a", "b"], True, [0], "folds True"),
     (["a", "b", "a"], 2, [0], "'a' given twice"),
+    (["a", ["b"]], 2, [0], r"item \['b'\] is not hashable"),
     (["a", "b"], 2, [], "expected at least one"),
     (["a", "b"], 2, [1, 1], "none twice"),
 ])  # fmt: skip
