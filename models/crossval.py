@@ -192,9 +192,13 @@ def cross_validate(items: Sequence[Hashable], k: int, candidates: Sequence[Hasha
     """
     folds = fold_blocks(items, k, groups)
     candidates = list(candidates)
-    if not candidates or len(set(candidates)) != len(candidates):
+    try:
+        distinct = len(set(candidates))
+    except TypeError:
+        distinct = -1  # an unhashable candidate cannot key the errors
+    if not candidates or distinct != len(candidates):
         raise InputError(f"cross-validation: candidates {candidates!r}: expected at least one, "
-                         "none twice")  # fmt: skip
+                         "none twice, each hashable")  # fmt: skip
     jobs = [(c, i) for c in candidates for i in range(len(folds))]
     errors: dict[Any, dict[Any, float]] = {c: {} for c in candidates}
     for c, i in jobs if progress is None else progress(jobs, len(jobs)):

@@ -89,6 +89,7 @@ def test_the_progress_wraps_every_fit():
     (["a", ["b"]], 2, [0], r"item \['b'\] is not hashable"),
     (["a", "b"], 2, [], "expected at least one"),
     (["a", "b"], 2, [1, 1], "none twice"),
+    (["a", "b"], 2, [1, [2]], "each hashable"),
 ])  # fmt: skip
 def test_refusals(items, k, candidates, needle):
     with pytest.raises(InputError, match=needle):
