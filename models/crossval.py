@@ -100,11 +100,7 @@ def _check_unique(items: list) -> None:
     or one that is not hashable."""
     seen: set = set()
     for item in items:
-        try:
-            hash(item)
-        except TypeError:
-            raise InputError(f"cross-validation: item {item!r} is not hashable (a file path "
-                             "names an item)") from None
+        _check_hashable(item, f"item {item!r}", "a file path names an item")
         if item in seen:
             raise InputError(f"cross-validation: {item!r} given twice (it would be scored by "
                              "a fit on itself)")  # fmt: skip
@@ -118,12 +114,18 @@ def _per_item(items: list, groups: Sequence[Hashable]) -> list:
         raise InputError(f"cross-validation: {len(groups)} groups for {len(items)} items "
                          "(expected one group per item)")  # fmt: skip
     for item, group in zip(items, groups):
-        try:
-            hash(group)
-        except TypeError:
-            raise InputError(f"cross-validation: the group {group!r} of {item!r} is not "
-                             "hashable (a string or a number names a group)") from None
+        _check_hashable(group, f"the group {group!r} of {item!r}",
+                        "a string or a number names a group")  # fmt: skip
     return groups
+
+
+def _check_hashable(value: Any, what: str, hint: str) -> None:
+    """An :class:`InputError` saying that ``what`` is not hashable, with ``hint``, where
+    ``value`` is not (a fold's items and groups key dicts and sets)."""
+    try:
+        hash(value)
+    except TypeError:
+        raise InputError(f"cross-validation: {what} is not hashable ({hint})") from None
 
 
 def group_keys(items: Sequence[str], pattern: str) -> list[str]:
