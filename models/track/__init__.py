@@ -10,12 +10,13 @@ A runner module (``models.track.<name>``) offers
   holds a ``truth`` file);
 * ``evaluate(result, truth) -> dict``: the tracker's metrics of a result file against a
   truth file;
-* optionally ``fit(ctx, train, validate, config, seeds, prior_strength, folds) -> dict``
-  (``dbntrack fit``): the tracker's parameters fitted on training files whose truth is
-  known, written into ``ctx.outdir`` as a config for ``track``, with the errors on the
-  training and the held-out files, and with ``folds`` >= 2 the cross-validation over the
-  training files that chooses among several prior strengths (``jorge``:
-  :mod:`models.track.jorge_fit`).
+* optionally ``fit(ctx, train, validate, config, seeds, prior_strength, folds, fold_by)
+  -> dict`` (``dbntrack fit``): the tracker's parameters fitted on training files whose
+  truth is known, written into ``ctx.outdir`` as a config for ``track``, with the errors on
+  the training and the held-out files, and with ``folds`` >= 2 the cross-validation over
+  the training files that chooses among several prior strengths, its folds keeping
+  together the files of one recording (``fold_by``, a regular expression) where given
+  (``jorge``: :mod:`models.track.jorge_fit`).
 
 ``dbn`` (any two-slice DBN from a BIF file) is not a tracker of the registry: it runs the
 library's generic engines.
