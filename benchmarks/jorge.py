@@ -106,11 +106,14 @@ their own; the group keys above pool the real views only, while the cost keys
 ``max_clique_entries`` cover every scored sequence), ``map_matches_pgmpy``
 (MAP log probability and marginals equal pgmpy's on small windows).
 
-Unlisted sequences: every other CAVIAR / PETS2009 XML ground truth in the data folder's
-``caviar`` and ``pets2009`` (:func:`models.jorge.fit.unlisted_sequences`; a file that is not
-a ground truth, such as PETS2009's camera ``View_001.xml``, is skipped with a line on
-stderr) is scored with the same seeds as the split ``unlisted`` (``per_sequence``) and
-pooled on its own, never with the keys above: ``unlisted_sequences`` (their names, ``[]``
+Unlisted sequences: every other ground truth in the data folder's ``caviar``,
+``pets2009`` and ``mot``, at any depth: CAVIAR / PETS2009 XML, and MOTChallenge ``gt.txt``
+at its ``seqinfo.ini``'s frame rate or its folder's (PETS2009 7 fps; the rate and where it
+came from go to stderr) (:func:`models.jorge.fit.unlisted_sequences`, keyed by
+:func:`models.jorge.fit.sequence_key`: ``PETS09-S2L2/gt/gt.txt`` is ``PETS09-S2L2``; a file
+that is not a ground truth, such as PETS2009's camera ``View_001.xml``, is skipped with a
+line on stderr) is scored with the same seeds as the split ``unlisted`` (``per_sequence``)
+and pooled on its own, never with the keys above: ``unlisted_sequences`` (their names, ``[]``
 without any) and, with any, ``error_rate_unlisted`` and its ``_colour_only`` and
 ``_true_links``, ``error_rate_unlisted_group_3plus`` and ``strokes_unlisted_group_3plus``.
 
@@ -428,7 +431,9 @@ from models.jorge.fit import (
     SIMULATED_VIEW_SEQUENCES,
     TRAIN_SEQUENCES,
     VALIDATION_SEQUENCES,
+    frame_rate_note,
     load_sequence,
+    sequence_key,
     unlisted_sequences,
 )
 from models.jorge.links import WHY_NOT_PARENT
@@ -683,13 +688,15 @@ def _label_sequences(seeds: list, cfg: OnlineConfig,
             continue
         if split == "simulated_view" and view_seconds is not None:
             truth = head(truth, view_seconds)
+        if split == "unlisted":
+            log(f"jorge: {folder}/{name}: {truth.fps:g} fps ({frame_rate_note(folder, name)})")
         rows = []
         for s in seeds:
             row, wins = _run_one(build_strokes(s, truth), cfg, keep_windows=(name == "ms3ggt.xml.gz" and s == seeds[0]))
             windows += wins
             ok &= row["ok"]
             rows.append(row)
-        key = truth.name if split == "simulated_view" else name.split(".")[0]
+        key = truth.name if split == "simulated_view" else sequence_key(folder, name)
         key = f"{folder}/{name}" if key in rows_by else key
         rows_by[key] = (split, rows)
         per[key] = _summary(split, rows)

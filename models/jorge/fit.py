@@ -70,6 +70,8 @@ __all__ = [
     "VALIDATION_SEQUENCES",
     "SIMULATED_VIEW_SEQUENCES",
     "unlisted_sequences",
+    "sequence_key",
+    "frame_rate_note",
     "TRAIN_SEEDS",
     "EventCounts",
     "count_events",
@@ -115,16 +117,21 @@ SIMULATED_VIEW_SEQUENCES = (("eth", "obsmat.txt.gz"),)
 has ground positions, no boxes): scored by the benchmark on its own, never fitted on,
 never pooled with the real views, and nothing is chosen on it."""
 
-UNLISTED_FOLDERS = ("caviar", "pets2009")
+UNLISTED_FOLDERS = ("caviar", "pets2009", "mot")
 """Folders of the data whose other ground truths :func:`unlisted_sequences` finds."""
 
 
 def unlisted_sequences() -> list[tuple[str, str]]:
-    """``(folder, name)`` of every CAVIAR / PETS2009 XML file (``.xml``, ``.xml.gz``) in
-    the data folder's ``caviar`` and ``pets2009`` that none of the lists above names:
-    sequences someone added (yours to hold out). The benchmark scores them as the split
-    ``unlisted``, on their own; nothing is fitted or chosen on them. Files that are not
-    a ground truth (PETS2009's camera ``View_001.xml``) are skipped where they are read."""
+    """``(folder, name)`` of every ground truth in the data folder's ``caviar``,
+    ``pets2009`` and ``mot`` (:data:`UNLISTED_FOLDERS`), at any depth, that none of the
+    lists above names: sequences someone added (yours to hold out). ``name`` is the
+    file's path below the folder (``/``-separated, e.g. ``Meeting/mc1gt.xml`` or
+    ``PETS09-S2L2/gt/gt.txt``). A ground truth is a CAVIAR / PETS2009 XML (``.xml``,
+    ``.xml.gz``) or a MOTChallenge ``gt.txt`` (``.gz`` too; :func:`load_sequence`); files
+    and folders whose names start with ``.`` are passed over. The benchmark scores them
+    as the split ``unlisted``, on their own; nothing is fitted or chosen on them. Files
+    that are not a ground truth (PETS2009's camera ``View_001.xml``) are skipped where
+    they are read."""
     from models import datasets
 
     listed = set(TRAIN_SEQUENCES) | set(VALIDATION_SEQUENCES) | set(SIMULATED_VIEW_SEQUENCES)
@@ -133,11 +140,30 @@ def unlisted_sequences() -> list[tuple[str, str]]:
         path = datasets.find(folder)
         if path is None or not path.is_dir():
             continue
-        for file in sorted(path.iterdir()):
-            xml = file.is_file() and file.name.lower().endswith((".xml", ".xml.gz"))
-            if xml and (folder, file.name) not in listed:
-                out.append((folder, file.name))
+        for file in sorted(path.rglob("*")):
+            name = file.relative_to(path).as_posix()
+            hidden = any(part.startswith(".") for part in file.relative_to(path).parts)
+            if file.is_file() and not hidden and _is_ground_truth_name(file.name) \
+                    and (folder, name) not in listed:
+                out.append((folder, name))
     return out
+
+
+def _is_ground_truth_name(name: str) -> bool:
+    """A CAVIAR / PETS2009 XML or a MOTChallenge ``gt.txt`` (either gzipped)."""
+    base = name.lower().removesuffix(".gz")
+    return base.endswith(".xml") or base == "gt.txt"
+
+
+def sequence_key(folder: str, name: str) -> str:
+    """Short name of a sequence of :func:`load_sequence` (the benchmark's ``per_sequence``
+    key): a MOTChallenge ``gt.txt``'s sequence folder (``PETS09-S2L2/gt/gt.txt`` ->
+    ``PETS09-S2L2``), else the file name up to its first dot (``ms3ggt.xml.gz`` ->
+    ``ms3ggt``)."""
+    parts = name.split("/")
+    if parts[-1].lower().removesuffix(".gz") != "gt.txt" or len(parts) < 2:
+        return parts[-1].split(".")[0]
+    return parts[-3] if parts[-2].lower() == "gt" and len(parts) >= 3 else parts[-2]
 
 
 TRAIN_SEEDS = tuple(range(100, 110))
@@ -145,16 +171,53 @@ TRAIN_SEEDS = tuple(range(100, 110))
 
 
 def load_sequence(folder: str, name: str):
-    """Ground truth of one sequence of ``../shared/data`` (``FileNotFoundError`` if absent);
-    ETH through the default SIMULATED :class:`~models.jorge.eth.ObliqueView`."""
+    """Ground truth of one sequence of ``../shared/data`` (``FileNotFoundError`` if absent;
+    ``name``: the file's path below ``folder``, ``/``-separated); ETH through the default
+    SIMULATED :class:`~models.jorge.eth.ObliqueView`. An XML in ``caviar`` is CAVIAR's (25
+    fps), in ``pets2009`` PETS2009's (7 fps), elsewhere told apart by its grouplists. A
+    MOTChallenge ``gt.txt`` is read as a ground truth is scored
+    (:func:`models.io.jorge.read_mot_truth`: where rows have classes, class-1 people only)
+    at its ``seqinfo.ini``'s frame rate, else at its folder's cameras' (PETS2009 7 fps,
+    else 25 assumed; :func:`frame_rate_note` says which)."""
     from models import datasets
+    from models.io.jorge import is_mot, mot_frame_rate, read_mot_truth
     from models.jorge.eth import load_eth
-    from models.jorge.strokes import load_caviar, load_pets2009
+    from models.jorge.strokes import load_caviar, load_ground_truth, load_pets2009
 
-    path = datasets.require(folder, name)
+    path = datasets.require(folder, *name.split("/"))
     if folder == "eth":
         return load_eth(path, name="ETH-seq_eth")
-    return load_caviar(path) if folder == "caviar" else load_pets2009(path)
+    if is_mot(path):
+        truth = read_mot_truth(path)[0]
+        fps, _ = mot_frame_rate(path)
+        return truth if fps is not None else replace(truth, fps=_folder_fps(folder))
+    if folder in ("caviar", "pets2009"):
+        return load_caviar(path) if folder == "caviar" else load_pets2009(path)
+    return load_ground_truth(path)
+
+
+def _folder_fps(folder: str) -> float:
+    """Frame rate of a MOTChallenge file without ``seqinfo.ini`` in ``folder``."""
+    from models.io.jorge import MOT_DEFAULT_FPS
+    from models.jorge.strokes import PETS2009_FPS
+
+    return PETS2009_FPS if folder == "pets2009" else MOT_DEFAULT_FPS
+
+
+def frame_rate_note(folder: str, name: str) -> str:
+    """Where :func:`load_sequence` takes the sequence's frame rate from, in words: the
+    file format's, a ``seqinfo.ini`` (its path), or the folder's assumed rate."""
+    from models import datasets
+    from models.io.jorge import frame_rate_source, is_mot, mot_frame_rate
+
+    path = datasets.require(folder, *name.split("/"))
+    if not is_mot(path) or folder == "eth":
+        return frame_rate_source(path)
+    _, ini = mot_frame_rate(path)
+    if ini is not None:
+        return str(ini)
+    cameras = "PETS2009's cameras' rate" if folder == "pets2009" else "assumed"
+    return f"no seqinfo.ini beside the MOTChallenge file: {_folder_fps(folder):g} fps, {cameras}"
 
 
 @dataclass

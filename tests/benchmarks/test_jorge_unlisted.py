@@ -3,14 +3,18 @@ names (``models.jorge.fit.unlisted_sequences``), as the split ``unlisted``, on t
 
 from __future__ import annotations
 
+import gzip
 import shutil
 from pathlib import Path
 
 import numpy as np
 
 from benchmarks.jorge import _error_keys, _label_sequences, _unlisted_keys
-from models.jorge.fit import unlisted_sequences
-from models.jorge.online import OnlineConfig
+from models.io.jorge import read_mot
+from models.jorge.fit import frame_rate_note, load_sequence, sequence_key, unlisted_sequences
+from models.jorge.online import OnlineConfig, label_online
+from models.jorge.scoring import score
+from models.jorge.strokes import build_strokes
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "data" / "jorge"
 
@@ -55,3 +59,69 @@ def test_benchmark_scores_unlisted_sequences_on_their_own(tmp_path, monkeypatch)
     # never pooled with the training and validation keys
     assert np.isnan(_error_keys(rows_by, 5)["error_rate_validation"])
     assert _unlisted_keys({}) == {"unlisted_sequences": []}
+
+
+def _nested(tmp_path: Path, monkeypatch) -> Path:
+    """A data folder laid out as the sequences' own archives are: a gzipped CAVIAR file two
+    folders down, MOTChallenge ``gt.txt`` files with and without a ``seqinfo.ini`` (one
+    with a static person, class 7, who is not scored), a tracker's ``det.txt``, an XML in
+    ``mot`` and a hidden copy (all SIMULATED, tests/data)."""
+    caviar = tmp_path / "caviar" / "Meeting" / "Meet_Two"
+    caviar.mkdir(parents=True)
+    with gzip.open(caviar / "m2gt.xml.gz", "wb") as f:
+        f.write((EXAMPLES / "caviar.xml").read_bytes())
+    gt = (EXAMPLES / "gt.txt").read_text()
+    static = "".join(f"{fr},9,300,100,20,40,1,7,1\n" for fr in range(70, 90))
+    for seq, text, ini in (("pets2009/PETS09-S9L8", gt, "[Sequence]\nframeRate=10\n"),
+                           ("pets2009/PETS09-S9L7", gt + static, None),
+                           ("mot/MOT-X", gt, None)):
+        (tmp_path / seq / "gt").mkdir(parents=True)
+        (tmp_path / seq / "gt" / "gt.txt").write_text(text)
+        if ini:
+            (tmp_path / seq / "seqinfo.ini").write_text(ini)
+    (tmp_path / "pets2009" / "PETS09-S9L7" / "det").mkdir()
+    (tmp_path / "pets2009" / "PETS09-S9L7" / "det" / "det.txt").write_text(gt)
+    (tmp_path / "mot" / "Walk").mkdir()
+    shutil.copy(EXAMPLES / "caviar.xml", tmp_path / "mot" / "Walk" / "walkgt.xml")
+    (tmp_path / "caviar" / ".cache").mkdir()
+    shutil.copy(EXAMPLES / "caviar.xml", tmp_path / "caviar" / ".cache" / "copy.xml")
+    monkeypatch.setenv("DBNTRACK_DATA", str(tmp_path))
+    return tmp_path
+
+
+NESTED = [("caviar", "Meeting/Meet_Two/m2gt.xml.gz"), ("pets2009", "PETS09-S9L7/gt/gt.txt"),
+          ("pets2009", "PETS09-S9L8/gt/gt.txt"), ("mot", "MOT-X/gt/gt.txt"),
+          ("mot", "Walk/walkgt.xml")]
+
+
+def test_unlisted_sequences_at_any_depth_and_in_motchallenge_layout(tmp_path, monkeypatch):
+    data = _nested(tmp_path, monkeypatch)
+    assert unlisted_sequences() == NESTED
+    assert [sequence_key(*s) for s in NESTED] == ["m2gt", "PETS09-S9L7", "PETS09-S9L8", "MOT-X",
+                                                  "walkgt"]
+    truths = [load_sequence(*s) for s in NESTED]
+    assert [t.fps for t in truths] == [25.0, 7.0, 10.0, 25.0, 25.0]
+    assert frame_rate_note(*NESTED[2]) == str(data / "pets2009" / "PETS09-S9L8" / "seqinfo.ini")
+    assert "7 fps, PETS2009's cameras' rate" in frame_rate_note(*NESTED[1])
+    assert "25 fps, assumed" in frame_rate_note(*NESTED[3])
+    # the static person (class 7) is not a person of the ground truth; the rest is the file's
+    assert 9 in read_mot(data / "pets2009" / "PETS09-S9L7" / "gt" / "gt.txt").ids
+    assert 9 not in truths[1].ids
+    np.testing.assert_array_equal(truths[1].boxes, truths[2].boxes)
+    assert len(truths[4].groups) > 0 and truths[4].fps == 25.0  # CAVIAR's, by its grouplists
+
+
+def test_benchmark_scores_nested_and_motchallenge_sequences(tmp_path, monkeypatch, capsys):
+    _nested(tmp_path, monkeypatch)
+    per, rows_by, _, ok = _label_sequences([0], OnlineConfig())
+    assert ok and list(per) == ["m2gt", "PETS09-S9L7", "PETS09-S9L8", "MOT-X", "walkgt"]
+    assert [per[k]["fps"] for k in per] == [25.0, 7.0, 10.0, 25.0, 25.0]
+    for key, seq in zip(per, NESTED):
+        strokes = build_strokes(0, load_sequence(*seq))
+        assert per[key]["strokes"] == len(strokes)
+        labels = label_online(strokes, OnlineConfig()).labels
+        assert per[key]["error_rate"] == score(strokes, labels).error_rate
+    err = capsys.readouterr().err
+    assert "jorge: pets2009/PETS09-S9L7/gt/gt.txt: 7 fps (no seqinfo.ini" in err
+    assert "jorge: pets2009/PETS09-S9L8/gt/gt.txt: 10 fps (" in err
+    assert _unlisted_keys(rows_by)["unlisted_sequences"] == list(per)
