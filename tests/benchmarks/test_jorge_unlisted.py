@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import gzip
 import shutil
+import warnings
 from pathlib import Path
 
 import numpy as np
 
-from benchmarks.jorge import _error_keys, _label_sequences, _unlisted_keys
+from benchmarks.jorge import _error_keys, _issue4_mean, _label_sequences, _unlisted_keys
 from models.io.jorge import read_mot
 from models.jorge.fit import frame_rate_note, load_sequence, sequence_key, unlisted_sequences
 from models.jorge.online import OnlineConfig, label_online
@@ -125,3 +126,13 @@ def test_benchmark_scores_nested_and_motchallenge_sequences(tmp_path, monkeypatc
     assert "jorge: pets2009/PETS09-S9L7/gt/gt.txt: 7 fps (no seqinfo.ini" in err
     assert "jorge: pets2009/PETS09-S9L8/gt/gt.txt: 10 fps (" in err
     assert _unlisted_keys(rows_by)["unlisted_sequences"] == list(per)
+
+
+def test_issue4_figure_takes_only_the_listed_ms3ggt_and_mws1gt():
+    per = {"ms3ggt": {"split": "unlisted", "error_rate": 0.5},  # a file of yours of that name
+           "mws1gt": {"split": "train", "error_rate": 0.1}}
+    assert _issue4_mean(per, "error_rate") == 0.1
+    per["mws1gt"]["split"] = "unlisted"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no mean of an empty list: a data folder of yours only
+        assert np.isnan(_issue4_mean(per, "error_rate"))
