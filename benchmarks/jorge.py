@@ -112,7 +112,8 @@ at its ``seqinfo.ini``'s frame rate or its folder's (PETS2009 7 fps; the rate an
 came from go to stderr) (:func:`models.jorge.fit.unlisted_sequences`, keyed by
 :func:`models.jorge.fit.sequence_key`: ``PETS09-S2L2/gt/gt.txt`` is ``PETS09-S2L2``; a file
 that is not a ground truth, such as PETS2009's camera ``View_001.xml``, is skipped with a
-line on stderr) is scored with the same seeds as the split ``unlisted`` (``per_sequence``)
+line on stderr, and one under a listed sequence's name, such as ``Meeting/ms3ggt.xml``, is
+that recording and left out, :func:`models.jorge.fit.listed_copies`) is scored with the same seeds as the split ``unlisted`` (``per_sequence``)
 and pooled on its own, never with the keys above: ``unlisted_sequences`` (their names, ``[]``
 without any) and, with any, ``error_rate_unlisted`` and its ``_colour_only`` and
 ``_true_links``, ``error_rate_unlisted_group_3plus`` and ``strokes_unlisted_group_3plus``.
@@ -432,6 +433,7 @@ from models.jorge.fit import (
     TRAIN_SEQUENCES,
     VALIDATION_SEQUENCES,
     frame_rate_note,
+    listed_copies,
     load_sequence,
     sequence_key,
     unlisted_sequences,
@@ -675,6 +677,9 @@ def _label_sequences(seeds: list, cfg: OnlineConfig,
     per, rows_by = {}, {}
     windows: list = []
     ok = True
+    for folder, name, key in listed_copies():
+        log(f"jorge: {folder}/{name}: the listed sequence {key} in another place, "
+            "not scored as unlisted")
     for folder, name, split in sequences:
         try:
             truth = load_sequence(folder, name)

@@ -70,6 +70,7 @@ __all__ = [
     "VALIDATION_SEQUENCES",
     "SIMULATED_VIEW_SEQUENCES",
     "unlisted_sequences",
+    "listed_copies",
     "sequence_key",
     "frame_rate_note",
     "TRAIN_SEEDS",
@@ -124,14 +125,32 @@ UNLISTED_FOLDERS = ("caviar", "pets2009", "mot")
 def unlisted_sequences() -> list[tuple[str, str]]:
     """``(folder, name)`` of every ground truth in the data folder's ``caviar``,
     ``pets2009`` and ``mot`` (:data:`UNLISTED_FOLDERS`), at any depth, that none of the
-    lists above names: sequences someone added (yours to hold out). ``name`` is the
-    file's path below the folder (``/``-separated, e.g. ``Meeting/mc1gt.xml`` or
-    ``PETS09-S2L2/gt/gt.txt``). A ground truth is a CAVIAR / PETS2009 XML (``.xml``,
-    ``.xml.gz``) or a MOTChallenge ``gt.txt`` (``.gz`` too; :func:`load_sequence`); files
-    and folders whose names start with ``.`` are passed over. The benchmark scores them
-    as the split ``unlisted``, on their own; nothing is fitted or chosen on them. Files
-    that are not a ground truth (PETS2009's camera ``View_001.xml``) are skipped where
-    they are read."""
+    lists above names, by path or by name: sequences someone added (yours to hold out).
+    ``name`` is the file's path below the folder (``/``-separated, e.g.
+    ``Meeting/mc1gt.xml`` or ``PETS09-S2L2/gt/gt.txt``). A ground truth is a CAVIAR /
+    PETS2009 XML (``.xml``, ``.xml.gz``) or a MOTChallenge ``gt.txt`` (``.gz`` too;
+    :func:`load_sequence`); files and folders whose names start with ``.`` are passed
+    over. A file whose :func:`sequence_key` is a listed sequence's, case aside, is that
+    recording in another place (:func:`listed_copies`), not unlisted: a training sequence
+    would leak into the held-out figure. The benchmark scores the unlisted ones as the
+    split ``unlisted``, on their own; nothing is fitted or chosen on them. Files that are
+    not a ground truth (PETS2009's camera ``View_001.xml``) are skipped where they are
+    read."""
+    return [(folder, name) for folder, name in _ground_truth_files()
+            if _listed_key(folder, name) is None]
+
+
+def listed_copies() -> list[tuple[str, str, str]]:
+    """``(folder, name, key)`` of the ground truths :func:`unlisted_sequences` leaves out
+    as copies of a listed sequence: found in another place (``caviar/Meeting/ms3ggt.xml``)
+    under the :func:`sequence_key` ``key`` of a training or validation sequence."""
+    found = [(folder, name, _listed_key(folder, name)) for folder, name in _ground_truth_files()]
+    return [(folder, name, key) for folder, name, key in found if key is not None]
+
+
+def _ground_truth_files() -> list[tuple[str, str]]:
+    """``(folder, name)`` of the ground truths of :data:`UNLISTED_FOLDERS` at any depth
+    (sorted by path, hidden ones passed over), the listed files themselves left out."""
     from models import datasets
 
     listed = set(TRAIN_SEQUENCES) | set(VALIDATION_SEQUENCES) | set(SIMULATED_VIEW_SEQUENCES)
@@ -147,6 +166,14 @@ def unlisted_sequences() -> list[tuple[str, str]]:
                     and (folder, name) not in listed:
                 out.append((folder, name))
     return out
+
+
+def _listed_key(folder: str, name: str) -> str | None:
+    """The training or validation sequence whose :func:`sequence_key` this file's is, case
+    aside (None: none)."""
+    listed = TRAIN_SEQUENCES + VALIDATION_SEQUENCES
+    keys = {sequence_key(*s).lower(): sequence_key(*s) for s in listed}
+    return keys.get(sequence_key(folder, name).lower())
 
 
 def _is_ground_truth_name(name: str) -> bool:

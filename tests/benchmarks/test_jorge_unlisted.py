@@ -12,7 +12,13 @@ import numpy as np
 
 from benchmarks.jorge import _error_keys, _issue4_mean, _label_sequences, _unlisted_keys
 from models.io.jorge import read_mot
-from models.jorge.fit import frame_rate_note, load_sequence, sequence_key, unlisted_sequences
+from models.jorge.fit import (
+    frame_rate_note,
+    listed_copies,
+    load_sequence,
+    sequence_key,
+    unlisted_sequences,
+)
 from models.jorge.online import OnlineConfig, label_online
 from models.jorge.scoring import score
 from models.jorge.strokes import build_strokes
@@ -39,6 +45,7 @@ def test_unlisted_sequences_lists_the_xml_files_no_list_names(tmp_path, monkeypa
                                     ("pets2009", "View_001.xml")]
     shutil.copy(EXAMPLES / "caviar.xml", data / "caviar" / "ms3ggt.xml.gz")  # a listed name
     assert ("caviar", "ms3ggt.xml.gz") not in unlisted_sequences()
+    assert listed_copies() == []  # the listed file itself
     monkeypatch.setenv("DBNTRACK_DATA", str(tmp_path / "absent"))
     assert unlisted_sequences() == []
 
@@ -66,7 +73,8 @@ def _nested(tmp_path: Path, monkeypatch) -> Path:
     """A data folder laid out as the sequences' own archives are: a gzipped CAVIAR file two
     folders down, MOTChallenge ``gt.txt`` files with and without a ``seqinfo.ini`` (one
     with a static person, class 7, who is not scored), a tracker's ``det.txt``, an XML in
-    ``mot`` and a hidden copy (all SIMULATED, tests/data)."""
+    ``mot``, a file under a training sequence's name and a hidden copy (all SIMULATED,
+    tests/data)."""
     caviar = tmp_path / "caviar" / "Meeting" / "Meet_Two"
     caviar.mkdir(parents=True)
     with gzip.open(caviar / "m2gt.xml.gz", "wb") as f:
@@ -84,6 +92,9 @@ def _nested(tmp_path: Path, monkeypatch) -> Path:
     (tmp_path / "pets2009" / "PETS09-S9L7" / "det" / "det.txt").write_text(gt)
     (tmp_path / "mot" / "Walk").mkdir()
     shutil.copy(EXAMPLES / "caviar.xml", tmp_path / "mot" / "Walk" / "walkgt.xml")
+    copy = tmp_path / "caviar" / "Meeting" / "Meet_Split_3rdGuy"  # a training sequence's name
+    copy.mkdir()
+    shutil.copy(EXAMPLES / "caviar.xml", copy / "MS3GGT.xml")
     (tmp_path / "caviar" / ".cache").mkdir()
     shutil.copy(EXAMPLES / "caviar.xml", tmp_path / "caviar" / ".cache" / "copy.xml")
     monkeypatch.setenv("DBNTRACK_DATA", str(tmp_path))
@@ -98,6 +109,7 @@ NESTED = [("caviar", "Meeting/Meet_Two/m2gt.xml.gz"), ("pets2009", "PETS09-S9L7/
 def test_unlisted_sequences_at_any_depth_and_in_motchallenge_layout(tmp_path, monkeypatch):
     data = _nested(tmp_path, monkeypatch)
     assert unlisted_sequences() == NESTED
+    assert listed_copies() == [("caviar", "Meeting/Meet_Split_3rdGuy/MS3GGT.xml", "ms3ggt")]
     assert [sequence_key(*s) for s in NESTED] == ["m2gt", "PETS09-S9L7", "PETS09-S9L8", "MOT-X",
                                                   "walkgt"]
     truths = [load_sequence(*s) for s in NESTED]
@@ -125,6 +137,7 @@ def test_benchmark_scores_nested_and_motchallenge_sequences(tmp_path, monkeypatc
     err = capsys.readouterr().err
     assert "jorge: pets2009/PETS09-S9L7/gt/gt.txt: 7 fps (no seqinfo.ini" in err
     assert "jorge: pets2009/PETS09-S9L8/gt/gt.txt: 10 fps (" in err
+    assert "jorge: caviar/Meeting/Meet_Split_3rdGuy/MS3GGT.xml: the listed sequence ms3ggt" in err
     assert _unlisted_keys(rows_by)["unlisted_sequences"] == list(per)
 
 
