@@ -112,8 +112,10 @@ at its ``seqinfo.ini``'s frame rate or its folder's (PETS2009 7 fps; the rate an
 came from go to stderr) (:func:`models.jorge.fit.unlisted_sequences`, keyed by
 :func:`models.jorge.fit.sequence_key`: ``PETS09-S2L2/gt/gt.txt`` is ``PETS09-S2L2``; a file
 that is not a ground truth, such as PETS2009's camera ``View_001.xml``, is skipped with a
-line on stderr, and one under a listed sequence's name, such as ``Meeting/ms3ggt.xml``, is
-that recording and left out, :func:`models.jorge.fit.listed_copies`) is scored with the same seeds as the split ``unlisted`` (``per_sequence``)
+line on stderr, and one under a listed sequence's name, such as ``Meeting/ms3ggt.xml``
+(:func:`models.jorge.fit.listed_copies`), or holding mostly the boxes of a training or
+validation recording (:func:`models.jorge.recordings.same_recording`: CAVIAR's
+``mws1gt1.xml`` is Meet_WalkSplit from frame 100 on) is that recording and left out) is scored with the same seeds as the split ``unlisted`` (``per_sequence``)
 and pooled on its own, never with the keys above: ``unlisted_sequences`` (their names, ``[]``
 without any) and, with any, ``error_rate_unlisted`` and its ``_colour_only`` and
 ``_true_links``, ``error_rate_unlisted_group_3plus`` and ``strokes_unlisted_group_3plus``.
@@ -450,6 +452,7 @@ from models.jorge.recall import (
     missed_links,
     result_recall,
 )
+from models.jorge.recordings import same_recording
 from models.jorge.scoring import (
     after_crowd,
     colour_only_labels,
@@ -663,6 +666,35 @@ def _table(per: dict) -> None:
             f"{s['link_accuracy']:6.2f} {s['first_error_share']:6.2f}  {by}")
 
 
+def _listed_copies() -> dict:
+    """The ground truths of :func:`models.jorge.fit.listed_copies` (each named on stderr:
+    never scored as unlisted), by listed key: with the listed files, what an unlisted file
+    is compared with (:func:`_held_out`)."""
+    out = {}
+    for folder, name, key in listed_copies():
+        log(f"jorge: {folder}/{name}: the listed sequence {key} in another place, "
+            "not scored as unlisted")
+        try:
+            out.setdefault(key, load_sequence(folder, name))
+        except DBNError as exc:
+            log(f"jorge: skipped {folder}/{name}: {exc}")
+    return out
+
+
+def _held_out(folder: str, name: str, truth, listed: dict) -> bool:
+    """Whether an unlisted ground truth is held out: not (a cut of) a training or
+    validation recording by its boxes (:func:`models.jorge.recordings.same_recording`, e.g.
+    CAVIAR's ``mws1gt1.xml``, Meet_WalkSplit from frame 100). Says on stderr why not, or
+    its frame rate and where that came from."""
+    same = same_recording(truth, listed)
+    if same is not None:
+        log(f"jorge: {folder}/{name}: the recording of the listed sequence {same} (the same "
+            "boxes), not scored as unlisted")
+        return False
+    log(f"jorge: {folder}/{name}: {truth.fps:g} fps ({frame_rate_note(folder, name)})")
+    return True
+
+
 def _label_sequences(seeds: list, cfg: OnlineConfig,
                      view_seconds: float | None = None) -> tuple[dict, dict, list, bool]:
     """Label every sequence of the data folder (train, validation, SIMULATED view) with
@@ -677,9 +709,7 @@ def _label_sequences(seeds: list, cfg: OnlineConfig,
     per, rows_by = {}, {}
     windows: list = []
     ok = True
-    for folder, name, key in listed_copies():
-        log(f"jorge: {folder}/{name}: the listed sequence {key} in another place, "
-            "not scored as unlisted")
+    listed = _listed_copies()  # the listed recordings as found elsewhere, by key
     for folder, name, split in sequences:
         try:
             truth = load_sequence(folder, name)
@@ -691,10 +721,12 @@ def _label_sequences(seeds: list, cfg: OnlineConfig,
                 raise
             log(f"jorge: skipped {folder}/{name}: {exc}")  # e.g. PETS2009's camera View_001.xml
             continue
+        if split in ("train", "validation"):
+            listed[sequence_key(folder, name)] = truth
         if split == "simulated_view" and view_seconds is not None:
             truth = head(truth, view_seconds)
-        if split == "unlisted":
-            log(f"jorge: {folder}/{name}: {truth.fps:g} fps ({frame_rate_note(folder, name)})")
+        if split == "unlisted" and not _held_out(folder, name, truth, listed):
+            continue
         rows = []
         for s in seeds:
             row, wins = _run_one(build_strokes(s, truth), cfg, keep_windows=(name == "ms3ggt.xml.gz" and s == seeds[0]))

@@ -18,5 +18,6 @@ prior network), :mod:`confirm` (a change compared on fresh seeds),
 :mod:`estimate` (the error on many SIMULATED meeting scenes, with standard errors),
 :mod:`simulate` (a synthetic sequence when the real ground truth is absent),
 :mod:`meeting` (SIMULATED meetings of 3-5 people), :mod:`demo` (``dbntrack demo``'s part),
-:mod:`eth` (tracks in world metres, ETH / UCY ``obsmat``, through a SIMULATED camera).
+:mod:`eth` (tracks in world metres, ETH / UCY ``obsmat``, through a SIMULATED camera),
+:mod:`recordings` (whether a ground truth is, by its boxes, a cut of another recording).
 """

@@ -6,6 +6,7 @@ from __future__ import annotations
 import gzip
 import shutil
 import warnings
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
@@ -73,8 +74,8 @@ def _nested(tmp_path: Path, monkeypatch) -> Path:
     """A data folder laid out as the sequences' own archives are: a gzipped CAVIAR file two
     folders down, MOTChallenge ``gt.txt`` files with and without a ``seqinfo.ini`` (one
     with a static person, class 7, who is not scored), a tracker's ``det.txt``, an XML in
-    ``mot``, a file under a training sequence's name and a hidden copy (all SIMULATED,
-    tests/data)."""
+    ``mot``, a file under a training sequence's name, a cut of it under another name and a
+    hidden copy (all SIMULATED, tests/data)."""
     caviar = tmp_path / "caviar" / "Meeting" / "Meet_Two"
     caviar.mkdir(parents=True)
     with gzip.open(caviar / "m2gt.xml.gz", "wb") as f:
@@ -94,14 +95,21 @@ def _nested(tmp_path: Path, monkeypatch) -> Path:
     shutil.copy(EXAMPLES / "caviar.xml", tmp_path / "mot" / "Walk" / "walkgt.xml")
     copy = tmp_path / "caviar" / "Meeting" / "Meet_Split_3rdGuy"  # a training sequence's name
     copy.mkdir()
-    shutil.copy(EXAMPLES / "caviar.xml", copy / "MS3GGT.xml")
+    root = ET.parse(EXAMPLES / "pets2009.xml").getroot()  # the examples are one recording:
+    for box in root.iter("box"):  # this one is another, its boxes 5 pixels to the right
+        box.set("xc", str(float(box.get("xc")) + 5.0))
+    ET.ElementTree(root).write(copy / "MS3GGT.xml")
+    for frame in [f for f in root.findall("frame") if int(f.get("number")) < 100]:
+        root.remove(frame)
+    ET.ElementTree(root).write(copy / "ms3ggt1.xml")  # and a cut of it, from frame 100 on
     (tmp_path / "caviar" / ".cache").mkdir()
     shutil.copy(EXAMPLES / "caviar.xml", tmp_path / "caviar" / ".cache" / "copy.xml")
     monkeypatch.setenv("DBNTRACK_DATA", str(tmp_path))
     return tmp_path
 
 
-NESTED = [("caviar", "Meeting/Meet_Two/m2gt.xml.gz"), ("pets2009", "PETS09-S9L7/gt/gt.txt"),
+NESTED = [("caviar", "Meeting/Meet_Split_3rdGuy/ms3ggt1.xml"),
+          ("caviar", "Meeting/Meet_Two/m2gt.xml.gz"), ("pets2009", "PETS09-S9L7/gt/gt.txt"),
           ("pets2009", "PETS09-S9L8/gt/gt.txt"), ("mot", "MOT-X/gt/gt.txt"),
           ("mot", "Walk/walkgt.xml")]
 
@@ -110,13 +118,13 @@ def test_unlisted_sequences_at_any_depth_and_in_motchallenge_layout(tmp_path, mo
     data = _nested(tmp_path, monkeypatch)
     assert unlisted_sequences() == NESTED
     assert listed_copies() == [("caviar", "Meeting/Meet_Split_3rdGuy/MS3GGT.xml", "ms3ggt")]
-    assert [sequence_key(*s) for s in NESTED] == ["m2gt", "PETS09-S9L7", "PETS09-S9L8", "MOT-X",
-                                                  "walkgt"]
-    truths = [load_sequence(*s) for s in NESTED]
+    assert [sequence_key(*s) for s in NESTED] == ["ms3ggt1", "m2gt", "PETS09-S9L7", "PETS09-S9L8",
+                                                  "MOT-X", "walkgt"]
+    truths = [load_sequence(*s) for s in NESTED[1:]]
     assert [t.fps for t in truths] == [25.0, 7.0, 10.0, 25.0, 25.0]
-    assert frame_rate_note(*NESTED[2]) == str(data / "pets2009" / "PETS09-S9L8" / "seqinfo.ini")
-    assert "7 fps, PETS2009's cameras' rate" in frame_rate_note(*NESTED[1])
-    assert "25 fps, assumed" in frame_rate_note(*NESTED[3])
+    assert frame_rate_note(*NESTED[3]) == str(data / "pets2009" / "PETS09-S9L8" / "seqinfo.ini")
+    assert "7 fps, PETS2009's cameras' rate" in frame_rate_note(*NESTED[2])
+    assert "25 fps, assumed" in frame_rate_note(*NESTED[4])
     # the static person (class 7) is not a person of the ground truth; the rest is the file's
     assert 9 in read_mot(data / "pets2009" / "PETS09-S9L7" / "gt" / "gt.txt").ids
     assert 9 not in truths[1].ids
@@ -129,7 +137,7 @@ def test_benchmark_scores_nested_and_motchallenge_sequences(tmp_path, monkeypatc
     per, rows_by, _, ok = _label_sequences([0], OnlineConfig())
     assert ok and list(per) == ["m2gt", "PETS09-S9L7", "PETS09-S9L8", "MOT-X", "walkgt"]
     assert [per[k]["fps"] for k in per] == [25.0, 7.0, 10.0, 25.0, 25.0]
-    for key, seq in zip(per, NESTED):
+    for key, seq in zip(per, NESTED[1:]):  # the cut of a training sequence's recording is not
         strokes = build_strokes(0, load_sequence(*seq))
         assert per[key]["strokes"] == len(strokes)
         labels = label_online(strokes, OnlineConfig()).labels
@@ -138,6 +146,8 @@ def test_benchmark_scores_nested_and_motchallenge_sequences(tmp_path, monkeypatc
     assert "jorge: pets2009/PETS09-S9L7/gt/gt.txt: 7 fps (no seqinfo.ini" in err
     assert "jorge: pets2009/PETS09-S9L8/gt/gt.txt: 10 fps (" in err
     assert "jorge: caviar/Meeting/Meet_Split_3rdGuy/MS3GGT.xml: the listed sequence ms3ggt" in err
+    assert ("jorge: caviar/Meeting/Meet_Split_3rdGuy/ms3ggt1.xml: the recording of the listed "
+            "sequence ms3ggt (the same boxes)") in err
     assert _unlisted_keys(rows_by)["unlisted_sequences"] == list(per)
 
 
@@ -149,3 +159,21 @@ def test_issue4_figure_takes_only_the_listed_ms3ggt_and_mws1gt():
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no mean of an empty list: a data folder of yours only
         assert np.isnan(_issue4_mean(per, "error_rate"))
+
+
+def test_a_cut_of_a_training_recording_at_its_listed_path_is_not_scored_as_unlisted(
+        tmp_path, monkeypatch, capsys):
+    (tmp_path / "caviar").mkdir()
+    with gzip.open(tmp_path / "caviar" / "ms3ggt.xml.gz", "wb") as f:  # at the listed path
+        f.write((EXAMPLES / "caviar.xml").read_bytes())
+    root = ET.parse(EXAMPLES / "caviar.xml").getroot()
+    for frame in [f for f in root.findall("frame") if int(f.get("number")) >= 120]:
+        root.remove(frame)
+    ET.ElementTree(root).write(tmp_path / "caviar" / "first_half.xml")
+    monkeypatch.setenv("DBNTRACK_DATA", str(tmp_path))
+    assert unlisted_sequences() == [("caviar", "first_half.xml")] and listed_copies() == []
+    per, rows_by, _, ok = _label_sequences([0], OnlineConfig())
+    assert ok and list(per) == ["ms3ggt"] and per["ms3ggt"]["split"] == "train"
+    err = capsys.readouterr().err
+    assert "caviar/first_half.xml: the recording of the listed sequence ms3ggt" in err
+    assert _unlisted_keys(rows_by) == {"unlisted_sequences": []}
