@@ -209,6 +209,12 @@ def fit(args: argparse.Namespace) -> dict:
         print(f"{args.name}: held-out files of recordings the training files hold too "
               f"(--fold-by): {', '.join(names[p] for p in shared)}: their errors are not "
               "held out from those recordings")  # fmt: skip
+    same = summary["parameters"]["validation_same_recording"]
+    if same:
+        print(f"{args.name}: held-out files whose boxes are mostly a training file's (the same "
+              "recording, or a cut of it): "
+              f"{', '.join(f'{names[p]} ({names[t]})' for p, t in same.items())}: their errors "
+              "are not held out")  # fmt: skip
     if "cross_validation" in summary["parameters"]:
         cv = summary["parameters"]["cross_validation"]
         errors = ", ".join(f"{_number(r['prior_strength'])}: {r['error']:.3f}"

@@ -81,11 +81,12 @@ FITTED_LABEL_FIELDS = ("p_new", "p_merge", "p_merge_one_split", "p_merge_both_sp
 
 class FitSet(NamedTuple):
     """One stroke set of a file: its strokes, their links (the file's, or None: the link
-    rule) and frame rate."""
+    rule), frame rate and, for a box file, its ground truth (None for a regions file)."""
 
     strokes: list
     links: list | None
     fps: float
+    truth: object = None
 
 
 def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
@@ -131,6 +132,7 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
               "folds": folds, "fold_by": fold_by,
               **({} if groups is None else {"validation_of_training_recordings":
                                             _held_of_training(validate, fold_by, groups)}),
+              "validation_same_recording": _same_recordings(read, train, validate),
               **({} if cv is None else {"cross_validation": _cv_record(cv)}),
               **_counted(training, counts.children, base.network.labels.max_group_size),
               "fitted": {k: v for k, v in out["labels"].items() if isinstance(v, float)}
@@ -163,6 +165,23 @@ def _held_of_training(validate: list[str], fold_by: str, groups: list[str]) -> l
             continue
         if key in train:
             out.append(str(Path(p).resolve()))
+    return out
+
+
+def _same_recordings(read: dict, train: list[str], validate: list[str]) -> dict[str, str]:
+    """Each held-out box file (resolved) whose boxes are mostly a training box file's
+    (:func:`models.jorge.recordings.same_recording`), with that file: the same recording or
+    a cut of it, whose error is not held out. Regions files hold no boxes per person and
+    are not compared."""
+    from models.jorge.recordings import same_recording
+
+    mine = {str(Path(p).resolve()): read[p][0].truth for p in train if read[p][0].truth is not None}
+    out = {}
+    for p in validate:
+        truth = read[p][0].truth
+        same = None if truth is None else same_recording(truth, mine)
+        if same is not None:
+            out[str(Path(p).resolve())] = same
     return out
 
 
@@ -278,7 +297,7 @@ def _sets(ctx: RunContext, path: str, config: dict, own: set, fps: float | None,
         return [FitSet(regions.strokes, regions.parents, rate)]
     truth, scfg, _, _ = read_box_truth(ctx, path, config, own, fps)
     rate = truth.fps if fps is None else fps
-    return [FitSet(list(build_strokes(ctx.seed + i, truth, scfg)), None, rate)
+    return [FitSet(list(build_strokes(ctx.seed + i, truth, scfg)), None, rate, truth)
             for i in range(seeds)]  # fmt: skip
 
 

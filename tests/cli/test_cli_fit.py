@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import xml.etree.ElementTree as ET
 from dataclasses import replace
 from pathlib import Path
 
@@ -328,3 +329,26 @@ def test_cross_validation_refusals(tmp_path, capsys):
         with pytest.raises(SystemExit):
             main(["fit", "jorge", *files, "-o", str(out), "--folds", bad])
         assert "--folds" in capsys.readouterr().err
+
+
+def test_held_out_box_files_of_a_training_recording_are_named(tmp_path, capsys):
+    """A held-out cut of a training box file (its first 120 frames) is named as that
+    recording; another recording (the same boxes 5 pixels to the right) and a regions
+    file are not."""
+    root = ET.parse(XML).getroot()
+    for box in root.iter("box"):
+        box.set("xc", str(float(box.get("xc")) + 5.0))
+    ET.ElementTree(root).write(tmp_path / "other.xml")
+    root = ET.parse(XML).getroot()
+    for frame in [f for f in root.findall("frame") if int(f.get("number")) >= 120]:
+        root.remove(frame)
+    ET.ElementTree(root).write(tmp_path / "cut.xml")
+    held = write_regions(tmp_path / "held.jsonl", build_strokes(9, load_caviar(XML)), fps=25.0)
+    summary, _ = _fit(tmp_path, "same", str(XML), "--validate", str(tmp_path / "cut.xml"),
+                      str(tmp_path / "other.xml"), str(held))  # fmt: skip
+    same = summary["parameters"]["validation_same_recording"]
+    assert same == {str((tmp_path / "cut.xml").resolve()): str(XML.resolve())}
+    assert "(the same recording, or a cut of it): cut.xml (caviar.xml): their errors" in \
+        capsys.readouterr().out
+    summary, _ = _fit(tmp_path, "apart", str(XML), "--validate", str(tmp_path / "other.xml"))
+    assert summary["parameters"]["validation_same_recording"] == {}
