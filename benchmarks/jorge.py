@@ -107,18 +107,19 @@ their own; the group keys above pool the real views only, while the cost keys
 (MAP log probability and marginals equal pgmpy's on small windows).
 
 Unlisted sequences: every other ground truth in the data folder's ``caviar``,
-``pets2009`` and ``mot``, at any depth: CAVIAR / PETS2009 XML, and MOTChallenge ``gt.txt``
-at its ``seqinfo.ini``'s frame rate or its folder's (PETS2009 7 fps; the rate and where it
-came from go to stderr) (:func:`models.jorge.fit.unlisted_sequences`, keyed by
-:func:`models.jorge.fit.sequence_key`: ``PETS09-S2L2/gt/gt.txt`` is ``PETS09-S2L2``; a file
-that is not a ground truth, such as PETS2009's camera ``View_001.xml``, is skipped with a
-line on stderr, and one under a listed sequence's name, such as ``Meeting/ms3ggt.xml``
-(:func:`models.jorge.fit.listed_copies`), or holding mostly the boxes of a training or
-validation recording (:func:`models.jorge.recordings.same_recording`: CAVIAR's
-``mws1gt1.xml`` is Meet_WalkSplit from frame 100 on) is that recording and left out) is scored with the same seeds as the split ``unlisted`` (``per_sequence``)
-and pooled on its own, never with the keys above: ``unlisted_sequences`` (their names, ``[]``
-without any) and, with any, ``error_rate_unlisted`` and its ``_colour_only`` and
-``_true_links``, ``error_rate_unlisted_group_3plus`` and ``strokes_unlisted_group_3plus``.
+``pets2009`` and ``mot``, at any depth (:func:`models.jorge.fit.unlisted_sequences`):
+CAVIAR / PETS2009 XML, and MOTChallenge ``gt.txt`` at its ``seqinfo.ini``'s frame rate or
+its folder's (PETS2009 7 fps; the rate and where it came from go to stderr), keyed by
+:func:`models.jorge.fit.sequence_key` (``PETS09-S2L2/gt/gt.txt`` is ``PETS09-S2L2``). Left
+out, each with a line on stderr: a file that is not a ground truth (PETS2009's camera
+``View_001.xml``), and a listed recording found again, under its name elsewhere
+(``Meeting/ms3ggt.xml``, :func:`models.jorge.fit.listed_copies`) or by its boxes
+(:func:`models.jorge.recordings.same_recording`: CAVIAR's ``mws1gt1.xml`` is
+Meet_WalkSplit from frame 100 on). The rest are scored with the same seeds as the split
+``unlisted`` (``per_sequence``) and pooled on their own, never with the keys above:
+``unlisted_sequences`` (their names, ``[]`` without any) and, with any,
+``error_rate_unlisted`` and its ``_colour_only`` and ``_true_links``,
+``error_rate_unlisted_group_3plus`` and ``strokes_unlisted_group_3plus``.
 
 SIMULATED meetings (issue 16; not real data, never fitted on): our CAVIAR sequences hold
 groups of one and two only, so ``error_rate_meeting_sim`` and

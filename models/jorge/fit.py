@@ -235,11 +235,14 @@ def frame_rate_note(folder: str, name: str) -> str:
     """Where :func:`load_sequence` takes the sequence's frame rate from, in words: the
     file format's, a ``seqinfo.ini`` (its path), or the folder's assumed rate."""
     from models import datasets
-    from models.io.jorge import frame_rate_source, is_mot, mot_frame_rate
+    from models.io.jorge import frame_rate_source, is_mot, is_obsmat, mot_frame_rate
 
     path = datasets.require(folder, *name.split("/"))
-    if not is_mot(path) or folder == "eth":
+    if folder == "eth" or is_obsmat(path):
         return frame_rate_source(path)
+    if not is_mot(path):
+        return {"caviar": "CAVIAR XML: 25 fps", "pets2009": "PETS2009 XML: 7 fps"}.get(
+            folder, "XML: CAVIAR's 25 fps with grouplists, PETS2009's 7 fps without")
     _, ini = mot_frame_rate(path)
     if ini is not None:
         return str(ini)

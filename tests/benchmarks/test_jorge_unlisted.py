@@ -125,6 +125,8 @@ def test_unlisted_sequences_at_any_depth_and_in_motchallenge_layout(tmp_path, mo
     assert frame_rate_note(*NESTED[3]) == str(data / "pets2009" / "PETS09-S9L8" / "seqinfo.ini")
     assert "7 fps, PETS2009's cameras' rate" in frame_rate_note(*NESTED[2])
     assert "25 fps, assumed" in frame_rate_note(*NESTED[4])
+    assert frame_rate_note(*NESTED[1]) == "CAVIAR XML: 25 fps"
+    assert "with grouplists" in frame_rate_note(*NESTED[5])
     # the static person (class 7) is not a person of the ground truth; the rest is the file's
     assert 9 in read_mot(data / "pets2009" / "PETS09-S9L7" / "gt" / "gt.txt").ids
     assert 9 not in truths[1].ids
