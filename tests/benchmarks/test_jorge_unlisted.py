@@ -139,7 +139,7 @@ def test_benchmark_scores_nested_and_motchallenge_sequences(tmp_path, monkeypatc
     per, rows_by, _, ok = _label_sequences([0], OnlineConfig())
     assert ok and list(per) == ["m2gt", "PETS09-S9L7", "PETS09-S9L8", "MOT-X", "walkgt"]
     assert [per[k]["fps"] for k in per] == [25.0, 7.0, 10.0, 25.0, 25.0]
-    for key, seq in zip(per, NESTED[1:]):  # the cut of a training sequence's recording is not
+    for key, seq in zip(per, NESTED[1:]):  # NESTED[0], a cut of a training recording, is not
         strokes = build_strokes(0, load_sequence(*seq))
         assert per[key]["strokes"] == len(strokes)
         labels = label_online(strokes, OnlineConfig()).labels
