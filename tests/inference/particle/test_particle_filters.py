@@ -168,7 +168,6 @@ def test_bad_threshold(bad) -> None:
         bootstrap_filter(LinearGaussianSSM(_params()), 10, ess_threshold=bad)
 
 
-@pytest.mark.heavy  # 5-12 s per filter: 24 runs at two sizes; CI runs it (pytest -m heavy)
 @pytest.mark.parametrize("algo", sorted(ALGOS))
 def test_error_shrinks_like_one_over_n(algo: str, lg_data) -> None:
     """Mean squared error of the filtered mean against Kalman falls ~16x for 16x particles."""
@@ -199,7 +198,6 @@ def _sir_and_flat_apf(threshold: float) -> tuple:
             auxiliary_filter(_FlatLookahead(params), 64, ess_threshold=threshold))
 
 
-@pytest.mark.heavy  # ~15 s: 12 examples, two filters each; CI runs it (pytest -m heavy)
 @settings(max_examples=12, deadline=None)
 @given(seed=st.integers(0, 2**31 - 1), threshold=st.sampled_from([0.0, 0.5, 1.0]))
 def test_apf_with_a_flat_lookahead_is_the_bootstrap_filter(seed: int, threshold: float) -> None:
