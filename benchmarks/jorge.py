@@ -435,11 +435,10 @@ from models.jorge.fit import (
     SIMULATED_VIEW_SEQUENCES,
     TRAIN_SEQUENCES,
     VALIDATION_SEQUENCES,
+    extra_ground_truths,
     frame_rate_note,
-    listed_copies,
     load_sequence,
     sequence_key,
-    unlisted_sequences,
 )
 from models.jorge.links import WHY_NOT_PARENT
 from models.jorge.meeting import FPS as MEETING_FPS
@@ -667,12 +666,12 @@ def _table(per: dict) -> None:
             f"{s['link_accuracy']:6.2f} {s['first_error_share']:6.2f}  {by}")
 
 
-def _listed_copies() -> dict:
-    """The ground truths of :func:`models.jorge.fit.listed_copies` (each named on stderr:
-    never scored as unlisted), by listed key: with the listed files, what an unlisted file
-    is compared with (:func:`_held_out`)."""
+def _listed_copies(copies: list) -> dict:
+    """The ground truths of ``copies`` (:func:`models.jorge.fit.listed_copies`, each named
+    on stderr: never scored as unlisted), by listed key: with the listed files, what an
+    unlisted file is compared with (:func:`_held_out`)."""
     out = {}
-    for folder, name, key in listed_copies():
+    for folder, name, key in copies:
         log(f"jorge: {folder}/{name}: the listed sequence {key} in another place, "
             "not scored as unlisted")
         try:
@@ -704,13 +703,14 @@ def _label_sequences(seeds: list, cfg: OnlineConfig,
     sequence's (split, rows), the windows kept for the pgmpy comparison (ms3ggt, first
     seed) and whether every run passed its checks; a sequence absent from the data folder
     is skipped."""
+    unlisted, copies = extra_ground_truths()
     sequences = ([(f, n, "train") for f, n in TRAIN_SEQUENCES] + [(f, n, "validation") for f, n in VALIDATION_SEQUENCES]
                  + [(f, n, "simulated_view") for f, n in SIMULATED_VIEW_SEQUENCES]
-                 + [(f, n, "unlisted") for f, n in unlisted_sequences()])
+                 + [(f, n, "unlisted") for f, n in unlisted])
     per, rows_by = {}, {}
     windows: list = []
     ok = True
-    listed = _listed_copies()  # the listed recordings as found elsewhere, by key
+    listed = _listed_copies(copies)  # the listed recordings as found elsewhere, by key
     for folder, name, split in sequences:
         try:
             truth = load_sequence(folder, name)

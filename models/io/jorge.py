@@ -36,7 +36,7 @@ from dbn.errors import DBNError, InputError, in_file
 from models.io.table import as_float, as_int, fail, read_lines, require_file, write_rows
 
 __all__ = ["read_boxes", "read_mot", "read_mot_truth", "mot_distractor_classes",
-           "mot_frame_rate", "frame_rate_source", "is_obsmat", "is_mot",
+           "mot_frame_rate", "frame_rate_source", "is_obsmat", "is_mot", "is_xml",
            "write_strokes", "read_stroke_rows", "read_strokes", "read_strokes_header",
            "write_mot_tracks"]
 
@@ -231,7 +231,7 @@ def read_boxes(path: str | Path, view=None):
     if view is not None:
         raise InputError(f"{path}: a camera view applies only to an ETH / UCY obsmat file "
                          "(tracks in metres); this file has image boxes")  # fmt: skip
-    if not _is_xml(path):
+    if not is_xml(path):
         return read_mot(path)
     return load_ground_truth(path)  # its errors name the file (and line or element)
 
@@ -243,7 +243,7 @@ def frame_rate_source(path: str | Path) -> str:
     path = Path(path)
     if is_obsmat(path):
         return "file format (ETH / UCY obsmat, 2.5 annotations per second)"
-    if _is_xml(path):
+    if is_xml(path):
         return "file format (CAVIAR 25 fps, PETS2009 7 fps)"
     _, ini = mot_frame_rate(path)
     if ini is not None:
@@ -259,12 +259,12 @@ def is_obsmat(path: str | Path) -> bool:
 
 def is_mot(path: str | Path) -> bool:
     """A MOTChallenge text file: neither XML nor obsmat (:func:`read_boxes`'s rule)."""
-    return not is_obsmat(path) and not _is_xml(Path(path))
+    return not is_obsmat(path) and not is_xml(path)
 
 
-def _is_xml(path: Path) -> bool:
+def is_xml(path: str | Path) -> bool:
     """CAVIAR / PETS2009 XML (``.xml`` or ``.xml.gz``), else MOTChallenge text."""
-    return path.name.lower().removesuffix(".gz").endswith(".xml")
+    return Path(path).name.lower().removesuffix(".gz").endswith(".xml")
 
 
 def _ids(label) -> str:

@@ -71,6 +71,7 @@ __all__ = [
     "SIMULATED_VIEW_SEQUENCES",
     "unlisted_sequences",
     "listed_copies",
+    "extra_ground_truths",
     "sequence_key",
     "frame_rate_note",
     "TRAIN_SEEDS",
@@ -136,16 +137,29 @@ def unlisted_sequences() -> list[tuple[str, str]]:
     split ``unlisted``, on their own; nothing is fitted or chosen on them. Files that are
     not a ground truth (PETS2009's camera ``View_001.xml``) are skipped where they are
     read."""
-    return [(folder, name) for folder, name in _ground_truth_files()
-            if _listed_key(folder, name) is None]
+    return extra_ground_truths()[0]
 
 
 def listed_copies() -> list[tuple[str, str, str]]:
     """``(folder, name, key)`` of the ground truths :func:`unlisted_sequences` leaves out
     as copies of a listed sequence: found in another place (``caviar/Meeting/ms3ggt.xml``)
     under the :func:`sequence_key` ``key`` of a training or validation sequence."""
-    found = [(folder, name, _listed_key(folder, name)) for folder, name in _ground_truth_files()]
-    return [(folder, name, key) for folder, name, key in found if key is not None]
+    return extra_ground_truths()[1]
+
+
+def extra_ground_truths() -> tuple[list[tuple[str, str]], list[tuple[str, str, str]]]:
+    """:func:`unlisted_sequences` and :func:`listed_copies` from one look through the data
+    folder (the benchmark needs both)."""
+    listed = TRAIN_SEQUENCES + VALIDATION_SEQUENCES
+    keys = {sequence_key(*s).lower(): sequence_key(*s) for s in listed}
+    unlisted, copies = [], []
+    for folder, name in _ground_truth_files():
+        key = keys.get(sequence_key(folder, name).lower())
+        if key is None:
+            unlisted.append((folder, name))
+        else:
+            copies.append((folder, name, key))
+    return unlisted, copies
 
 
 def _ground_truth_files() -> list[tuple[str, str]]:
@@ -160,26 +174,24 @@ def _ground_truth_files() -> list[tuple[str, str]]:
         if path is None or not path.is_dir():
             continue
         for file in sorted(path.rglob("*")):
-            name = file.relative_to(path).as_posix()
-            hidden = any(part.startswith(".") for part in file.relative_to(path).parts)
+            rel = file.relative_to(path)
+            hidden = any(part.startswith(".") for part in rel.parts)
             if file.is_file() and not hidden and _is_ground_truth_name(file.name) \
-                    and (folder, name) not in listed:
-                out.append((folder, name))
+                    and (folder, rel.as_posix()) not in listed:
+                out.append((folder, rel.as_posix()))
     return out
-
-
-def _listed_key(folder: str, name: str) -> str | None:
-    """The training or validation sequence whose :func:`sequence_key` this file's is, case
-    aside (None: none)."""
-    listed = TRAIN_SEQUENCES + VALIDATION_SEQUENCES
-    keys = {sequence_key(*s).lower(): sequence_key(*s) for s in listed}
-    return keys.get(sequence_key(folder, name).lower())
 
 
 def _is_ground_truth_name(name: str) -> bool:
     """A CAVIAR / PETS2009 XML or a MOTChallenge ``gt.txt`` (either gzipped)."""
-    base = name.lower().removesuffix(".gz")
-    return base.endswith(".xml") or base == "gt.txt"
+    from models.io.jorge import is_xml
+
+    return is_xml(name) or _is_mot_gt(name)
+
+
+def _is_mot_gt(name: str) -> bool:
+    """A MOTChallenge ground truth's file name, ``gt.txt`` (or ``.gz``)."""
+    return name.lower().removesuffix(".gz") == "gt.txt"
 
 
 def sequence_key(folder: str, name: str) -> str:
@@ -188,7 +200,7 @@ def sequence_key(folder: str, name: str) -> str:
     ``PETS09-S2L2``), else the file name up to its first dot (``ms3ggt.xml.gz`` ->
     ``ms3ggt``)."""
     parts = name.split("/")
-    if parts[-1].lower().removesuffix(".gz") != "gt.txt" or len(parts) < 2:
+    if not _is_mot_gt(parts[-1]) or len(parts) < 2:
         return parts[-1].split(".")[0]
     return parts[-3] if parts[-2].lower() == "gt" and len(parts) >= 3 else parts[-2]
 

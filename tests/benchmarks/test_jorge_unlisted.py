@@ -14,6 +14,7 @@ import numpy as np
 from benchmarks.jorge import _error_keys, _issue4_mean, _label_sequences, _unlisted_keys
 from models.io.jorge import read_mot
 from models.jorge.fit import (
+    extra_ground_truths,
     frame_rate_note,
     listed_copies,
     load_sequence,
@@ -118,6 +119,7 @@ def test_unlisted_sequences_at_any_depth_and_in_motchallenge_layout(tmp_path, mo
     data = _nested(tmp_path, monkeypatch)
     assert unlisted_sequences() == NESTED
     assert listed_copies() == [("caviar", "Meeting/Meet_Split_3rdGuy/MS3GGT.xml", "ms3ggt")]
+    assert extra_ground_truths() == (unlisted_sequences(), listed_copies())
     assert [sequence_key(*s) for s in NESTED] == ["ms3ggt1", "m2gt", "PETS09-S9L7", "PETS09-S9L8",
                                                   "MOT-X", "walkgt"]
     truths = [load_sequence(*s) for s in NESTED[1:]]
