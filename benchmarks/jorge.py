@@ -114,9 +114,13 @@ its folder's (PETS2009 7 fps; the rate and where it came from go to stderr), key
 out, each with a line on stderr: a file that is not a ground truth (PETS2009's camera
 ``View_001.xml``), and a listed recording found again, under its name elsewhere
 (``Meeting/ms3ggt.xml``, :func:`models.jorge.fit.listed_copies`) or by its boxes
-(:func:`models.jorge.recordings.same_recording`: CAVIAR's ``mws1gt1.xml`` is
-Meet_WalkSplit from frame 100 on). The rest are scored with the same seeds as the split
-``unlisted`` (``per_sequence``) and pooled on their own, never with the keys above:
+(:func:`models.jorge.recordings.same_recording`, whatever the frame numbers and ids:
+CAVIAR's ``mws1gt1.xml`` is Meet_WalkSplit from frame 100 on, MOTChallenge's
+``PETS09-S2L1`` is PETS2009 S2L1 counted from frame 1), and all but the one with the most
+boxes of several files of one new recording (a cut beside the whole). A listed sequence
+absent from its listed path is read from its copy found elsewhere, if any, and scored in
+its split. The rest are scored with the same seeds as the split ``unlisted``
+(``per_sequence``) and pooled on their own, never with the keys above:
 ``unlisted_sequences`` (their names, ``[]`` without any) and, with any,
 ``error_rate_unlisted`` and its ``_colour_only`` and ``_true_links``,
 ``error_rate_unlisted_group_3plus`` and ``strokes_unlisted_group_3plus``.
@@ -666,30 +670,97 @@ def _table(per: dict) -> None:
             f"{s['link_accuracy']:6.2f} {s['first_error_share']:6.2f}  {by}")
 
 
-def _listed_copies(copies: list) -> dict:
+def _listed_copies(copies: list) -> tuple[dict, dict]:
     """The ground truths of ``copies`` (:func:`models.jorge.fit.listed_copies`, each named
-    on stderr: never scored as unlisted), by listed key: with the listed files, what an
-    unlisted file is compared with (:func:`_held_out`)."""
-    out = {}
+    on stderr: never scored as unlisted), by listed key, the first of each key: where it
+    is (``{key: (folder, name)}``) and its ground truth (``{key: GroundTruth}``, with the
+    listed files what an unlisted file is compared with, :func:`_held_out`)."""
+    where, truths = {}, {}
     for folder, name, key in copies:
         log(f"jorge: {folder}/{name}: the listed sequence {key} in another place, "
             "not scored as unlisted")
+        if key in truths:
+            continue
         try:
-            out.setdefault(key, load_sequence(folder, name))
+            truths[key] = load_sequence(folder, name)
         except DBNError as exc:
             log(f"jorge: skipped {folder}/{name}: {exc}")
+            continue
+        where[key] = (folder, name)
+    return where, truths
+
+
+def _listed_truths(copies: dict, listed: dict, view_seconds: float | None) -> list:
+    """``(key, path, split, truth)`` of every listed sequence in the data folder (train,
+    validation, SIMULATED view; ``view_seconds``: the view's first seconds only). One absent
+    from its listed path is read from its copy in another place if there is one
+    (``copies``, ``listed``: :func:`_listed_copies`; said on stderr), else skipped. The
+    training and validation ground truths are added to ``listed``."""
+    sequences = ([(f, n, "train") for f, n in TRAIN_SEQUENCES]
+                 + [(f, n, "validation") for f, n in VALIDATION_SEQUENCES]
+                 + [(f, n, "simulated_view") for f, n in SIMULATED_VIEW_SEQUENCES])
+    out = []
+    for folder, name, split in sequences:
+        key = sequence_key(folder, name)
+        try:
+            truth = load_sequence(folder, name)
+        except FileNotFoundError as exc:
+            if split == "simulated_view" or key not in copies:
+                log(f"jorge: {exc}")
+                continue
+            folder, name = copies[key]
+            truth = listed[key]
+            log(f"jorge: {key} is not at its listed path: its copy {folder}/{name} is "
+                f"scored as {split}")
+        if split == "simulated_view":
+            key = truth.name
+            truth = truth if view_seconds is None else head(truth, view_seconds)
+        else:
+            listed[key] = truth
+        out.append((key, f"{folder}/{name}", split, truth))
     return out
 
 
-def _held_out(folder: str, name: str, truth, listed: dict) -> bool:
-    """Whether an unlisted ground truth is held out: not (a cut of) a training or
-    validation recording by its boxes (:func:`models.jorge.recordings.same_recording`, e.g.
-    CAVIAR's ``mws1gt1.xml``, Meet_WalkSplit from frame 100). Says on stderr why not, or
-    its frame rate and where that came from."""
+def _boxes(truth) -> int:
+    return int(np.isfinite(truth.boxes[..., 0]).sum())
+
+
+def _held_out_truths(unlisted: list, listed: dict) -> list:
+    """``(key, path, "unlisted", truth)`` of the unlisted ground truths to score, in the
+    data folder's order: a file that is not a ground truth is skipped (PETS2009's camera
+    ``View_001.xml``), one that is (a cut of) a listed recording is left out
+    (:func:`_held_out`), and of several files of one recording (a cut beside the whole)
+    only the one with the most boxes is scored; each said on stderr."""
+    loaded = []
+    for folder, name in unlisted:
+        try:
+            loaded.append((folder, name, load_sequence(folder, name)))
+        except (FileNotFoundError, DBNError) as exc:
+            log(f"jorge: skipped {folder}/{name}: {exc}")
+    kept: dict = {}
+    for folder, name, truth in sorted(loaded, key=lambda job: -_boxes(job[2])):
+        if _held_out(folder, name, truth, listed, kept):
+            kept[f"{folder}/{name}"] = truth
+    return [(sequence_key(f, n), f"{f}/{n}", "unlisted", t) for f, n, t in loaded
+            if f"{f}/{n}" in kept]
+
+
+def _held_out(folder: str, name: str, truth, listed: dict, scored: dict) -> bool:
+    """Whether an unlisted ground truth is held out and new: not (a cut of) a training or
+    validation recording (``listed``) nor of an unlisted one already ``scored``, by its
+    boxes (:func:`models.jorge.recordings.same_recording`, e.g. CAVIAR's ``mws1gt1.xml``,
+    Meet_WalkSplit from frame 100; MOTChallenge's ``PETS09-S2L1``, PETS2009 S2L1 with its
+    frames counted from 1). Says on stderr why not, or its frame rate and where that came
+    from."""
     same = same_recording(truth, listed)
     if same is not None:
         log(f"jorge: {folder}/{name}: the recording of the listed sequence {same} (the same "
             "boxes), not scored as unlisted")
+        return False
+    same = same_recording(truth, scored)
+    if same is not None:
+        log(f"jorge: {folder}/{name}: the recording of the unlisted {same} (the same boxes), "
+            "scored once")
         return False
     log(f"jorge: {folder}/{name}: {truth.fps:g} fps ({frame_rate_note(folder, name)})")
     return True
@@ -697,45 +768,28 @@ def _held_out(folder: str, name: str, truth, listed: dict) -> bool:
 
 def _label_sequences(seeds: list, cfg: OnlineConfig,
                      view_seconds: float | None = None) -> tuple[dict, dict, list, bool]:
-    """Label every sequence of the data folder (train, validation, SIMULATED view) with
-    every seed's strokes (``view_seconds``: only the first seconds of the SIMULATED-view
-    sequences, :data:`QUICK_VIEW_SECONDS`). Returns the per-sequence summaries, each
-    sequence's (split, rows), the windows kept for the pgmpy comparison (ms3ggt, first
-    seed) and whether every run passed its checks; a sequence absent from the data folder
-    is skipped."""
+    """Label every sequence of the data folder (train, validation, SIMULATED view,
+    unlisted) with every seed's strokes (``view_seconds``: only the first seconds of the
+    SIMULATED-view sequences, :data:`QUICK_VIEW_SECONDS`). Returns the per-sequence
+    summaries, each sequence's (split, rows), the windows kept for the pgmpy comparison
+    (ms3ggt, first seed) and whether every run passed its checks; a sequence absent from
+    the data folder is skipped."""
     unlisted, copies = extra_ground_truths()
-    sequences = ([(f, n, "train") for f, n in TRAIN_SEQUENCES] + [(f, n, "validation") for f, n in VALIDATION_SEQUENCES]
-                 + [(f, n, "simulated_view") for f, n in SIMULATED_VIEW_SEQUENCES]
-                 + [(f, n, "unlisted") for f, n in unlisted])
+    where, listed = _listed_copies(copies)  # the listed recordings found elsewhere, by key
+    jobs = _listed_truths(where, listed, view_seconds)
+    jobs += _held_out_truths(unlisted, listed)
     per, rows_by = {}, {}
     windows: list = []
     ok = True
-    listed = _listed_copies(copies)  # the listed recordings as found elsewhere, by key
-    for folder, name, split in sequences:
-        try:
-            truth = load_sequence(folder, name)
-        except FileNotFoundError as exc:
-            log(f"jorge: {exc}")
-            continue
-        except DBNError as exc:
-            if split != "unlisted":
-                raise
-            log(f"jorge: skipped {folder}/{name}: {exc}")  # e.g. PETS2009's camera View_001.xml
-            continue
-        if split in ("train", "validation"):
-            listed[sequence_key(folder, name)] = truth
-        if split == "simulated_view" and view_seconds is not None:
-            truth = head(truth, view_seconds)
-        if split == "unlisted" and not _held_out(folder, name, truth, listed):
-            continue
+    for key, path, split, truth in jobs:
         rows = []
         for s in seeds:
-            row, wins = _run_one(build_strokes(s, truth), cfg, keep_windows=(name == "ms3ggt.xml.gz" and s == seeds[0]))
+            keep = split == "train" and key == "ms3ggt" and s == seeds[0]
+            row, wins = _run_one(build_strokes(s, truth), cfg, keep_windows=keep)
             windows += wins
             ok &= row["ok"]
             rows.append(row)
-        key = truth.name if split == "simulated_view" else sequence_key(folder, name)
-        key = f"{folder}/{name}" if key in rows_by else key
+        key = path if key in rows_by else key
         rows_by[key] = (split, rows)
         per[key] = _summary(split, rows)
         log(f"jorge: {key} ({split}) error {per[key]['error_rate']:.3f} colour-only "

@@ -28,13 +28,29 @@ from models.jorge.strokes import build_strokes
 EXAMPLES = Path(__file__).resolve().parent.parent / "data" / "jorge"
 
 
+def _moved_xml(src: Path, dx: float) -> bytes:
+    """The example XML ``src`` with every box ``dx`` pixels to the right: the examples are
+    one recording, and each of these another (:mod:`models.jorge.recordings`)."""
+    root = ET.parse(src).getroot()
+    for box in root.iter("box"):
+        box.set("xc", str(float(box.get("xc")) + dx))
+    return ET.tostring(root)
+
+
+def _moved_gt(dx: float) -> str:
+    """The example ``gt.txt`` with every box ``dx`` pixels to the right."""
+    rows = [line.split(",") for line in (EXAMPLES / "gt.txt").read_text().splitlines()]
+    return "".join(",".join(r[:2] + [f"{float(r[2]) + dx:g}"] + r[3:]) + "\n" for r in rows)
+
+
 def _data(tmp_path: Path, monkeypatch) -> Path:
     """A data folder holding a CAVIAR and a PETS2009 example (SIMULATED, tests/data) under
     names no list has, a camera file that is not a ground truth, and one listed name."""
     for folder in ("caviar", "pets2009"):
         (tmp_path / folder).mkdir()
     shutil.copy(EXAMPLES / "caviar.xml", tmp_path / "caviar" / "mine.xml")
-    shutil.copy(EXAMPLES / "pets2009.xml", tmp_path / "pets2009" / "PETS2009-S9L9.xml")
+    (tmp_path / "pets2009" / "PETS2009-S9L9.xml").write_bytes(_moved_xml(EXAMPLES / "pets2009.xml",
+                                                                         10.0))
     (tmp_path / "pets2009" / "View_001.xml").write_text("<Camera><Geometry/></Camera>\n")
     (tmp_path / "pets2009" / "notes.txt").write_text("not a sequence\n")
     monkeypatch.setenv("DBNTRACK_DATA", str(tmp_path))
@@ -76,24 +92,23 @@ def _nested(tmp_path: Path, monkeypatch) -> Path:
     folders down, MOTChallenge ``gt.txt`` files with and without a ``seqinfo.ini`` (one
     with a static person, class 7, who is not scored), a tracker's ``det.txt``, an XML in
     ``mot``, a file under a training sequence's name, a cut of it under another name and a
-    hidden copy (all SIMULATED, tests/data)."""
+    hidden copy (all SIMULATED, tests/data; each its own recording, its boxes moved)."""
     caviar = tmp_path / "caviar" / "Meeting" / "Meet_Two"
     caviar.mkdir(parents=True)
     with gzip.open(caviar / "m2gt.xml.gz", "wb") as f:
         f.write((EXAMPLES / "caviar.xml").read_bytes())
-    gt = (EXAMPLES / "gt.txt").read_text()
     static = "".join(f"{fr},9,300,100,20,40,1,7,1\n" for fr in range(70, 90))
-    for seq, text, ini in (("pets2009/PETS09-S9L8", gt, "[Sequence]\nframeRate=10\n"),
-                           ("pets2009/PETS09-S9L7", gt + static, None),
-                           ("mot/MOT-X", gt, None)):
+    for seq, text, ini in (("pets2009/PETS09-S9L8", _moved_gt(10), "[Sequence]\nframeRate=10\n"),
+                           ("pets2009/PETS09-S9L7", _moved_gt(20) + static, None),
+                           ("mot/MOT-X", _moved_gt(30), None)):
         (tmp_path / seq / "gt").mkdir(parents=True)
         (tmp_path / seq / "gt" / "gt.txt").write_text(text)
         if ini:
             (tmp_path / seq / "seqinfo.ini").write_text(ini)
     (tmp_path / "pets2009" / "PETS09-S9L7" / "det").mkdir()
-    (tmp_path / "pets2009" / "PETS09-S9L7" / "det" / "det.txt").write_text(gt)
+    (tmp_path / "pets2009" / "PETS09-S9L7" / "det" / "det.txt").write_text(_moved_gt(20))
     (tmp_path / "mot" / "Walk").mkdir()
-    shutil.copy(EXAMPLES / "caviar.xml", tmp_path / "mot" / "Walk" / "walkgt.xml")
+    (tmp_path / "mot" / "Walk" / "walkgt.xml").write_bytes(_moved_xml(EXAMPLES / "caviar.xml", 40))
     copy = tmp_path / "caviar" / "Meeting" / "Meet_Split_3rdGuy"  # a training sequence's name
     copy.mkdir()
     root = ET.parse(EXAMPLES / "pets2009.xml").getroot()  # the examples are one recording:
@@ -132,16 +147,19 @@ def test_unlisted_sequences_at_any_depth_and_in_motchallenge_layout(tmp_path, mo
     # the static person (class 7) is not a person of the ground truth; the rest is the file's
     assert 9 in read_mot(data / "pets2009" / "PETS09-S9L7" / "gt" / "gt.txt").ids
     assert 9 not in truths[1].ids
-    np.testing.assert_array_equal(truths[1].boxes, truths[2].boxes)
+    np.testing.assert_allclose(truths[1].boxes, truths[2].boxes + [10.0, 0, 0, 0])  # 20 px, 10 px
     assert len(truths[4].groups) > 0 and truths[4].fps == 25.0  # CAVIAR's, by its grouplists
 
 
 def test_benchmark_scores_nested_and_motchallenge_sequences(tmp_path, monkeypatch, capsys):
     _nested(tmp_path, monkeypatch)
     per, rows_by, _, ok = _label_sequences([0], OnlineConfig())
-    assert ok and list(per) == ["m2gt", "PETS09-S9L7", "PETS09-S9L8", "MOT-X", "walkgt"]
-    assert [per[k]["fps"] for k in per] == [25.0, 7.0, 10.0, 25.0, 25.0]
-    for key, seq in zip(per, NESTED[1:]):  # NESTED[0], a cut of a training recording, is not
+    unlisted = ["m2gt", "PETS09-S9L7", "PETS09-S9L8", "MOT-X", "walkgt"]
+    assert ok and list(per) == ["ms3ggt"] + unlisted  # ms3ggt: absent from its listed path
+    assert [per[k]["split"] for k in per] == ["train"] + ["unlisted"] * 5
+    assert [per[k]["fps"] for k in per] == [25.0, 25.0, 7.0, 10.0, 25.0, 25.0]
+    copy = ("caviar", "Meeting/Meet_Split_3rdGuy/MS3GGT.xml")
+    for key, seq in zip(per, [copy] + NESTED[1:]):  # NESTED[0], a cut of ms3ggt, is not scored
         strokes = build_strokes(0, load_sequence(*seq))
         assert per[key]["strokes"] == len(strokes)
         labels = label_online(strokes, OnlineConfig()).labels
@@ -152,7 +170,9 @@ def test_benchmark_scores_nested_and_motchallenge_sequences(tmp_path, monkeypatc
     assert "jorge: caviar/Meeting/Meet_Split_3rdGuy/MS3GGT.xml: the listed sequence ms3ggt" in err
     assert ("jorge: caviar/Meeting/Meet_Split_3rdGuy/ms3ggt1.xml: the recording of the listed "
             "sequence ms3ggt (the same boxes)") in err
-    assert _unlisted_keys(rows_by)["unlisted_sequences"] == list(per)
+    assert ("jorge: ms3ggt is not at its listed path: its copy caviar/Meeting/Meet_Split_3rdGuy/"
+            "MS3GGT.xml is scored as train") in err
+    assert _unlisted_keys(rows_by)["unlisted_sequences"] == unlisted
 
 
 def test_issue4_figure_takes_only_the_listed_ms3ggt_and_mws1gt():
@@ -181,3 +201,42 @@ def test_a_cut_of_a_training_recording_at_its_listed_path_is_not_scored_as_unlis
     err = capsys.readouterr().err
     assert "caviar/first_half.xml: the recording of the listed sequence ms3ggt" in err
     assert _unlisted_keys(rows_by) == {"unlisted_sequences": []}
+
+
+def _mot_copy(truth) -> str:
+    """``truth`` as MOTChallenge writes a ground truth: frames from one more, its own ids,
+    the corners rounded to whole pixels (as MOTChallenge's PETS09-S2L1 is PETS2009 S2L1)."""
+    rows = []
+    for i, frame in enumerate(truth.frames):
+        for j in np.flatnonzero(np.isfinite(truth.boxes[i, :, 0])):
+            xc, yc, w, h = truth.boxes[i, j]
+            rows.append(f"{frame + 1},{100 + j},{round(xc - w / 2)},{round(yc - h / 2)},"
+                        f"{w:g},{h:g},1,1,1\n")
+    return "".join(rows)
+
+
+def test_one_recording_is_scored_once_and_a_converted_listed_one_not_at_all(
+        tmp_path, monkeypatch, capsys):
+    caviar, new = tmp_path / "caviar", tmp_path / "caviar" / "Meet_New"
+    new.mkdir(parents=True)
+    with gzip.open(caviar / "ms3ggt.xml.gz", "wb") as f:  # the training recording
+        f.write(_moved_xml(EXAMPLES / "caviar.xml", 50.0))
+    shutil.copy(EXAMPLES / "caviar.xml", new / "mngt.xml")  # a new recording, whole
+    root = ET.parse(EXAMPLES / "caviar.xml").getroot()
+    for frame in [f for f in root.findall("frame") if int(f.get("number")) < 100]:
+        root.remove(frame)
+    ET.ElementTree(root).write(new / "mngt1.xml")  # and cut, from frame 100 on
+    monkeypatch.setenv("DBNTRACK_DATA", str(tmp_path))
+    for seq, truth in (("MOT-NEW", load_sequence("caviar", "Meet_New/mngt.xml")),
+                       ("MOT-TRAIN", load_sequence("caviar", "ms3ggt.xml.gz"))):
+        (tmp_path / "mot" / seq / "gt").mkdir(parents=True)
+        (tmp_path / "mot" / seq / "gt" / "gt.txt").write_text(_mot_copy(truth))
+    assert len(unlisted_sequences()) == 4
+    per, rows_by, _, ok = _label_sequences([0], OnlineConfig())
+    assert ok and list(per) == ["ms3ggt", "mngt"]
+    assert _unlisted_keys(rows_by)["unlisted_sequences"] == ["mngt"]
+    err = capsys.readouterr().err
+    for cut in ("caviar/Meet_New/mngt1.xml", "mot/MOT-NEW/gt/gt.txt"):
+        assert (f"jorge: {cut}: the recording of the unlisted caviar/Meet_New/mngt.xml (the "
+                "same boxes), scored once") in err
+    assert "jorge: mot/MOT-TRAIN/gt/gt.txt: the recording of the listed sequence ms3ggt" in err
