@@ -147,10 +147,21 @@ def _mot_rows(path: Path, classes: bool):
         yield line_no, fr, oid, (x, y, w, h), conf, cls
 
 
+def mot_sequence(path: str | Path) -> str | None:
+    """The sequence of a MOTChallenge ground truth ``gt.txt`` (or ``.gz``): its folder's
+    name, or the one above a ``gt`` folder (``PETS09-S2L1/gt/gt.txt`` -> ``PETS09-S2L1``);
+    None for another file name or a ``gt.txt`` without a folder."""
+    parts = Path(path).parts
+    if len(parts) < 2 or parts[-1].lower().removesuffix(".gz") != "gt.txt":
+        return None
+    return parts[-3] if parts[-2].lower() == "gt" and len(parts) >= 3 else parts[-2]
+
+
 def read_mot(path: str | Path):
-    """A MOTChallenge box file as a :class:`models.jorge.strokes.GroundTruth`; its ``fps``
-    from :func:`mot_frame_rate`, else :data:`MOT_DEFAULT_FPS`. Rows with ``conf = 0`` are
-    not people."""
+    """A MOTChallenge box file as a :class:`models.jorge.strokes.GroundTruth` named by its
+    sequence (:func:`mot_sequence`) or else its file name; its ``fps`` from
+    :func:`mot_frame_rate`, else :data:`MOT_DEFAULT_FPS`. Rows with ``conf = 0`` are not
+    people."""
     path = Path(path)
     return _people(path, _mot_rows(path, classes=False))
 
@@ -195,7 +206,8 @@ def _people(path: Path, rows):
         raise fail(path, 0, "no boxes")
     fps, _ = mot_frame_rate(path)
     try:
-        return _assemble(path.name, sorted(frames.items()), [], fps=MOT_DEFAULT_FPS if fps is None else fps)
+        fps = MOT_DEFAULT_FPS if fps is None else fps
+        return _assemble(mot_sequence(path) or path.name, sorted(frames.items()), [], fps=fps)
     except DBNError as exc:
         raise in_file(exc, path) from None
 

@@ -199,10 +199,9 @@ def sequence_key(folder: str, name: str) -> str:
     key): a MOTChallenge ``gt.txt``'s sequence folder (``PETS09-S2L2/gt/gt.txt`` ->
     ``PETS09-S2L2``), else the file name up to its first dot (``ms3ggt.xml.gz`` ->
     ``ms3ggt``)."""
-    parts = name.split("/")
-    if not _is_mot_gt(parts[-1]) or len(parts) < 2:
-        return parts[-1].split(".")[0]
-    return parts[-3] if parts[-2].lower() == "gt" and len(parts) >= 3 else parts[-2]
+    from models.io.jorge import mot_sequence
+
+    return mot_sequence(name) or name.split("/")[-1].split(".")[0]
 
 
 TRAIN_SEEDS = tuple(range(100, 110))

@@ -432,6 +432,7 @@ def test_jorge_frame_rate_from_seqinfo(tmp_path, capsys):
     out = _track(tmp_path / "b", "jorge", [gt])
     got = params(out)
     assert got["fps"] == 7.0 and got["fps_source"] == str(seq / "seqinfo.ini")
+    assert got["sequence"] == "SEQ"  # a gt.txt is its sequence folder's
     assert "assumed" not in capsys.readouterr().err
     strokes = build_strokes(3, read_mot(gt))
     assert [r["label"] for r in read_strokes(out / "strokes.csv")[1]] == list(label_online(strokes).labels)
