@@ -12,12 +12,14 @@ marginals), :mod:`online` (periodic inference with bounded memory, eq. 12 labell
 stroke graph and the colour-only baseline), :mod:`recall` (where a stroke's right label was
 lost: not admissible, pruned from its domain, or not chosen),
 :mod:`memo` (what a node remembers of its CPD and evidence between inferences),
-:mod:`api` (the labeller under the tracker protocol), :mod:`fit` (the parameters learned
+:mod:`api` (the labeller under the tracker protocol), :mod:`checkpoint` (the labeller saved
+and resumed), :mod:`fit` (the parameters learned
 on the declared training split), :mod:`fit_prior` (a fit on little data shrunk towards a
 prior network), :mod:`confirm` (a change compared on fresh seeds),
 :mod:`estimate` (the error on many SIMULATED meeting scenes, with standard errors),
 :mod:`simulate` (a synthetic sequence when the real ground truth is absent),
 :mod:`meeting` (SIMULATED meetings of 3-5 people), :mod:`demo` (``dbntrack demo``'s part),
 :mod:`eth` (tracks in world metres, ETH / UCY ``obsmat``, through a SIMULATED camera),
-:mod:`recordings` (whether a ground truth is, by its boxes, a cut of another recording).
+:mod:`recordings` (whether a ground truth is, by its boxes, a cut or a copy of another
+recording, whatever its frame numbers and ids).
 """

@@ -12,6 +12,8 @@ jorge`` uses) needs no copy: the fold's own labeller takes every stroke in place
 same labels (ETH through the CLI: the labelling phase 87.6 s with a step loop, 13.1 s
 with ``fold``, the same outputs byte for byte).
 :func:`~models.jorge.online.label_online` stays the batch entry point.
+:meth:`JorgeTracker.save` / ``load`` write and resume the labeller
+(:mod:`models.jorge.checkpoint`: its strokes and links, added again on loading).
 Deterministic (the key is not used). Info's ``log_prob`` is the log eq. 12 posterior
 probability of the label given to the new stroke. An observation is a
 :class:`~models.jorge.strokes.Stroke` (linked by the on-line link rule) or a
@@ -28,6 +30,7 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
+from models.jorge.checkpoint import load_labeller, save_labeller
 from models.jorge.online import OnlineConfig, OnlineLabeller
 from models.jorge.strokes import Stroke
 from models.protocol import Example, StepTracker, seed_from_key
@@ -80,7 +83,7 @@ class JorgeTracker(StepTracker):
 
     name = "jorge"
     score_field = "log_prob"
-    can_save = False
+    can_save = True
 
     def __init__(self, config: OnlineConfig | None = None, fps: float | None = None) -> None:
         self.config = OnlineConfig() if config is None else config
@@ -107,6 +110,16 @@ class JorgeTracker(StepTracker):
         raises (the partial state is dropped)."""
         state, steps = self._start(key, list(observations), progress)
         return state, [_add(state.labeller, obs) for _, obs in steps]
+
+    def save(self, state: JorgeState, path) -> None:
+        """Write the labeller's strokes and links to ``.npz``
+        (:func:`models.jorge.checkpoint.save_labeller`)."""
+        save_labeller(path, state.labeller)
+
+    def load(self, path) -> JorgeState:
+        """The labeller written by :meth:`save` under this tracker's configuration and frame
+        rate, its strokes added again (:func:`models.jorge.checkpoint.load_labeller`)."""
+        return JorgeState(load_labeller(path, self.config, self.fps))
 
     def fingerprint(self, state: JorgeState):
         """Labels, beliefs, domains and the inference log (without wall times)."""

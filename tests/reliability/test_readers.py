@@ -614,7 +614,8 @@ def _rewrite(src: Path, dst: Path, header_fn=None, arrays_fn=None) -> None:
     np.savez(dst, __header__=blob, **arrays)
 
 
-@pytest.mark.parametrize("name", ["localization", "pathrecovery", "rjmcmc3d", "zajdel_adf"])
+@pytest.mark.parametrize("name", ["jorge", "localization", "pathrecovery", "rjmcmc3d",
+                                  "zajdel_adf"])
 def test_tracker_checkpoints_reject_bad_files(name, tmp_path) -> None:
     import jax
 
