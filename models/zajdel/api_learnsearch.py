@@ -9,6 +9,7 @@ re-runs :func:`learn_search` on the whole prefix. Cost: one full search per step
 ``O(K)`` per step and ``O(K^2)`` over a run of ``K`` observations -- the protocol's
 reference semantics; call :func:`learn_search` once for a batch. Deterministic (the key is
 not used). Info's ``log_score`` is the unnormalised log posterior of the MAP partition.
+Both adapters save and load their state (:mod:`models.zajdel.learnsearch_checkpoint`).
 
 ``make(..., window=W)`` gives the streaming form instead (:class:`StreamLearnSearchTracker`,
 :class:`models.zajdel.learnsearch_stream.StreamSearch`): hypotheses over the last ``W``
@@ -27,6 +28,7 @@ import numpy as np
 from models.protocol import Example, StepTracker, seed_from_key
 from models.zajdel.data import Observations, concat_observations, take, validate_observations
 from models.zajdel.learnsearch import LearnSearchConfig, LSParams, learn_search
+from models.zajdel.learnsearch_checkpoint import load_search, load_stream, save_search, save_stream
 from models.zajdel.learnsearch_stream import StreamSearch
 
 __all__ = [
@@ -66,7 +68,7 @@ class LearnSearchTracker(StepTracker):
 
     name = "zajdel_learnsearch"
     score_field = "log_score"
-    can_save = False
+    can_save = True
 
     def __init__(self, params: LSParams, config: LearnSearchConfig | None = None) -> None:
         self.params = params
@@ -94,6 +96,15 @@ class LearnSearchTracker(StepTracker):
         new = LearnSearchState(allobs, res.labels, res.hypotheses, res.log_scores, res.params)
         return new, LearnSearchInfo(res.labels, float(res.log_scores[0]))
 
+    def save(self, state: LearnSearchState, path) -> None:
+        """Write ``state`` to ``.npz``
+        (:func:`models.zajdel.learnsearch_checkpoint.save_search`)."""
+        save_search(path, state, self.params, self.config)
+
+    def load(self, path) -> LearnSearchState:
+        """A state written by :meth:`save` of a tracker with these parameters and config."""
+        return load_search(path, self.params, self.config)
+
 
 class StreamLearnSearchInfo(NamedTuple):
     """What a streaming step settles and what it still revises.
@@ -117,7 +128,7 @@ class StreamLearnSearchTracker(StepTracker):
 
     name = "zajdel_learnsearch"
     score_field = "log_score"
-    can_save = False
+    can_save = True
 
     def __init__(self, params, config, window: int, close_z: float | None = 5.0) -> None:
         self.params = params
@@ -147,6 +158,16 @@ class StreamLearnSearchTracker(StepTracker):
             score = float(new.log_scores()[0])
             info = StreamLearnSearchInfo(new.pop_committed(), new.window_labels(), score)
         return new, info
+
+    def save(self, state: StreamSearch, path) -> None:
+        """Write ``state`` to ``.npz``
+        (:func:`models.zajdel.learnsearch_checkpoint.save_stream`)."""
+        save_stream(path, state)
+
+    def load(self, path) -> StreamSearch:
+        """A search written by :meth:`save` of a tracker with these parameters, config,
+        window and ``close_z``."""
+        return load_stream(path, self.params, self.config, self.window, self.close_z)
 
     def fingerprint(self, state: StreamSearch):
         """The arrays that determine the state (its window, hypotheses and parameters)."""

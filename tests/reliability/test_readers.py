@@ -615,7 +615,7 @@ def _rewrite(src: Path, dst: Path, header_fn=None, arrays_fn=None) -> None:
 
 
 @pytest.mark.parametrize("name", ["jorge", "localization", "pathrecovery", "rjmcmc3d",
-                                  "zajdel_adf"])
+                                  "zajdel_adf", "zajdel_learnsearch"])
 def test_tracker_checkpoints_reject_bad_files(name, tmp_path) -> None:
     import jax
 
