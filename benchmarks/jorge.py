@@ -119,8 +119,9 @@ CAVIAR's ``mws1gt1.xml`` is Meet_WalkSplit from frame 100 on, MOTChallenge's
 ``PETS09-S2L1`` is PETS2009 S2L1 counted from frame 1), and all but the one with the most
 boxes of several files of one new recording (a cut beside the whole, MOT17's copy of a
 ``gt.txt`` per detector). A listed sequence absent from its listed path is read from its
-copy found elsewhere, if any, and scored in its split. The rest are scored with the same seeds as the split ``unlisted``
-(``per_sequence``) and pooled on their own, never with the keys above:
+copy found elsewhere, if any, and scored in its split. The rest are scored with the same
+seeds as the split ``unlisted`` (``per_sequence``) and pooled on their own, never with the
+keys above:
 ``unlisted_sequences`` (their names, ``[]`` without any) and, with any,
 ``error_rate_unlisted`` and its ``_colour_only`` and ``_true_links``,
 ``error_rate_unlisted_group_3plus`` and ``strokes_unlisted_group_3plus``.

@@ -33,8 +33,9 @@ _OBS = Observations._fields
 
 
 def params_digest(params: LSParams) -> str:
-    """SHA-256 of every array of ``params`` (dtype, shape, bytes) and of ``p_new``."""
-    h = hashlib.sha256(repr(params.p_new).encode())
+    """SHA-256 of every array of ``params`` (as float64: shape and bytes) and of ``p_new``
+    (a number or None)."""
+    h = hashlib.sha256(repr(None if params.p_new is None else float(params.p_new)).encode())
     for name, value in [*params._asdict().items(), *params.path._asdict().items()]:
         if name in ("path", "p_new"):
             continue

@@ -12,7 +12,7 @@ from inference.checkpoint import load_arrays, save_arrays
 from models.zajdel.api_learnsearch import make
 from models.zajdel.data import take
 from models.zajdel.learnsearch import LearnSearchConfig, params_from_zajdel
-from models.zajdel.learnsearch_checkpoint import _config, load_stream, save_stream
+from models.zajdel.learnsearch_checkpoint import _config, load_stream, params_digest, save_stream
 from models.zajdel.learnsearch_stream import StreamSearch
 from models.zajdel.simulate import OfficeConfig, simulate_office
 
@@ -123,3 +123,14 @@ def test_labels_committed_and_not_handed_out_are_kept(office, tmp_path):
     np.testing.assert_array_equal(back.window_labels(), search.window_labels())
     assert (back.num_seen, back.em_iterations, back.max_window) == \
         (search.num_seen, search.em_iterations, search.max_window)
+
+
+def test_the_parameters_digest_sees_values_not_types(office):
+    params, _ = office
+    digest = params_digest(params._replace(p_new=0.25))
+    assert params_digest(params._replace(p_new=np.float64(0.25))) == digest
+    assert params_digest(params._replace(p_new=None)) != digest
+    moved = params.path._replace(log_entry=params.path.log_entry.astype(np.float32))
+    assert params_digest(params._replace(path=moved)) != params_digest(params)  # rounded
+    path = params.path._replace(travel_std=params.path.travel_std * 1.5)
+    assert params_digest(params._replace(path=path)) != params_digest(params)
