@@ -34,9 +34,9 @@ _NAMES = ("index", "start", "end", "has_extent",
 def _ragged(rows: list, dtype, width: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Rows of different lengths as one array and the lengths ``(num_rows,)``; ``width``:
     the rows are ``(n, width)``."""
-    shape = (0,) if width is None else (0, width)
-    rows = [np.asarray(r, dtype).reshape(shape[:0] + (-1,) + shape[1:]) for r in rows]
-    flat = np.concatenate(rows) if rows else np.zeros(shape, dtype)
+    tail = () if width is None else (width,)
+    rows = [np.asarray(r, dtype).reshape((-1, *tail)) for r in rows]
+    flat = np.concatenate(rows) if rows else np.zeros((0, *tail), dtype)
     return flat.astype(dtype), np.array([len(r) for r in rows], np.int64)
 
 
