@@ -113,7 +113,8 @@ its folder's (PETS2009 7 fps; the rate and where it came from go to stderr), key
 :func:`models.jorge.fit.sequence_key` (``PETS09-S2L2/gt/gt.txt`` is ``PETS09-S2L2``). Left
 out, each with a line on stderr: a file that is not a ground truth (PETS2009's camera
 ``View_001.xml``), and a listed recording found again, under its name elsewhere
-(``Meeting/ms3ggt.xml``, :func:`models.jorge.fit.listed_copies`) or by its boxes
+(``Meeting/ms3ggt.xml``; MOTChallenge's ``PETS09-S2L1``,
+:func:`models.jorge.fit.listed_copies`) or by its boxes
 (:func:`models.jorge.recordings.same_recording`, whatever the frame numbers and ids:
 CAVIAR's ``mws1gt1.xml`` is Meet_WalkSplit from frame 100 on, MOTChallenge's
 ``PETS09-S2L1`` is PETS2009 S2L1 counted from frame 1), and all but the one with the most

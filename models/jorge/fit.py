@@ -72,6 +72,7 @@ __all__ = [
     "unlisted_sequences",
     "listed_copies",
     "extra_ground_truths",
+    "same_name",
     "sequence_key",
     "frame_rate_note",
     "TRAIN_SEEDS",
@@ -131,8 +132,9 @@ def unlisted_sequences() -> list[tuple[str, str]]:
     ``Meeting/mc1gt.xml`` or ``PETS09-S2L2/gt/gt.txt``). A ground truth is a CAVIAR /
     PETS2009 XML (``.xml``, ``.xml.gz``) or a MOTChallenge ``gt.txt`` (``.gz`` too;
     :func:`load_sequence`); files and folders whose names start with ``.`` are passed
-    over. A file whose :func:`sequence_key` is a listed sequence's, case aside, is that
-    recording in another place (:func:`listed_copies`), not unlisted: a training sequence
+    over. A file whose :func:`sequence_key` is a listed sequence's (:func:`same_name`:
+    case aside, MOTChallenge's ``PETS09-S2L1`` is ``PETS2009-S2L1``) is that recording in
+    another place (:func:`listed_copies`), not unlisted: a training sequence
     would leak into the held-out figure. The benchmark scores the unlisted ones as the
     split ``unlisted``, on their own; nothing is fitted or chosen on them. Files that are
     not a ground truth (PETS2009's camera ``View_001.xml``) are skipped where they are
@@ -151,15 +153,23 @@ def extra_ground_truths() -> tuple[list[tuple[str, str]], list[tuple[str, str, s
     """:func:`unlisted_sequences` and :func:`listed_copies` from one look through the data
     folder (the benchmark needs both)."""
     listed = TRAIN_SEQUENCES + VALIDATION_SEQUENCES
-    keys = {sequence_key(*s).lower(): sequence_key(*s) for s in listed}
+    keys = {same_name(sequence_key(*s)): sequence_key(*s) for s in listed}
     unlisted, copies = [], []
     for folder, name in _ground_truth_files():
-        key = keys.get(sequence_key(folder, name).lower())
+        key = keys.get(same_name(sequence_key(folder, name)))
         if key is None:
             unlisted.append((folder, name))
         else:
             copies.append((folder, name, key))
     return unlisted, copies
+
+
+def same_name(key: str) -> str:
+    """A :func:`sequence_key` as the lists are compared with it: lower case, and
+    MOTChallenge's ``PETS09-`` prefix read as PETS2009's ``PETS2009-`` (MOTChallenge's
+    ``PETS09-S2L1`` is our validation sequence ``PETS2009-S2L1``)."""
+    low = key.lower()
+    return "pets2009-" + low.removeprefix("pets09-") if low.startswith("pets09-") else low
 
 
 def _ground_truth_files() -> list[tuple[str, str]]:

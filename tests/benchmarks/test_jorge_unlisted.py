@@ -18,6 +18,7 @@ from models.jorge.fit import (
     frame_rate_note,
     listed_copies,
     load_sequence,
+    same_name,
     sequence_key,
     unlisted_sequences,
 )
@@ -240,3 +241,22 @@ def test_one_recording_is_scored_once_and_a_converted_listed_one_not_at_all(
         assert (f"jorge: {cut}: the recording of the unlisted caviar/Meet_New/mngt.xml (the "
                 "same boxes), scored once") in err
     assert "jorge: mot/MOT-TRAIN/gt/gt.txt: the recording of the listed sequence ms3ggt" in err
+
+
+def test_motchallenge_pets09_is_our_pets2009_sequence_by_name(tmp_path, monkeypatch, capsys):
+    """MOTChallenge's PETS09-S2L1 is our validation PETS2009-S2L1: never unlisted, and
+    scored as validation where our file is absent (the example boxes, SIMULATED)."""
+    seq = tmp_path / "mot" / "PETS09-S2L1"
+    (seq / "gt").mkdir(parents=True)
+    (seq / "gt" / "gt.txt").write_text((EXAMPLES / "gt.txt").read_text())
+    (seq / "seqinfo.ini").write_text("[Sequence]\nframeRate=7\n")
+    monkeypatch.setenv("DBNTRACK_DATA", str(tmp_path))
+    assert same_name("PETS09-S2L1") == same_name("pets2009-s2l1") == "pets2009-s2l1"
+    assert same_name("PETS09S2L1") == "pets09s2l1"
+    assert unlisted_sequences() == []
+    assert listed_copies() == [("mot", "PETS09-S2L1/gt/gt.txt", "PETS2009-S2L1")]
+    per, rows_by, _, ok = _label_sequences([0], OnlineConfig())
+    assert ok and list(per) == ["PETS2009-S2L1"] and per["PETS2009-S2L1"]["split"] == "validation"
+    assert per["PETS2009-S2L1"]["fps"] == 7.0
+    assert ("jorge: PETS2009-S2L1 is not at its listed path: its copy mot/PETS09-S2L1/gt/gt.txt "
+            "is scored as validation") in capsys.readouterr().err
