@@ -6,10 +6,11 @@ their links. A checkpoint holds exactly those, as named arrays with a versioned,
 checksummed header (:mod:`inference.checkpoint`: no pickle); :func:`load_labeller` adds
 the strokes again, each with its saved links, and checks that they get their saved labels
 and inference count back, so the labeller comes back exactly as it was or not at all (a
-file saved by a labeller that labels otherwise, another version of this library, or after
-inferences run from outside :meth:`~models.jorge.online.OnlineLabeller.add_stroke`, is a
-:class:`~dbn.errors.CheckpointError`). Loading costs the labelling of the saved strokes
-again (not the link search): about as long as the run up to the checkpoint took.
+file saved by a labeller that labels otherwise, another version of this library, is a
+:class:`~dbn.errors.CheckpointError`; a labeller on which inferences were run from outside
+:meth:`~models.jorge.online.OnlineLabeller.add_stroke` is refused at saving). Loading costs
+the labelling of the saved strokes again (not the link search): about as long as the run up
+to the checkpoint took.
 """
 
 from __future__ import annotations
@@ -51,8 +52,11 @@ def save_labeller(path, labeller: OnlineLabeller) -> None:
     Raises
     ------
     CheckpointError
-        A stroke holds a non-finite number (not a state that can be resumed).
+        A stroke holds a non-finite number, or inferences were run from outside
+        :meth:`~models.jorge.online.OnlineLabeller.add_stroke` (``infer``, ``finish``):
+        adding the strokes again would not give this labeller back. Nothing is written.
     """
+    _check_periodic(path, labeller)
     nodes = labeller.graph.nodes
     strokes = [node.stroke for node in nodes]
     extent = [s.extent if s.extent is not None else np.zeros((0, 2)) for s in strokes]
@@ -77,6 +81,23 @@ def save_labeller(path, labeller: OnlineLabeller) -> None:
     save_arrays(path, arrays, FORMAT, _config(labeller.config, labeller.fps),
                 extra={"keep_windows": bool(labeller.keep_windows),
                        "num_inferences": len(labeller.records)})
+
+
+def _check_periodic(path, lab: OnlineLabeller) -> None:
+    """Refuse a labeller whose inferences are not the ones ``add_stroke`` ran: those due
+    every ``period_s`` before each stroke after the first (its loop, step for step)."""
+    due, expected = None, []
+    for node in lab.graph.nodes:
+        start = node.stroke.start
+        if due is None:
+            due = start + lab._period_frames
+        while start >= due:
+            expected.append(int(np.floor(due)))
+            due += lab._period_frames
+    if [r.frame for r in lab.records] != expected:
+        raise CheckpointError(path, "inferences run from outside add_stroke (infer, finish): "
+                              f"{len(lab.records)} inferences where adding the strokes again "
+                              f"runs {len(expected)}; such a labeller cannot be resumed")
 
 
 def _config(config: OnlineConfig, fps: float) -> dict:

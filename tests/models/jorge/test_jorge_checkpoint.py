@@ -82,16 +82,23 @@ def test_another_configuration_rate_or_labeller_is_refused(strokes, tmp_path):
         load_labeller(path, cfg, strokes.fps / 2)
     # a file whose labels the replay does not give back (another labeller saved it)
     arrays, header = load_arrays(path, FORMAT, _NAMES, {"online": cfg, "fps": strokes.fps})
-    arrays = dict(arrays, labels=arrays["labels"] + 1000)
+    relabelled = dict(arrays, labels=arrays["labels"] + 1000)
     extra = {k: header[k] for k in ("keep_windows", "num_inferences")}
-    save_arrays(tmp_path / "other.npz", arrays, FORMAT, {"online": cfg, "fps": strokes.fps}, extra)
+    save_arrays(tmp_path / "other.npz", relabelled, FORMAT, {"online": cfg, "fps": strokes.fps},
+                extra)
     with pytest.raises(CheckpointError, match="labels otherwise"):
         load_labeller(tmp_path / "other.npz", cfg, strokes.fps)
-    # nor the inference count (an inference run from outside add_stroke)
-    lab.infer(strokes.strokes[19].start)
-    save_labeller(tmp_path / "ran.npz", lab)
+    # nor the inference count (an inference run from outside add_stroke): refused at saving
+    extra_run = dict(extra, num_inferences=extra["num_inferences"] + 1)
+    save_arrays(tmp_path / "ran.npz", arrays, FORMAT, {"online": cfg, "fps": strokes.fps},
+                extra_run)
     with pytest.raises(CheckpointError, match="inferences run from outside"):
         load_labeller(tmp_path / "ran.npz", cfg, strokes.fps)
+    assert len(lab.records) > 0  # the periodic inferences of add_stroke are saved
+    lab.infer(strokes.strokes[19].start)
+    with pytest.raises(CheckpointError, match="inferences run from outside add_stroke"):
+        save_labeller(tmp_path / "after.npz", lab)
+    assert not (tmp_path / "after.npz").exists()
     # links the replay cannot take (a later stroke as a parent), a file that is not one
     parents = arrays["parents"].copy()
     parents[0] = 15
