@@ -50,6 +50,22 @@ def _learned(theta: LSParams) -> dict[str, np.ndarray]:
     return out
 
 
+def _check_shapes(path, start: LSParams, a: dict, prefix: str) -> Observations:
+    """The file's observations (``prefix``) and learned arrays, checked against each other
+    and against the starting parameters' shapes; else a CheckpointError."""
+    for key, want in _learned(start).items():
+        if a[key].shape != want.shape:
+            raise CheckpointError(path, f"array {key!r} of shape {a[key].shape}, the "
+                                  f"parameters' is {want.shape}")
+    obs = Observations(*(a[f"{prefix}_{k}"] for k in _OBS))
+    n = obs.num_obs
+    if obs.appearance.shape != (n, start.obs_dim) or any(
+            np.shape(v) != (n,) for v in obs[1:]):
+        raise CheckpointError(path, f"the {prefix} arrays do not hold {n} observations of "
+                              f"dimension {start.obs_dim}")
+    return obs
+
+
 def _theta(start: LSParams, a: dict) -> LSParams:
     """``start`` with the learned arrays of a file."""
     path = start.path._replace(travel_mean=a["theta_travel_mean"], travel_std=a["theta_travel_std"])
@@ -98,7 +114,7 @@ def load_search(path, params: LSParams, config: LearnSearchConfig):
     names += ["labels", "hypotheses", "log_scores"]
     a, _ = load_arrays(path, "zajdel-learnsearch", names, _config(config, params),
                        neg_inf=("log_scores",))
-    obs = Observations(*(a[f"obs_{k}"] for k in _OBS))
+    obs = _check_shapes(path, params, a, "obs")
     n = obs.num_obs
     if a["labels"].shape != (n,) or a["hypotheses"].shape[1:] != (n,) \
             or a["log_scores"].shape != a["hypotheses"].shape[:1]:
@@ -139,6 +155,16 @@ def save_stream(path, search: StreamSearch) -> None:
     save_arrays(path, arrays, "zajdel-learnsearch-stream", config, extra, neg_inf=_ST)
 
 
+def _check_window(path, a: dict, width: int) -> None:
+    """The working arrays hold one row per hypothesis, and ``lab`` one column per window
+    observation; else a CheckpointError."""
+    rows = a["st_score"].shape[:1]
+    bad = [k for k in ST_ARRAYS if a[f"st_{k}"].shape[:1] != rows or a[f"st_{k}"].ndim == 0]
+    if bad or rows == (0,) or a["st_lab"].shape != (*rows, width):
+        raise CheckpointError(path, f"the working arrays {bad or ['lab']} do not fit "
+                              f"{rows[0] if rows else 0} hypotheses over {width} observations")
+
+
 def load_stream(path, params: LSParams, config: LearnSearchConfig | None, window: int,
                 close_z: float | None = 5.0) -> StreamSearch:
     """The search written by :func:`save_stream` from a tracker of the same ``params``,
@@ -160,7 +186,9 @@ def load_stream(path, params: LSParams, config: LearnSearchConfig | None, window
         win_start = int(header["win_start"]) if started else None
     except (KeyError, TypeError, ValueError) as exc:
         raise CheckpointError(path, f"header does not fit this format ({exc!r})") from None
-    search.buf = Observations(*(a[f"buf_{k}"] for k in _OBS))
+    search.buf = _check_shapes(path, params, a, "buf")
+    if started:
+        _check_window(path, a, search.buf.num_obs)
     search.theta = _theta(params, a)
     search.committed = [int(x) for x in a["committed"]]
     for k, v in counters.items():

@@ -134,3 +134,28 @@ def test_the_parameters_digest_sees_values_not_types(office):
     assert params_digest(params._replace(path=moved)) != params_digest(params)  # rounded
     path = params.path._replace(travel_std=params.path.travel_std * 1.5)
     assert params_digest(params._replace(path=path)) != params_digest(params)
+
+
+def test_arrays_that_do_not_fit_each_other_are_refused(office, tmp_path):
+    params, steps = office
+    tracker = make(params, CONFIG, window=6)
+    states, _ = tracker.run(jax.random.key(0), steps[:10])
+    good = tmp_path / "good.npz"
+    tracker.save(states[-1], good)
+    with np.load(good) as f:
+        names = [n for n in f.files if n != "__header__"]
+    config = {"config": CONFIG._asdict(), "params_sha256": params_digest(params), "window": 6,
+              "close_z": 5.0}
+    arrays, header = load_arrays(good, "zajdel-learnsearch-stream", names, config,
+                                 neg_inf=[n for n in names if n.startswith("st_")])
+    extra = {k: v for k, v in header.items() if k not in ("format", "version", "config",
+                                                           "checksum")}
+    cases = {"st_lab": arrays["st_lab"][:, :-1], "st_ncol": arrays["st_ncol"][:-1],
+             "theta_mean": arrays["theta_mean"][:-1], "buf_camera": arrays["buf_camera"][:-1],
+             "buf_appearance": arrays["buf_appearance"][:, :-1]}
+    for name, value in cases.items():
+        bad = tmp_path / f"{name}.npz"
+        save_arrays(bad, dict(arrays, **{name: value}), "zajdel-learnsearch-stream", config, extra,
+                    neg_inf=[n for n in names if n.startswith("st_")])
+        with pytest.raises(CheckpointError, match=f"{name}.npz"):
+            tracker.load(bad)
