@@ -72,12 +72,19 @@ def test_a_learned_state_keeps_its_parameters(office, tmp_path):
     np.testing.assert_array_equal(loaded.theta.noise_cov, state.theta.noise_cov)
 
 
-def test_another_tracker_or_a_bad_file_is_refused(office, tmp_path):
+def _saved(office, num_steps: int, path):
+    """The fixed-lag tracker (window 6) after ``num_steps`` steps, saved to ``path``."""
     params, steps = office
     tracker = make(params, CONFIG, window=6)
-    state, _ = tracker.run(jax.random.key(0), steps[:8])
+    states, _ = tracker.run(jax.random.key(0), steps[:num_steps])
+    tracker.save(states[-1], path)
+    return tracker, states[-1]
+
+
+def test_another_tracker_or_a_bad_file_is_refused(office, tmp_path):
+    params, steps = office
     path = tmp_path / "s.npz"
-    tracker.save(state[-1], path)
+    tracker, last = _saved(office, 8, path)
     others = [make(params._replace(mean=params.mean + 1.0), CONFIG, window=6),
               make(params, CONFIG, window=7), make(params, CONFIG._replace(batch=5), window=6),
               make(params, CONFIG, window=6, close_z=None), make(params, CONFIG)]
@@ -85,7 +92,7 @@ def test_another_tracker_or_a_bad_file_is_refused(office, tmp_path):
         with pytest.raises(CheckpointError, match="s.npz"):
             other.load(path)
     # parameters that differ from the tracker's beyond what EM learns are not saved
-    moved = state[-1].copy()
+    moved = last.copy()
     moved.theta = moved.theta._replace(path=moved.theta.path._replace(window=np.float64(1.0)))
     with pytest.raises(CheckpointError, match="beyond what EM learns"):
         tracker.save(moved, tmp_path / "moved.npz")
@@ -137,11 +144,9 @@ def test_the_parameters_digest_sees_values_not_types(office):
 
 
 def test_arrays_that_do_not_fit_each_other_are_refused(office, tmp_path):
-    params, steps = office
-    tracker = make(params, CONFIG, window=6)
-    states, _ = tracker.run(jax.random.key(0), steps[:10])
+    params, _ = office
     good = tmp_path / "good.npz"
-    tracker.save(states[-1], good)
+    tracker, _ = _saved(office, 10, good)
     with np.load(good) as f:
         names = [n for n in f.files if n != "__header__"]
     config = {"config": CONFIG._asdict(), "params_sha256": params_digest(params), "window": 6,
