@@ -723,10 +723,6 @@ def _listed_truths(copies: dict, listed: dict, view_seconds: float | None) -> li
     return out
 
 
-def _boxes(truth) -> int:
-    return int(np.isfinite(truth.boxes[..., 0]).sum())
-
-
 def _held_out_truths(unlisted: list, listed: dict) -> list:
     """``(key, path, "unlisted", truth)`` of the unlisted ground truths to score, in the
     data folder's order: a file that is not a ground truth is skipped (PETS2009's camera
@@ -740,7 +736,7 @@ def _held_out_truths(unlisted: list, listed: dict) -> list:
         except (FileNotFoundError, DBNError) as exc:
             log(f"jorge: skipped {folder}/{name}: {exc}")
     kept: dict = {}
-    for folder, name, truth in sorted(loaded, key=lambda job: -_boxes(job[2])):
+    for folder, name, truth in sorted(loaded, key=lambda job: -job[2].num_boxes):
         if _held_out(folder, name, truth, listed, kept):
             kept[f"{folder}/{name}"] = truth
     return [(sequence_key(f, n), f"{f}/{n}", "unlisted", t) for f, n, t in loaded

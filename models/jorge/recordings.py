@@ -65,7 +65,7 @@ def shared_boxes(truth: GroundTruth, other: GroundTruth, tol: float = 1.0) -> fl
     float
         In [0, 1]; 0 for a ground truth without boxes or without a box in common.
     """
-    total = int(np.isfinite(truth.boxes[..., 0]).sum())
+    total = truth.num_boxes
     shift = frame_offset(truth, other, tol)
     if total == 0 or shift is None:
         return 0.0

@@ -146,6 +146,11 @@ class GroundTruth:
         return int(self.frames.shape[0])
 
     @property
+    def num_boxes(self) -> int:
+        """Annotated boxes: (frame, person) pairs where the person is present."""
+        return int(np.isfinite(self.boxes[..., 0]).sum())
+
+    @property
     def duration_s(self) -> float:
         """Duration in seconds at ``fps`` frames per second."""
         return self.num_frames / self.fps
