@@ -37,6 +37,7 @@ from models.io.table import as_float, as_int, fail, read_lines, require_file, wr
 
 __all__ = ["read_boxes", "read_mot", "read_mot_truth", "mot_distractor_classes",
            "mot_frame_rate", "frame_rate_source", "is_obsmat", "is_mot", "is_xml",
+           "is_mot_gt", "mot_sequence",
            "write_strokes", "read_stroke_rows", "read_strokes", "read_strokes_header",
            "write_mot_tracks"]
 
@@ -147,12 +148,17 @@ def _mot_rows(path: Path, classes: bool):
         yield line_no, fr, oid, (x, y, w, h), conf, cls
 
 
+def is_mot_gt(path: str | Path) -> bool:
+    """A MOTChallenge ground truth's file name, ``gt.txt`` (or ``.gz``)."""
+    return Path(path).name.lower().removesuffix(".gz") == "gt.txt"
+
+
 def mot_sequence(path: str | Path) -> str | None:
     """The sequence of a MOTChallenge ground truth ``gt.txt`` (or ``.gz``): its folder's
     name, or the one above a ``gt`` folder (``PETS09-S2L1/gt/gt.txt`` -> ``PETS09-S2L1``);
     None for another file name or a ``gt.txt`` without a folder."""
     parts = Path(path).parts
-    if len(parts) < 2 or parts[-1].lower().removesuffix(".gz") != "gt.txt":
+    if len(parts) < 2 or not is_mot_gt(path):
         return None
     return parts[-3] if parts[-2].lower() == "gt" and len(parts) >= 3 else parts[-2]
 

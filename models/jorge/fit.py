@@ -194,14 +194,9 @@ def _ground_truth_files() -> list[tuple[str, str]]:
 
 def _is_ground_truth_name(name: str) -> bool:
     """A CAVIAR / PETS2009 XML or a MOTChallenge ``gt.txt`` (either gzipped)."""
-    from models.io.jorge import is_xml
+    from models.io.jorge import is_mot_gt, is_xml
 
-    return is_xml(name) or _is_mot_gt(name)
-
-
-def _is_mot_gt(name: str) -> bool:
-    """A MOTChallenge ground truth's file name, ``gt.txt`` (or ``.gz``)."""
-    return name.lower().removesuffix(".gz") == "gt.txt"
+    return is_xml(name) or is_mot_gt(name)
 
 
 def sequence_key(folder: str, name: str) -> str:
