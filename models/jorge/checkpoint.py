@@ -84,20 +84,13 @@ def save_labeller(path, labeller: OnlineLabeller) -> None:
 
 
 def _check_periodic(path, lab: OnlineLabeller) -> None:
-    """Refuse a labeller whose inferences are not the ones ``add_stroke`` ran: those due
-    every ``period_s`` before each stroke after the first (its loop, step for step)."""
-    due, expected = None, []
-    for node in lab.graph.nodes:
-        start = node.stroke.start
-        if due is None:
-            due = start + lab._period_frames
-        while start >= due:
-            expected.append(int(np.floor(due)))
-            due += lab._period_frames
-    if [r.frame for r in lab.records] != expected:
+    """Refuse a labeller with inferences that ``add_stroke`` did not run
+    (:attr:`~models.jorge.online.OnlineLabeller.periodic_inferences`)."""
+    if len(lab.records) != lab.periodic_inferences:
         raise CheckpointError(path, "inferences run from outside add_stroke (infer, finish): "
                               f"{len(lab.records)} inferences where adding the strokes again "
-                              f"runs {len(expected)}; such a labeller cannot be resumed")
+                              f"runs {lab.periodic_inferences}; such a labeller cannot be "
+                              "resumed")
 
 
 def _config(config: OnlineConfig, fps: float) -> dict:

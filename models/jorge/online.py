@@ -210,6 +210,9 @@ class OnlineLabeller:
     labels : dict int -> Label
         Current label of every node.
     records : list of InferenceRecord
+    periodic_inferences : int
+        How many of ``records`` :meth:`add_stroke` ran (the rest: :meth:`infer` or
+        :meth:`finish` called from outside).
     instant_pruned_mass : list of float
         Posterior mass dropped each time a new node's eq. 12 posterior was capped to
         ``max_labels`` labels.
@@ -232,6 +235,7 @@ class OnlineLabeller:
         self.beliefs: dict[int, np.ndarray] = {}
         self.free_beliefs: dict[int, np.ndarray] = {}
         self.records: list[InferenceRecord] = []
+        self.periodic_inferences = 0
         self.windows: list = []
         self.keep_windows = keep_windows
         self._period_frames = self.config.period_s * self.fps
@@ -389,9 +393,11 @@ class OnlineLabeller:
             parents = self.graph.check_links(stroke, parents)
         if self._next_inference is None:
             self._next_inference = stroke.start + self._period_frames
+        before = len(self.records)
         while stroke.start >= self._next_inference:
             self.infer(int(np.floor(self._next_inference)))
             self._next_inference += self._period_frames
+        self.periodic_inferences += len(self.records) - before
         k, widened = self.graph.add_stroke(stroke, parents, checked=True)
         for c in sorted(set(widened)):  # parents before children
             self._relabel(c)
