@@ -84,6 +84,11 @@ def _observations(prefix: str, obs: Observations) -> dict[str, np.ndarray]:
     return {f"{prefix}_{k}": np.asarray(v) for k, v in obs._asdict().items()}
 
 
+def _names(prefix: str) -> list[str]:
+    """The names :func:`_observations` (``prefix``) and :func:`_learned` write."""
+    return [f"{prefix}_{k}" for k in _OBS] + [f"theta_{k}" for k in _LEARNED]
+
+
 def _config(config: LearnSearchConfig, params: LSParams, **more) -> dict:
     return {"config": config._asdict(), "params_sha256": params_digest(params), **more}
 
@@ -110,8 +115,7 @@ def load_search(path, params: LSParams, config: LearnSearchConfig):
     """
     from models.zajdel.api_learnsearch import LearnSearchState
 
-    names = [f"obs_{k}" for k in _OBS] + [f"theta_{k}" for k in _LEARNED]
-    names += ["labels", "hypotheses", "log_scores"]
+    names = [*_names("obs"), "labels", "hypotheses", "log_scores"]
     a, _ = load_arrays(path, "zajdel-learnsearch", names, _config(config, params),
                        neg_inf=("log_scores",))
     obs = _check_shapes(path, params, a, "obs")
@@ -177,8 +181,8 @@ def load_stream(path, params: LSParams, config: LearnSearchConfig | None, window
         not fit this format.
     """
     search = StreamSearch(params, config, window, close_z)
-    names = [f"buf_{k}" for k in _OBS] + [f"theta_{k}" for k in _LEARNED]
-    a, header = load_arrays(path, "zajdel-learnsearch-stream", [*names, "committed", *_ST],
+    names = [*_names("buf"), "committed", *_ST]
+    a, header = load_arrays(path, "zajdel-learnsearch-stream", names,
                             _stream_config(params, search.cfg, window, close_z), neg_inf=_ST)
     try:
         counters = {k: int(header[k]) for k in _COUNTERS}
