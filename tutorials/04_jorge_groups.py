@@ -327,7 +327,8 @@ from models.jorge.recordings import frame_offset, same_recording
 from models.jorge.strokes import GroundTruth
 
 try:
-    listed = {n.split(".")[0]: load_sequence("caviar", n) for n in ("ms3ggt.xml.gz", "mws1gt.xml.gz")}
+    names = ("ms3ggt.xml.gz", "mws1gt.xml.gz")
+    listed = {n.split(".")[0]: load_sequence("caviar", n) for n in names}
 except FileNotFoundError:
     print("CAVIAR ms3ggt / mws1gt: absent")
 else:
