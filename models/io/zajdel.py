@@ -108,10 +108,10 @@ def read_observations(path: str | Path) -> PassTable:
     for p in passes:
         if min(p[3], p[4], p[5]) < 0:
             raise p[8].fail("camera and borders must be >= 0")
-    ids = [p[0] for p in passes]
-    if len(set(ids)) != len(ids):
+    if len({p[0] for p in passes}) != len(passes):
         raise fail(path, 0, "pass ids are not unique")
     passes.sort(key=lambda p: p[2])
+    ids = [p[0] for p in passes]  # in the passes' (quit-time) order, as obs and person
     obs = Observations(
         np.array([p[6] for p in passes], float), np.array([p[3] for p in passes], np.int64),
         np.array([p[1] for p in passes], float), np.array([p[2] for p in passes], float),

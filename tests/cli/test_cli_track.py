@@ -226,6 +226,39 @@ def test_zajdel_events_layout_equals_passes(tmp_path):
         np.testing.assert_allclose(x, y)
 
 
+def test_zajdel_rows_in_any_order_label_the_same_passes(tmp_path, capsys):
+    """Rows not in quit-time order (shuffled; an events file lists its passes in order of
+    entry): the passes are read in quit-time order with their own ids and people, so
+    labels.csv gives each pass id the same label and eval the same metrics. The reader
+    took the ids in the file's order and the passes in quit-time order: the shuffled copy of
+    the example got other passes' labels (pairwise F1 0.33 against 1.0)."""
+    from models.io.zajdel import read_labels, read_observations
+
+    rows = (DATA / "zajdel" / "observations.csv").read_text().splitlines()
+    head, body = rows[:2], rows[2:]
+    shuffled = tmp_path / "shuffled.csv"
+    shuffled.write_text("\n".join(head + [body[i] for i in np.random.default_rng(0).permutation(
+        len(body))]) + "\n")  # fmt: skip
+    a, b = read_observations(DATA / "zajdel" / "observations.csv"), read_observations(shuffled)
+    for x, y in zip([a.ids, a.person, *a.obs], [b.ids, b.person, *b.obs]):
+        np.testing.assert_array_equal(x, y)
+    results = []
+    for path in (DATA / "zajdel" / "observations.csv", shuffled):
+        out = _track(tmp_path, "zajdel_learnsearch", [path], "--config", str(_beam(tmp_path)))
+        capsys.readouterr()
+        assert main(["eval", "zajdel_learnsearch", str(out / "labels.csv"), str(path),
+                     "--json"]) == 0  # fmt: skip
+        results.append((read_labels(out / "labels.csv"), json.loads(capsys.readouterr().out)))
+    assert results[0] == results[1] and results[0][1]["pairwise_f1"] == 1.0
+
+
+def _beam(tmp_path: Path) -> Path:
+    """A config of a narrower learn-search beam (faster)."""
+    cfg = tmp_path / "beam.json"
+    cfg.write_text('{"num_hypotheses": 5}')
+    return cfg
+
+
 def test_zajdel_bad_file(tmp_path, capsys):
     argv = ["track", "zajdel_adf", str(DATA / "zajdel" / "bad_observations.csv"), "-o",
             str(tmp_path)]  # fmt: skip
