@@ -54,13 +54,14 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
     p.add_argument("--method", help="dbn only: exact (default), auto, bk, particle, rbpf")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p = sub.add_parser(
-        "fit", help="fit a tracker's parameters on your files (jorge)", epilog=_EPILOG,
+        "fit", help="fit a tracker's parameters on your files (jorge, zajdel_*)", epilog=_EPILOG,
         description="Fit tracker NAME's parameters on TRAIN files whose truth you know; write "
         "OUTDIR/config.json (for `dbntrack track NAME --config`), summary.json and fit.png, with "
         "the error of the config's and the fitted parameters on the training and the held-out "
         "(--validate) files.",
     )  # fmt: skip
-    p.add_argument("name", metavar="NAME", help="tracker with a fit (jorge)")
+    p.add_argument("name", metavar="NAME", help="tracker with a fit (jorge, zajdel_adf, "
+                   "zajdel_learnsearch)")  # fmt: skip
     p.add_argument("train", metavar="TRAIN", nargs="+", help="training files")
     p.add_argument("--validate", metavar="FILE", nargs="+", default=[],
                    help="held-out files: scored, never fitted on")  # fmt: skip
@@ -71,10 +72,11 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
                    "file, seeds SEED, SEED + 1, ... (default 1)")  # fmt: skip
     p.add_argument("--config", metavar="FILE", help="JSON file of tracker options: the "
                    "settings the fit keeps")  # fmt: skip
-    p.add_argument("--prior-strength", type=prior_strengths, default=(0.0,),
+    p.add_argument("--prior-strength", type=prior_strengths, default=None,
                    metavar="LAMBDA[,LAMBDA...]", help="pseudo-observations per parameter row "
-                   "of the config's network as a prior, for fits on little data (default 0: "
-                   "the plain fit); several are chosen among by --folds")  # fmt: skip
+                   "as a prior, for fits on little data (jorge: of the config's network, "
+                   "default 0, the plain fit; zajdel_*: of uniform tables, default 1); several "
+                   "are chosen among by --folds")  # fmt: skip
     p.add_argument("--folds", type=_int_in(2, None), default=0, metavar="K",
                    help="K-fold cross-validation over the training files, cut in the order "
                    "given (keep a recording's files together): the error of fits on the "
@@ -176,7 +178,7 @@ def fit(args: argparse.Namespace) -> dict:
     """Run ``dbntrack fit``; returns the summary written to ``OUTDIR/summary.json``."""
     from dbn.errors import InputError
     from models.track import available, runner
-    from models.track.context import clean, short_names, shown_strength
+    from models.track.context import clean, shown_strength
 
     mod = runner(args.name)
     if not hasattr(mod, "fit"):
@@ -184,7 +186,7 @@ def fit(args: argparse.Namespace) -> dict:
         raise InputError(f"tracker {args.name!r} has no fit; trackers with one: "
                          f"{', '.join(with_fit)}")  # fmt: skip
     config = _read_config(args.config)
-    strengths = list(args.prior_strength)
+    strengths = list(args.prior_strength or getattr(mod, "DEFAULT_PRIOR_STRENGTH", (0.0,)))
     summary = {"tracker": args.name, "train": [str(Path(p).resolve()) for p in args.train],
                "validate": [str(Path(p).resolve()) for p in args.validate],
                "seed": args.seed, "seeds": args.seeds, "folds": args.folds,
@@ -195,45 +197,13 @@ def fit(args: argparse.Namespace) -> dict:
     ctx = _run(args, summary, lambda ctx: mod.fit(ctx, list(args.train), list(args.validate),
                                                   config, args.seeds, strengths, args.folds,
                                                   args.fold_by))
-    names = short_names([row["file"] for row in summary["files"]])
-    for row in summary["files"]:
-        other = f" (other folds' fit {row['error_cv']:.3f})" if "error_cv" in row else ""
-        big = (f"; {row['strokes_group_3plus']} strokes of 3+ people: "
-               f"{row['error_group_3plus_config']:.3f} -> {row['error_group_3plus_fitted']:.3f}"
-               if row["strokes_group_3plus"] else "")  # fmt: skip
-        print(f"{row['split']:>10}  {names[row['file']]}: {row['strokes']} strokes, error "
-              f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted)"
-              f"{other}{big}")
-    shared = summary["parameters"].get("validation_of_training_recordings")
-    if shared:
-        print(f"{args.name}: held-out files of recordings the training files hold too "
-              f"(--fold-by): {', '.join(names[p] for p in shared)}: their errors are not "
-              "held out from those recordings")  # fmt: skip
-    same = summary["parameters"]["validation_same_recording"]
-    if same:
-        print(f"{args.name}: held-out files whose boxes are mostly a training file's (the same "
-              "recording, or a cut of it): "
-              f"{', '.join(f'{names[p]} ({names[t]})' for p, t in same.items())}: their errors "
-              "are not held out")  # fmt: skip
-    if "cross_validation" in summary["parameters"]:
-        cv = summary["parameters"]["cross_validation"]
-        errors = ", ".join(f"{_number(r['prior_strength'])}: {r['error']:.3f}"
-                           + (f" ({r['versus_chosen']:+.3f} +- {r['versus_chosen_se']:.3f})"
-                              if r["prior_strength"] != cv["chosen"] else "")
-                           for r in cv["errors"])  # fmt: skip
-        print(f"{args.name}: {args.folds}-fold cross-validation error by prior strength: "
-              f"{errors}; chosen {_number(cv['chosen'])} (the config's network on the training "
-              f"files: {summary['metrics']['error_train_config']:.3f})")
+    for line in mod.fit_report(summary):
+        print(line)
     if not args.validate:
         print(f"{args.name}: no --validate file: an error on the files fitted on is not a result")
     print(f"{args.name}: wrote {', '.join(summary['outputs'])}, summary.json to {ctx.outdir}")
     print(json.dumps(clean(summary["metrics"])))
     return summary
-
-
-def _number(value: float | str) -> str:
-    """A summary's number for the terminal (``"inf"``, JSON's stand-in, as it is)."""
-    return value if isinstance(value, str) else f"{value:g}"
 
 
 def _read_config(path: str | None) -> dict:

@@ -16,7 +16,11 @@ A runner module (``models.track.<name>``) offers
   the training and the held-out files, and with ``folds`` >= 2 the cross-validation over
   the training files that chooses among several prior strengths, its folds keeping
   together the files of one recording (``fold_by``, a regular expression) where given
-  (``jorge``: :mod:`models.track.jorge_fit`).
+  (``jorge``: :mod:`models.track.jorge_fit`; ``zajdel_adf`` and ``zajdel_learnsearch``:
+  :mod:`models.track.zajdel_fit`; their shared parts: :mod:`models.track.fitting`), with
+  ``fit_report(summary) -> list[str]``, the lines ``dbntrack fit`` prints of it, and
+  optionally ``DEFAULT_PRIOR_STRENGTH``, the strengths where ``--prior-strength`` is not
+  given (else ``(0.0,)``).
 
 ``dbn`` (any two-slice DBN from a BIF file) is not a tracker of the registry: it runs the
 library's generic engines.

@@ -130,6 +130,13 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
     return fit_files(ctx, train, validate, config, seeds, prior_strength, folds, fold_by)
 
 
+def fit_report(summary: dict) -> list[str]:
+    """What ``dbntrack fit`` prints of ``summary`` (:func:`models.track.jorge_fit.fit_report`)."""
+    from models.track.jorge_fit import fit_report as lines
+
+    return lines(summary)
+
+
 def label_steps(ctx: RunContext, online, steps: list, fps: float,
                 phase: str | None = "label") -> tuple[list, list]:
     """The registry's labeller over ``steps`` (strokes, or :class:`LinkedStroke`), then its

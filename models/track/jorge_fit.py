@@ -58,9 +58,19 @@ from typing import NamedTuple
 import numpy as np
 
 from dbn.errors import ConfigError, InputError
-from models.crossval import CrossValidation, cross_validate, fold_blocks, group_keys
+from models.crossval import CrossValidation, cross_validate
 from models.io.jorge_regions import is_regions
-from models.track.context import RunContext, short_names, shown_strength
+from models.track.context import RunContext, shown_strength
+from models.track.fitting import (
+    check_disjoint,
+    check_strengths,
+    cv_record,
+    fold_groups,
+    held_of_training,
+    mean_errors,
+    plot_fit,
+    report,
+)
 from models.track.jorge import (
     builder_keys,
     label_steps,
@@ -71,7 +81,7 @@ from models.track.jorge import (
     require_truth,
 )
 
-__all__ = ["fit", "fitted_config", "FitSet", "FITTED_LABEL_FIELDS"]
+__all__ = ["fit", "fit_report", "fitted_config", "FitSet", "FITTED_LABEL_FIELDS"]
 
 FITTED_LABEL_FIELDS = ("p_new", "p_merge", "p_merge_one_split", "p_merge_both_split", "p_split",
                        "p_part", "p_join", "new_group_probs", "split_cover")
@@ -101,11 +111,11 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
     the files that share the match of the regular expression ``fold_by``
     (:func:`models.crossval.group_keys`) where it is given. Returns ``parameters``,
     ``metrics``, ``files`` (one row per file) and ``outputs`` for ``summary.json``."""
-    groups = _fold_groups(train, folds, fold_by)
-    strengths = _strengths(prior_strength, folds, train, groups)
+    groups = fold_groups(train, folds, fold_by)
+    strengths = check_strengths(prior_strength, folds, train, groups)
     opt = read_options(config)
     base, own = opt.online, opt.own
-    _check_disjoint(train, validate)
+    check_disjoint(train, validate)
     builder = builder_keys(config, own)
     if builder and all(map(is_regions, [*train, *validate])):
         raise ConfigError(f"config {builder}: stroke-builder settings apply to box files, and "
@@ -125,15 +135,15 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
                  for p in ctx.progress(read, len(read), "files")]
     out = fitted_config(config, fitted.network)
     (ctx.outdir / "config.json").write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
-    _plot(ctx, files)
+    plot_fit(ctx, files, "network", "labelling error")
     training = [fs for p in train for fs in read[p]]
     params = {"seeds": seeds, "split_cover": opt.split_cover,
               "prior_strength": shown_strength(strength),
               "folds": folds, "fold_by": fold_by,
               **({} if groups is None else {"validation_of_training_recordings":
-                                            _held_of_training(validate, fold_by, groups)}),
+                                            held_of_training(validate, fold_by, groups)}),
               "validation_same_recording": _same_recordings(read, train, validate),
-              **({} if cv is None else {"cross_validation": _cv_record(cv)}),
+              **({} if cv is None else {"cross_validation": cv_record(cv)}),
               **_counted(training, counts.children, base.network.labels.max_group_size),
               "fitted": {k: v for k, v in out["labels"].items() if isinstance(v, float)}
               | {k: out["network"][k] for k in ("size_mu_single", "size_slope", "size_sigma")}}
@@ -141,32 +151,33 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
             "outputs": ["config.json", "fit.png"]}
 
 
-def _fold_groups(train: list[str], folds: int, fold_by: str | None) -> list[str] | None:
-    """Each training file's group (:func:`models.crossval.group_keys`) where ``fold_by`` is
-    given, which needs ``folds``; None without it. Checked before any file is read."""
-    if fold_by is None:
-        return None
-    if not folds:
-        raise InputError(f"fold groups {fold_by!r}: they group the folds of a cross-validation "
-                         "(give folds >= 2)")  # fmt: skip
-    return group_keys(train, fold_by)
 
 
-def _held_of_training(validate: list[str], fold_by: str, groups: list[str]) -> list[str]:
-    """The held-out files (resolved) whose recording, the match of ``fold_by``, a training
-    file's is too (``groups``): their error is not held out from that recording. Held-out
-    files the pattern does not match are not compared."""
-    train = set(groups)
-    out = []
-    for p in validate:
-        try:
-            (key,) = group_keys([p], fold_by)
-        except InputError:
-            continue
-        if key in train:
-            out.append(str(Path(p).resolve()))
-    return out
 
+
+
+def fit_report(summary: dict) -> list[str]:
+    """The lines ``dbntrack fit jorge`` prints for ``summary``
+    (:func:`models.track.fitting.report`): each file's strokes and errors, those of its
+    strokes of three and more people, and the held-out files of a training recording."""
+
+    def row_text(row: dict, other: str) -> str:
+        big = (f"; {row['strokes_group_3plus']} strokes of 3+ people: "
+               f"{row['error_group_3plus_config']:.3f} -> {row['error_group_3plus_fitted']:.3f}"
+               if row["strokes_group_3plus"] else "")  # fmt: skip
+        return (f"{row['strokes']} strokes, error {row['error_config']:.3f} (config) -> "
+                f"{row['error_fitted']:.3f} (fitted){other}{big}")
+
+    def notes(names: dict) -> list[str]:
+        same = summary["parameters"]["validation_same_recording"]
+        if not same:
+            return []
+        return [f"jorge: held-out files whose boxes are mostly a training file's (the same "
+                "recording, or a cut of it): "
+                f"{', '.join(f'{names[p]} ({names[t]})' for p, t in same.items())}: their "
+                "errors are not held out"]  # fmt: skip
+
+    return report(summary, row_text, "network", notes)
 
 def _same_recordings(read: dict, train: list[str], validate: list[str]) -> dict[str, str]:
     """Each held-out box file (resolved) whose boxes are mostly a training box file's
@@ -185,24 +196,6 @@ def _same_recordings(read: dict, train: list[str], validate: list[str]) -> dict[
     return out
 
 
-def _strengths(prior_strength: float | Sequence[float], folds: int, train: list[str],
-               groups: list[str] | None = None) -> list:
-    """The prior strengths as a list, each a number >= 0 or inf, none twice; several only
-    with ``folds`` to choose among them, and ``folds`` 0 or 2 .. the number of training
-    files (of their ``groups``). Checked before any file is read."""
-    one = np.ndim(prior_strength) == 0
-    strengths = [prior_strength] if one else list(prior_strength)  # type: ignore[arg-type]
-    for lam in strengths:
-        if isinstance(lam, bool) or not isinstance(lam, (int, float, np.number)) or not lam >= 0:
-            raise InputError(f"prior strength {lam!r}: expected a number >= 0 (or inf)")
-    if not strengths or len(set(strengths)) != len(strengths):
-        raise InputError(f"prior strengths {strengths!r}: expected at least one, none twice")
-    if folds:
-        fold_blocks(train, folds, groups)  # refuses a bad number of folds
-    elif len(strengths) > 1:
-        raise InputError(f"prior strengths {strengths!r}: choosing among several needs "
-                         "cross-validation (folds >= 2)")  # fmt: skip
-    return [float(lam) for lam in strengths]
 
 
 def _fitted(read: dict, files: list[str], base, strength: float):
@@ -250,18 +243,6 @@ def _cross_validate(ctx: RunContext, read: dict, train: list[str], base, strengt
     return cv, {p: seen[cv.chosen, p] for p in train}
 
 
-def _cv_record(cv: CrossValidation) -> dict:
-    """The cross-validation for ``summary.json``: each fold's files (resolved, as in
-    ``files``), and each strength's mean error of the fits on the other folds, with its
-    paired difference from the chosen one's and that difference's standard error over
-    the files (:meth:`models.crossval.CrossValidation.versus_chosen`)."""
-    rows = []
-    for lam, e in cv.mean.items():
-        d, se = cv.versus_chosen(lam)
-        rows.append({"prior_strength": shown_strength(lam), "error": e,
-                     "versus_chosen": d, "versus_chosen_se": se})
-    return {"folds": [[str(Path(p).resolve()) for p in fold] for fold in cv.folds],
-            "errors": rows, "chosen": shown_strength(cv.chosen)}
 
 
 def _counted(training: list[FitSet], children: int, gmax: int) -> dict:
@@ -272,15 +253,6 @@ def _counted(training: list[FitSet], children: int, gmax: int) -> dict:
             "strokes_beyond_max_group_size": sum(len(s.truth) > gmax for s in strokes)}
 
 
-def _check_disjoint(train: list[str], validate: list[str]) -> None:
-    """Refuse a file both fitted on and held out (by resolved path), or given twice."""
-    seen: dict[Path, str] = {}
-    for p in [*train, *validate]:
-        q = Path(p).resolve()
-        if q in seen:
-            raise InputError(f"{p}: given twice (as {seen[q]!r}); a held-out file must not be "
-                             "a training file")  # fmt: skip
-        seen[q] = p
 
 
 def _sets(ctx: RunContext, path: str, config: dict, own: set, fps: float | None, base,
@@ -346,22 +318,16 @@ def _errors(ctx: RunContext, online, sets: list[FitSet]) -> _Errors:
 
 
 def _means(files: list[dict]) -> dict:
-    """Mean errors over the training and the held-out files (each file weighs the same),
-    and the error over their strokes of three and more people, pooled (NaN where there
-    are none); under cross-validation the same of the training files' fits on the other
-    folds (``error_cv_fitted``: the chosen strength's cross-validation error)."""
-    out, crowd = {}, {}
-    for split in ("train", "validation"):
-        rows = [f for f in files if f["split"] == split]
-        for name in ("config", "fitted"):
-            out[f"error_{split}_{name}"] = float(np.mean([f[f"error_{name}"] for f in rows])
-                                               if rows else np.nan)  # fmt: skip
-            crowd[f"error_{split}_group_3plus_{name}"] = _pooled(rows, f"error_group_3plus_{name}")
+    """:func:`models.track.fitting.mean_errors`, and the errors over the files' strokes of
+    three and more people, pooled (NaN where there are none; ``error_cv_group_3plus_fitted``
+    under cross-validation)."""
+    crowd = {f"error_{split}_group_3plus_{name}":
+             _pooled([f for f in files if f["split"] == split], f"error_group_3plus_{name}")
+             for split in ("train", "validation") for name in ("config", "fitted")}
     rows = [f for f in files if "error_cv" in f]
     if rows:
-        out["error_cv_fitted"] = float(np.mean([f["error_cv"] for f in rows]))
         crowd["error_cv_group_3plus_fitted"] = _pooled(rows, "error_cv_group_3plus")
-    return out | crowd
+    return mean_errors(files) | crowd
 
 
 def _pooled(rows: list[dict], key: str) -> float:
@@ -383,25 +349,3 @@ def fitted_config(config: dict, network) -> dict:
     return {**config, "network": {**config.get("network", {}), **net},
             "labels": {**config.get("labels", {}), **labels}}
 
-
-def _plot(ctx: RunContext, files: list[dict]) -> None:
-    """``fit.png``: each file's error with the config's and the fitted network (and, for
-    the training files under cross-validation, with the fit on the other folds)."""
-    size = (min(14.0, max(4.0, 0.45 * len(files) + 2)), 4.0)
-    bars = [("config", "config's network"), ("fitted", "fitted network")]
-    if any("error_cv" in f for f in files):
-        bars.append(("cv", "fitted on the other folds"))
-    with ctx.figure("fit.png", figsize=size) as (_, ax):
-        x, width = np.arange(len(files)), 0.8 / len(bars)
-        for i, (name, label) in enumerate(bars):
-            ax.bar(x + (i - (len(bars) - 1) / 2) * width,
-                   [f.get(f"error_{name}", np.nan) for f in files], width, label=label)
-        names = short_names([f["file"] for f in files])
-        ax.set_xticks(x, [("" if f["split"] == "train" else "held out\n") + names[f["file"]]
-                          for f in files], rotation=30, ha="right", fontsize=7)  # fmt: skip
-        held = [i for i, f in enumerate(files) if f["split"] != "train"]
-        if held and held[0] > 0:  # the training files first, then the held-out ones
-            ax.axvline(held[0] - 0.5, color="0.5", lw=0.8, ls="--")
-        ax.set_ylabel("labelling error")
-        ax.set_title("dbntrack fit: each file's error, config's and fitted network", fontsize=9)
-        ax.legend(fontsize=7)

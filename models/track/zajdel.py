@@ -171,21 +171,59 @@ def _run_learnsearch_stream(ctx: RunContext, table, start, config: dict, fields,
     return labels, onehot, {**extra, "best_window_log_score": float(info.log_score)}
 
 
+def check_config(name: str, config: dict) -> tuple[dict, object]:
+    """The config of runner ``name`` checked (:class:`ConfigError` naming the key) before
+    any file is read: its tracker-config fields and the tracker's config instance."""
+    if name == "zajdel_adf":
+        from models.zajdel.tracker import ADFConfig as Config
+    else:
+        from models.zajdel.learnsearch import LearnSearchConfig as Config
+    return _split_config(config, Config, name)
+
+
+def label_passes(ctx: RunContext, table, config: dict, path: str, checked=None):
+    """Run tracker ``ctx.name`` on the passes of ``table`` (read from ``path``) with
+    ``config`` (``checked``: :func:`check_config`'s result, else checked here). Returns
+    the labels (n,), the label matrix (n, K), the run's parameters for the summary and
+    the starting parameters (an :class:`~models.zajdel.learnsearch.LSParams`)."""
+    fields, cfg = check_config(ctx.name, config) if checked is None else checked
+    start = _path_and_start(table, config, path)
+    run = _run_adf if ctx.name == "zajdel_adf" else _run_learnsearch
+    return (*run(ctx, table, start, config, fields, cfg), start)
+
+
+def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, seeds: int = 1,
+        prior_strength=(1.0,), folds: int = 0, fold_by: str | None = None) -> dict:
+    """``dbntrack fit``: the path model and appearance scales fitted on passes whose people
+    are known (:mod:`models.track.zajdel_fit`)."""
+    from models.track.zajdel_fit import fit as fit_files
+
+    return fit_files(ctx, train, validate, config, seeds, prior_strength, folds, fold_by)
+
+
+def fit_report(summary: dict) -> list[str]:
+    """What ``dbntrack fit`` prints of ``summary`` (:mod:`models.track.zajdel_fit`)."""
+    from models.track.zajdel_fit import fit_report as lines
+
+    return lines(summary)
+
+
+DEFAULT_PRIOR_STRENGTH = (1.0,)
+"""``dbntrack fit``'s pseudo-observations per row where ``--prior-strength`` is not given
+(:mod:`models.zajdel.fit`: one move spread uniformly over a row, one travel time at the
+moments of every move), declared, not chosen on data: a plain fit (0) forbids every move
+its training files never show."""
+
+
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     """Label every pass; write ``labels.csv``, ``partition.csv`` and ``labels.png``."""
     if len(inputs) != 1:
         raise InputError(f"{ctx.name} needs one input (OBSERVATIONS.csv), got {len(inputs)}")
-    if ctx.name == "zajdel_adf":
-        from models.zajdel.tracker import ADFConfig as Config
-    else:
-        from models.zajdel.learnsearch import LearnSearchConfig as Config
-    fields, cfg = _split_config(config, Config, ctx.name)
+    checked = check_config(ctx.name, config)
     with ctx.timed("read"):
         table = read_observations(inputs[0])
-        start = _path_and_start(table, config, inputs[0])
-    run = _run_adf if ctx.name == "zajdel_adf" else _run_learnsearch
     with ctx.timed("track"):
-        labels, matrix, extra = run(ctx, table, start, config, fields, cfg)
+        labels, matrix, extra, start = label_passes(ctx, table, config, inputs[0], checked)
     write_labels(ctx.outdir / "labels.csv", table, labels)
     write_partition(ctx.outdir / "partition.csv", table, labels)
     _plot(ctx, table, labels, matrix)
@@ -234,4 +272,5 @@ def evaluate(result: str, truth: str) -> dict:
             "num_compared": len(common)}  # fmt: skip
 
 
-__all__ = ["INPUTS", "track", "evaluate"]
+__all__ = ["INPUTS", "track", "evaluate", "fit", "fit_report", "label_passes",
+           "check_config", "DEFAULT_PRIOR_STRENGTH"]

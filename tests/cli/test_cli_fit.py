@@ -129,7 +129,8 @@ def test_fit_refusals(tmp_path, capsys):
         cfg.write_text(text)
         _bad(capsys, ["fit", "jorge", str(plain), "-o", str(out), "--config", str(cfg)], *needles)
     _bad(capsys, ["fit", "localization", str(plain), "-o", str(out)],
-         "'localization' has no fit; trackers with one: jorge")  # fmt: skip
+         "'localization' has no fit; trackers with one: zajdel_adf, zajdel_learnsearch, "
+         "jorge")  # fmt: skip
     from models.track.context import RunContext
     from models.track.jorge_fit import fit
 
