@@ -135,3 +135,24 @@ def test_fit_refusals(tmp_path, capsys):
     _bad(capsys, ["fit", "zajdel_adf", str(files[0]), "--config", str(cfg), "-o", out],
          "cfg.json", "stream_window")  # fmt: skip
     assert not (tmp_path / "out" / "config.json").exists()
+
+
+def test_a_held_out_copy_of_a_training_file_is_named(tmp_path, capsys):
+    """A held-out file holding half of a training file's passes (other ids, times shifted
+    by an hour, rows in another order) is named as not held out; another day is not."""
+    train, other = _office_files(tmp_path)[:2]
+    head, *rows = train.read_text().splitlines()
+    cut = tmp_path / "cut.csv"
+    shifted = []
+    for row in rows[: (len(rows) + 1) // 2][::-1]:
+        cells = row.split(",")
+        cells[0] = str(int(cells[0]) + 5000)
+        cells[1], cells[2] = (str(float(c) + 3600.0) for c in cells[1:3])
+        shifted.append(",".join(cells))
+    cut.write_text("\n".join([head, *shifted]) + "\n")
+    summary, _ = _fit(tmp_path, "zajdel_learnsearch", "fit", train, "--validate", cut, other)
+    assert summary["parameters"]["validation_same_recording"] == {
+        str(cut.resolve()): str(train.resolve())}
+    out = capsys.readouterr().out
+    assert "held-out files of which half the passes or more are a training file's: " \
+           "cut.csv (office0.csv): their errors are not held out" in out
