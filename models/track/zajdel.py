@@ -39,7 +39,7 @@ _MAX_SCALE = 1e100  # times and spreads beyond it overflow once squared (a unit 
 _MAX_PATH_ENTRIES = 10**7  # the dense (C, B, C, B) transition table: 80 MB
 
 
-def _check_path_size(path: str, config: dict, C: int, B: int) -> None:
+def check_path_size(path: str, config: dict, C: int, B: int) -> None:
     """Refuse camera and border counts whose dense path table would exceed
     ``_MAX_PATH_ENTRIES`` (an id of 3000 took 35 s and 2 GB; 100000 asked for 298 GiB),
     naming the config keys or the observations file they came from."""
@@ -60,7 +60,7 @@ def _path_and_start(table, config: dict, path: str):
     o = table.obs
     C = integer(config, "num_cameras", int(o.camera.max()) + 1)
     B = integer(config, "num_borders", int(max(o.border_enter.max(), o.border_quit.max())) + 1)
-    _check_path_size(path, config, C, B)
+    check_path_size(path, config, C, B)
     trans = array(config, "trans", np.full((C, B, C, B), 1.0 / (C * B)))
     entry = array(config, "entry", np.full((C, B), 1.0 / (C * B)))
     span = float(o.t_quit.max() - o.t_enter.min())
@@ -192,8 +192,16 @@ def label_passes(ctx: RunContext, table, config: dict, path: str, checked=None):
     return (*run(ctx, table, start, config, fields, cfg), start)
 
 
+DEFAULT_PRIOR_STRENGTH = (1.0,)
+"""``dbntrack fit``'s pseudo-observations per row where ``--prior-strength`` is not given
+(:mod:`models.zajdel.fit`: one move spread uniformly over a row, one travel time at the
+moments of every move), declared, not chosen on data: a plain fit (0) forbids every move
+its training files never show."""
+
+
 def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, seeds: int = 1,
-        prior_strength=(1.0,), folds: int = 0, fold_by: str | None = None) -> dict:
+        prior_strength=DEFAULT_PRIOR_STRENGTH, folds: int = 0,
+        fold_by: str | None = None) -> dict:
     """``dbntrack fit``: the path model and appearance scales fitted on passes whose people
     are known (:mod:`models.track.zajdel_fit`)."""
     from models.track.zajdel_fit import fit as fit_files
@@ -206,13 +214,6 @@ def fit_report(summary: dict) -> list[str]:
     from models.track.zajdel_fit import fit_report as lines
 
     return lines(summary)
-
-
-DEFAULT_PRIOR_STRENGTH = (1.0,)
-"""``dbntrack fit``'s pseudo-observations per row where ``--prior-strength`` is not given
-(:mod:`models.zajdel.fit`: one move spread uniformly over a row, one travel time at the
-moments of every move), declared, not chosen on data: a plain fit (0) forbids every move
-its training files never show."""
 
 
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
@@ -273,4 +274,4 @@ def evaluate(result: str, truth: str) -> dict:
 
 
 __all__ = ["INPUTS", "track", "evaluate", "fit", "fit_report", "label_passes",
-           "check_config", "DEFAULT_PRIOR_STRENGTH"]
+           "check_config", "check_path_size", "DEFAULT_PRIOR_STRENGTH"]

@@ -52,7 +52,12 @@ from models.track.fitting import (
     report,
 )
 from models.track.options import integer
-from models.track.zajdel import check_config, label_passes
+from models.track.zajdel import (
+    DEFAULT_PRIOR_STRENGTH,
+    check_config,
+    check_path_size,
+    label_passes,
+)
 
 __all__ = ["fit", "fit_report", "fitted_config", "FITTED_KEYS"]
 
@@ -63,7 +68,8 @@ FITTED_KEYS = {"zajdel_adf": ("trans", "entry", "travel_mean", "travel_std", "p_
 
 
 def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, seeds: int = 1,
-        prior_strength=(1.0,), folds: int = 0, fold_by: str | None = None) -> dict:
+        prior_strength=DEFAULT_PRIOR_STRENGTH, folds: int = 0,
+        fold_by: str | None = None) -> dict:
     """Fit on ``train``, score on ``train`` and ``validate`` (module docstring); write
     ``config.json`` and ``fit.png``. Returns ``parameters``, ``metrics``, ``files`` (one
     row per file) and ``outputs`` for ``summary.json``."""
@@ -120,11 +126,15 @@ def _read(path: str):
 
 
 def _layout(config: dict, tables: dict) -> tuple[int, int]:
-    """(cameras, borders): the config's, else one more than the largest ids of the files."""
-    obs = [t.obs for t in tables.values()]
-    C = integer(config, "num_cameras", max(int(o.camera.max()) for o in obs) + 1)
-    B = integer(config, "num_borders", max(int(max(o.border_enter.max(), o.border_quit.max()))
-                                           for o in obs) + 1)  # fmt: skip
+    """(cameras, borders): the config's, else one more than the largest ids of the files;
+    a dense path table too large to count in is refused, naming the file with the largest
+    ids (:func:`models.track.zajdel.check_path_size`), before anything is counted."""
+    ids = {p: (int(t.obs.camera.max()) + 1,
+               int(max(t.obs.border_enter.max(), t.obs.border_quit.max())) + 1)
+           for p, t in tables.items()}  # fmt: skip
+    C = integer(config, "num_cameras", max(c for c, _ in ids.values()))
+    B = integer(config, "num_borders", max(b for _, b in ids.values()))
+    check_path_size(max(ids, key=lambda p: ids[p][0] * ids[p][1]), config, C, B)
     return C, B
 
 

@@ -130,6 +130,12 @@ def test_fit_refusals(tmp_path, capsys):
          "--seeds 2: zajdel_adf labels its files as they are")  # fmt: skip
     _bad(capsys, ["fit", "zajdel_adf", str(files[0]), "--prior-strength", "inf", "-o", out],
          "zajdel_adf's prior is a uniform table")  # fmt: skip
+    far = tmp_path / "far.csv"  # a camera id of 100000: a dense table of 4e10 entries
+    cells = rows[1].split(",")
+    cells[3] = "100000"  # pass,t_enter,t_quit,camera,...
+    far.write_text("\n".join([rows[0], ",".join(cells), *rows[2:]]) + "\n")
+    _bad(capsys, ["fit", "zajdel_adf", str(files[0]), "--validate", str(far), "-o", out],
+         "far.csv: camera ids up to 100000", "dense")  # fmt: skip
     cfg = tmp_path / "cfg.json"
     cfg.write_text('{"stream_window": 5}')
     _bad(capsys, ["fit", "zajdel_adf", str(files[0]), "--config", str(cfg), "-o", out],
