@@ -136,12 +136,14 @@ def plot_fit(ctx: RunContext, files: list[dict], fitted: str, error: str) -> Non
 
 
 def report(summary: dict, row_text: Callable[[dict, str], str], fitted: str,
-           notes: Callable[[dict], list[str]] | None = None) -> list[str]:
+           same: str) -> list[str]:
     """The lines ``dbntrack fit`` prints before its closing ones: a line per file
     (``row_text(row, other)``, ``other`` the other folds' fit's error where there is one,
-    else empty), the held-out files of training recordings, the runner's ``notes(names)``
-    (``names``: the files' short names), and the cross-validation's errors by prior
-    strength beside the config's ``fitted`` (e.g. ``"network"``) on the training files."""
+    else empty), the held-out files of training recordings (``--fold-by``) and those that
+    hold a training file's data (``parameters.validation_same_recording``, described by
+    ``same``, e.g. ``"whose boxes are mostly a training file's"``), and the
+    cross-validation's errors by prior strength beside the config's ``fitted`` (e.g.
+    ``"network"``) on the training files."""
     name, params = summary["tracker"], summary["parameters"]
     names = short_names([row["file"] for row in summary["files"]])
     lines = []
@@ -153,7 +155,11 @@ def report(summary: dict, row_text: Callable[[dict, str], str], fitted: str,
         lines.append(f"{name}: held-out files of recordings the training files hold too "
                      f"(--fold-by): {', '.join(names[p] for p in shared)}: their errors are not "
                      "held out from those recordings")  # fmt: skip
-    lines += notes(names) if notes is not None else []
+    copies = params["validation_same_recording"]
+    if copies:
+        lines.append(f"{name}: held-out files {same}: "
+                     f"{', '.join(f'{names[p]} ({names[t]})' for p, t in copies.items())}: "
+                     "their errors are not held out")  # fmt: skip
     if "cross_validation" in params:
         cv = params["cross_validation"]
         errors = ", ".join(f"{_number(r['prior_strength'])}: {r['error']:.3f}"

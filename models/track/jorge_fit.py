@@ -168,16 +168,9 @@ def fit_report(summary: dict) -> list[str]:
         return (f"{row['strokes']} strokes, error {row['error_config']:.3f} (config) -> "
                 f"{row['error_fitted']:.3f} (fitted){other}{big}")
 
-    def notes(names: dict) -> list[str]:
-        same = summary["parameters"]["validation_same_recording"]
-        if not same:
-            return []
-        return [f"jorge: held-out files whose boxes are mostly a training file's (the same "
-                "recording, or a cut of it): "
-                f"{', '.join(f'{names[p]} ({names[t]})' for p, t in same.items())}: their "
-                "errors are not held out"]  # fmt: skip
+    return report(summary, row_text, "network", "whose boxes are mostly a training file's "
+                  "(the same recording, or a cut of it)")
 
-    return report(summary, row_text, "network", notes)
 
 def _same_recordings(read: dict, train: list[str], validate: list[str]) -> dict[str, str]:
     """Each held-out box file (resolved) whose boxes are mostly a training box file's

@@ -240,7 +240,6 @@ def _cross_validate(ctx: RunContext, tables: dict, counts: dict, layout, config:
     return cv, {p: seen[cv.chosen, p] for p in train}
 
 
-
 def fit_report(summary: dict) -> list[str]:
     """The lines ``dbntrack fit zajdel_*`` prints for ``summary``
     (:func:`models.track.fitting.report`): each file's passes, people, error and ``q``."""
@@ -250,13 +249,5 @@ def fit_report(summary: dict) -> list[str]:
                 f"{row['error_config']:.3f} (config) -> {row['error_fitted']:.3f} (fitted)"
                 f"{other}; q {row['q_config']:.3f} -> {row['q_fitted']:.3f}")
 
-    def notes(names: dict) -> list[str]:
-        same = summary["parameters"]["validation_same_recording"]
-        if not same:
-            return []
-        return [f"{summary['tracker']}: held-out files of which half the passes or more are "
-                "a training file's: "
-                f"{', '.join(f'{names[p]} ({names[t]})' for p, t in same.items())}: their "
-                "errors are not held out"]  # fmt: skip
-
-    return report(summary, row_text, "parameters", notes)
+    return report(summary, row_text, "parameters",
+                  "of which half the passes or more are a training file's")
