@@ -115,7 +115,7 @@ def plot_fit(ctx: RunContext, files: list[dict], fitted: str, error: str) -> Non
     """``fit.png``: each file's ``error`` (the axis label) with the config's and the
     ``fitted`` parameters (e.g. ``"network"``), and, for the training files under
     cross-validation, with the fit on the other folds."""
-    size = (min(14.0, max(4.0, 0.45 * len(files) + 2)), 4.0)
+    size = (min(14.0, max(5.0, 0.45 * len(files) + 2)), 4.0)
     bars = [("config", f"config's {fitted}"), ("fitted", f"fitted {fitted}")]
     if any("error_cv" in f for f in files):
         bars.append(("cv", "fitted on the other folds"))
