@@ -185,8 +185,8 @@ def _travel(travel: np.ndarray, lam: float) -> tuple[np.ndarray, np.ndarray]:
         s0 = max(abs(d0), 1.0)  # one travel time only: a spread of its size
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = np.where(N + lam > 0, (lam * d0 + S1) / (lam + N), d0)
-        var = np.where(N + lam > 0,
-                       (lam * s0**2 + S2 - 2 * mean * S1 + mean**2 * N) / (lam + N), s0**2)  # fmt: skip
+        spread = (lam * s0**2 + S2 - 2 * mean * S1 + mean**2 * N) / (lam + N)
+        var = np.where(N + lam > 0, spread, s0**2)
     return mean, np.sqrt(np.maximum(var, (_FLOOR * s0) ** 2))
 
 
