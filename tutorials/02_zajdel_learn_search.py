@@ -249,7 +249,8 @@ print("acceptance rates (swap, move, split, merge):", np.round(r.accept_rate, 4)
 # four "days" of about 60 passes: the layout is fitted on three days and the search labels
 # the fourth, against the uniform start (uniform tables, travel times guessed from the
 # data, as `dbntrack track` starts without a config) and the simulator's own layout (EM
-# learns the appearance and the travel times in every case).
+# learns the appearance and the travel times in every case; the three runs share the
+# fitted new-person rate, so only the layout and the travel times differ).
 
 # %%
 from models.zajdel.fit import fit_passes
@@ -287,10 +288,10 @@ for name, col in zip(("uniform tables", "fitted on 3 days", "simulator's own"), 
           f"(+- {col.std(ddof=1) / np.sqrt(col.size):.3f} over {col.size} offices)")
 
 # %% [markdown]
-# The fitted layout closes much of the gap between the uniform start and the simulator's
-# own tables; what is left comes from the few moves three days show per row (the
-# SIMULATED offices' real layouts differ from seed to seed, as buildings do, so nothing is
-# fitted across offices). With your files: `dbntrack fit zajdel_learnsearch DAY1.csv
+# The fitted layout closes most of the gap between the uniform start and the simulator's
+# own tables. Three days show about 160 moves for a table of 196 entries (14 quit places
+# by 14 entry places), so the fit is noisy where people rarely go (the SIMULATED offices'
+# layouts differ from seed to seed, as buildings do, so nothing is fitted across offices). With your files: `dbntrack fit zajdel_learnsearch DAY1.csv
 # DAY2.csv --validate DAY3.csv -o fit`, then `dbntrack track zajdel_learnsearch NEW.csv
 # --config fit/config.json`; `--folds 3 --prior-strength 0,1,10` chooses the pseudo-count
 # by cross-validation over the training days (`docs/formats.md`).
