@@ -39,7 +39,7 @@ import numpy as np
 from dbn.errors import InputError
 from models.zajdel.data import Observations
 
-__all__ = ["PassCounts", "PassFit", "pass_counts", "fit_counts", "fit_passes"]
+__all__ = ["PassCounts", "PassFit", "pass_counts", "sum_counts", "fit_counts", "fit_passes"]
 
 _FLOOR = 1e-6  # relative floor of a spread, and of p_new's distance from 0 and 1
 
@@ -195,11 +195,17 @@ def fit_passes(sets: Sequence[tuple[Observations, np.ndarray]], num_cameras: int
     """:func:`fit_counts` of the summed :func:`pass_counts` of ``(obs, person)`` sets."""
     if not sets:
         raise InputError("no passes to fit on")
-    dims = {np.shape(o.appearance)[1] for o, _ in sets}
+    return fit_counts(sum_counts([pass_counts(o, p, num_cameras, num_borders)
+                                  for o, p in sets]), strength)  # fmt: skip
+
+
+def sum_counts(parts: Sequence[PassCounts]) -> PassCounts:
+    """The statistics of several sets of passes together (:meth:`PassCounts.plus`); sets
+    of different appearance dimensions are an :class:`~dbn.errors.InputError`."""
+    dims = {part.means.shape[1] for part in parts}
     if len(dims) > 1:
         raise InputError(f"the sets' appearance dimensions differ: {sorted(dims)}")
-    parts = [pass_counts(o, p, num_cameras, num_borders) for o, p in sets]
     total = parts[0]
     for part in parts[1:]:
         total = total.plus(part)
-    return fit_counts(total, strength)
+    return total
