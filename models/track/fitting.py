@@ -16,11 +16,11 @@ from pathlib import Path
 import numpy as np
 
 from dbn.errors import InputError
-from models.crossval import CrossValidation, fold_blocks, group_keys
+from models.crossval import CrossValidation, cross_validate, fold_blocks, group_keys
 from models.track.context import RunContext, short_names, shown_strength
 
 __all__ = ["check_disjoint", "fold_groups", "held_of_training", "check_strengths",
-           "cv_record", "mean_errors", "plot_fit", "report"]  # fmt: skip
+           "cross_validate_files", "cv_record", "mean_errors", "plot_fit", "report"]  # fmt: skip
 
 
 def check_disjoint(train: list[str], validate: list[str]) -> None:
@@ -79,6 +79,34 @@ def check_strengths(prior_strength: float | Sequence[float], folds: int, train: 
         raise InputError(f"prior strengths {strengths!r}: choosing among several needs "
                          "cross-validation (folds >= 2)")  # fmt: skip
     return [float(lam) for lam in strengths]
+
+
+def cross_validate_files(ctx: RunContext, train: list[str], strengths: list, folds: int,
+                         groups: list[str] | None, fit: Callable, score: Callable,
+                         advice: str = "") -> tuple[CrossValidation, dict]:
+    """Each training file scored with the parameters fitted on the other folds (no group of
+    ``groups`` split between folds), for every strength
+    (:func:`models.crossval.cross_validate`): ``fit(files, strength) -> model``,
+    ``score(model, path) -> (error, record)``. Returns the cross-validation and each
+    training file's record under the chosen strength's fit on the other folds. A fit that
+    fails (:class:`InputError`) is named by the fold it was for, then ``advice``."""
+    seen: dict = {}
+
+    def fit_on(files: list[str], strength: float):
+        try:
+            return strength, fit(files, strength)
+        except InputError as exc:
+            held = [p for p in train if p not in files]
+            raise InputError(f"cross-validation, the fit for the fold of {held}: {exc}"
+                             f"{advice}") from None  # fmt: skip
+
+    def error(model: tuple, path: str) -> float:
+        strength, fitted = model
+        err, seen[strength, path] = score(fitted, path)
+        return err
+
+    cv = cross_validate(train, folds, strengths, fit_on, error, ctx.bar("fits"), groups)
+    return cv, {p: seen[cv.chosen, p] for p in train}
 
 
 def cv_record(cv: CrossValidation) -> dict:

@@ -58,12 +58,13 @@ from typing import NamedTuple
 import numpy as np
 
 from dbn.errors import ConfigError, InputError
-from models.crossval import CrossValidation, cross_validate
+from models.crossval import CrossValidation
 from models.io.jorge_regions import is_regions
 from models.track.context import RunContext, shown_strength
 from models.track.fitting import (
     check_disjoint,
     check_strengths,
+    cross_validate_files,
     cv_record,
     fold_groups,
     held_of_training,
@@ -151,11 +152,6 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict,
             "outputs": ["config.json", "fit.png"]}
 
 
-
-
-
-
-
 def fit_report(summary: dict) -> list[str]:
     """The lines ``dbntrack fit jorge`` prints for ``summary``
     (:func:`models.track.fitting.report`): each file's strokes and errors, those of its
@@ -189,8 +185,6 @@ def _same_recordings(read: dict, train: list[str], validate: list[str]) -> dict[
     return out
 
 
-
-
 def _fitted(read: dict, files: list[str], base, strength: float):
     """``(online, counts)``: the config's labeller ``base`` with its network fitted on the
     stroke sets of ``files`` (``read[path]``) and shrunk with ``strength``, and the events
@@ -212,30 +206,18 @@ def _fitted(read: dict, files: list[str], base, strength: float):
 
 def _cross_validate(ctx: RunContext, read: dict, train: list[str], base, strengths: list,
                     folds: int, groups: list[str] | None) -> tuple[CrossValidation, dict]:
-    """Each training file labelled with the network fitted on the other folds (no group of
-    ``groups`` split between folds), for every strength
-    (:func:`models.crossval.cross_validate`); and each training file's :class:`_Errors`
-    under the chosen strength's fit on the other folds."""
-    seen: dict = {}
+    """Each training file labelled with the network fitted on the other folds, for every
+    strength (:func:`models.track.fitting.cross_validate_files`); and each training file's
+    :class:`_Errors` under the chosen strength's fit on the other folds."""
 
-    def fit_on(files: list[str], strength: float):
-        try:
-            return strength, _fitted(read, files, base, strength)[0]
-        except InputError as exc:
-            held = [p for p in train if p not in files]
-            raise InputError(f"cross-validation, the fit for the fold of {held}: {exc}; give "
-                             "fewer folds or order the files so that every fold's complement "
-                             "has links") from None
+    def score(online, path: str) -> tuple[float, _Errors]:
+        errors = _errors(ctx, online, read[path])
+        return errors.rate, errors
 
-    def error(model: tuple, path: str) -> float:
-        strength, online = model
-        seen[strength, path] = _errors(ctx, online, read[path])
-        return seen[strength, path].rate
-
-    cv = cross_validate(train, folds, strengths, fit_on, error, ctx.bar("fits"), groups)
-    return cv, {p: seen[cv.chosen, p] for p in train}
-
-
+    return cross_validate_files(
+        ctx, train, strengths, folds, groups,
+        lambda files, strength: _fitted(read, files, base, strength)[0], score,
+        "; give fewer folds or order the files so that every fold's complement has links")
 
 
 def _counted(training: list[FitSet], children: int, gmax: int) -> dict:
@@ -244,8 +226,6 @@ def _counted(training: list[FitSet], children: int, gmax: int) -> dict:
     strokes = [s for fs in training for s in fs.strokes]
     return {"training_strokes": len(strokes), "counted_children": children,
             "strokes_beyond_max_group_size": sum(len(s.truth) > gmax for s in strokes)}
-
-
 
 
 def _sets(ctx: RunContext, path: str, config: dict, own: set, fps: float | None, base,

@@ -38,12 +38,12 @@ from pathlib import Path
 import numpy as np
 
 from dbn.errors import DBNError, InputError, in_file
-from models.crossval import cross_validate
 from models.io.zajdel import read_observations
 from models.track.context import RunContext, shown_strength
 from models.track.fitting import (
     check_disjoint,
     check_strengths,
+    cross_validate_files,
     cv_record,
     fold_groups,
     held_of_training,
@@ -58,6 +58,7 @@ from models.track.zajdel import (
     check_path_size,
     label_passes,
 )
+from models.zajdel.fit import fit_counts, pass_counts, sum_counts
 
 __all__ = ["fit", "fit_report", "fitted_config", "FITTED_KEYS"]
 
@@ -101,7 +102,7 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, se
     (ctx.outdir / "config.json").write_text(json.dumps(fitted, indent=1) + "\n",
                                             encoding="utf-8")  # fmt: skip
     plot_fit(ctx, files, "parameters", "error (1 - pairwise F1)")
-    total = _sum([counts[p] for p in train])
+    total = sum_counts([counts[p] for p in train])
     params = {"prior_strength": shown_strength(strength), "folds": folds, "fold_by": fold_by,
               **({} if groups is None else {"validation_of_training_recordings":
                                             held_of_training(validate, fold_by, groups)}),
@@ -160,33 +161,18 @@ def _same_recordings(tables: dict, train: list[str], validate: list[str]) -> dic
 
 
 def _counts(path: str, table, layout: tuple[int, int]):
-    from models.zajdel.fit import pass_counts
-
     try:
         return pass_counts(table.obs, table.person, *layout, ids=table.ids)
     except DBNError as exc:
         raise in_file(exc, path) from None
 
 
-def _sum(parts: list):
-    total = parts[0]
-    for part in parts[1:]:
-        total = total.plus(part)
-    return total
-
-
 def _fitted(name: str, config: dict, layout, counts: dict, files: list[str],
             strength: float) -> dict:
     """The config with the parameters fitted on ``files`` written over it."""
-    from models.zajdel.fit import fit_counts
-
-    dims = {counts[p].means.shape[1] for p in files}
-    if len(dims) > 1:
-        raise InputError(f"training files with {sorted(dims)} appearance columns: one "
-                         "appearance space is fitted")  # fmt: skip
     try:
-        return fitted_config(name, config, layout, fit_counts(_sum([counts[p] for p in files]),
-                                                              strength))  # fmt: skip
+        total = sum_counts([counts[p] for p in files])
+        return fitted_config(name, config, layout, fit_counts(total, strength))
     except InputError as exc:
         raise InputError(f"training files {files}: {exc}") from None
 
@@ -223,21 +209,17 @@ def _score_file(ctx: RunContext, path: str, table, config: dict, base, fitted: d
 def _cross_validate(ctx: RunContext, tables: dict, counts: dict, layout, config: dict,
                     strengths: list, folds: int, groups):
     """Each training file labelled with the parameters fitted on the other folds, for every
-    strength (:func:`models.crossval.cross_validate`); and each file's error under the
-    chosen strength's fit on the other folds."""
-    seen: dict = {}
+    strength (:func:`models.track.fitting.cross_validate_files`); and each file's error
+    under the chosen strength's fit on the other folds."""
 
-    def fit_on(files: list[str], strength: float):
-        return strength, _fitted(ctx.name, config, layout, counts, files, strength)
+    def score(fitted: dict, path: str) -> tuple[float, float]:
+        error = _error(ctx, path, tables[path], fitted)[0]
+        return error, error
 
-    def error(model: tuple, path: str) -> float:
-        strength, fitted = model
-        seen[strength, path] = _error(ctx, path, tables[path], fitted)[0]
-        return seen[strength, path]
-
-    train = list(counts)
-    cv = cross_validate(train, folds, strengths, fit_on, error, ctx.bar("fits"), groups)
-    return cv, {p: seen[cv.chosen, p] for p in train}
+    return cross_validate_files(
+        ctx, list(counts), strengths, folds, groups,
+        lambda files, strength: _fitted(ctx.name, config, layout, counts, files, strength),
+        score)
 
 
 def fit_report(summary: dict) -> list[str]:
