@@ -291,10 +291,11 @@ for name, col in zip(("uniform tables", "fitted on 3 days", "simulator's own"), 
 # The fitted layout closes most of the gap between the uniform start and the simulator's
 # own tables. Three days show about 160 moves for a table of 196 entries (14 quit places
 # by 14 entry places), so the fit is noisy where people rarely go (the SIMULATED offices'
-# layouts differ from seed to seed, as buildings do, so nothing is fitted across offices). With your files: `dbntrack fit zajdel_learnsearch DAY1.csv
-# DAY2.csv --validate DAY3.csv -o fit`, then `dbntrack track zajdel_learnsearch NEW.csv
-# --config fit/config.json`; `--folds 3 --prior-strength 0,1,10` chooses the pseudo-count
-# by cross-validation over the training days (`docs/formats.md`).
+# layouts differ from seed to seed, as buildings do, so nothing is fitted across offices).
+# With your files: `dbntrack fit zajdel_learnsearch DAY1.csv DAY2.csv --validate DAY3.csv
+# -o fit`, then `dbntrack track zajdel_learnsearch NEW.csv --config fit/config.json`;
+# `--folds 3 --prior-strength 0,1,10` chooses the pseudo-count by cross-validation over
+# the training days (`docs/formats.md`).
 
 # %% [markdown]
 # ## Reading the tables
