@@ -195,26 +195,11 @@ def estimate_noise(data: MRCLAMRobot, *, duration: float = 600.0, dt: float = 0.
     bearing errors of landmark measurements, and per-step odometry errors over ``dt`` steps
     split into the ``a * sqrt(dt)`` form of :class:`~models.localization.model.MotionNoise`.
     """
-    seq = build_sequence(data, duration=duration, dt=dt)
-    obs = seq.observations
-    k, j = np.nonzero(obs.mask)
-    pose = seq.truth[k + 1]
-    lm = seq.landmarks[obs.landmark[k, j]]
-    r_hat = np.hypot(lm[:, 0] - pose[:, 0], lm[:, 1] - pose[:, 1])
-    b_hat = np.arctan2(lm[:, 1] - pose[:, 1], lm[:, 0] - pose[:, 0]) - pose[:, 2]
-    er = obs.range[k, j] - r_hat
-    eb = wrap_angle(obs.bearing[k, j] - b_hat)
-    mad = lambda e: 1.4826 * float(np.median(np.abs(e - np.median(e))))  # noqa: E731
-    true_rel = relative_pose(seq.truth[:-1], seq.truth[1:])
-    e_odo = true_rel - seq.odometry[:, :3]
-    return {
-        "sigma_range": mad(er),
-        "sigma_bearing": mad(eb),
-        "range_bias": float(np.median(er)),
-        "a_xy": mad(np.concatenate([e_odo[:, 0], e_odo[:, 1]])) / math.sqrt(dt),
-        "a_theta": mad(wrap_angle(e_odo[:, 2])) / math.sqrt(dt),
-        "num_measurements": int(len(er)),
-    }
+    from models.localization.fit import noise_residuals, robust_noise
+
+    noise = robust_noise(noise_residuals(build_sequence(data, duration=duration, dt=dt)))
+    return {k: noise[k] for k in ("sigma_range", "sigma_bearing", "range_bias", "a_xy",
+                                  "a_theta", "num_measurements")}  # fmt: skip
 
 
 #: Noise settings of the MRCLAM model, chosen on robot 2 (held out; robot 1 is the test
@@ -231,12 +216,14 @@ MRCLAM_NOISE = {
 }
 
 
-def mrclam_model(seq: MRCLAMSequence):
+def mrclam_model(seq: MRCLAMSequence, settings: dict | None = None):
     """The range-bearing :class:`RangeBearingLocalizationModel` for a sequence (initial belief
-    around the true first pose, ``MRCLAM_NOISE`` settings)."""
+    around the true first pose) with the noise ``settings`` (keys of ``MRCLAM_NOISE``, and
+    optionally ``range_bias`` and ``max_range``; default ``MRCLAM_NOISE``)."""
     from models.localization.model import MotionNoise, RangeBearingLocalizationModel
 
-    cfg = MRCLAM_NOISE
+    cfg = MRCLAM_NOISE if settings is None else settings
+    extra = {k: float(cfg[k]) for k in ("range_bias", "max_range") if k in cfg}
     return RangeBearingLocalizationModel(
         seq.landmarks,
         seq.truth[0],
@@ -245,4 +232,5 @@ def mrclam_model(seq: MRCLAMSequence):
         sigma_range=cfg["sigma_range"],
         sigma_bearing=cfg["sigma_bearing"],
         outlier_prob=cfg["outlier_prob"],
+        **extra,
     )

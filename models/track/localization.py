@@ -5,7 +5,13 @@ registry's protocol adapter (auxiliary particle filter by default).
 
 Config keys: ``robot`` (1), ``duration`` (s, default: the whole odometry), ``dt`` (0.1),
 ``num_particles`` (2000), ``algorithm`` ('apf' or 'sir'), ``initial_pose`` ([x, y, theta];
-default: the first ground-truth pose, required without ground truth).
+default: the first ground-truth pose, required without ground truth); the noise of your
+robot (default :data:`~models.localization.mrclam.MRCLAM_NOISE`, chosen on MRCLAM's robot
+2): ``motion`` ``[a_xy, b_xy, a_theta, b_theta]`` (:class:`~models.localization.model.
+MotionNoise`), ``sigma_range`` (m), ``sigma_bearing`` (rad), ``outlier_prob``,
+``initial_std`` ``[sx, sy, stheta]``, ``range_bias`` (m, 0) and ``max_range`` (m, 10).
+``dbntrack fit localization`` measures them on your runs with ground truth
+(:mod:`models.track.localization_fit`).
 """
 
 from __future__ import annotations
@@ -28,7 +34,10 @@ from models.track.options import array, check_keys, integer, number, text
 
 INPUTS = ("an MRCLAM dataset folder (RobotN_Odometry.dat, ...), or",
           "odometry.csv measurements.csv landmarks.csv [groundtruth.csv]")  # fmt: skip
-_KEYS = {"robot", "duration", "dt", "num_particles", "algorithm", "initial_pose", "start"}
+NOISE_KEYS = ("motion", "sigma_range", "sigma_bearing", "outlier_prob", "initial_std",
+              "range_bias", "max_range")  # fmt: skip
+_KEYS = {"robot", "duration", "dt", "num_particles", "algorithm", "initial_pose", "start",
+         *NOISE_KEYS}  # fmt: skip
 _MAX_STEPS = 1e8  # filter steps of one run (a duration beyond it is a unit mistake)
 
 
@@ -62,7 +71,33 @@ def _options(config: dict) -> dict:
     if opts["duration"] is not None and not opts["duration"] / opts["dt"] <= _MAX_STEPS:
         raise ConfigError(f"config duration = {opts['duration']!r}: more than {_MAX_STEPS:g} steps "
                           f"of dt = {opts['dt']!r}")  # fmt: skip
+    opts["noise"] = noise_settings(config)
     return opts
+
+
+def noise_settings(config: dict) -> dict:
+    """The model's noise: :data:`~models.localization.mrclam.MRCLAM_NOISE` with the
+    config's noise keys (:data:`NOISE_KEYS`) written over it, each checked (scales > 0
+    where the likelihood divides by them, >= 0 for the motion and the initial spread,
+    ``outlier_prob`` in (0, 1))."""
+    from models.localization.mrclam import MRCLAM_NOISE
+
+    out = {**MRCLAM_NOISE, "range_bias": 0.0, "max_range": 10.0}
+    for key, size in (("motion", 4), ("initial_std", 3)):
+        if key in config:
+            v = array(config, key, ndim=1)
+            if v.shape != (size,) or not np.all(v >= 0):
+                raise ConfigError(f"config {key} = {config[key]!r}: expected {size} numbers >= 0")
+            out[key] = tuple(float(x) for x in v)
+    for key in ("sigma_range", "sigma_bearing", "max_range"):
+        if key in config and not number(config, key) > 0:
+            raise ConfigError(f"config {key} = {config[key]!r}: expected a number > 0")
+    if "outlier_prob" in config and not 0 < number(config, "outlier_prob") < 1:
+        raise ConfigError(f"config outlier_prob = {config['outlier_prob']!r}: expected a "
+                          "probability in (0, 1)")  # fmt: skip
+    out.update({k: number(config, k) for k in ("sigma_range", "sigma_bearing", "max_range",
+                                               "outlier_prob", "range_bias") if k in config})
+    return out
 
 
 def _sequence(data, odometry: Path, opts: dict):
@@ -88,6 +123,25 @@ def _sequence(data, odometry: Path, opts: dict):
 
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     """Filter the robot's run; write ``poses.csv`` and ``trajectory.png``."""
+    opts = _options(config)
+    with ctx.timed("read"):
+        data, odometry = _read(inputs, opts["robot"])
+        seq, data = _sequence(data, odometry, opts)
+    with ctx.timed("filter"):
+        means = filter_means(seq, opts, ctx.key(), lambda steps, n: ctx.progress(steps, n, "steps"))
+    write_poses(ctx.outdir / "poses.csv", seq.times[1:], means)
+    _plot(ctx, seq, means, data.groundtruth if len(data.groundtruth) > 1 else None)
+    params = {"num_particles": opts["num_particles"], "algorithm": opts["algorithm"],
+              "dt": opts["dt"], "num_steps": len(means),
+              "initial_pose": [float(x) for x in seq.truth[0]],
+              "noise": {k: opts["noise"][k] for k in NOISE_KEYS}}  # fmt: skip
+    return {"parameters": params, "outputs": ["poses.csv", "trajectory.png"]}
+
+
+def filter_means(seq, opts: dict, key, progress=None) -> np.ndarray:
+    """The filter's mean pose after each step, ``(T, 3)``: the registry's tracker on the
+    model of ``opts["noise"]`` (:func:`~models.localization.mrclam.mrclam_model`), run
+    through the protocol from ``key`` (``progress(steps, total)`` wraps the steps)."""
     import models
     from inference.precision import precision_scope
     from models.localization.api import LocalizationStep
@@ -95,38 +149,25 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     from models.localization.mrclam import mrclam_model
     from models.protocol import split_run_keys
 
-    opts = _options(config)
-    with ctx.timed("read"):
-        data, odometry = _read(inputs, opts["robot"])
-        seq, data = _sequence(data, odometry, opts)
-    n_part = opts["num_particles"]
-    model = mrclam_model(seq)
     try:
         tracker = models.get("localization").make(
-            model=model, num_particles=n_part, algorithm=opts["algorithm"]
-        )
+            model=mrclam_model(seq, opts["noise"]), num_particles=opts["num_particles"],
+            algorithm=opts["algorithm"])  # fmt: skip
     except InputError as exc:  # num_particles or algorithm
         raise ConfigError(str(exc)) from None
-    obs = seq.observations
-    T = len(seq.odometry)
-    k_init, keys = split_run_keys(ctx.key(), T)  # the protocol's run, with progress
+    obs, T = seq.observations, len(seq.odometry)
+    k_init, keys = split_run_keys(key, T)  # the protocol's run
     means = np.zeros((T, 3))
     mean_fn = jax.jit(circular_mean)
-    with ctx.timed("filter"):
-        state = tracker.init(k_init)
-        for k in ctx.progress(range(T), T, "steps"):
-            y = jax.tree_util.tree_map(lambda a, k=k: a[k], obs)
-            step = LocalizationStep(seq.odometry[k], y, float(seq.times[k + 1]))
-            state, _ = tracker.step(keys[k], state, step)
-            p = state.particles
-            with precision_scope(tracker.dtype):
-                means[k] = np.asarray(mean_fn(p.particles, p.log_weights))
-    write_poses(ctx.outdir / "poses.csv", seq.times[1:], means)
-    _plot(ctx, seq, means, data.groundtruth if len(data.groundtruth) > 1 else None)
-    params = {"num_particles": n_part, "algorithm": opts["algorithm"],
-              "dt": opts["dt"], "num_steps": T,
-              "initial_pose": [float(x) for x in seq.truth[0]]}  # fmt: skip
-    return {"parameters": params, "outputs": ["poses.csv", "trajectory.png"]}
+    state = tracker.init(k_init)
+    for k in range(T) if progress is None else progress(range(T), T):
+        y = jax.tree_util.tree_map(lambda a, k=k: a[k], obs)
+        step = LocalizationStep(seq.odometry[k], y, float(seq.times[k + 1]))
+        state, _ = tracker.step(keys[k], state, step)
+        p = state.particles
+        with precision_scope(tracker.dtype):
+            means[k] = np.asarray(mean_fn(p.particles, p.log_weights))
+    return means
 
 
 def _plot(ctx: RunContext, seq, means: np.ndarray, gt: np.ndarray | None) -> None:

@@ -99,6 +99,15 @@ RANGE_CASES = [
     ("zajdel_learnsearch", {"em_tol": -1}, "em_tol"),
     ("zajdel_learnsearch", {"close_z": 3.0}, "close_z"),  # without stream_window
     ("localization", {"duration": 1e308}, "duration"),
+    ("localization", {"sigma_range": 0}, "sigma_range"),  # the likelihood divides by it
+    ("localization", {"sigma_bearing": -0.1}, "sigma_bearing"),
+    ("localization", {"max_range": 0}, "max_range"),
+    ("localization", {"outlier_prob": 0}, "outlier_prob"),  # log(0) in the outlier term
+    ("localization", {"outlier_prob": 1.0}, "outlier_prob"),
+    ("localization", {"motion": [0.1, 0.1, 0.1]}, "motion"),
+    ("localization", {"motion": [0.1, -0.1, 0.1, 0.1]}, "motion"),
+    ("localization", {"initial_std": [0.1, 0.1, 0.1, 0.1]}, "initial_std"),
+    ("localization", {"range_bias": "5cm"}, "range_bias"),
     ("pathrecovery", {"c0": 0}, "c0"),  # without f0 it was ignored
     ("pathrecovery", {"c0": 16, "f0": [0.1, 0.2]}, "f0"),
     ("rjmcmc3d", {"tau": 1e308}, "tau"),  # six such fields overflowed once squared

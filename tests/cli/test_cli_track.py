@@ -114,6 +114,35 @@ def test_localization_track_eval(tmp_path, capsys):
     assert metrics["rmse_m"] < 0.2  # odometry noise alone drifts; landmarks every 0.2 s
 
 
+def test_localization_noise_keys_reach_the_model(tmp_path, monkeypatch):
+    """The config's noise keys are the model's (the MRCLAM defaults where absent), and
+    ``summary.json`` records the noise the run used."""
+    import models.localization.mrclam as mrclam
+
+    seen = []
+    real = mrclam.mrclam_model
+    monkeypatch.setattr(mrclam, "mrclam_model", lambda seq, s=None: seen.append(real(seq, s))
+                        or seen[-1])  # fmt: skip
+    d = DATA / "localization"
+    noise = {"motion": [0.03, 0.2, 0.04, 0.3], "sigma_range": 0.25, "sigma_bearing": 0.07,
+             "outlier_prob": 0.1, "initial_std": [0.1, 0.2, 0.3], "range_bias": 0.02,
+             "max_range": 7.0}  # fmt: skip
+    for i, extra in enumerate(({}, noise)):
+        cfg = tmp_path / f"cfg{i}.json"
+        cfg.write_text(json.dumps({"num_particles": 50, "duration": 1.0, **extra}))
+        out = _track(tmp_path / str(i), "localization", [d / "mrclam"], "--config", str(cfg))
+        used = json.loads((out / "summary.json").read_text())["parameters"]["noise"]
+        m = seen[-1]
+        got = {"motion": list(m.noise), "sigma_range": m.sigma_range,
+               "sigma_bearing": m.sigma_bearing, "outlier_prob": m.outlier_prob,
+               "initial_std": list(m.initial_std), "range_bias": m.range_bias,
+               "max_range": m.max_range}  # fmt: skip
+        want = noise if extra else {**mrclam.MRCLAM_NOISE, "range_bias": 0.0, "max_range": 10.0}
+        assert got == pytest.approx({k: list(v) if isinstance(v, tuple) else v
+                                     for k, v in want.items()})  # fmt: skip
+        assert used == pytest.approx(got)
+
+
 def test_localization_csv_layout_equals_mrclam_folder():
     from models.io.localization import read_generic, read_mrclam_folder
 
