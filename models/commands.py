@@ -54,22 +54,24 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
     p.add_argument("--method", help="dbn only: exact (default), auto, bk, particle, rbpf")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p = sub.add_parser(
-        "fit", help="fit a tracker's parameters on your files (jorge, zajdel_*)", epilog=_EPILOG,
+        "fit", help="fit a tracker's parameters on your files (jorge, zajdel_*, localization)",
+        epilog=_EPILOG,
         description="Fit tracker NAME's parameters on TRAIN files whose truth you know; write "
         "OUTDIR/config.json (for `dbntrack track NAME --config`), summary.json and fit.png, with "
         "the error of the config's and the fitted parameters on the training and the held-out "
         "(--validate) files.",
     )  # fmt: skip
     p.add_argument("name", metavar="NAME", help="tracker with a fit (jorge, zajdel_adf, "
-                   "zajdel_learnsearch)")  # fmt: skip
+                   "zajdel_learnsearch, localization)")  # fmt: skip
     p.add_argument("train", metavar="TRAIN", nargs="+", help="training files")
     p.add_argument("--validate", metavar="FILE", nargs="+", default=[],
                    help="held-out files: scored, never fitted on")  # fmt: skip
     p.add_argument("-o", "--outdir", required=True, help="output folder (created)")
     p.add_argument("--seed", type=_seed, default=0, help="first seed of the simulated parts "
-                   "(default 0)")  # fmt: skip
-    p.add_argument("--seeds", type=_positive, default=1, help="stroke sets simulated per box "
-                   "file, seeds SEED, SEED + 1, ... (default 1)")  # fmt: skip
+                   "and the filter runs (default 0)")  # fmt: skip
+    p.add_argument("--seeds", type=_positive, default=1, help="seeds SEED, SEED + 1, ... per "
+                   "file: jorge's stroke sets simulated per box file, localization's filter "
+                   "runs averaged (default 1)")  # fmt: skip
     p.add_argument("--config", metavar="FILE", help="JSON file of tracker options: the "
                    "settings the fit keeps")  # fmt: skip
     p.add_argument("--prior-strength", type=prior_strengths, default=None,

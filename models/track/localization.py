@@ -52,8 +52,9 @@ def _read(inputs: list[str], robot: int):
     )
 
 
-def _options(config: dict) -> dict:
-    """The config's options, checked before any file is read."""
+def run_options(config: dict) -> dict:
+    """The config's options, checked before any file is read (``noise``:
+    :func:`noise_settings`)."""
     check_keys(config, _KEYS)
     initial = array(config, "initial_pose") if "initial_pose" in config else None
     if initial is not None and initial.shape != (3,):
@@ -100,7 +101,10 @@ def noise_settings(config: dict) -> dict:
     return out
 
 
-def _sequence(data, odometry: Path, opts: dict):
+def run_sequence(data, odometry: Path, opts: dict):
+    """The filter's steps of a run (:func:`~models.localization.mrclam.build_sequence` with
+    the options' ``dt``, ``duration``, ``start``) and its data, with the options' initial
+    pose (required without ground truth)."""
     from models.localization.mrclam import build_sequence
 
     initial = opts["initial_pose"]
@@ -123,10 +127,10 @@ def _sequence(data, odometry: Path, opts: dict):
 
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     """Filter the robot's run; write ``poses.csv`` and ``trajectory.png``."""
-    opts = _options(config)
+    opts = run_options(config)
     with ctx.timed("read"):
         data, odometry = _read(inputs, opts["robot"])
-        seq, data = _sequence(data, odometry, opts)
+        seq, data = run_sequence(data, odometry, opts)
     with ctx.timed("filter"):
         means = filter_means(seq, opts, ctx.key(), lambda steps, n: ctx.progress(steps, n, "steps"))
     write_poses(ctx.outdir / "poses.csv", seq.times[1:], means)
@@ -217,4 +221,22 @@ def evaluate(result: str, truth: str) -> dict:
             "num_compared": int(err.size)}  # fmt: skip
 
 
-__all__ = ["INPUTS", "track", "evaluate"]
+def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, seeds: int = 1,
+        prior_strength=(0.0,), folds: int = 0, fold_by: str | None = None) -> dict:
+    """``dbntrack fit``: the robot's noise measured on runs with ground truth, and the
+    filter's widening of it searched (:mod:`models.track.localization_fit`)."""
+    from models.track.localization_fit import fit as fit_runs
+
+    return fit_runs(ctx, train, validate, config, seeds, prior_strength, folds, fold_by)
+
+
+def fit_report(summary: dict) -> list[str]:
+    """The lines ``dbntrack fit localization`` prints
+    (:func:`models.track.localization_fit.fit_report`)."""
+    from models.track.localization_fit import fit_report as report
+
+    return report(summary)
+
+
+__all__ = ["INPUTS", "NOISE_KEYS", "track", "evaluate", "fit", "fit_report", "filter_means",
+           "noise_settings", "run_options", "run_sequence"]

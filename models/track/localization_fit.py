@@ -1,0 +1,243 @@
+r"""``dbntrack fit localization TRAIN... --validate HELD...``: your robot's noise measured on
+runs with ground truth, and the widening of it the filter needs, written as a config for
+``dbntrack track localization --config``.
+
+A run (each TRAIN and HELD) is a robot's odometry file in an MRCLAM folder
+(``RobotN_Odometry.dat[.gz]``: that folder, robot N), an MRCLAM folder (the config's
+``robot``), or a folder of the generic CSVs (``odometry.csv``, ``measurements.csv``,
+``landmarks.csv``, ``groundtruth.csv``; :mod:`models.io.localization`); each needs its
+ground truth, and starts at its first true pose. The config's ``duration``, ``start``,
+``dt``, ``num_particles`` and ``algorithm`` apply to every run.
+
+The fit, a documented search rather than a likelihood:
+
+1. the measured noise (:mod:`models.localization.fit`): the robust spreads of the training
+   runs' range, bearing and odometry errors against their truth, pooled, and the median
+   range error as the range bias;
+2. the filter run on every training run with the measured motion noise (``a_xy``,
+   ``a_theta``) times each of ``search_scales`` and the measured sensor noise
+   (``sigma_range``, ``sigma_bearing``) times each of them (default :data:`SEARCH_SCALES`:
+   16 pairs), and the pair of the least mean position RMSE kept (ties: the smaller
+   scales). The bare spreads make an overconfident filter: a step's quantisation of the
+   measurement times and the truth's own error are noise to it, and on MRCLAM the filter
+   did best with the range spread doubled and the bearing spread five times wider
+   (:data:`~models.localization.mrclam.MRCLAM_NOISE`).
+
+``b_xy``, ``b_theta``, ``outlier_prob``, ``initial_std`` and ``max_range`` are kept (the
+config's, else MRCLAM's). A run's error is the position RMSE (m) of the filter's mean pose
+against its truth at the filter's steps, the mean over ``--seeds`` runs of seeds ``--seed``,
+``--seed + 1``, ... (as ``dbntrack track --seed``), with the config's noise and with the
+fitted. There is no prior strength and no cross-validation: the training runs choose the
+scales, the held-out runs say how well the choice holds. The error on the runs fitted on
+is not a result: hold runs out (a held-out run of which half the odometry rows or more
+are a training run's is named as not held out).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+from dbn.errors import ConfigError, DBNError, InputError, in_file
+from models.io.localization import mrclam_file, read_generic, read_mrclam_folder
+from models.localization.fit import noise_residuals, noise_settings, pool_residuals, robust_noise
+from models.track.context import RunContext
+from models.track.fitting import check_disjoint, mean_errors, plot_fit, report
+from models.track.localization import (
+    NOISE_KEYS,
+    filter_means,
+    run_options,
+    run_sequence,
+)
+from models.track.options import array
+
+__all__ = ["fit", "fit_report", "SEARCH_SCALES"]
+
+SEARCH_SCALES = (1.0, 2.0, 4.0, 8.0)
+"""The factors of the measured motion and sensor noise the search tries (config key
+``search_scales``): doublings from the bare spreads to eight times them."""
+
+_CSV = ("odometry", "measurements", "landmarks", "groundtruth")
+_ODOMETRY = re.compile(r"Robot(\d+)_Odometry\.dat(\.gz)?")
+
+
+class Run(NamedTuple):
+    """A run's filter steps (:class:`~models.localization.mrclam.MRCLAMSequence`) and its
+    odometry rows as text (to tell a copy of a training run)."""
+
+    seq: object
+    rows: frozenset
+
+
+def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, seeds: int = 1,
+        prior_strength=(0.0,), folds: int = 0, fold_by: str | None = None) -> dict:
+    """Measure and search on ``train``, score ``train`` and ``validate`` (module
+    docstring); write ``config.json`` and ``fit.png``. Returns ``parameters``, ``metrics``,
+    ``files`` (one row per run) and ``outputs`` for ``summary.json``."""
+    _refuse(prior_strength, folds, fold_by)
+    scales = _scales(config)
+    base = {k: v for k, v in config.items() if k != "search_scales"}
+    if "initial_pose" in base:
+        raise ConfigError("config initial_pose: the fit starts each run at its ground truth's "
+                          "first pose; leave it out")  # fmt: skip
+    opts = run_options(base)
+    check_disjoint(train, validate)
+    with ctx.timed("read"):
+        runs = {p: _read_run(p, opts) for p in [*train, *validate]}
+    try:
+        measured = robust_noise(pool_residuals([noise_residuals(runs[p].seq) for p in train]))
+    except InputError as exc:
+        raise InputError(f"training runs {train}: {exc}") from None
+    keys = [jax.random.key(ctx.seed + i) for i in range(seeds)]
+    with ctx.timed("search"):
+        search = _search(ctx, runs, train, opts, measured, scales, keys)
+    chosen = min(search, key=lambda ms: (np.mean(list(search[ms].values())), ms))
+    noise = noise_settings(opts["noise"], measured, *chosen)
+    fitted = {**base, **{k: _listed(noise[k]) for k in NOISE_KEYS}}
+    run_options(fitted)  # as dbntrack track will read it
+    with ctx.timed("score"):
+        files = [_row(p, runs[p], opts, noise, keys, search[chosen] if p in train else None)
+                 for p in ctx.progress(runs, len(runs), "runs")]  # fmt: skip
+    (ctx.outdir / "config.json").write_text(json.dumps(fitted, indent=1) + "\n",
+                                            encoding="utf-8")  # fmt: skip
+    plot_fit(ctx, files, "noise", "position RMSE (m)")
+    params = {"seeds": seeds, "search_scales": list(scales), "measured": measured,
+              "motion_scale": chosen[0], "sensor_scale": chosen[1],
+              "search": [{"motion_scale": m, "sensor_scale": s,
+                          "error": float(np.mean(list(errors.values())))}
+                         for (m, s), errors in search.items()],
+              "validation_same_recording": _same_runs(runs, train, validate),
+              "fitted": {k: _listed(noise[k]) for k in NOISE_KEYS}}  # fmt: skip
+    return {"parameters": params, "metrics": mean_errors(files), "files": files,
+            "outputs": ["config.json", "fit.png"]}
+
+
+def _refuse(prior_strength, folds: int, fold_by: str | None) -> None:
+    """The options of the other fits that have no meaning here."""
+    if list(np.atleast_1d(prior_strength)) != [0.0]:
+        raise InputError(f"prior strength {prior_strength!r}: localization's fit measures its "
+                         "noise and searches its scales; it has no prior strength")  # fmt: skip
+    if folds or fold_by is not None:
+        raise InputError("--folds / --fold-by: localization's fit chooses its scales on the "
+                         "training runs (no strengths to cross-validate); hold runs out with "
+                         "--validate")  # fmt: skip
+
+
+def _scales(config: dict) -> tuple[float, ...]:
+    """The config's ``search_scales`` (else :data:`SEARCH_SCALES`): numbers > 0, none twice."""
+    if "search_scales" not in config:
+        return SEARCH_SCALES
+    v = array(config, "search_scales", ndim=1)
+    if v.size == 0 or not np.all(v > 0) or np.unique(v).size != v.size:
+        raise ConfigError(f"config search_scales = {config['search_scales']!r}: expected "
+                          "numbers > 0, at least one, none twice")  # fmt: skip
+    return tuple(sorted(float(x) for x in v))
+
+
+def _read_run(path: str, opts: dict) -> Run:
+    """A run (the forms of the module docstring), which must have its ground truth."""
+    p = Path(path)
+    m = _ODOMETRY.fullmatch(p.name)
+    if m and p.is_file():
+        data, odometry = read_mrclam_folder(p.parent, int(m[1])), p
+    elif p.is_dir() and (p / "odometry.csv").is_file():
+        files = [p / f"{n}.csv" for n in _CSV]
+        if not files[-1].is_file():
+            raise InputError(f"{path}: no groundtruth.csv: dbntrack fit needs each run's truth")
+        data, odometry = read_generic(*files), files[0]
+    elif p.is_dir():
+        robot = opts["robot"]
+        data, odometry = read_mrclam_folder(p, robot), mrclam_file(p, f"Robot{robot}_Odometry")
+    else:
+        raise InputError(f"{path}: expected a robot's MRCLAM odometry file "
+                         "(RobotN_Odometry.dat[.gz]), an MRCLAM folder or a folder of "
+                         f"{', '.join(f'{n}.csv' for n in _CSV)}")  # fmt: skip
+    if data.groundtruth is None:
+        raise InputError(f"{path}: no ground truth (RobotN_Groundtruth.dat): dbntrack fit "
+                         "needs each run's truth")  # fmt: skip
+    try:
+        seq = run_sequence(data, odometry, opts)[0]
+    except DBNError as exc:  # named by its run, unless it names the odometry file
+        raise (exc if str(odometry) in str(exc) else in_file(exc, path)) from None
+    return Run(seq, frozenset(tuple(f"{x:.9g}" for x in row) for row in data.odometry))
+
+
+def _rmse(seq, noise: dict, opts: dict, keys: list) -> float:
+    """The mean over ``keys`` of the position RMSE of the filter's mean pose, ``noise``'s
+    model, against the run's truth at the filter's steps."""
+    out = []
+    for key in keys:
+        means = filter_means(seq, {**opts, "noise": noise}, key)
+        err = np.hypot(*(means[:, :2] - seq.truth[1:, :2]).T)
+        out.append(float(np.sqrt(np.mean(err**2))))
+    return float(np.mean(out))
+
+
+def _search(ctx: RunContext, runs: dict, train: list[str], opts: dict, measured: dict,
+            scales: tuple, keys: list) -> dict:
+    """``{(motion_scale, sensor_scale): {run: error}}`` over the training runs."""
+    grid = [(m, s) for m in scales for s in scales]
+    jobs = [(ms, p) for ms in grid for p in train]
+    out: dict = {ms: {} for ms in grid}
+    for ms, p in ctx.progress(jobs, len(jobs), "search"):
+        out[ms][p] = _rmse(runs[p].seq, noise_settings(opts["noise"], measured, *ms), opts, keys)
+    return out
+
+
+def _row(path: str, run: Run, opts: dict, noise: dict, keys: list,
+         searched: dict | None) -> dict:
+    """One run's row: its steps and measurements, its error with the config's noise and
+    with the fitted (a training run's from the search)."""
+    fitted = searched[path] if searched is not None else _rmse(run.seq, noise, opts, keys)
+    return {"file": str(Path(path).resolve()),
+            "split": "train" if searched is not None else "validation",
+            "steps": int(len(run.seq.odometry)),
+            "measurements": int(np.asarray(run.seq.observations.mask).sum()),
+            "error_config": _rmse(run.seq, opts["noise"], opts, keys),
+            "error_fitted": fitted}  # fmt: skip
+
+
+def _same_runs(runs: dict, train: list[str], validate: list[str]) -> dict[str, str]:
+    """Each held-out run (resolved) of which at least half the odometry rows are a training
+    run's (a copy or a cut of it), with that run."""
+    out = {}
+    for p in validate:
+        mine = runs[p].rows
+        for q in train:
+            if len(mine & runs[q].rows) >= 0.5 * len(mine):
+                out[str(Path(p).resolve())] = str(Path(q).resolve())
+                break
+    return out
+
+
+def _listed(v):
+    """A setting as JSON has it (tuples as lists)."""
+    return [float(x) for x in v] if isinstance(v, tuple | list) else float(v)
+
+
+def fit_report(summary: dict) -> list[str]:
+    """The lines ``dbntrack fit localization`` prints for ``summary``
+    (:func:`models.track.fitting.report`): each run's error, then the measured noise and the
+    scales the search chose."""
+
+    def row_text(row: dict, other: str) -> str:
+        return (f"{row['steps']} steps, {row['measurements']} measurements, position RMSE "
+                f"{row['error_config']:.3f} m (config) -> {row['error_fitted']:.3f} m "
+                f"(fitted){other}")  # fmt: skip
+
+    p = summary["parameters"]
+    m = p["measured"]
+    best = min(r["error"] for r in p["search"])
+    return [*report(summary, row_text, "noise", "of which half the odometry rows or more "
+                    "are a training run's"),
+            f"localization: measured on {m['num_measurements']} measurements and "
+            f"{m['num_steps']} steps: range sd {m['sigma_range']:.4g} m (bias "
+            f"{m['range_bias']:+.3g} m), bearing sd {m['sigma_bearing']:.3g} rad, odometry "
+            f"a_xy {m['a_xy']:.3g}, a_theta {m['a_theta']:.3g}; the search chose motion x "
+            f"{p['motion_scale']:g}, sensor x {p['sensor_scale']:g} (mean training RMSE "
+            f"{best:.3f} m)"]  # fmt: skip
