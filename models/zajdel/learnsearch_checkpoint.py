@@ -24,7 +24,7 @@ from dbn.errors import CheckpointError
 from inference.checkpoint import load_arrays, save_arrays
 from models.zajdel.data import Observations
 from models.zajdel.learnsearch import LearnSearchConfig, LSParams
-from models.zajdel.learnsearch_stream import StreamSearch, _par
+from models.zajdel.learnsearch_stream import StreamSearch
 
 __all__ = ["params_digest", "save_search", "load_search", "save_stream", "load_stream"]
 
@@ -193,11 +193,10 @@ def load_stream(path, params: LSParams, config: LearnSearchConfig | None, window
     search.buf = _check_shapes(path, params, a, "buf")
     if started:
         _check_window(path, a, search.buf.num_obs)
-    search.theta = _theta(params, a)
     search.committed = [int(x) for x in a["committed"]]
     for k, v in counters.items():
         setattr(search, k, v)
     if started:
-        search.par = _par(search.theta)
         search.st = {**{k: a[f"st_{k}"] for k in ST_ARRAYS}, "win_start": win_start}
+    search.use_params(_theta(params, a))
     return search

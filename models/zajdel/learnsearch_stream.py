@@ -468,12 +468,17 @@ class StreamSearch:
         if not self.cfg.learn:
             return
         st = self.st
-        self.theta = em_step(
+        self.use_params(em_step(
             self.buf, _canonical(st["lab"]), st["score"], self.theta, self.cfg, self.start_params
-        )
-        self.par = _par(self.theta)
+        ))  # fmt: skip
         _rebuild(st, self.buf, self.theta, self.par)
         self._keep_best()
+
+    def use_params(self, theta: LSParams) -> None:
+        """Take ``theta`` as the parameters, with the terms the scores precompute of them
+        (:func:`_par`) once the search has started (a checkpoint's restore, an EM step)."""
+        self.theta = theta
+        self.par = _par(theta) if self.st is not None else None
 
     def _keep_best(self) -> None:
         st = self.st
