@@ -233,6 +233,65 @@ if mr is not None:
     plt.show()
 
 # %% [markdown]
+# ## 5. Your robot's noise: `dbntrack fit localization`
+#
+# The noise settings above were chosen on robot 2 by hand. For a robot of yours,
+# `dbntrack fit localization` measures them against the ground truth of training runs (the
+# robust spreads of the range, bearing and odometry errors, and the median range error as a
+# bias), then searches how much the filter must widen them: the motion and the sensor noise
+# each times 1, 2, 4 and 8, kept by the least position RMSE on the training runs. It writes
+# a config for `dbntrack track localization`. Here robot 2 (its first 5 minutes) is the
+# training run and robot 1 is held out, as in the benchmark; the command line is
+# `dbntrack fit localization DATA/Robot2_Odometry.dat.gz --validate
+# DATA/Robot1_Odometry.dat.gz --config cfg.json -o OUT`.
+
+# %%
+import json
+import tempfile
+from pathlib import Path
+
+from models import datasets
+from models.cli import main
+
+try:
+    folder = datasets.require("mrclam6")
+except FileNotFoundError as exc:
+    folder = None
+    print("MRCLAM data absent, part 5 skipped:", exc)
+if folder is not None:
+    out = Path(tempfile.mkdtemp())
+    small = {"duration": 30.0, "num_particles": 300, "search_scales": [1, 4]}
+    cfg = small if QUICK else {"duration": 300.0, "num_particles": 1000}
+    (out / "cfg.json").write_text(json.dumps(cfg))
+    main(["fit", "localization", str(folder / "Robot2_Odometry.dat.gz"), "--validate",
+          str(folder / "Robot1_Odometry.dat.gz"), "--config", str(out / "cfg.json"),
+          "-o", str(out / "fit"), "--quiet"])  # fmt: skip
+    fit = json.loads((out / "fit" / "summary.json").read_text())
+    p = fit["parameters"]
+    scales = p["search_scales"]
+    grid = np.array([[r["error"] for r in p["search"] if r["motion_scale"] == m]
+                     for m in scales])  # fmt: skip
+    fig, ax = plt.subplots(figsize=(5, 4))
+    im = ax.imshow(grid, cmap="viridis", origin="lower")
+    ax.set_xticks(range(len(scales)), [f"x{s:g}" for s in scales])
+    ax.set_yticks(range(len(scales)), [f"x{s:g}" for s in scales])
+    ax.set_xlabel("sensor noise scale")
+    ax.set_ylabel("motion noise scale")
+    ax.set_title("training (robot 2) position RMSE [m]", fontsize=9)
+    fig.colorbar(im)
+    plt.show()
+
+# %% [markdown]
+# On the full run (5 minutes, N = 1,000, one seed) the search keeps motion x 4 and sensor
+# x 8: 0.212 m on robot 2 against 0.220 m with the hand-chosen settings, but 0.177 m against
+# 0.158 m on the held-out robot 1. The surface is flat (0.22 to 0.29 m over the 16 pairs)
+# and one scale for both the range and the bearing cannot widen the bearing five times and
+# the range twice, as the hand-chosen settings do; one training run of a robot whose range
+# noise is twice robot 1's does not choose better settings for robot 1. The fit is for a
+# robot whose noise is not MRCLAM's: its held-out error is the figure to check before
+# using its config.
+
+# %% [markdown]
 # ## Takeaways
 #
 # * The engine is generic: the same `auxiliary_filter` runs the k-NN model and the
@@ -240,3 +299,5 @@ if mr is not None:
 # * The outlier rule turns occlusions into pure prediction steps.
 # * Odometry alone drifts by decimetres within a minute on the real robot; the filter
 #   stays near the motion-capture truth.
+# * `dbntrack fit localization` measures a robot's noise against ground truth and chooses
+#   the filter's widening of it on training runs; held-out runs say whether it holds.

@@ -7,9 +7,10 @@ Config keys: ``robot`` (1), ``duration`` (s, default: the whole odometry), ``dt`
 ``num_particles`` (2000), ``algorithm`` ('apf' or 'sir'), ``initial_pose`` ([x, y, theta];
 default: the first ground-truth pose, required without ground truth); the noise of your
 robot (default :data:`~models.localization.mrclam.MRCLAM_NOISE`, chosen on MRCLAM's robot
-2): ``motion`` ``[a_xy, b_xy, a_theta, b_theta]`` (:class:`~models.localization.model.
-MotionNoise`), ``sigma_range`` (m), ``sigma_bearing`` (rad), ``outlier_prob``,
-``initial_std`` ``[sx, sy, stheta]``, ``range_bias`` (m, 0) and ``max_range`` (m, 10).
+2): ``motion`` ``[a_xy, b_xy, a_theta, b_theta]``
+(:class:`~models.localization.model.MotionNoise`), ``sigma_range`` (m), ``sigma_bearing``
+(rad), ``outlier_prob``, ``initial_std`` ``[sx, sy, stheta]``, ``range_bias`` (m, 0) and
+``max_range`` (m, 10).
 ``dbntrack fit localization`` measures them on your runs with ground truth
 (:mod:`models.track.localization_fit`).
 """
