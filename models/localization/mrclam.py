@@ -115,6 +115,17 @@ class MRCLAMSequence(NamedTuple):
     on_grid: np.ndarray
 
 
+def _check_span(t: np.ndarray, t0: float, t_end: float, duration: float) -> None:
+    """Refuse a run that starts outside the odometry's times ``t`` or ends after them
+    (the dead reckoning would hold the last pose: steps of no data, scored as data)."""
+    if not t[0] <= t0 < t[-1]:
+        raise InputError(f"start t = {t0:.6g}: outside the odometry's times [{t[0]:.6g}, "
+                         f"{t[-1]:.6g}]")  # fmt: skip
+    if t_end > t[-1]:
+        raise InputError(f"duration = {duration:g} s from t = {t0:.6g} runs past the "
+                         f"odometry's end (t = {t[-1]:.6g}, {t[-1] - t0:.6g} s in)")  # fmt: skip
+
+
 def build_sequence(
     data: MRCLAMRobot,
     *,
@@ -144,6 +155,7 @@ def build_sequence(
         raise InputError(f"align = {align!r}, expected 'events' or 'grid'")
     t0 = max(data.odometry[0, 0], data.groundtruth[0, 0]) if start is None else float(start)
     grid = t0 + dt * np.arange(int(math.floor(duration / dt)) + 1)
+    _check_span(data.odometry[:, 0], t0, grid[-1], duration)
     # landmark measurements (robots and unknown barcodes dropped)
     meas = data.measurements
     index = {int(s): i for i, s in enumerate(data.landmark_subjects)}

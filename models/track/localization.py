@@ -113,14 +113,18 @@ def run_sequence(data, odometry: Path, opts: dict):
         if initial is None:
             raise InputError("no ground truth to start from: give initial_pose in --config")
         data = data._replace(groundtruth=np.array([[data.odometry[0, 0], *initial]]))
-    dt, duration = opts["dt"], opts["duration"]
-    t0 = max(data.odometry[0, 0], data.groundtruth[0, 0])
+    dt, duration, start = opts["dt"], opts["duration"], opts["start"]
+    t0 = max(data.odometry[0, 0], data.groundtruth[0, 0]) if start is None else start
     if duration is None:
         duration = float(data.odometry[-1, 0] - t0 - 1e-9)
         if not duration > dt:
-            raise InputError(f"{odometry}: the odometry runs {duration + 1e-9:.6g} s from the start "
-                             f"(t = {t0:.6g}), less than one step (dt = {dt:g})")  # fmt: skip
-    seq = build_sequence(data, duration=duration, dt=dt, start=opts["start"])
+            what = f"the start (t = {t0:.6g})" if start is None else f"config start t = {t0:.6g}"
+            raise InputError(f"{odometry}: the odometry ends at t = {data.odometry[-1, 0]:.6g}, "
+                             f"less than one step (dt = {dt:g}) after {what}")  # fmt: skip
+    try:
+        seq = build_sequence(data, duration=duration, dt=dt, start=start)
+    except InputError as exc:  # a span outside the odometry's
+        raise InputError(f"{odometry}: config {exc}") from None
     if initial is not None:
         seq = seq._replace(truth=np.vstack([initial, seq.truth[1:]]))
     return seq, data

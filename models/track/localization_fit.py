@@ -7,7 +7,8 @@ A run (each TRAIN and HELD) is a robot's odometry file in an MRCLAM folder
 ``robot``), or a folder of the generic CSVs (``odometry.csv``, ``measurements.csv``,
 ``landmarks.csv``, ``groundtruth.csv``; :mod:`models.io.localization`); each needs its
 ground truth, and starts at its first true pose. The config's ``duration``, ``start``,
-``dt``, ``num_particles`` and ``algorithm`` apply to every run.
+``dt``, ``num_particles`` and ``algorithm`` apply to every run; without a ``duration`` a
+run ends where its odometry or its truth does (the truth must cover every step).
 
 The fit, a documented search rather than a likelihood:
 
@@ -161,10 +162,27 @@ def _read_run(path: str, opts: dict) -> Run:
         raise InputError(f"{path}: no ground truth (RobotN_Groundtruth.dat): dbntrack fit "
                          "needs each run's truth")  # fmt: skip
     try:
-        seq = run_sequence(data, odometry, opts)[0]
+        seq = run_sequence(data, odometry, _within_truth(data, opts))[0]
     except DBNError as exc:  # named by its run, unless it names the odometry file
         raise (exc if str(odometry) in str(exc) else in_file(exc, path)) from None
+    gt = data.groundtruth[:, 0]
+    if seq.times[0] < gt[0] or seq.times[-1] > gt[-1]:
+        raise InputError(f"{path}: the ground truth covers t = [{gt[0]:.6g}, {gt[-1]:.6g}], "
+                         f"the run t = [{seq.times[0]:.6g}, {seq.times[-1]:.6g}]: the fit needs "
+                         "the truth of every step (config start, duration)")  # fmt: skip
     return Run(seq, frozenset(tuple(f"{x:.9g}" for x in row) for row in data.odometry))
+
+
+def _within_truth(data, opts: dict) -> dict:
+    """``opts`` with, where the config gives no ``duration``, the run cut where its
+    odometry or its truth ends (MRCLAM's robot 1 has odometry for 128 s after its last
+    true pose)."""
+    if opts["duration"] is not None:
+        return opts
+    odo, gt = data.odometry[:, 0], data.groundtruth[:, 0]
+    t0 = max(odo[0], gt[0]) if opts["start"] is None else opts["start"]
+    end = min(odo[-1], gt[-1])
+    return {**opts, "duration": float(end - t0 - 1e-9) if end - t0 > opts["dt"] else None}
 
 
 def _rmse(seq, noise: dict, opts: dict, keys: list) -> float:

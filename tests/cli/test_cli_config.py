@@ -71,6 +71,17 @@ def test_localization_odometry_shorter_than_a_step_names_the_file(capsys, tmp_pa
     assert len(err.splitlines()) == 1 and "odometry.csv" in err and "one step" in err, err
 
 
+@pytest.mark.parametrize("config, key", [({"duration": 200.0}, "duration"),  # 8 s of data
+                                         ({"start": 99.0}, "start"),  # before the first time
+                                         ({"start": 107.99}, "start")])  # after the last
+def test_localization_span_outside_the_odometry_names_the_file(capsys, tmp_path, config, key):
+    """A run past the odometry's end, or starting outside it, is refused naming the
+    odometry file and the key (the dead reckoning held the last pose: steps of no data)."""
+    rc, err = _run(capsys, tmp_path, "localization", config)
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "odometry.csv" in err and f"config {key}" in err, err
+
+
 @pytest.mark.parametrize("bad", [{}, [], False, "", 0])
 def test_localization_duration_of_the_wrong_kind_is_refused(capsys, tmp_path, bad):
     """``duration`` is a number of seconds or absent (null: the whole odometry); an empty

@@ -22,7 +22,7 @@ LANDMARKS = np.array([[11, 0.0, 0.0], [12, 3.0, 0.0], [13, 0.0, 3.0], [14, 3.0, 
 CONFIG = {"duration": 4.0, "num_particles": 100, "search_scales": [1, 4]}
 
 
-def _robot(folder: Path, robot: int, seconds: float = 6.0) -> None:
+def _robot(folder: Path, robot: int, seconds: float = 7.0) -> None:
     """SIMULATED robot ``robot`` (seed ``robot``) on a circle of its own through the
     landmarks' square: odometry and truth at 20 Hz (odometry noise 0.02 m/s, 0.03 rad/s),
     every landmark measured at 5 Hz (range noise 0.05 m, bias 0.03 m; bearing 0.02 rad)."""
@@ -127,6 +127,23 @@ def test_fit_writes_the_measured_noise_at_the_searched_scales(runs, tmp_path, ca
         (held["error_fitted"] + cut["error_fitted"]) / 2)
     assert p["validation_same_recording"] == {str(copy.resolve()): train["file"]}
     assert "copy (Robot1_Odometry.dat)" in capsys.readouterr().out
+
+
+@pytest.mark.heavy
+def test_a_run_without_a_duration_ends_with_its_truth(runs, tmp_path):
+    """Without a duration a run ends where its truth does (here 3 s of truth under 7 s of
+    odometry); a duration past the truth is refused."""
+    cut = tmp_path / "cut"
+    shutil.copytree(runs, cut)
+    gt = read_mrclam_folder(runs, 1).groundtruth
+    np.savetxt(cut / "Robot1_Groundtruth.dat", gt[gt[:, 0] <= 103.0], fmt="%.5f")
+    config = {"num_particles": 20, "search_scales": [1]}
+    summary, _ = _fit(tmp_path, "fit", config, cut / "Robot1_Odometry.dat")
+    assert [r["steps"] for r in summary["files"]] == [29]  # 100 .. 102.9 in steps of 0.1 s
+    cfg = tmp_path / "c.json"
+    cfg.write_text(json.dumps({**config, "duration": 4.0}))
+    assert main(["fit", "localization", str(cut / "Robot1_Odometry.dat"), "--config", str(cfg),
+                 "-o", str(tmp_path / "o"), "--quiet"]) == 2  # fmt: skip
 
 
 def test_refusals_name_the_run_or_option(runs, tmp_path, capsys):

@@ -114,6 +114,20 @@ def test_localization_track_eval(tmp_path, capsys):
     assert metrics["rmse_m"] < 0.2  # odometry noise alone drifts; landmarks every 0.2 s
 
 
+def test_localization_start_without_duration_ends_with_the_odometry(tmp_path):
+    """``start`` alone runs to the odometry's end (it ran as far past it as the start was
+    late, the robot held still on no data)."""
+    d = DATA / "localization"
+    cfg = tmp_path / "cfg.json"
+    cfg.write_text(json.dumps({"num_particles": 50, "start": 104.0}))
+    out = _track(tmp_path, "localization", [d / "mrclam"], "--config", str(cfg))
+    from models.io.localization import read_dat, read_poses
+
+    t, _ = read_poses(out / "poses.csv")
+    end = read_dat(d / "mrclam" / "Robot1_Odometry.dat", 3)[-1, 0]
+    assert t[0] == pytest.approx(104.1) and end - 0.1 < t[-1] <= end
+
+
 def test_localization_noise_keys_reach_the_model(tmp_path, monkeypatch):
     """The config's noise keys are the model's (the MRCLAM defaults where absent), and
     ``summary.json`` records the noise the run used."""
