@@ -90,6 +90,21 @@ def _check_range_bearing(meas: np.ndarray, path, lines: list[int]) -> None:
         say = (f"range {r:g} is negative" if r < 0 else
                f"bearing {b:g} is beyond one turn: bearings are radians (degrees?)")
         raise fail(path, lines[i], say)
+    _check_repeats(meas, path, lines)
+
+
+def _check_repeats(meas: np.ndarray, path, lines: list[int]) -> None:
+    """A :class:`FileFormatError` at the later line of the first two measurements of one
+    id at one time: one sensor reads a landmark once per instant, and a repeated row
+    would count its evidence twice."""
+    order = np.lexsort((meas[:, 1], meas[:, 0]))
+    key = meas[order, :2]
+    same = np.flatnonzero(np.all(key[1:] == key[:-1], axis=1))
+    if same.size:
+        a, b = sorted((lines[order[same[0]]], lines[order[same[0] + 1]]))
+        t, i = key[same[0]]
+        raise fail(path, b, f"a second measurement of id {i:g} at t = {t:g} (the first at line "
+                            f"{a}): a repeated row would count its evidence twice")  # fmt: skip
 
 
 _MAX_ID = 2**31

@@ -210,6 +210,27 @@ def test_localization_refuses_degrees_and_negative_ranges(tmp_path, capsys, colu
     _bad(capsys, argv, "Robot1_Measurement.dat:", needle)
 
 
+def test_localization_refuses_a_measurement_read_twice(tmp_path, capsys):
+    """A repeated measurement row (one landmark, one time) counted its evidence twice; it
+    is refused at its line in both layouts (a second landmark at that time is not)."""
+    d = DATA / "localization"
+    lines = (d / "measurements.csv").read_text().splitlines()
+    meas = tmp_path / "measurements.csv"
+    meas.write_text("\n".join([*lines[:6], lines[5], *lines[6:]]) + "\n")
+    argv = ["track", "localization", str(d / "odometry.csv"), str(meas),
+            str(d / "landmarks.csv"), "-o", str(tmp_path / "out")]  # fmt: skip
+    t, lm = lines[5].split(",")[:2]
+    _bad(capsys, argv, "measurements.csv:7:", f"measurement of id {lm} at t = {float(t):g}",
+         "the first at line 6")  # fmt: skip
+    folder = tmp_path / "mrclam"
+    shutil.copytree(d / "mrclam", folder)
+    dat = folder / "Robot1_Measurement.dat"
+    rows = dat.read_text().splitlines()
+    dat.write_text("\n".join([*rows, rows[-1]]) + "\n")
+    argv = ["track", "localization", str(folder), "-o", str(tmp_path / "out2")]
+    _bad(capsys, argv, f"Robot1_Measurement.dat:{len(rows) + 1}:", "a second measurement")
+
+
 @pytest.mark.parametrize("name", ["zajdel_adf", "zajdel_learnsearch"])
 def test_zajdel_track_eval(tmp_path, capsys, name):
     d = DATA / "zajdel"
