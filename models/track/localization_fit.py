@@ -21,7 +21,7 @@ The fit, a documented search rather than a likelihood:
    16 pairs), and the pair of the least mean position RMSE kept (ties: the smaller
    scales). The bare spreads make an overconfident filter: a step's quantisation of the
    measurement times and the truth's own error are noise to it, and on MRCLAM the filter
-   did best with the range spread doubled and the bearing spread five times wider
+   did best with the range spread 2.7 and the bearing spread 5 times wider
    (:data:`~models.localization.mrclam.MRCLAM_NOISE`).
 
 ``b_xy``, ``b_theta``, ``outlier_prob``, ``initial_std`` and ``max_range`` are kept (the
