@@ -85,8 +85,11 @@ def _spread(e: np.ndarray) -> float:
 
 def robust_noise(res: NoiseResiduals) -> dict:
     """The measured noise: ``sigma_range``, ``sigma_bearing``, ``range_bias`` (the median
-    range error), ``a_xy`` (the spread of the odometry's x and y errors over
-    ``sqrt(dt)``), ``a_theta``, each scale at least its :data:`FLOORS` entry, with
+    range error), ``a_xy`` (the root mean square of the spreads of the odometry's x and y
+    errors, over ``sqrt(dt)``: the model's one ``sigma_xy`` for both axes, whose
+    maximum-likelihood variance is the mean of the two; pooling the errors instead would
+    give the lesser axis's spread where the two differ, as a robot's along-track and
+    lateral errors do), ``a_theta``, each scale at least its :data:`FLOORS` entry, with
     ``num_measurements`` and ``num_steps``.
 
     Raises
@@ -99,7 +102,8 @@ def robust_noise(res: NoiseResiduals) -> dict:
                          "steps: the noise needs some of each")  # fmt: skip
     root = math.sqrt(res.dt)
     out = {"sigma_range": _spread(res.range), "sigma_bearing": _spread(res.bearing),
-           "a_xy": _spread(res.odometry[:, :2].ravel()) / root,
+           "a_xy": math.hypot(_spread(res.odometry[:, 0]), _spread(res.odometry[:, 1]))
+           / math.sqrt(2.0) / root,
            "a_theta": _spread(res.odometry[:, 2]) / root}  # fmt: skip
     out = {k: max(v, FLOORS[k]) for k, v in out.items()}
     return {**out, "range_bias": float(np.median(res.range)),

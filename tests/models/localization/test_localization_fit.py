@@ -103,15 +103,16 @@ def test_pooled_runs_are_measured_as_one():
 
 def test_spreads_by_hand():
     """Medians worked out by hand: range errors 0, 1, 2, 3, 100 (an outlier) have median 2
-    and absolute deviations 2, 1, 0, 1, 98 (median 1); x and y odometry errors are pooled
-    (-1, 1, -1, 1 and four zeros: deviations of median 0.5)."""
+    and absolute deviations 2, 1, 0, 1, 98 (median 1); the x odometry errors -1, 1, -1, 1
+    spread 1.4826, the y errors none: the root mean square of the two is 1.4826 / sqrt(2)
+    (pooled, the eight errors' deviations have median 0.5)."""
     odo = np.column_stack([[-1.0, 1.0, -1.0, 1.0], np.zeros(4), [0.0, 0.2, 0.4, 0.6]])
     res = NoiseResiduals(np.array([0.0, 1.0, 2.0, 3.0, 100.0]), np.array([0.1, -0.1, 0.3,
                          -0.3, 0.0]), odo, 0.25)  # fmt: skip
     got = robust_noise(res)
     assert got["sigma_range"] == pytest.approx(1.4826) and got["range_bias"] == 2.0
     assert got["sigma_bearing"] == pytest.approx(1.4826 * 0.1)
-    assert got["a_xy"] == pytest.approx(1.4826 * 0.5 / 0.5)  # over sqrt(0.25)
+    assert got["a_xy"] == pytest.approx(1.4826 / math.sqrt(2) / 0.5)  # over sqrt(0.25)
     assert got["a_theta"] == pytest.approx(1.4826 * 0.2 / 0.5)  # median 0.3, deviations 0.2
 
 
