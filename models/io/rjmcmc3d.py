@@ -4,7 +4,9 @@ Input: one folder per camera view, each holding its Tsai calibration (one ``.xml
 PETS2009 ``View_00k.xml`` layout: ``Geometry``, ``Intrinsic``, ``Extrinsic``) and one
 foreground mask per frame (``*.png``, sorted by name = frame order; grey or RGB, values
 above 0.5 are foreground), in the camera's own (unrectified) image. Optional ``colour``
-sub-folder: the colour frames (same names). Every view has the same frames and size.
+sub-folder: the colour frames (same names). Every view has the same frames and size
+(``dbntrack track`` checks the count, and the frame numbers in the names where they have
+them).
 
 The masks are warped into seed 003's rectified images (nearest neighbour), and person
 detections (the tracker's data-driven proposals) are the feet (bottom centre) of the

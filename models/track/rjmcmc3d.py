@@ -9,6 +9,8 @@ of the camera centres on the ground), ``scale`` (image rescaling of the calibrat
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from dbn.errors import ConfigError, InputError
@@ -18,6 +20,27 @@ from models.track.options import array, build, check_keys, integer, number
 
 INPUTS = ("VIEW_DIR ...: one folder per camera: a Tsai calibration .xml and one foreground "
           "mask .png per frame",)  # fmt: skip
+
+
+def _frame_numbers(masks: list) -> list[int] | None:
+    """The last number in each mask's name (``mask_0005.png``: 5); None if a name has none."""
+    found = [re.findall(r"\d+", m.stem) for m in masks]
+    return [int(f[-1]) for f in found] if all(found) else None
+
+
+def _check_frame_numbers(views: list) -> None:
+    """Refuse views whose masks, matched by position, carry different frame numbers (one
+    exported from frame 1, another from frame 0: every frame would pair images of two
+    instants). Views whose names carry no numbers are matched by position alone."""
+    numbers = [_frame_numbers(v.masks) for v in views]
+    if any(n is None for n in numbers):
+        return
+    for v, n in zip(views[1:], numbers[1:]):
+        if n != numbers[0]:
+            k = next(i for i, (a, b) in enumerate(zip(numbers[0], n)) if a != b)
+            raise InputError(f"{views[0].masks[k]} and {v.masks[k]} are mask {k + 1} of their "
+                             f"views, of frames {numbers[0][k]} and {n[k]}: the views' masks "
+                             "are matched by position and must be of the same frames")  # fmt: skip
 
 
 def _spans_area(floor: np.ndarray) -> bool:
@@ -95,6 +118,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
             each = ", ".join(f"{p}: {c}" for p, c in zip(inputs, counts))
             raise InputError(f"the views have different numbers of masks ({each}); "
                              "every folder needs one mask per frame")
+        _check_frame_numbers(views)
         scene = _scene(ctx, views, floor, sigma_px)
     tracker = models.get("rjmcmc3d").make(scene=scene, params=params)
     T = len(views[0].masks)

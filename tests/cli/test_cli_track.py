@@ -798,6 +798,14 @@ def test_rjmcmc3d_bad_files(tmp_path, capsys):
     views = [str(d / "view0"), str(d / "view1"), str(short)]
     _bad(capsys, ["track", "rjmcmc3d", *views, "-o", str(tmp_path / "o2")],
          "different numbers of masks", "view0: 6", f"{short}: 5")
+    late = tmp_path / "late"  # the same count, exported from frame 1: matched one frame off
+    shutil.copytree(d / "view2", late)
+    for m in sorted(late.glob("mask_*.png"), reverse=True):
+        m.rename(late / f"mask_{int(m.stem[5:]) + 1:04d}.png")
+    views = [str(d / "view0"), str(d / "view1"), str(late)]
+    _bad(capsys, ["track", "rjmcmc3d", *views, "-o", str(tmp_path / "o3")],
+         f"{d / 'view0' / 'mask_0000.png'} and {late / 'mask_0001.png'} are mask 1",
+         "of frames 0 and 1")
 
 
 @pytest.mark.parametrize("command", ["track", "fit", "eval", "list", "demo", "sweep"])
