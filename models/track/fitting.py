@@ -20,8 +20,9 @@ from dbn.errors import InputError
 from models.crossval import CrossValidation, cross_validate, fold_blocks, group_keys
 from models.track.context import RunContext, short_names, shown_strength
 
-__all__ = ["check_disjoint", "fold_groups", "held_of_training", "check_strengths",
-           "cross_validate_files", "cv_record", "mean_errors", "plot_fit", "report"]  # fmt: skip
+__all__ = ["check_disjoint", "fold_groups", "held_of_training", "copies_of_training",
+           "check_strengths", "cross_validate_files", "cv_record", "mean_errors", "plot_fit",
+           "report"]  # fmt: skip
 
 
 def check_disjoint(train: list[str], validate: list[str]) -> None:
@@ -59,6 +60,21 @@ def held_of_training(validate: list[str], fold_by: str, groups: list[str]) -> li
             continue
         if key in train:
             out.append(str(Path(p).resolve()))
+    return out
+
+
+def copies_of_training(keys: dict, train: list[str], validate: list[str],
+                       share: float = 0.5) -> dict[str, str]:
+    """Each held-out file (resolved) of which at least ``share`` of its items (``keys[p]``,
+    a set: passes, odometry rows) are a training file's, with the first such training file
+    (resolved): a copy or a cut of it, whose error is not held out."""
+    out = {}
+    for p in validate:
+        held = keys[p]
+        for q in train:
+            if len(held & keys[q]) >= share * len(held):
+                out[str(Path(p).resolve())] = str(Path(q).resolve())
+                break
     return out
 
 

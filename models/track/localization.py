@@ -55,7 +55,7 @@ def _read(inputs: list[str], robot: int):
 
 def run_options(config: dict) -> dict:
     """The config's options, checked before any file is read (``noise``:
-    :func:`noise_settings`)."""
+    :func:`config_noise`)."""
     check_keys(config, _KEYS)
     initial = array(config, "initial_pose") if "initial_pose" in config else None
     if initial is not None and initial.shape != (3,):
@@ -73,11 +73,11 @@ def run_options(config: dict) -> dict:
     if opts["duration"] is not None and not opts["duration"] / opts["dt"] <= _MAX_STEPS:
         raise ConfigError(f"config duration = {opts['duration']!r}: more than {_MAX_STEPS:g} steps "
                           f"of dt = {opts['dt']!r}")  # fmt: skip
-    opts["noise"] = noise_settings(config)
+    opts["noise"] = config_noise(config)
     return opts
 
 
-def noise_settings(config: dict) -> dict:
+def config_noise(config: dict) -> dict:
     """The model's noise: :data:`~models.localization.mrclam.MRCLAM_NOISE` with the
     config's noise keys (:data:`NOISE_KEYS`) written over it, each checked (scales > 0
     where the likelihood divides by them, >= 0 for the motion and the initial spread,
@@ -102,10 +102,11 @@ def noise_settings(config: dict) -> dict:
     return out
 
 
-def run_sequence(data, odometry: Path, opts: dict):
+def run_sequence(data, odometry: Path, opts: dict, end: float | None = None):
     """The filter's steps of a run (:func:`~models.localization.mrclam.build_sequence` with
     the options' ``dt``, ``duration``, ``start``) and its data, with the options' initial
-    pose (required without ground truth)."""
+    pose (required without ground truth). Without a ``duration`` the run ends at ``end``
+    (default: the odometry's last time)."""
     from models.localization.mrclam import build_sequence
 
     initial = opts["initial_pose"]
@@ -116,11 +117,13 @@ def run_sequence(data, odometry: Path, opts: dict):
     dt, duration, start = opts["dt"], opts["duration"], opts["start"]
     t0 = max(data.odometry[0, 0], data.groundtruth[0, 0]) if start is None else start
     if duration is None:
-        duration = float(data.odometry[-1, 0] - t0 - 1e-9)
+        last = data.odometry[-1, 0] if end is None else end
+        duration = float(last - t0 - 1e-9)
         if not duration > dt:
             what = f"the start (t = {t0:.6g})" if start is None else f"config start t = {t0:.6g}"
-            raise InputError(f"{odometry}: the odometry ends at t = {data.odometry[-1, 0]:.6g}, "
-                             f"less than one step (dt = {dt:g}) after {what}")  # fmt: skip
+            data_end = "odometry ends" if end is None else "run's data end"
+            raise InputError(f"{odometry}: the {data_end} at t = {last:.6g}, less than one step "
+                             f"(dt = {dt:g}) after {what}")  # fmt: skip
     try:
         seq = build_sequence(data, duration=duration, dt=dt, start=start)
     except InputError as exc:  # a span outside the odometry's
@@ -244,4 +247,4 @@ def fit_report(summary: dict) -> list[str]:
 
 
 __all__ = ["INPUTS", "NOISE_KEYS", "track", "evaluate", "fit", "fit_report", "filter_means",
-           "noise_settings", "run_options", "run_sequence"]
+           "config_noise", "run_options", "run_sequence"]

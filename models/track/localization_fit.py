@@ -48,7 +48,13 @@ from dbn.errors import ConfigError, DBNError, InputError, in_file
 from models.io.localization import mrclam_file, read_generic, read_mrclam_folder
 from models.localization.fit import noise_residuals, noise_settings, pool_residuals, robust_noise
 from models.track.context import RunContext
-from models.track.fitting import check_disjoint, mean_errors, plot_fit, report
+from models.track.fitting import (
+    check_disjoint,
+    copies_of_training,
+    mean_errors,
+    plot_fit,
+    report,
+)
 from models.track.localization import (
     NOISE_KEYS,
     filter_means,
@@ -112,7 +118,8 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, se
               "search": [{"motion_scale": m, "sensor_scale": s,
                           "error": float(np.mean(list(errors.values())))}
                          for (m, s), errors in search.items()],
-              "validation_same_recording": _same_runs(runs, train, validate),
+              "validation_same_recording": copies_of_training(
+                  {p: run.rows for p, run in runs.items()}, train, validate),
               "fitted": {k: _listed(noise[k]) for k in NOISE_KEYS}}  # fmt: skip
     return {"parameters": params, "metrics": mean_errors(files), "files": files,
             "outputs": ["config.json", "fit.png"]}
@@ -162,7 +169,8 @@ def _read_run(path: str, opts: dict) -> Run:
         raise InputError(f"{path}: no ground truth (RobotN_Groundtruth.dat): dbntrack fit "
                          "needs each run's truth")  # fmt: skip
     try:
-        seq = run_sequence(data, odometry, _within_truth(data, opts))[0]
+        end = min(data.odometry[-1, 0], data.groundtruth[-1, 0])  # without a duration
+        seq = run_sequence(data, odometry, opts, end)[0]
     except DBNError as exc:  # named by its run, unless it names the odometry file
         raise (exc if str(odometry) in str(exc) else in_file(exc, path)) from None
     gt = data.groundtruth[:, 0]
@@ -171,18 +179,6 @@ def _read_run(path: str, opts: dict) -> Run:
                          f"the run t = [{seq.times[0]:.6g}, {seq.times[-1]:.6g}]: the fit needs "
                          "the truth of every step (config start, duration)")  # fmt: skip
     return Run(seq, frozenset(tuple(f"{x:.9g}" for x in row) for row in data.odometry))
-
-
-def _within_truth(data, opts: dict) -> dict:
-    """``opts`` with, where the config gives no ``duration``, the run cut where its
-    odometry or its truth ends (MRCLAM's robot 1 has odometry for 128 s after its last
-    true pose)."""
-    if opts["duration"] is not None:
-        return opts
-    odo, gt = data.odometry[:, 0], data.groundtruth[:, 0]
-    t0 = max(odo[0], gt[0]) if opts["start"] is None else opts["start"]
-    end = min(odo[-1], gt[-1])
-    return {**opts, "duration": float(end - t0 - 1e-9) if end - t0 > opts["dt"] else None}
 
 
 def _rmse(seq, noise: dict, opts: dict, keys: list) -> float:
@@ -218,19 +214,6 @@ def _row(path: str, run: Run, opts: dict, noise: dict, keys: list,
             "measurements": int(np.asarray(run.seq.observations.mask).sum()),
             "error_config": _rmse(run.seq, opts["noise"], opts, keys),
             "error_fitted": fitted}  # fmt: skip
-
-
-def _same_runs(runs: dict, train: list[str], validate: list[str]) -> dict[str, str]:
-    """Each held-out run (resolved) of which at least half the odometry rows are a training
-    run's (a copy or a cut of it), with that run."""
-    out = {}
-    for p in validate:
-        mine = runs[p].rows
-        for q in train:
-            if len(mine & runs[q].rows) >= 0.5 * len(mine):
-                out[str(Path(p).resolve())] = str(Path(q).resolve())
-                break
-    return out
 
 
 def _listed(v):

@@ -43,6 +43,7 @@ from models.track.context import RunContext, shown_strength
 from models.track.fitting import (
     check_disjoint,
     check_strengths,
+    copies_of_training,
     cross_validate_files,
     cv_record,
     fold_groups,
@@ -149,15 +150,8 @@ def _same_recordings(tables: dict, train: list[str], validate: list[str]) -> dic
         o = table.obs
         return {(int(c), *(f"{x:.6g}" for x in a)) for c, a in zip(o.camera, o.appearance)}
 
-    mine = {p: keys(tables[p]) for p in train}
-    out = {}
-    for p in validate:
-        held = keys(tables[p])
-        for q, theirs in mine.items():
-            if len(held & theirs) >= 0.5 * len(held):
-                out[str(Path(p).resolve())] = str(Path(q).resolve())
-                break
-    return out
+    return copies_of_training({p: keys(tables[p]) for p in [*train, *validate]}, train,
+                              validate)  # fmt: skip
 
 
 def _counts(path: str, table, layout: tuple[int, int]):
