@@ -120,7 +120,7 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, se
                          for (m, s), errors in search.items()],
               "validation_same_recording": copies_of_training(
                   {p: run.rows for p, run in runs.items()}, train, validate),
-              "fitted": {k: _listed(noise[k]) for k in NOISE_KEYS}}  # fmt: skip
+              "fitted": {k: fitted[k] for k in NOISE_KEYS}}  # fmt: skip
     return {"parameters": params, "metrics": mean_errors(files), "files": files,
             "outputs": ["config.json", "fit.png"]}
 
