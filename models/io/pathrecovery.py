@@ -24,7 +24,8 @@ import numpy as np
 from dbn.errors import DBNError, InputError, TimeOrderError
 from models.io.table import fail, read_rows, write_rows
 
-__all__ = ["Observations", "read_network", "read_observations", "write_path", "read_path"]
+__all__ = ["Observations", "read_network", "read_observations", "write_path", "read_path",
+           "write_scene"]
 
 _FEAT = re.compile(r"^f(\d+)$")
 _KIND = {"visible": 0, "hidden": 1, "none": -1}
@@ -163,4 +164,31 @@ def read_path(path: str | Path) -> dict[int, tuple[int, int, int, int]]:
         out[t], last = _path_step(r, _KIND[r["state"]], cam, ta, r.int("obs")), t
     if not out:
         raise fail(path, 0, "no steps")
+    return out
+
+
+def write_scene(folder: str | Path, scene) -> Path:
+    """Write a :class:`models.pathrecovery.simulate.Scene` (SIMULATED) as a run's files in
+    ``folder`` (made if absent): ``edges.csv``, ``cameras.csv``, ``observations.csv`` (every
+    observation, its row index as ``obs``, its ``object``) and ``truth_path.csv`` (the
+    target's path from ``t = 0``: what ``dbntrack track pathrecovery`` reads, ``dbntrack
+    eval`` scores against and ``dbntrack fit pathrecovery`` fits on). Returns ``folder``."""
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    net, odb = scene.network, scene.odb
+    src = np.repeat(np.arange(net.indptr.size - 1), np.diff(net.indptr))
+    write_rows(out / "edges.csv", ("from", "to", "prob", "gap_mean"),
+               [(int(a), int(b), float(p), float(g))
+                for a, b, p, g in zip(src, net.indices, net.probs, net.gap_mean)])  # fmt: skip
+    write_rows(out / "cameras.csv", ("camera", "x", "y"),
+               [(i, float(x), float(y)) for i, (x, y) in enumerate(net.coords)])  # fmt: skip
+    t_of = np.repeat(np.arange(odb.num_timesteps), np.diff(odb.time_ptr))
+    d = odb.feat.shape[1]
+    write_rows(out / "observations.csv", ("obs", "t", "camera", *(f"f{i}" for i in range(d)),
+                                          "object"),
+               [(i, int(t_of[i]), int(odb.cam[i]), *map(float, odb.feat[i]),
+                 int(odb.obj[i])) for i in range(odb.cam.size)])  # fmt: skip
+    T = odb.num_timesteps
+    write_path(out / "truth_path.csv", np.arange(T), np.where(scene.true_ta == 0, 0, 1),
+               scene.true_cam, scene.true_ta, scene.true_obs)  # fmt: skip
     return out

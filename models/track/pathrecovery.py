@@ -8,6 +8,9 @@ the second (dynamic programming over the k-best lists) is
 ``f0``. ``sigma`` (the typical feature covariance of eq. 2) defaults to the covariance
 of all features. Other config keys: the fields of
 :class:`~models.pathrecovery.filter.FilterConfig` and ``k_dp`` (7, the second phase's k).
+``dbntrack fit pathrecovery`` searches the weighting's ``sharpness`` and
+``hidden_likelihood`` on runs whose true path is known
+(:mod:`models.track.pathrecovery_fit`).
 """
 
 from __future__ import annotations
@@ -18,6 +21,10 @@ from dbn.errors import ConfigError, InputError
 from models.io.pathrecovery import read_network, read_observations, read_path, write_path
 from models.track.context import RunContext
 from models.track.options import array, build, check_keys, integer
+
+OTHER_KEYS = ("c0", "f0", "target_obs", "sigma", "k_dp")
+"""The config keys of ``dbntrack track pathrecovery`` besides the fields of
+:class:`~models.pathrecovery.filter.FilterConfig`: the start, ``sigma`` and ``k_dp``."""
 
 INPUTS = ("EDGES.csv: from,to,prob[,gap_mean] camera network (with self loops)",
           "OBSERVATIONS.csv: t,camera,f0,f1,... (the target's start at t = 0)",
@@ -75,43 +82,71 @@ def _positive_definite(sigma: np.ndarray) -> bool:
 
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     """Recover the target's path; write ``path.csv`` and ``path.png``."""
-    import models
-    from models.pathrecovery.api import PathObservation
-    from models.pathrecovery.filter import FilterConfig, KBestLists, make_model
-    from models.pathrecovery.recover import recover_path
-
     if len(inputs) not in (2, 3):
         raise InputError(f"pathrecovery needs EDGES.csv OBSERVATIONS.csv [CAMERAS.csv], "
                          f"got {len(inputs)} input(s)")  # fmt: skip
-    check_keys(config, set(FilterConfig._fields) | {"c0", "f0", "target_obs", "sigma", "k_dp"})
-    fcfg = build(FilterConfig, {k: config[k] for k in FilterConfig._fields if k in config})
-    k_dp = integer(config, "k_dp", 7)
+    fcfg, k_dp = run_options(config)
     with ctx.timed("read"):
         net = read_network(inputs[0], inputs[2] if len(inputs) == 3 else None)
         odb = read_observations(inputs[1])
-    if odb.cam.max() >= net.num_cameras:
-        raise InputError(f"{inputs[1]}: camera {int(odb.cam.max())} is not in the network "
-                         f"{inputs[0]} (cameras 0..{net.num_cameras - 1})")  # fmt: skip
+    check_cameras(net, odb, inputs[0], inputs[1])
     c0, f0 = _start(odb, config, inputs[1])
     sigma = array(config, "sigma") if "sigma" in config else _feature_cov(odb.feat, inputs[1])
-    model = make_model(net, c0, f0, sigma, fcfg)
-    tracker = models.get("pathrecovery").make(model=model)
-    T = odb.time_ptr.size - 1
-    bounds = [(t, int(odb.time_ptr[t]), int(odb.time_ptr[t + 1])) for t in range(1, T)]
-    steps = [PathObservation(odb.cam[lo:hi], odb.feat[lo:hi], lo, t) for t, lo, hi in bounds]
     with ctx.timed("filter"):
-        _, infos = tracker.fold(ctx.key(), steps, ctx.bar("steps"))
-    lists = KBestLists(*(np.stack([getattr(i, f) for i in infos])
-                         for f in ("kind", "cam", "ta", "obs", "mass", "num_tracked_cameras")),
-                       step_seconds=np.zeros(T - 1))  # fmt: skip
-    with ctx.timed("recover"):
-        path = recover_path(model, lists, odb.feat, k=min(k_dp, fcfg.k))
-    ids = np.where(path.obs >= 0, odb.ids[np.maximum(path.obs, 0)], -1)
-    write_path(ctx.outdir / "path.csv", np.arange(1, T), path.kind, path.cam, path.ta, ids)
+        path = recover(net, odb, (c0, f0, sigma), fcfg, k_dp, ctx.key(), ctx.bar("steps"))
+    T = odb.time_ptr.size - 1
+    write_path(ctx.outdir / "path.csv", np.arange(1, T), path.kind, path.cam, path.ta,
+               path_ids(path, odb))  # fmt: skip
     _plot(ctx, net, path, c0)
     params = {"num_steps": T, "num_cameras": net.num_cameras, "c0": c0, "k_dp": k_dp,
               **fcfg._asdict(), "jumps": int(path.jumped.sum())}  # fmt: skip
     return {"parameters": params, "outputs": ["path.csv", "path.png"]}
+
+
+def run_options(config: dict, extra: tuple = ()) -> tuple:
+    """The config's :class:`~models.pathrecovery.filter.FilterConfig` and ``k_dp``, its keys
+    checked before any file is read (those fields, :data:`OTHER_KEYS` and ``extra``)."""
+    from models.pathrecovery.filter import FilterConfig
+
+    check_keys(config, {*FilterConfig._fields, *OTHER_KEYS, *extra})
+    fcfg = build(FilterConfig, {k: config[k] for k in FilterConfig._fields if k in config})
+    return fcfg, integer(config, "k_dp", 7)
+
+
+def check_cameras(net, odb, edges: str, observations: str) -> None:
+    """Refuse observations in a camera the network does not have."""
+    if odb.cam.max() >= net.num_cameras:
+        raise InputError(f"{observations}: camera {int(odb.cam.max())} is not in the network "
+                         f"{edges} (cameras 0..{net.num_cameras - 1})")  # fmt: skip
+
+
+def recover(net, odb, start: tuple, fcfg, k_dp: int, key, progress=None):
+    """Both phases on one run: the registry's tracker stepped through the protocol over
+    ``t = 1 .. T-1`` (``progress`` as :meth:`models.protocol.StepTracker.fold` takes it),
+    then :func:`models.pathrecovery.recover_path` over its k-best lists with
+    ``min(k_dp, fcfg.k)``. ``start`` is ``(c0, f0, sigma)``. Returns the
+    :class:`~models.pathrecovery.recover.RecoveredPath` of steps ``1 .. T-1``."""
+    import models
+    from models.pathrecovery.api import PathObservation
+    from models.pathrecovery.filter import KBestLists, make_model
+    from models.pathrecovery.recover import recover_path
+
+    model = make_model(net, *start, fcfg)
+    tracker = models.get("pathrecovery").make(model=model)
+    T = odb.time_ptr.size - 1
+    bounds = [(t, int(odb.time_ptr[t]), int(odb.time_ptr[t + 1])) for t in range(1, T)]
+    steps = [PathObservation(odb.cam[lo:hi], odb.feat[lo:hi], lo, t) for t, lo, hi in bounds]
+    _, infos = tracker.fold(key, steps, progress)
+    lists = KBestLists(*(np.stack([getattr(i, f) for i in infos])
+                         for f in ("kind", "cam", "ta", "obs", "mass", "num_tracked_cameras")),
+                       step_seconds=np.zeros(T - 1))  # fmt: skip
+    return recover_path(model, lists, odb.feat, k=min(k_dp, fcfg.k))
+
+
+def path_ids(path, odb) -> np.ndarray:
+    """The observation id (``obs`` of the observations CSV) of each recovered step, -1
+    where it has none."""
+    return np.where(path.obs >= 0, odb.ids[np.maximum(path.obs, 0)], -1)
 
 
 def _plot(ctx: RunContext, net, path, c0: int) -> None:
@@ -140,9 +175,15 @@ def evaluate(result: str, truth: str) -> dict:
     """Seed 001's path score (sec. 7.2): fraction of steps whose state is correct, overall,
     on visible and on hidden steps (:func:`models.pathrecovery.metrics.path_score`), and
     the camera accuracy on visible steps, over the steps ``t >= 1`` of the truth."""
+    return score_path(read_path(result), read_path(truth), result, truth)
+
+
+def score_path(pred: dict, true: dict, result: str, truth: str) -> dict:
+    """:func:`evaluate` of two paths as :func:`models.io.pathrecovery.read_path` gives
+    them (``t -> (kind, camera, ta, obs)``), ``result`` and ``truth`` naming them in
+    errors."""
     from models.pathrecovery.metrics import path_score
 
-    pred, true = read_path(result), read_path(truth)
     steps = sorted(t for t in true if t >= 1)
     if not steps:
         raise InputError(f"{truth}: no step t >= 1 to score (the path score counts the "
@@ -162,4 +203,22 @@ def evaluate(result: str, truth: str) -> dict:
             "num_steps": len(steps)}  # fmt: skip
 
 
-__all__ = ["INPUTS", "track", "evaluate"]
+def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, seeds: int = 1,
+        prior_strength=(0.0,), folds: int = 0, fold_by: str | None = None) -> dict:
+    """``dbntrack fit``: the default weighting's ``sharpness`` and ``hidden_likelihood``
+    searched on runs whose true path is known (:mod:`models.track.pathrecovery_fit`)."""
+    from models.track.pathrecovery_fit import fit as fit_runs
+
+    return fit_runs(ctx, train, validate, config, seeds, prior_strength, folds, fold_by)
+
+
+def fit_report(summary: dict) -> list[str]:
+    """The lines ``dbntrack fit pathrecovery`` prints
+    (:func:`models.track.pathrecovery_fit.fit_report`)."""
+    from models.track.pathrecovery_fit import fit_report as report
+
+    return report(summary)
+
+
+__all__ = ["INPUTS", "OTHER_KEYS", "fit", "fit_report", "track", "evaluate", "score_path", "run_options",
+           "check_cameras", "recover", "path_ids"]
