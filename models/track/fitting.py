@@ -1,7 +1,7 @@
 """What every ``dbntrack fit`` runner shares (:mod:`models.track.jorge_fit`,
-:mod:`models.track.zajdel_fit`, :mod:`models.track.localization_fit`): the checks of the
-files and options before any file is read, the cross-validation's folds and record, the
-mean errors and ``fit.png``.
+:mod:`models.track.zajdel_fit`, :mod:`models.track.localization_fit`,
+:mod:`models.track.pathrecovery_fit`): the checks of the files and options before any
+file is read, the cross-validation's folds and record, the mean errors and ``fit.png``.
 
 A runner's ``fit`` returns one row per file (``file``, resolved; ``split``, ``"train"`` or
 ``"validation"``; ``error_config`` and ``error_fitted``, the file's error with the config's

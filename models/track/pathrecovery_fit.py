@@ -1,0 +1,266 @@
+r"""``dbntrack fit pathrecovery TRAIN... --validate HELD...``: the filter's weighting chosen
+by the path score on runs of yours whose target's path you know, written as a config for
+``dbntrack track pathrecovery --config``.
+
+A run (each TRAIN and HELD) is a folder holding ``edges.csv``, ``observations.csv`` and
+``truth_path.csv`` (:mod:`models.io.pathrecovery`: the files ``dbntrack track
+pathrecovery`` reads and the truth ``dbntrack eval pathrecovery`` scores against;
+:func:`models.io.pathrecovery.write_scene` writes a SIMULATED scene so). The target starts
+at its true observation at ``t = 0`` (the truth's first row, which must be visible), and
+the truth must hold every step ``t = 0 .. T-1`` of the observations. The config's other
+keys (``num_particles``, ``k``, ``alpha``, ..., ``sigma``, ``k_dp``) apply to every run.
+
+The fit, a documented search rather than a likelihood: the default weighting's two
+settings (:class:`~models.pathrecovery.filter.FilterConfig`: ``sharpness`` ``kappa``, the
+power the weights are raised to, and ``hidden_likelihood`` ``q``, the weight of a hidden
+particle) were chosen on SIMULATED scenes with the simulator's ``sigma``
+(:mod:`models.pathrecovery.filter`), where ``dbntrack track`` takes, without a config
+``sigma``, the covariance of all of a run's features. Both phases run on every training
+run for each pair of ``search_sharpness`` x ``search_hidden_likelihood`` (config keys;
+default :data:`SEARCH_SHARPNESS` x :data:`SEARCH_HIDDEN_LIKELIHOOD`, the grid of that
+choice: 36 pairs), and the pair of the least mean path error is kept (ties: the config's
+pair where it is among them, else the smaller ``kappa``, then the smaller ``q``); a choice
+at an edge of the grid is reported (``on_edge``: a wider search may do better).
+
+A run's path error is one minus seed 001's path score (sec. 7.2,
+:func:`models.track.pathrecovery.evaluate`): the fraction of steps ``t >= 1`` whose
+recovered state is wrong, the mean over ``--seeds`` runs of seeds ``--seed``, ``--seed +
+1``, ... (as ``dbntrack track --seed``), with the config's settings and with the fitted
+(``OUTDIR/config.json``: the config with ``sharpness`` and ``hidden_likelihood`` written
+over it). There is no prior strength and no cross-validation: the training runs choose,
+the held-out runs say how well the choice holds (a held-out run of which half the
+observations or more are a training run's is named as not held out). The network's edge
+probabilities and gap means, and ``sigma``, are not fitted: ``sigma`` measured as the
+covariance of the target's own features about its mean (pooled over the training runs'
+true paths) made both phases worse on SIMULATED scenes at every searched pair (eq. 5-6's
+mixture support needs a similarity wider than one object's spread).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+from dbn.errors import ConfigError, DBNError, InputError, in_file
+from models.io.pathrecovery import read_network, read_observations, read_path
+from models.track.context import RunContext
+from models.track.fitting import check_disjoint, copies_of_training, mean_errors, plot_fit, report
+from models.track.options import array
+from models.track.pathrecovery import (
+    _feature_cov,
+    _start,
+    check_cameras,
+    path_ids,
+    recover,
+    run_options,
+    score_path,
+)
+
+__all__ = ["fit", "fit_report", "SEARCH_SHARPNESS", "SEARCH_HIDDEN_LIKELIHOOD"]
+
+SEARCH_SHARPNESS = (1.0, 3.0, 4.0, 5.0, 6.0, 8.0)
+"""The ``kappa`` the search tries (config key ``search_sharpness``)."""
+
+SEARCH_HIDDEN_LIKELIHOOD = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6)
+"""The ``q`` the search tries (config key ``search_hidden_likelihood``)."""
+
+_SEARCH_KEYS = ("search_sharpness", "search_hidden_likelihood")
+_FILES = ("edges.csv", "observations.csv", "truth_path.csv")
+
+
+class Run(NamedTuple):
+    """A run's network, observations, start ``(c0, f0, sigma)`` (``sigma`` as ``dbntrack
+    track`` takes it from the config) and true path, with its observations' rows (to tell
+    a copy of a training run)."""
+
+    net: object
+    odb: object
+    start: tuple
+    truth: dict
+    truth_file: str
+    rows: frozenset
+
+
+def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, seeds: int = 1,
+        prior_strength=(0.0,), folds: int = 0, fold_by: str | None = None) -> dict:
+    """Search on ``train``, score ``train`` and ``validate`` (module docstring); write
+    ``config.json`` and ``fit.png``. Returns ``parameters``, ``metrics``, ``files`` (one
+    row per run) and ``outputs`` for ``summary.json``."""
+    _refuse(config, prior_strength, folds, fold_by)
+    axes = _axes(config)
+    grid = [(k, q) for k in axes[0] for q in axes[1]]
+    base = {k: v for k, v in config.items() if k not in _SEARCH_KEYS}
+    fcfg, k_dp = run_options(base)
+    check_disjoint(train, validate)
+    with ctx.timed("read"):
+        runs = {p: _read_run(p, base) for p in [*train, *validate]}
+    keys = [jax.random.key(ctx.seed + i) for i in range(seeds)]
+    with ctx.timed("search"):
+        search = _search(ctx, runs, train, fcfg, k_dp, grid, keys)
+    mean = {pair: float(np.mean(list(e.values()))) for pair, e in search.items()}
+    own = (float(fcfg.sharpness), float(fcfg.hidden_likelihood))
+    chosen = min(mean, key=lambda pair: (mean[pair], pair != own, pair))
+    fitted_cfg = fcfg._replace(sharpness=chosen[0], hidden_likelihood=chosen[1])
+    fitted = {**base, "sharpness": chosen[0], "hidden_likelihood": chosen[1]}
+    run_options(fitted)  # as dbntrack track will read it
+    with ctx.timed("score"):
+        files = [_row(p, runs[p], fcfg, fitted_cfg, k_dp, keys,
+                      search[chosen] if p in train else None)
+                 for p in ctx.progress(runs, len(runs), "runs")]  # fmt: skip
+    (ctx.outdir / "config.json").write_text(json.dumps(fitted, indent=1) + "\n",
+                                            encoding="utf-8")  # fmt: skip
+    plot_fit(ctx, files, "weighting", "path error (1 - path score)")
+    params = {"seeds": seeds, "k_dp": k_dp,
+              "sharpness": chosen[0], "hidden_likelihood": chosen[1],
+              "on_edge": _on_edge(chosen, axes),
+              "search": [{"sharpness": s, "hidden_likelihood": q, "error": mean[(s, q)]}
+                         for s, q in search],
+              "validation_same_recording": copies_of_training(
+                  {p: run.rows for p, run in runs.items()}, train, validate)}  # fmt: skip
+    return {"parameters": params, "metrics": mean_errors(files), "files": files,
+            "outputs": ["config.json", "fit.png"]}
+
+
+def _refuse(config: dict, prior_strength, folds: int, fold_by: str | None) -> None:
+    """The options of the other fits that have no meaning here, and the config keys that
+    cannot apply to every run or leave nothing to search."""
+    if list(np.atleast_1d(prior_strength)) != [0.0]:
+        raise InputError(f"prior strength {prior_strength!r}: pathrecovery's fit searches its "
+                         "weighting; it has no prior strength")  # fmt: skip
+    if folds or fold_by is not None:
+        raise InputError("--folds / --fold-by: pathrecovery's fit chooses its weighting on the "
+                         "training runs (no strengths to cross-validate); hold runs out with "
+                         "--validate")  # fmt: skip
+    start = [k for k in ("c0", "f0", "target_obs") if k in config]
+    if start:
+        raise ConfigError(f"config {start}: the fit starts each run at its true path's "
+                          "observation at t = 0; leave them out")  # fmt: skip
+    if config.get("faithful") is True:
+        raise ConfigError("config faithful = true: the paper's weighting has neither sharpness "
+                          "nor hidden_likelihood to fit")  # fmt: skip
+
+
+def _axes(config: dict) -> list[tuple[float, ...]]:
+    """The searched ``kappa`` and ``q``, sorted: the config's ``search_sharpness`` (numbers
+    > 0) and ``search_hidden_likelihood`` (in [0, 1]), each none twice, else the defaults."""
+    out = []
+    for key, default, ok, what in (
+            ("search_sharpness", SEARCH_SHARPNESS, lambda v: v > 0, "numbers > 0"),
+            ("search_hidden_likelihood", SEARCH_HIDDEN_LIKELIHOOD,
+             lambda v: (v >= 0) & (v <= 1), "numbers in [0, 1]")):  # fmt: skip
+        if key not in config:
+            out.append(default)
+            continue
+        v = array(config, key, ndim=1)
+        if v.size == 0 or not np.all(ok(v)) or np.unique(v).size != v.size:
+            raise ConfigError(f"config {key} = {config[key]!r}: expected {what}, at least "
+                              "one, none twice")  # fmt: skip
+        out.append(tuple(sorted(float(x) for x in v)))
+    return out
+
+
+def _on_edge(chosen: tuple, axes: list) -> list[str]:
+    """The search keys whose chosen value is the least or the largest of several tried: a
+    wider search may do better."""
+    return [key for key, v, axis in zip(_SEARCH_KEYS, chosen, axes)
+            if len(axis) > 1 and v in (axis[0], axis[-1])]  # fmt: skip
+
+
+def _read_run(path: str, config: dict) -> Run:
+    """A run folder (module docstring), its start taken from its true path."""
+    p = Path(path)
+    if not p.is_dir():
+        raise InputError(f"{path}: expected a run folder holding {', '.join(_FILES)}")
+    missing = [n for n in _FILES if not (p / n).is_file()]
+    if missing:
+        raise InputError(f"{path}: no {', '.join(missing)} (a run folder holds "
+                         f"{', '.join(_FILES)}; dbntrack fit needs each run's true path)")
+    edges, obs, truth_file = (str(p / n) for n in _FILES)
+    net, odb, truth = read_network(edges), read_observations(obs), read_path(truth_file)
+    check_cameras(net, odb, edges, obs)
+    T = odb.time_ptr.size - 1
+    if sorted(truth) != list(range(T)):
+        raise InputError(f"{truth_file}: the true path has steps {_span(truth)}, the "
+                         f"observations t = 0 .. {T - 1}: the fit needs the truth of every "
+                         "step")  # fmt: skip
+    kind, _, _, obs_id = truth[0]
+    if kind != 0 or obs_id < 0:
+        raise InputError(f"{truth_file}: the target is not seen at t = 0 (the fit starts "
+                         "each run at its true observation there)")  # fmt: skip
+    try:
+        c0, f0 = _start(odb, {"target_obs": obs_id}, obs)
+    except ConfigError as exc:  # not about the config: the truth names a missing obs
+        raise InputError(f"{truth_file}: t = 0: {exc}") from None
+    sigma = array(config, "sigma") if "sigma" in config else _feature_cov(odb.feat, obs)
+    rows = frozenset(zip(odb.cam.tolist(), map(tuple, np.round(odb.feat, 9).tolist())))
+    return Run(net, odb, (c0, f0, sigma), truth, truth_file, rows)
+
+
+def _span(truth: dict) -> str:
+    t = sorted(truth)
+    return f"t = {t[0]} .. {t[-1]} ({len(t)} steps)"
+
+
+def _error(path: str, run: Run, fcfg, k_dp: int, keys: list) -> float:
+    """The mean over ``keys`` of the run's path error (1 - path score) with ``fcfg``."""
+    out = []
+    for key in keys:
+        try:
+            path = recover(run.net, run.odb, run.start, fcfg, k_dp, key)
+        except DBNError as exc:
+            raise in_file(exc, path) from None
+        t = np.arange(1, path.kind.size + 1)
+        pred = dict(zip(t.tolist(), zip(path.kind.tolist(), path.cam.tolist(),
+                                        path.ta.tolist(), path_ids(path, run.odb).tolist())))
+        out.append(1.0 - score_path(pred, run.truth, f"{path} (recovered)", run.truth_file)["path_score"])
+    return float(np.mean(out))
+
+
+def _search(ctx: RunContext, runs: dict, train: list[str], fcfg, k_dp: int, grid: list,
+            keys: list) -> dict:
+    """``{(kappa, q): {run: error}}`` over the training runs."""
+    jobs = [(pair, p) for pair in grid for p in train]
+    out: dict = {pair: {} for pair in grid}
+    for (s, q), p in ctx.progress(jobs, len(jobs), "search"):
+        cfg = fcfg._replace(sharpness=s, hidden_likelihood=q)
+        out[(s, q)][p] = _error(p, runs[p], cfg, k_dp, keys)
+    return out
+
+
+def _row(path: str, run: Run, fcfg, fitted_cfg, k_dp: int, keys: list,
+         searched: dict | None) -> dict:
+    """One run's row: its steps and observations, its path error with the config's and
+    with the fitted settings (a training run's from the search)."""
+    error = (searched[path] if searched is not None
+             else _error(path, run, fitted_cfg, k_dp, keys))  # fmt: skip
+    return {"file": str(Path(path).resolve()),
+            "split": "train" if searched is not None else "validation",
+            "steps": int(run.odb.time_ptr.size - 1),
+            "observations": int(run.odb.cam.size),
+            "hidden_steps": int(sum(v[0] != 0 for v in run.truth.values())),
+            "error_config": _error(path, run, fcfg, k_dp, keys),
+            "error_fitted": error}  # fmt: skip
+
+
+def fit_report(summary: dict) -> list[str]:
+    """The lines ``dbntrack fit pathrecovery`` prints for ``summary``
+    (:func:`models.track.fitting.report`): each run's error, then the chosen pair."""
+
+    def row_text(row: dict, other: str) -> str:
+        return (f"{row['steps']} steps ({row['hidden_steps']} hidden), {row['observations']} "
+                f"observations, path error {row['error_config']:.3f} (config) -> "
+                f"{row['error_fitted']:.3f} (fitted){other}")  # fmt: skip
+
+    p = summary["parameters"]
+    best = min(r["error"] for r in p["search"])
+    return [*report(summary, row_text, "weighting", "of which half the observations or more "
+                    "are a training run's"),
+            f"pathrecovery: the search over {len(p['search'])} pairs chose sharpness "
+            f"{p['sharpness']:g}, hidden_likelihood {p['hidden_likelihood']:g} (mean training "
+            f"path error {best:.3f})",
+            *(f"pathrecovery: the chosen value is the edge of config {key}: a wider search may "
+              "do better" for key in p["on_edge"])]  # fmt: skip
