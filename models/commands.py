@@ -54,7 +54,9 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
     p.add_argument("--method", help="dbn only: exact (default), auto, bk, particle, rbpf")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p = sub.add_parser(
-        "fit", help="fit a tracker's parameters on your files (jorge, zajdel_*, localization)",
+        "fit",
+        help="fit a tracker's parameters on your files "
+        "(jorge, zajdel_*, localization, pathrecovery)",
         epilog=_EPILOG,
         description="Fit tracker NAME's parameters on TRAIN files whose truth you know; write "
         "OUTDIR/config.json (for `dbntrack track NAME --config`), summary.json and fit.png, with "
@@ -91,7 +93,8 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
     p = sub.add_parser("eval", help="score a result file against a truth file", epilog=_EPILOG,
                        description="Metrics of tracker NAME's RESULT file against TRUTH: "
                        "MOTA/IDF1 (jorge, rjmcmc3d), partition q and pairwise F1 (zajdel), "
-                       "label error rate (jorge, dbn), RMSE (localization, pathrecovery).")  # fmt: skip
+                       "label error rate (jorge, dbn), RMSE (localization), path score "
+                       "(pathrecovery).")  # fmt: skip
     p.add_argument("name", metavar="NAME")
     p.add_argument("result", metavar="RESULT")
     p.add_argument("truth", metavar="TRUTH")
