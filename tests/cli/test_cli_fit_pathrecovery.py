@@ -19,7 +19,7 @@ from models.pathrecovery.simulate import manhattan_grid, simulate_scene
 from tests.cli.test_cli_track import _bad
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "pathrecovery"
-GRID = {"search_sharpness": [1, 6], "search_hidden_likelihood": [0.1, 0.5]}
+GRID = {"search_sharpness": [1, 3], "search_hidden_likelihood": [0.1, 0.3]}  # not the default
 CONFIG = {"num_particles": 100, **GRID}
 
 
@@ -81,13 +81,13 @@ def test_fit_keeps_the_least_training_error_and_scores_as_track_and_eval(runs, t
     """``config.json`` is the config with the pair of the least mean training error; each
     run's errors are those ``dbntrack track --config --truth`` gives with the config's and
     the fitted settings (mean over the seeds); a held-out copy of a training run is named
-    as not held out."""
-    copy = shutil.copytree(runs[3], tmp_path / "copy")
+    as not held out, whatever its observations' ids."""
+    copy = _renumbered_copy(runs[3], tmp_path / "copy")
     summary, fitted = _fit(tmp_path, "fit", CONFIG, runs[3], runs[4], "--validate", runs[5],
                            copy, "--seeds", "2")  # fmt: skip
     p = summary["parameters"]
     search = {(r["sharpness"], r["hidden_likelihood"]): r["error"] for r in p["search"]}
-    assert sorted(search) == [(1, 0.1), (1, 0.5), (6, 0.1), (6, 0.5)]
+    assert sorted(search) == [(1, 0.1), (1, 0.3), (3, 0.1), (3, 0.3)]
     chosen = (p["sharpness"], p["hidden_likelihood"])
     assert search[chosen] == min(search.values()) and len(set(search.values())) > 1
     assert fitted == {"num_particles": 100, "sharpness": chosen[0],
@@ -124,6 +124,18 @@ def test_ties_keep_the_config_pair_else_the_smallest(tmp_path, capsys):
     summary, fitted = _fit(tmp_path, "other", {**config, "search_sharpness": [6, 5]}, DATA)
     assert (fitted["sharpness"], fitted["hidden_likelihood"]) == (5, 0.3)
     assert summary["parameters"]["on_edge"] == ["search_sharpness", "search_hidden_likelihood"]
+
+
+def _renumbered_copy(run: Path, folder: Path) -> Path:
+    """A copy of ``run`` whose observation ids are 1000 more (in its true path too)."""
+    shutil.copytree(run, folder)
+    for name, column in (("observations.csv", 0), ("truth_path.csv", 4)):
+        lines = (folder / name).read_text().splitlines()
+        rows = [line.split(",") for line in lines[1:]]
+        for r in rows:
+            r[column] = str(int(r[column]) + 1000 if int(r[column]) >= 0 else -1)
+        (folder / name).write_text("\n".join([lines[0], *map(",".join, rows)]) + "\n")
+    return folder
 
 
 def _edited_run(runs: dict, tmp_path: Path, name: str, rows) -> Path:
