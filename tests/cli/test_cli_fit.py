@@ -128,9 +128,9 @@ def test_fit_refusals(tmp_path, capsys):
             ('{"nope": 1}', ("cfg.json", "unknown config key(s) ['nope']"))):
         cfg.write_text(text)
         _bad(capsys, ["fit", "jorge", str(plain), "-o", str(out), "--config", str(cfg)], *needles)
-    _bad(capsys, ["fit", "pathrecovery", str(plain), "-o", str(out)],
-         "'pathrecovery' has no fit; trackers with one: localization, zajdel_adf, "
-         "zajdel_learnsearch, jorge")  # fmt: skip
+    _bad(capsys, ["fit", "rjmcmc3d", str(plain), "-o", str(out)],
+         "'rjmcmc3d' has no fit; trackers with one: localization, zajdel_adf, "
+         "zajdel_learnsearch, pathrecovery, jorge")  # fmt: skip
     from models.track.context import RunContext
     from models.track.jorge_fit import fit
 

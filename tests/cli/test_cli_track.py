@@ -42,7 +42,8 @@ def test_list_names_every_runner(capsys):
     assert main(["list", "--json"]) == 0
     rows = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert {"dbn", "localization"} <= {r["name"] for r in rows}
-    with_fit = ["zajdel_adf", "zajdel_learnsearch", "jorge", "localization"]  # dbntrack fit
+    with_fit = ["zajdel_adf", "zajdel_learnsearch", "jorge", "localization",
+                "pathrecovery"]  # dbntrack fit
     assert [r["name"] for r in rows if r["fit"]] == with_fit
     assert main(["list"]) == 0
     assert "dbntrack fit: yes" in capsys.readouterr().out.split("\njorge\n")[1]
