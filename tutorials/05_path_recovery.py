@@ -307,6 +307,9 @@ print("identical to the serial run:", [r["result"] for r in records] == [r["resu
 # `truth_path.csv`; `models.io.pathrecovery.write_scene` writes SIMULATED scenes so (here a
 # 3 x 3 grid of blocks, 300 walkers, confusion measure 0.3; training scenes 20.., held-out
 # scenes 30..). The split is declared before the run; the held-out runs choose nothing.
+# With config `fit_network: true` the fit first counts the network's transition
+# probabilities and gap means from every object's moves (the `object` column): worth it
+# where your gap means are guesses (`models.track.pathrecovery_fit` gives the figures).
 
 # %%
 import json

@@ -25,7 +25,7 @@ from dbn.errors import DBNError, InputError, TimeOrderError
 from models.io.table import fail, read_rows, write_rows
 
 __all__ = ["Observations", "read_network", "read_observations", "write_path", "read_path",
-           "write_scene"]
+           "write_network", "write_scene"]
 
 _FEAT = re.compile(r"^f(\d+)$")
 _KIND = {"visible": 0, "hidden": 1, "none": -1}
@@ -167,6 +167,15 @@ def read_path(path: str | Path) -> dict[int, tuple[int, int, int, int]]:
     return out
 
 
+def write_network(path: str | Path, net) -> Path:
+    """Write a :class:`models.pathrecovery.model.CameraNetwork`'s edges as ``edges.csv``
+    (``from,to,prob,gap_mean``; :func:`read_network` reads it back)."""
+    src = np.repeat(np.arange(net.indptr.size - 1), np.diff(net.indptr))
+    return write_rows(path, ("from", "to", "prob", "gap_mean"),
+                      [(int(a), int(b), float(p), float(g))
+                       for a, b, p, g in zip(src, net.indices, net.probs, net.gap_mean)])
+
+
 def write_scene(folder: str | Path, scene) -> Path:
     """Write a :class:`models.pathrecovery.simulate.Scene` (SIMULATED) as a run's files in
     ``folder`` (made if absent): ``edges.csv``, ``cameras.csv``, ``observations.csv`` (every
@@ -176,10 +185,7 @@ def write_scene(folder: str | Path, scene) -> Path:
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
     net, odb = scene.network, scene.odb
-    src = np.repeat(np.arange(net.indptr.size - 1), np.diff(net.indptr))
-    write_rows(out / "edges.csv", ("from", "to", "prob", "gap_mean"),
-               [(int(a), int(b), float(p), float(g))
-                for a, b, p, g in zip(src, net.indices, net.probs, net.gap_mean)])  # fmt: skip
+    write_network(out / "edges.csv", net)
     write_rows(out / "cameras.csv", ("camera", "x", "y"),
                [(i, float(x), float(y)) for i, (x, y) in enumerate(net.coords)])  # fmt: skip
     t_of = np.repeat(np.arange(odb.num_timesteps), np.diff(odb.time_ptr))

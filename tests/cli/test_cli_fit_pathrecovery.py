@@ -15,6 +15,7 @@ import pytest
 
 from models.cli import main
 from models.io.pathrecovery import read_network, read_observations, read_path, write_scene
+from models.pathrecovery.fit import count_moves, fitted_network, pool_moves
 from models.pathrecovery.simulate import manhattan_grid, simulate_scene
 from tests.cli.test_cli_track import _bad
 
@@ -46,16 +47,26 @@ def _fit(tmp_path: Path, out: str, config: dict, *argv) -> tuple[dict, dict]:
             json.loads((tmp_path / out / "config.json").read_text()))
 
 
-def _track_error(tmp_path: Path, run: Path, config: dict, out: str, seed: int = 0) -> float:
-    """1 - the path score ``dbntrack track pathrecovery --config --truth`` gives, the
-    target started at its true observation at t = 0."""
+def _track_error(tmp_path: Path, run: Path, config: dict, out: str, seed: int = 0,
+                 edges: Path | None = None) -> float:
+    """1 - the path score ``dbntrack track pathrecovery --config --truth`` gives (with the
+    run's ``edges.csv`` or ``edges``), the target started at its true observation at
+    t = 0."""
     start = read_path(run / "truth_path.csv")[0][3]
     path = tmp_path / f"{out}.json"
     path.write_text(json.dumps({**config, "target_obs": start}))
-    assert main(["track", "pathrecovery", str(run / "edges.csv"), str(run / "observations.csv"),
+    assert main(["track", "pathrecovery", str(edges or run / "edges.csv"),
+                 str(run / "observations.csv"),
                  "--config", str(path), "--truth", str(run / "truth_path.csv"),
                  "-o", str(tmp_path / out), "--seed", str(seed), "--quiet"]) == 0  # fmt: skip
     return 1.0 - json.loads((tmp_path / out / "summary.json").read_text())["metrics"]["path_score"]
+
+
+def _moves(net, run: Path):
+    """The moves of a run folder's objects (``models.pathrecovery.fit.count_moves``)."""
+    odb = read_observations(run / "observations.csv")
+    steps = np.repeat(np.arange(odb.time_ptr.size - 1), np.diff(odb.time_ptr))
+    return count_moves(net, steps, odb.cam, odb.obj)
 
 
 def test_write_scene_reads_back(runs):
@@ -78,13 +89,21 @@ def test_write_scene_reads_back(runs):
 
 
 def test_fit_keeps_the_least_training_error_and_scores_as_track_and_eval(runs, tmp_path, capsys):
-    """``config.json`` is the config with the pair of the least mean training error; each
-    run's errors are those ``dbntrack track --config --truth`` gives with the config's and
-    the fitted settings (mean over the seeds); a held-out copy of a training run is named
-    as not held out, whatever its observations' ids."""
+    """``edges.csv`` is the network counted from the training runs' objects, ``config.json``
+    the config with the pair of the least mean training error; each run's errors are those
+    ``dbntrack track --config --truth`` gives with its own network and the config's
+    settings and with the fitted (mean over the seeds); a held-out copy of a training run
+    is named as not held out, whatever its observations' ids."""
     copy = _renumbered_copy(runs[3], tmp_path / "copy")
-    summary, fitted = _fit(tmp_path, "fit", CONFIG, runs[3], runs[4], "--validate", runs[5],
-                           copy, "--seeds", "2")  # fmt: skip
+    summary, fitted = _fit(tmp_path, "fit", {**CONFIG, "fit_network": True}, runs[3], runs[4],
+                           "--validate", runs[5], copy, "--seeds", "2")  # fmt: skip
+    net = read_network(runs[3] / "edges.csv")
+    want = fitted_network(net, pool_moves([_moves(net, runs[3]), _moves(net, runs[4])]))
+    got = read_network(tmp_path / "fit" / "edges.csv")
+    np.testing.assert_array_equal(got.indices, net.indices)
+    np.testing.assert_allclose(got.probs, want.probs, rtol=1e-12)
+    np.testing.assert_allclose(got.gap_mean, want.gap_mean, rtol=1e-12)
+    assert np.abs(got.probs - net.probs).max() > 0.01  # counted, not the runs' own
     p = summary["parameters"]
     search = {(r["sharpness"], r["hidden_likelihood"]): r["error"] for r in p["search"]}
     assert sorted(search) == [(1, 0.1), (1, 0.3), (3, 0.1), (3, 0.3)]
@@ -96,9 +115,10 @@ def test_fit_keeps_the_least_training_error_and_scores_as_track_and_eval(runs, t
     assert [r["split"] for r in summary["files"]] == ["train", "train", "validation",
                                                       "validation"]  # fmt: skip
     plain = {"num_particles": 100}
-    for name, run in (("scene3", runs[3]), ("scene5", runs[5])):
-        for which, config in (("config", plain), ("fitted", fitted)):
-            want = np.mean([_track_error(tmp_path, run, config, f"{name}{which}{s}", s)
+    for name, run in (("scene3", runs[3]), ("scene4", runs[4]), ("scene5", runs[5])):
+        for which, config, edges in (("config", plain, None),
+                                     ("fitted", fitted, tmp_path / "fit" / "edges.csv")):
+            want = np.mean([_track_error(tmp_path, run, config, f"{name}{which}{s}", s, edges)
                             for s in (0, 1)])  # fmt: skip
             assert rows[name][f"error_{which}"] == pytest.approx(want, abs=1e-12), (name, which)
     assert np.mean([rows["scene3"]["error_fitted"], rows["scene4"]["error_fitted"]]) == \
@@ -116,6 +136,10 @@ def test_ties_keep_the_config_pair_else_the_smallest(tmp_path, capsys):
     config = {"sharpness": 4, "hidden_likelihood": 0.3, "sigma": np.eye(4).tolist(),
               "search_sharpness": [3, 4, 5], "search_hidden_likelihood": [0.3, 0.4]}
     summary, fitted = _fit(tmp_path, "own", config, DATA)
+    assert not summary["parameters"]["network"]["fitted"]  # by default
+    kept, given = (read_network(f) for f in (tmp_path / "own" / "edges.csv", DATA / "edges.csv"))
+    for name in ("indptr", "indices", "probs", "gap_mean"):
+        np.testing.assert_array_equal(getattr(kept, name), getattr(given, name))
     assert {r["error"] for r in summary["parameters"]["search"]} == {0.0}  # all tie
     assert (fitted["sharpness"], fitted["hidden_likelihood"]) == (4, 0.3)
     assert fitted["sigma"] == config["sigma"]
@@ -124,6 +148,32 @@ def test_ties_keep_the_config_pair_else_the_smallest(tmp_path, capsys):
     summary, fitted = _fit(tmp_path, "other", {**config, "search_sharpness": [6, 5]}, DATA)
     assert (fitted["sharpness"], fitted["hidden_likelihood"]) == (5, 0.3)
     assert summary["parameters"]["on_edge"] == ["search_sharpness", "search_hidden_likelihood"]
+
+
+def test_the_network_is_kept_without_objects_or_refused_when_runs_differ(runs, tmp_path, capsys):
+    """``fit_network`` asks for the objects of every training run (else the runs' network is
+    kept and the summary says why); runs of different networks are refused."""
+    bare = shutil.copytree(runs[4], tmp_path / "bare")
+    lines = (bare / "observations.csv").read_text().splitlines()
+    (bare / "observations.csv").write_text("\n".join(line.rsplit(",", 1)[0] for line in lines)
+                                           + "\n")  # fmt: skip
+    config = {**CONFIG, "fit_network": True, "search_sharpness": [6],
+              "search_hidden_likelihood": [0.5]}  # fmt: skip
+    summary, _ = _fit(tmp_path, "kept", config, runs[3], bare)
+    network = summary["parameters"]["network"]
+    assert not network["fitted"] and str(bare / "observations.csv") in network["why_not"]
+    assert "no object column" in capsys.readouterr().out
+    other = shutil.copytree(runs[5], tmp_path / "other")
+    edges = (other / "edges.csv").read_text().splitlines()
+    a, b, prob, gap = edges[1].split(",")
+    c, d, prob2, gap2 = edges[2].split(",")
+    edges[1:3] = [f"{a},{b},{prob2},{gap}", f"{c},{d},{prob},{gap2}"]  # still sums to 1
+    (other / "edges.csv").write_text("\n".join(edges) + "\n")
+    cfg = tmp_path / "c.json"
+    cfg.write_text(json.dumps(config))
+    _bad(capsys, ["fit", "pathrecovery", str(runs[3]), "--validate", str(other), "--config",
+                  str(cfg), "-o", str(tmp_path / "o")], "other/edges.csv",
+         "not the network of", "share one camera network")  # fmt: skip
 
 
 def _renumbered_copy(run: Path, folder: Path) -> Path:
@@ -174,6 +224,7 @@ def test_refusals_name_the_run_or_option(runs, tmp_path, capsys):
                      ({"c0": 1, "f0": [0, 0, 0, 0]}, "c0"),
                      ({"faithful": True}, "faithful"),
                      ({"sharpness": -1}, "sharpness"),
-                     ({"search_alpha": [1]}, "search_alpha")):  # fmt: skip
+                     ({"search_alpha": [1]}, "search_alpha"),
+                     ({"fit_network": "yes"}, "fit_network")):  # fmt: skip
         cfg.write_text(json.dumps({**CONFIG, **bad}))
         _bad(capsys, base, key)
