@@ -9,8 +9,8 @@ the second (dynamic programming over the k-best lists) is
 of all features. Other config keys: the fields of
 :class:`~models.pathrecovery.filter.FilterConfig` and ``k_dp`` (7, the second phase's k).
 ``dbntrack fit pathrecovery`` searches the weighting's ``sharpness`` and
-``hidden_likelihood`` on runs whose true path is known
-(:mod:`models.track.pathrecovery_fit`).
+``hidden_likelihood`` on runs whose true path is known, and on request counts the network
+from their objects' moves (:mod:`models.track.pathrecovery_fit`).
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ INPUTS = ("EDGES.csv: from,to,prob[,gap_mean] camera network (with self loops)",
           "[CAMERAS.csv: camera,x,y positions, for the figure]")  # fmt: skip
 
 
-def _start(odb, config: dict, path: str) -> tuple[int, np.ndarray]:
+def target_start(odb, config: dict, path: str) -> tuple[int, np.ndarray]:
     """The target's camera and feature at ``t = 0``: config ``c0`` and ``f0`` (both), or
     config ``target_obs``, or the only observation at ``t = 0`` of ``path``'s."""
     given = [k for k in ("c0", "f0", "target_obs") if k in config]
@@ -57,7 +57,7 @@ def _start(odb, config: dict, path: str) -> tuple[int, np.ndarray]:
     return int(odb.cam[i]), odb.feat[i]
 
 
-def _feature_cov(feat: np.ndarray, path: str) -> np.ndarray:
+def feature_cov(feat: np.ndarray, path: str) -> np.ndarray:
     """The features' covariance (n, d) -> (d, d), the default ``sigma``; an
     :class:`InputError` naming ``path`` where it is not positive definite (too few
     observations, or a constant feature), instead of the model's "sigma is not SPD"."""
@@ -90,8 +90,8 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
         net = read_network(inputs[0], inputs[2] if len(inputs) == 3 else None)
         odb = read_observations(inputs[1])
     check_cameras(net, odb, inputs[0], inputs[1])
-    c0, f0 = _start(odb, config, inputs[1])
-    sigma = array(config, "sigma") if "sigma" in config else _feature_cov(odb.feat, inputs[1])
+    c0, f0 = target_start(odb, config, inputs[1])
+    sigma = array(config, "sigma") if "sigma" in config else feature_cov(odb.feat, inputs[1])
     with ctx.timed("filter"):
         path = recover(net, odb, (c0, f0, sigma), fcfg, k_dp, ctx.key(), ctx.bar("steps"))
     T = odb.time_ptr.size - 1
@@ -103,12 +103,12 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     return {"parameters": params, "outputs": ["path.csv", "path.png"]}
 
 
-def run_options(config: dict, extra: tuple = ()) -> tuple:
+def run_options(config: dict) -> tuple:
     """The config's :class:`~models.pathrecovery.filter.FilterConfig` and ``k_dp``, its keys
-    checked before any file is read (those fields, :data:`OTHER_KEYS` and ``extra``)."""
+    checked before any file is read (those fields and :data:`OTHER_KEYS`)."""
     from models.pathrecovery.filter import FilterConfig
 
-    check_keys(config, {*FilterConfig._fields, *OTHER_KEYS, *extra})
+    check_keys(config, {*FilterConfig._fields, *OTHER_KEYS})
     fcfg = build(FilterConfig, {k: config[k] for k in FilterConfig._fields if k in config})
     return fcfg, integer(config, "k_dp", 7)
 
@@ -206,7 +206,8 @@ def score_path(pred: dict, true: dict, result: str, truth: str) -> dict:
 def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, seeds: int = 1,
         prior_strength=(0.0,), folds: int = 0, fold_by: str | None = None) -> dict:
     """``dbntrack fit``: the default weighting's ``sharpness`` and ``hidden_likelihood``
-    searched on runs whose true path is known (:mod:`models.track.pathrecovery_fit`)."""
+    searched on runs whose true path is known, and on request the network counted from
+    their objects' moves (:mod:`models.track.pathrecovery_fit`)."""
     from models.track.pathrecovery_fit import fit as fit_runs
 
     return fit_runs(ctx, train, validate, config, seeds, prior_strength, folds, fold_by)
@@ -220,5 +221,5 @@ def fit_report(summary: dict) -> list[str]:
     return report(summary)
 
 
-__all__ = ["INPUTS", "OTHER_KEYS", "fit", "fit_report", "track", "evaluate", "score_path", "run_options",
-           "check_cameras", "recover", "path_ids"]
+__all__ = ["INPUTS", "OTHER_KEYS", "track", "evaluate", "fit", "fit_report", "score_path",
+           "run_options", "check_cameras", "target_start", "feature_cov", "recover", "path_ids"]

@@ -77,13 +77,13 @@ from models.track.context import RunContext
 from models.track.fitting import check_disjoint, copies_of_training, mean_errors, plot_fit, report
 from models.track.options import array
 from models.track.pathrecovery import (
-    _feature_cov,
-    _start,
     check_cameras,
+    feature_cov,
     path_ids,
     recover,
     run_options,
     score_path,
+    target_start,
 )
 
 __all__ = ["fit", "fit_report", "SEARCH_SHARPNESS", "SEARCH_HIDDEN_LIKELIHOOD"]
@@ -264,10 +264,10 @@ def _read_run(path: str, config: dict) -> Run:
         raise InputError(f"{truth_file}: the target is not seen at t = 0 (the fit starts "
                          "each run at its true observation there)")  # fmt: skip
     try:
-        c0, f0 = _start(odb, {"target_obs": obs_id}, obs)
+        c0, f0 = target_start(odb, {"target_obs": obs_id}, obs)
     except ConfigError as exc:  # not about the config: the truth names a missing obs
         raise InputError(f"{truth_file}: t = 0: {exc}") from None
-    sigma = array(config, "sigma") if "sigma" in config else _feature_cov(odb.feat, obs)
+    sigma = array(config, "sigma") if "sigma" in config else feature_cov(odb.feat, obs)
     rows = frozenset(zip(odb.cam.tolist(), map(tuple, np.round(odb.feat, 9).tolist())))
     return Run(net, odb, (c0, f0, sigma), truth, truth_file, rows)
 
@@ -283,12 +283,12 @@ def _error(path: str, run: Run, net, fcfg, k_dp: int, keys: list) -> float:
     out = []
     for key in keys:
         try:
-            path = recover(net, run.odb, run.start, fcfg, k_dp, key)
+            rec = recover(net, run.odb, run.start, fcfg, k_dp, key)
         except DBNError as exc:
             raise in_file(exc, path) from None
-        t = np.arange(1, path.kind.size + 1)
-        pred = dict(zip(t.tolist(), zip(path.kind.tolist(), path.cam.tolist(),
-                                        path.ta.tolist(), path_ids(path, run.odb).tolist())))
+        t = np.arange(1, rec.kind.size + 1)
+        pred = dict(zip(t.tolist(), zip(rec.kind.tolist(), rec.cam.tolist(), rec.ta.tolist(),
+                                        path_ids(rec, run.odb).tolist())))  # fmt: skip
         score = score_path(pred, run.truth, f"{path} (recovered)", run.truth_file)
         out.append(1.0 - score["path_score"])
     return float(np.mean(out))
