@@ -82,6 +82,8 @@ def _positive_definite(sigma: np.ndarray) -> bool:
 
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     """Recover the target's path; write ``path.csv`` and ``path.png``."""
+    from models.pathrecovery.recover import recover_path
+
     if len(inputs) not in (2, 3):
         raise InputError(f"pathrecovery needs EDGES.csv OBSERVATIONS.csv [CAMERAS.csv], "
                          f"got {len(inputs)} input(s)")  # fmt: skip
@@ -93,7 +95,9 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     c0, f0 = target_start(odb, config, inputs[1])
     sigma = array(config, "sigma") if "sigma" in config else feature_cov(odb.feat, inputs[1])
     with ctx.timed("filter"):
-        path = recover(net, odb, (c0, f0, sigma), fcfg, k_dp, ctx.key(), ctx.bar("steps"))
+        model, lists = filter_lists(net, odb, (c0, f0, sigma), fcfg, ctx.key(), ctx.bar("steps"))
+    with ctx.timed("recover"):
+        path = recover_path(model, lists, odb.feat, k=min(k_dp, fcfg.k))
     T = odb.time_ptr.size - 1
     write_path(ctx.outdir / "path.csv", np.arange(1, T), path.kind, path.cam, path.ta,
                path_ids(path, odb))  # fmt: skip
@@ -120,16 +124,25 @@ def check_cameras(net, odb, edges: str, observations: str) -> None:
                          f"{edges} (cameras 0..{net.num_cameras - 1})")  # fmt: skip
 
 
-def recover(net, odb, start: tuple, fcfg, k_dp: int, key, progress=None):
-    """Both phases on one run: the registry's tracker stepped through the protocol over
-    ``t = 1 .. T-1`` (``progress`` as :meth:`models.protocol.StepTracker.fold` takes it),
-    then :func:`models.pathrecovery.recover_path` over its k-best lists with
-    ``min(k_dp, fcfg.k)``. ``start`` is ``(c0, f0, sigma)``. Returns the
-    :class:`~models.pathrecovery.recover.RecoveredPath` of steps ``1 .. T-1``."""
+def recover(net, odb, start: tuple, fcfg, k_dp: int, key):
+    """Both phases on one run: :func:`filter_lists`, then
+    :func:`models.pathrecovery.recover_path` over its k-best lists with
+    ``min(k_dp, fcfg.k)``. Returns the :class:`~models.pathrecovery.recover.RecoveredPath`
+    of steps ``1 .. T-1``."""
+    from models.pathrecovery.recover import recover_path
+
+    model, lists = filter_lists(net, odb, start, fcfg, key)
+    return recover_path(model, lists, odb.feat, k=min(k_dp, fcfg.k))
+
+
+def filter_lists(net, odb, start: tuple, fcfg, key, progress=None) -> tuple:
+    """The first phase on one run: the registry's tracker stepped through the protocol
+    over ``t = 1 .. T-1`` (``progress`` as :meth:`models.protocol.StepTracker.fold` takes
+    it). ``start`` is ``(c0, f0, sigma)``. Returns the model and its
+    :class:`~models.pathrecovery.filter.KBestLists`."""
     import models
     from models.pathrecovery.api import PathObservation
     from models.pathrecovery.filter import KBestLists, make_model
-    from models.pathrecovery.recover import recover_path
 
     model = make_model(net, *start, fcfg)
     tracker = models.get("pathrecovery").make(model=model)
@@ -140,7 +153,7 @@ def recover(net, odb, start: tuple, fcfg, k_dp: int, key, progress=None):
     lists = KBestLists(*(np.stack([getattr(i, f) for i in infos])
                          for f in ("kind", "cam", "ta", "obs", "mass", "num_tracked_cameras")),
                        step_seconds=np.zeros(T - 1))  # fmt: skip
-    return recover_path(model, lists, odb.feat, k=min(k_dp, fcfg.k))
+    return model, lists
 
 
 def path_ids(path, odb) -> np.ndarray:
@@ -222,4 +235,5 @@ def fit_report(summary: dict) -> list[str]:
 
 
 __all__ = ["INPUTS", "OTHER_KEYS", "track", "evaluate", "fit", "fit_report", "score_path",
-           "run_options", "check_cameras", "target_start", "feature_cov", "recover", "path_ids"]
+           "run_options", "check_cameras", "target_start", "feature_cov", "recover", "filter_lists",
+           "path_ids"]
