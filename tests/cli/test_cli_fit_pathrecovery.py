@@ -210,7 +210,8 @@ def test_refusals_name_the_run_or_option(runs, tmp_path, capsys):
     unseen = _edited_run(runs, tmp_path, "unseen",
                          lambda r: ["0,hidden,1,1,-1", *r[1:]])  # fmt: skip
     _bad(capsys, [*base, "--validate", str(unseen)], "unseen", "not seen at t = 0")
-    late = _edited_run(runs, tmp_path, "late", lambda r: [r[0].rsplit(",", 1)[0] + ",99999", *r[1:]])
+    late = _edited_run(runs, tmp_path, "late",
+                       lambda r: [r[0].rsplit(",", 1)[0] + ",99999", *r[1:]])  # fmt: skip
     _bad(capsys, [*base, "--validate", str(late)], "late", "truth_path.csv", "no such obs")
     _bad(capsys, [*base, "--prior-strength", "1"], "no prior strength")
     _bad(capsys, ["fit", "pathrecovery", str(runs[3]), str(runs[4]), *base[3:], "--folds", "2"],
