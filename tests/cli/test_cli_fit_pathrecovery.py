@@ -174,6 +174,14 @@ def test_the_network_is_kept_without_objects_or_refused_when_runs_differ(runs, t
     _bad(capsys, ["fit", "pathrecovery", str(runs[3]), "--validate", str(other), "--config",
                   str(cfg), "-o", str(tmp_path / "o")], "other/edges.csv",
          "not the network of", "share one camera network")  # fmt: skip
+    twice = shutil.copytree(runs[4], tmp_path / "twice")
+    lines = (twice / "observations.csv").read_text().splitlines()
+    first = lines[1].split(",")  # obs 0 at t = 0; its object seen once more at t = 0
+    again = ",".join(["99999", *first[1:]])
+    (twice / "observations.csv").write_text("\n".join([*lines, again]) + "\n")
+    _bad(capsys, ["fit", "pathrecovery", str(runs[3]), str(twice), "--config", str(cfg),
+                  "-o", str(tmp_path / "o")], "twice/observations.csv",
+         f"object {first[-1]} is observed twice at t = 0")  # fmt: skip
 
 
 def _renumbered_copy(run: Path, folder: Path) -> Path:
