@@ -20,7 +20,7 @@ from dbn.errors import InputError
 from models.crossval import CrossValidation, cross_validate, fold_blocks, group_keys
 from models.track.context import RunContext, short_names, shown_strength
 
-__all__ = ["check_disjoint", "fold_groups", "held_of_training", "copies_of_training",
+__all__ = ["check_disjoint", "refuse_strengths", "fold_groups", "held_of_training", "copies_of_training",
            "check_strengths", "cross_validate_files", "cv_record", "mean_errors", "plot_fit",
            "report"]  # fmt: skip
 
@@ -34,6 +34,19 @@ def check_disjoint(train: list[str], validate: list[str]) -> None:
             raise InputError(f"{p}: given twice (as {seen[q]!r}); a held-out file must not be "
                              "a training file")  # fmt: skip
         seen[q] = p
+
+
+def refuse_strengths(name: str, does: str, chooses: str, prior_strength, folds: int,
+                     fold_by: str | None) -> None:
+    """Refuse ``--prior-strength`` (other than the default 0), ``--folds`` and ``--fold-by``
+    for a fit that searches on its training files instead (``does``, e.g. ``"searches its
+    weighting"``; ``chooses``, what the search chooses, e.g. ``"its weighting"``)."""
+    if list(np.atleast_1d(prior_strength)) != [0.0]:
+        raise InputError(f"prior strength {prior_strength!r}: {name}'s fit {does}; it has no "
+                         "prior strength")  # fmt: skip
+    if folds or fold_by is not None:
+        raise InputError(f"--folds / --fold-by: {name}'s fit chooses {chooses} on the training "
+                         "runs (no strengths to cross-validate); hold runs out with --validate")
 
 
 def fold_groups(train: list[str], folds: int, fold_by: str | None) -> list[str] | None:

@@ -53,6 +53,7 @@ from models.track.fitting import (
     copies_of_training,
     mean_errors,
     plot_fit,
+    refuse_strengths,
     report,
 )
 from models.track.localization import (
@@ -86,7 +87,8 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, se
     """Measure and search on ``train``, score ``train`` and ``validate`` (module
     docstring); write ``config.json`` and ``fit.png``. Returns ``parameters``, ``metrics``,
     ``files`` (one row per run) and ``outputs`` for ``summary.json``."""
-    _refuse(prior_strength, folds, fold_by)
+    refuse_strengths("localization", "measures its noise and searches its scales",
+                     "its scales", prior_strength, folds, fold_by)  # fmt: skip
     scales = _scales(config)
     base = {k: v for k, v in config.items() if k != "search_scales"}
     if "initial_pose" in base:
@@ -123,17 +125,6 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, se
               "fitted": {k: fitted[k] for k in NOISE_KEYS}}  # fmt: skip
     return {"parameters": params, "metrics": mean_errors(files), "files": files,
             "outputs": ["config.json", "fit.png"]}
-
-
-def _refuse(prior_strength, folds: int, fold_by: str | None) -> None:
-    """The options of the other fits that have no meaning here."""
-    if list(np.atleast_1d(prior_strength)) != [0.0]:
-        raise InputError(f"prior strength {prior_strength!r}: localization's fit measures its "
-                         "noise and searches its scales; it has no prior strength")  # fmt: skip
-    if folds or fold_by is not None:
-        raise InputError("--folds / --fold-by: localization's fit chooses its scales on the "
-                         "training runs (no strengths to cross-validate); hold runs out with "
-                         "--validate")  # fmt: skip
 
 
 def _scales(config: dict) -> tuple[float, ...]:

@@ -74,7 +74,14 @@ from dbn.errors import ConfigError, DBNError, InputError, in_file
 from models.io.pathrecovery import read_network, read_observations, read_path, write_network
 from models.pathrecovery.fit import PRIOR_MOVES, count_moves, fitted_network, pool_moves
 from models.track.context import RunContext
-from models.track.fitting import check_disjoint, copies_of_training, mean_errors, plot_fit, report
+from models.track.fitting import (
+    check_disjoint,
+    copies_of_training,
+    mean_errors,
+    plot_fit,
+    refuse_strengths,
+    report,
+)
 from models.track.options import array
 from models.track.pathrecovery import (
     check_cameras,
@@ -200,13 +207,8 @@ def _network(runs: dict, train: list[str], fit_net: bool) -> tuple:
 def _refuse(config: dict, prior_strength, folds: int, fold_by: str | None) -> None:
     """The options of the other fits that have no meaning here, and the config keys that
     cannot apply to every run or leave nothing to search."""
-    if list(np.atleast_1d(prior_strength)) != [0.0]:
-        raise InputError(f"prior strength {prior_strength!r}: pathrecovery's fit searches its "
-                         "weighting; it has no prior strength")  # fmt: skip
-    if folds or fold_by is not None:
-        raise InputError("--folds / --fold-by: pathrecovery's fit chooses its weighting on the "
-                         "training runs (no strengths to cross-validate); hold runs out with "
-                         "--validate")  # fmt: skip
+    refuse_strengths("pathrecovery", "searches its weighting", "its weighting", prior_strength,
+                     folds, fold_by)  # fmt: skip
     start = [k for k in ("c0", "f0", "target_obs") if k in config]
     if start:
         raise ConfigError(f"config {start}: the fit starts each run at its true path's "
