@@ -76,7 +76,7 @@ def count_moves(net, t: np.ndarray, cam: np.ndarray, obj: np.ndarray) -> MoveCou
         raise InputError(f"object {obj[i]} is observed twice at t = {t[i]}")
     n = net.num_cameras
     src = np.repeat(np.arange(n), np.diff(net.indptr))
-    keys = src * n + np.asarray(net.indices)  # increasing: edges sorted by (from, to)
+    keys = src * n + np.asarray(net.indices)  # increasing: CameraNetwork sorts each row
     pos = np.clip(np.searchsorted(keys, a * n + b), 0, keys.size - 1)
     listed = keys[pos] == a * n + b
     ok = listed & ((d == 1) | (np.asarray(net.gap_mean)[pos] > 0))

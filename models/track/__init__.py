@@ -19,7 +19,7 @@ A runner module (``models.track.<name>``) offers
   (``jorge``: :mod:`models.track.jorge_fit`; ``zajdel_adf`` and ``zajdel_learnsearch``:
   :mod:`models.track.zajdel_fit`; their shared parts: :mod:`models.track.fitting`;
   ``localization``: :mod:`models.track.localization_fit` and ``pathrecovery``:
-  :mod:`models.track.pathrecovery_fit`, a measurement and a search without prior
+  :mod:`models.track.pathrecovery_fit`, measurements and searches without prior
   strengths or folds), with
   ``fit_report(summary) -> list[str]``, the lines ``dbntrack fit`` prints of it, and
   optionally ``DEFAULT_PRIOR_STRENGTH``, the strengths where ``--prior-strength`` is not

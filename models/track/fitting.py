@@ -20,9 +20,9 @@ from dbn.errors import InputError
 from models.crossval import CrossValidation, cross_validate, fold_blocks, group_keys
 from models.track.context import RunContext, short_names, shown_strength
 
-__all__ = ["check_disjoint", "refuse_strengths", "fold_groups", "held_of_training", "copies_of_training",
-           "check_strengths", "cross_validate_files", "cv_record", "mean_errors", "plot_fit",
-           "report"]  # fmt: skip
+__all__ = ["check_disjoint", "refuse_strengths", "fold_groups", "held_of_training",
+           "copies_of_training", "check_strengths", "cross_validate_files", "cv_record",
+           "mean_errors", "plot_fit", "report"]  # fmt: skip
 
 
 def check_disjoint(train: list[str], validate: list[str]) -> None:
