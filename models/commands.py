@@ -64,7 +64,7 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
         "(--validate) files.",
     )  # fmt: skip
     p.add_argument("name", metavar="NAME", help="tracker with a fit (jorge, zajdel_adf, "
-                   "zajdel_learnsearch, localization)")  # fmt: skip
+                   "zajdel_learnsearch, localization, pathrecovery)")  # fmt: skip
     p.add_argument("train", metavar="TRAIN", nargs="+", help="training files")
     p.add_argument("--validate", metavar="FILE", nargs="+", default=[],
                    help="held-out files: scored, never fitted on")  # fmt: skip
@@ -72,8 +72,8 @@ def build_parser(demo: Callable, demo_names: list[str]) -> argparse.ArgumentPars
     p.add_argument("--seed", type=_seed, default=0, help="first seed of the simulated parts "
                    "and the filter runs (default 0)")  # fmt: skip
     p.add_argument("--seeds", type=_positive, default=1, help="seeds SEED, SEED + 1, ... per "
-                   "file: jorge's stroke sets simulated per box file, localization's filter "
-                   "runs averaged (default 1)")  # fmt: skip
+                   "file: jorge's stroke sets simulated per box file, localization's and "
+                   "pathrecovery's filter runs averaged (default 1)")  # fmt: skip
     p.add_argument("--config", metavar="FILE", help="JSON file of tracker options: the "
                    "settings the fit keeps")  # fmt: skip
     p.add_argument("--prior-strength", type=prior_strengths, default=None,

@@ -16,11 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
-from dbn.errors import InputError
+from dbn.errors import ConfigError, InputError
 from models.crossval import CrossValidation, cross_validate, fold_blocks, group_keys
 from models.track.context import RunContext, short_names, shown_strength
+from models.track.options import array
 
-__all__ = ["check_disjoint", "refuse_strengths", "fold_groups", "held_of_training",
+__all__ = ["check_disjoint", "refuse_strengths", "search_values", "fold_groups", "held_of_training",
            "copies_of_training", "check_strengths", "cross_validate_files", "cv_record",
            "mean_errors", "plot_fit", "report"]  # fmt: skip
 
@@ -47,6 +48,21 @@ def refuse_strengths(name: str, does: str, chooses: str, prior_strength, folds: 
     if folds or fold_by is not None:
         raise InputError(f"--folds / --fold-by: {name}'s fit chooses {chooses} on the training "
                          "runs (no strengths to cross-validate); hold runs out with --validate")
+
+
+def search_values(config: dict, key: str, default: tuple, most: float = np.inf) -> tuple:
+    """The values a search tries: the config's list ``key`` (numbers > 0, or in [0,
+    ``most``] where ``most`` is finite; at least one, none twice), sorted, else
+    ``default``. A :class:`~dbn.errors.ConfigError` naming the key otherwise."""
+    if key not in config:
+        return default
+    v = array(config, key, ndim=1)
+    ok = (v > 0) if np.isinf(most) else (v >= 0) & (v <= most)
+    if v.size == 0 or not np.all(ok) or np.unique(v).size != v.size:
+        what = "numbers > 0" if np.isinf(most) else f"numbers in [0, {most:g}]"
+        raise ConfigError(f"config {key} = {config[key]!r}: expected {what}, at least one, "
+                          "none twice")  # fmt: skip
+    return tuple(sorted(float(x) for x in v))
 
 
 def fold_groups(train: list[str], folds: int, fold_by: str | None) -> list[str] | None:

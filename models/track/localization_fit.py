@@ -55,6 +55,7 @@ from models.track.fitting import (
     plot_fit,
     refuse_strengths,
     report,
+    search_values,
 )
 from models.track.localization import (
     NOISE_KEYS,
@@ -62,7 +63,6 @@ from models.track.localization import (
     run_options,
     run_sequence,
 )
-from models.track.options import array
 
 __all__ = ["fit", "fit_report", "SEARCH_SCALES"]
 
@@ -89,7 +89,7 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, se
     ``files`` (one row per run) and ``outputs`` for ``summary.json``."""
     refuse_strengths("localization", "measures its noise and searches its scales",
                      "its scales", prior_strength, folds, fold_by)  # fmt: skip
-    scales = _scales(config)
+    scales = search_values(config, "search_scales", SEARCH_SCALES)
     base = {k: v for k, v in config.items() if k != "search_scales"}
     if "initial_pose" in base:
         raise ConfigError("config initial_pose: the fit starts each run at its ground truth's "
@@ -125,17 +125,6 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, se
               "fitted": {k: fitted[k] for k in NOISE_KEYS}}  # fmt: skip
     return {"parameters": params, "metrics": mean_errors(files), "files": files,
             "outputs": ["config.json", "fit.png"]}
-
-
-def _scales(config: dict) -> tuple[float, ...]:
-    """The config's ``search_scales`` (else :data:`SEARCH_SCALES`): numbers > 0, none twice."""
-    if "search_scales" not in config:
-        return SEARCH_SCALES
-    v = array(config, "search_scales", ndim=1)
-    if v.size == 0 or not np.all(v > 0) or np.unique(v).size != v.size:
-        raise ConfigError(f"config search_scales = {config['search_scales']!r}: expected "
-                          "numbers > 0, at least one, none twice")  # fmt: skip
-    return tuple(sorted(float(x) for x in v))
 
 
 def _read_run(path: str, opts: dict) -> Run:

@@ -81,8 +81,9 @@ from models.track.fitting import (
     plot_fit,
     refuse_strengths,
     report,
+    search_values,
 )
-from models.track.options import array
+from models.track.options import array, flag
 from models.track.pathrecovery import (
     check_cameras,
     feature_cov,
@@ -127,7 +128,7 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, se
     axes = _axes(config)
     base = {k: v for k, v in config.items() if k not in (*_SEARCH_KEYS, "fit_network")}
     fcfg, k_dp = run_options(base)
-    fit_net = _flag(config, "fit_network", False)
+    fit_net = flag(config, "fit_network", False)
     check_disjoint(train, validate)
     with ctx.timed("read"):
         runs = {p: _read_run(p, base) for p in [*train, *validate]}
@@ -158,14 +159,6 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, se
                   {p: run.rows for p, run in runs.items()}, train, validate)}  # fmt: skip
     return {"parameters": params, "metrics": mean_errors(files), "files": files,
             "outputs": ["config.json", "edges.csv", "fit.png"]}
-
-
-def _flag(config: dict, key: str, default: bool) -> bool:
-    """A config key that must be true or false."""
-    value = config.get(key, default)
-    if not isinstance(value, bool):
-        raise ConfigError(f"config {key} = {value!r}: expected true or false")
-    return value
 
 
 def _check_one_network(runs: dict, first: str) -> None:
@@ -219,22 +212,11 @@ def _refuse(config: dict, prior_strength, folds: int, fold_by: str | None) -> No
 
 
 def _axes(config: dict) -> list[tuple[float, ...]]:
-    """The searched ``kappa`` and ``q``, sorted: the config's ``search_sharpness`` (numbers
-    > 0) and ``search_hidden_likelihood`` (in [0, 1]), each none twice, else the defaults."""
-    out = []
-    for key, default, ok, what in (
-            ("search_sharpness", SEARCH_SHARPNESS, lambda v: v > 0, "numbers > 0"),
-            ("search_hidden_likelihood", SEARCH_HIDDEN_LIKELIHOOD,
-             lambda v: (v >= 0) & (v <= 1), "numbers in [0, 1]")):  # fmt: skip
-        if key not in config:
-            out.append(default)
-            continue
-        v = array(config, key, ndim=1)
-        if v.size == 0 or not np.all(ok(v)) or np.unique(v).size != v.size:
-            raise ConfigError(f"config {key} = {config[key]!r}: expected {what}, at least "
-                              "one, none twice")  # fmt: skip
-        out.append(tuple(sorted(float(x) for x in v)))
-    return out
+    """The searched ``kappa`` (config ``search_sharpness``, numbers > 0) and ``q``
+    (``search_hidden_likelihood``, in [0, 1]), sorted
+    (:func:`models.track.fitting.search_values`)."""
+    return [search_values(config, "search_sharpness", SEARCH_SHARPNESS),
+            search_values(config, "search_hidden_likelihood", SEARCH_HIDDEN_LIKELIHOOD, 1.0)]
 
 
 def _on_edge(chosen: tuple, axes: list) -> list[str]:
