@@ -16,7 +16,7 @@ from models.cli import main
 from models.io.localization import read_mrclam_folder
 from models.localization.fit import noise_residuals, noise_settings, pool_residuals, robust_noise
 from models.localization.mrclam import MRCLAM_NOISE, build_sequence
-from tests.cli.test_cli_track import _bad
+from tests.cli.test_cli_track import _bad, _fitted
 
 LANDMARKS = np.array([[11, 0.0, 0.0], [12, 3.0, 0.0], [13, 0.0, 3.0], [14, 3.0, 3.0]])
 CONFIG = {"duration": 4.0, "num_particles": 100, "search_scales": [1, 4]}
@@ -60,11 +60,7 @@ def _fit(tmp_path: Path, out: str, config: dict, *argv) -> tuple[dict, dict]:
     """``dbntrack fit localization ARGV --config CONFIG -o tmp/OUT``: (summary, config.json)."""
     path = tmp_path / f"{out}.json"
     path.write_text(json.dumps(config))
-    assert main(["fit", "localization", *map(str, argv), "--config", str(path),
-                 "-o", str(tmp_path / out), "--quiet"]) == 0  # fmt: skip
-    assert (tmp_path / out / "fit.png").is_file()
-    return (json.loads((tmp_path / out / "summary.json").read_text()),
-            json.loads((tmp_path / out / "config.json").read_text()))
+    return _fitted(tmp_path, "localization", out, *argv, "--config", path)
 
 
 def _track_rmse(tmp_path: Path, folder: Path, robot: int, config: dict, out: str) -> float:

@@ -17,7 +17,7 @@ from models.cli import main
 from models.io.pathrecovery import read_network, read_observations, read_path, write_scene
 from models.pathrecovery.fit import count_moves, fitted_network, pool_moves
 from models.pathrecovery.simulate import manhattan_grid, simulate_scene
-from tests.cli.test_cli_track import _bad
+from tests.cli.test_cli_track import _bad, _fitted
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "pathrecovery"
 GRID = {"search_sharpness": [1, 3], "search_hidden_likelihood": [0.1, 0.3]}  # not the default
@@ -40,11 +40,7 @@ def _fit(tmp_path: Path, out: str, config: dict, *argv) -> tuple[dict, dict]:
     config.json)."""
     path = tmp_path / f"{out}.json"
     path.write_text(json.dumps(config))
-    assert main(["fit", "pathrecovery", *map(str, argv), "--config", str(path),
-                 "-o", str(tmp_path / out), "--quiet"]) == 0  # fmt: skip
-    assert (tmp_path / out / "fit.png").is_file()
-    return (json.loads((tmp_path / out / "summary.json").read_text()),
-            json.loads((tmp_path / out / "config.json").read_text()))
+    return _fitted(tmp_path, "pathrecovery", out, *argv, "--config", path)
 
 
 def _track_error(tmp_path: Path, run: Path, config: dict, out: str, seed: int = 0,

@@ -21,6 +21,7 @@ from models.zajdel.fit import fit_passes
 from models.zajdel.metrics import pairwise_prf
 from models.zajdel.simulate import OfficeConfig, simulate_office
 from tests.cli.test_cli_track import _bad
+from tests.cli.test_cli_track import _fitted as _fit
 
 
 def _office_files(tmp_path: Path, files: int = 3, people: int = 12, passes: int = 72) -> list:
@@ -42,14 +43,6 @@ def _office_files(tmp_path: Path, files: int = 3, people: int = 12, passes: int 
                             o.border_quit[i], *o.appearance[i], sc.labels[i]])  # fmt: skip
         paths.append(path)
     return paths
-
-
-def _fit(tmp_path: Path, name: str, out: str, *argv) -> tuple[dict, dict]:
-    """``dbntrack fit NAME ARGV -o tmp/OUT``: (summary, config.json)."""
-    assert main(["fit", name, *map(str, argv), "-o", str(tmp_path / out), "--quiet"]) == 0
-    assert (tmp_path / out / "fit.png").is_file()
-    return (json.loads((tmp_path / out / "summary.json").read_text()),
-            json.loads((tmp_path / out / "config.json").read_text()))
 
 
 def _error(name: str, path: Path, config: dict) -> float:

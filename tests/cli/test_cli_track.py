@@ -38,6 +38,14 @@ def _bad(capsys, argv: list[str], *needles: str) -> None:
         assert n in err, err
 
 
+def _fitted(tmp_path: Path, name: str, out: str, *argv) -> tuple[dict, dict]:
+    """``dbntrack fit NAME ARGV -o tmp/OUT``: (summary, config.json), ``fit.png`` written."""
+    assert main(["fit", name, *map(str, argv), "-o", str(tmp_path / out), "--quiet"]) == 0
+    assert (tmp_path / out / "fit.png").is_file()
+    return (json.loads((tmp_path / out / "summary.json").read_text()),
+            json.loads((tmp_path / out / "config.json").read_text()))
+
+
 def test_list_names_every_runner(capsys):
     assert main(["list", "--json"]) == 0
     rows = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
