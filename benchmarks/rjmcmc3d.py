@@ -49,9 +49,9 @@ import os
 import time
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from benchmarks._common import log
+from inference.progress import progress_bar
 from models.rjmcmc3d.metrics import evaluate
 from models.rjmcmc3d.model import TrackerParams
 from models.rjmcmc3d.scene import coverage_fractions, default_scene, render_frame, simulate_walkers
@@ -63,7 +63,7 @@ def _track(tracker: RJMCMCTracker, seed: int, scene, truth, render_seed: int, la
     results, wall, cpu = [], 0.0, 0.0
     snapshot = None
     n = len(truth.frames)
-    for t in tqdm(range(n), desc=label, leave=False):
+    for t in progress_bar(range(n), desc=label, leave=False):
         frame = render_frame(render_seed, scene, truth, t)
         w0, c0 = time.perf_counter(), time.process_time()
         state, res = tracker.step(seed * 100_003 + t, state, frame)

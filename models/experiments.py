@@ -207,9 +207,9 @@ def local_cluster(n_workers: int | None = None):
 
 
 def _progress(total: int, enabled: bool):
-    from tqdm import tqdm
+    from inference.progress import progress_bar
 
-    return tqdm(total=total, desc="sweep", unit="task", disable=not enabled or None)
+    return progress_bar(total=total, desc="sweep", unit="task", disable=not enabled or None)
 
 
 def run_grid(

@@ -182,9 +182,9 @@ def _take(xs, idx):
 def _progress(it: Iterable, progress: bool, desc: str, unit: str) -> Iterable:
     if not progress:
         return it
-    from tqdm import tqdm
+    from inference.progress import progress_bar
 
-    return tqdm(it, desc=desc, unit=unit)
+    return progress_bar(it, desc=desc, unit=unit)
 
 
 def _stack_infos(parts: list, empty_info) -> Any:

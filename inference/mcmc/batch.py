@@ -248,9 +248,9 @@ def run_batch(
     best_value, best = value.copy(), state
     steps = range(num_steps)
     if progress:
-        from tqdm.auto import tqdm
+        from inference.progress import progress_bar
 
-        steps = tqdm(steps, desc="MCMC", unit="step")
+        steps = progress_bar(steps, desc="MCMC", unit="step")
     for s in steps:
         state, info, delta = kernel.step(rng, state, num_chains)
         value = value + delta

@@ -219,9 +219,9 @@ def run_steps(
     if not isinstance(rng, np.random.Generator):
         raise InputError(f"rng must be a numpy Generator, got {type(rng).__name__}")
     if progress:
-        from tqdm.auto import tqdm
+        from inference.progress import progress_bar
 
-        observations = tqdm(observations, desc=desc)
+        observations = progress_bar(observations, desc=desc)
     infos, seconds = [], []
     for obs in observations:
         t0 = time.perf_counter()

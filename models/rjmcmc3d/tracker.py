@@ -30,9 +30,9 @@ from collections.abc import Iterable
 from typing import NamedTuple
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from dbn.errors import InputError
+from inference.progress import progress_bar
 from models.protocol import next_frame_index
 from models.rjmcmc3d.chain import MOVE_NAMES, MOVES, FrameChain
 from models.rjmcmc3d.frames import check_frame
@@ -338,7 +338,7 @@ class RJMCMCTracker:
         """
         state = self.init_state()
         results = []
-        it = tqdm(frames, total=num_frames, disable=not progress, desc="rjmcmc3d")
+        it = progress_bar(frames, total=num_frames, disable=not progress, desc="rjmcmc3d")
         for t, frame in enumerate(it):
             state, res = self.step(
                 int(np.random.SeedSequence([seed, t]).generate_state(1)[0]), state, frame

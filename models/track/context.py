@@ -49,9 +49,9 @@ class RunContext:
 
     def progress(self, iterable: Iterable, total: int | None = None, desc: str = ""):
         """``iterable`` wrapped in a tqdm bar (silent when :attr:`quiet`)."""
-        from tqdm.auto import tqdm
+        from inference.progress import progress_bar
 
-        return tqdm(iterable, total=total, desc=desc or self.name, disable=self.quiet,
+        return progress_bar(iterable, total=total, desc=desc or self.name, disable=self.quiet,
                     leave=False, mininterval=1.0)  # fmt: skip
 
     def bar(self, desc: str) -> Callable[[Iterable, int], Iterable]:

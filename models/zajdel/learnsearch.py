@@ -713,9 +713,9 @@ def learn_search(obs: Observations, params: LSParams,
     history.append(beam.labels[0, : max(n0, 1)].copy())
     it = range(max(n0, 1), K)
     if progress:
-        from tqdm import tqdm
+        from inference.progress import progress_bar
 
-        it = tqdm(it, desc=f"learn-search T={T}", unit="obs")
+        it = progress_bar(it, desc=f"learn-search T={T}", unit="obs")
     since = 0
     for i in it:
         beam = _extend(beam, i, t, T, theta.p_new)
