@@ -63,10 +63,13 @@ EXAMPLE_NETWORKS = (
 
 @contextmanager
 def _quiet() -> Iterator[None]:
-    """Silence pgmpy's deprecation and future warnings inside the adapter."""
+    """Silence pgmpy's deprecation and future warnings inside the adapter, and the one its
+    import of ``tqdm.auto`` gives in a notebook without ``ipywidgets`` ("IProgress not
+    found": the adapter shows none of pgmpy's bars)."""
     with warnings.catch_warnings():
         for category in (DeprecationWarning, FutureWarning, UserWarning):
             warnings.simplefilter("ignore", category)
+        warnings.filterwarnings("ignore", message="IProgress not found")
         yield
 
 

@@ -33,3 +33,6 @@ def test_tutorial_executes(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
         nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": str(path.parent)}}
     )
     client.execute(env=dict(os.environ))
+    warned = [o["text"] for c in nb.cells for o in c.get("outputs", [])
+              if o.get("name") == "stderr" and "IProgress not found" in o.get("text", "")]
+    assert not warned, f"{path.name}: a progress bar wants ipywidgets: {warned[0]}"
