@@ -24,8 +24,8 @@ The fit, a documented search rather than a likelihood:
    did best with the range spread 2.7 and the bearing spread 5 times wider
    (:data:`~models.localization.mrclam.MRCLAM_NOISE`);
 3. at the kept scales, the filter run on every training run once more without the range
-   bias (``range_bias`` 0), and the bias kept only if the mean position RMSE is less with
-   it (ties: kept). On MRCLAM the median range error against the motion-capture truth is
+   bias (``range_bias`` 0), and the measured bias kept unless the mean position RMSE is
+   less without it. On MRCLAM the median range error against the motion-capture truth is
    +0.05 m in each of the first two 5-minute windows of both robots, and at MRCLAM's noise
    a filter given it did worse in each of the four (one seed; robot 1's first 5 minutes
    0.155 -> 0.183 m): why is not known here (the truth's reference point need not be the
