@@ -1,7 +1,8 @@
 """What every ``dbntrack fit`` runner shares (:mod:`models.track.jorge_fit`,
 :mod:`models.track.zajdel_fit`, :mod:`models.track.localization_fit`,
 :mod:`models.track.pathrecovery_fit`): the checks of the files and options before any
-file is read, the cross-validation's folds and record, the mean errors and ``fit.png``.
+file is read, the cross-validation's folds and record, the grid search of the
+localization and pathrecovery fits, the mean errors and ``fit.png``.
 
 A runner's ``fit`` returns one row per file (``file``, resolved; ``split``, ``"train"`` or
 ``"validation"``; ``error_config`` and ``error_fitted``, the file's error with the config's
@@ -23,7 +24,7 @@ from models.track.options import array
 
 __all__ = ["check_disjoint", "refuse_strengths", "search_values", "fold_groups", "held_of_training",
            "copies_of_training", "check_strengths", "cross_validate_files", "cv_record",
-           "mean_errors", "plot_fit", "report"]  # fmt: skip
+           "search_grid", "mean_errors", "plot_fit", "report"]  # fmt: skip
 
 
 def check_disjoint(train: list[str], validate: list[str]) -> None:
@@ -167,6 +168,19 @@ def cv_record(cv: CrossValidation) -> dict:
                      "versus_chosen": d, "versus_chosen_se": se})
     return {"folds": [[str(Path(p).resolve()) for p in fold] for fold in cv.folds],
             "errors": rows, "chosen": shown_strength(cv.chosen)}
+
+
+def search_grid(ctx: RunContext, axes: Sequence[Sequence[float]], train: list[str],
+                error: Callable[[float, float, str], float]) -> dict:
+    """``{(a, b): {run: error(a, b, run)}}`` for every pair of ``axes[0]`` x ``axes[1]``
+    and every training run, pair by pair, with a progress bar: the search of the
+    localization and pathrecovery fits."""
+    grid = [(a, b) for a in axes[0] for b in axes[1]]
+    jobs = [(pair, p) for pair in grid for p in train]
+    out: dict = {pair: {} for pair in grid}
+    for pair, p in ctx.progress(jobs, len(jobs), "search"):
+        out[pair][p] = error(*pair, p)
+    return out
 
 
 def mean_errors(files: list[dict]) -> dict:

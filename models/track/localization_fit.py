@@ -62,6 +62,7 @@ from models.track.fitting import (
     plot_fit,
     refuse_strengths,
     report,
+    search_grid,
     search_values,
 )
 from models.track.localization import (
@@ -111,8 +112,10 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, se
         raise InputError(f"training runs {train}: {exc}") from None
     keys = [jax.random.key(ctx.seed + i) for i in range(seeds)]
     with ctx.timed("search"):
-        search = _search(ctx, runs, train, opts, measured, scales, keys)
-        chosen = min(search, key=lambda ms: (np.mean(list(search[ms].values())), ms))
+        search = search_grid(ctx, (scales, scales), train, lambda m, s, p: _rmse(
+            runs[p].seq, noise_settings(opts["noise"], measured, m, s), opts, keys))
+        mean = {ms: float(np.mean(list(e.values()))) for ms, e in search.items()}
+        chosen = min(mean, key=lambda ms: (mean[ms], ms))
         noise = noise_settings(opts["noise"], measured, *chosen)
         unbiased = {p: _rmse(runs[p].seq, {**noise, "range_bias": 0.0}, opts, keys)
                     for p in ctx.progress(train, len(train), "range bias")}  # fmt: skip
@@ -130,11 +133,10 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, se
     params = {"seeds": seeds, "search_scales": list(scales), "measured": measured,
               "motion_scale": chosen[0], "sensor_scale": chosen[1],
               "range_bias_kept": keep_bias,
-              "range_bias_errors": {"measured": float(np.mean(list(search[chosen].values()))),
+              "range_bias_errors": {"measured": mean[chosen],
                                     "zero": float(np.mean(list(unbiased.values())))},
-              "search": [{"motion_scale": m, "sensor_scale": s,
-                          "error": float(np.mean(list(errors.values())))}
-                         for (m, s), errors in search.items()],
+              "search": [{"motion_scale": m, "sensor_scale": s, "error": mean[(m, s)]}
+                         for m, s in search],
               "validation_same_recording": copies_of_training(
                   {p: run.rows for p, run in runs.items()}, train, validate),
               "fitted": {k: fitted[k] for k in NOISE_KEYS}}  # fmt: skip
@@ -193,17 +195,6 @@ def keeps_bias(biased: dict, unbiased: dict) -> bool:
     if set(biased) != set(unbiased) or not biased:
         raise ValueError("keeps_bias: the same training runs, with and without the bias")
     return bool(np.mean(list(biased.values())) <= np.mean(list(unbiased.values())))
-
-
-def _search(ctx: RunContext, runs: dict, train: list[str], opts: dict, measured: dict,
-            scales: tuple, keys: list) -> dict:
-    """``{(motion_scale, sensor_scale): {run: error}}`` over the training runs."""
-    grid = [(m, s) for m in scales for s in scales]
-    jobs = [(ms, p) for ms in grid for p in train]
-    out: dict = {ms: {} for ms in grid}
-    for ms, p in ctx.progress(jobs, len(jobs), "search"):
-        out[ms][p] = _rmse(runs[p].seq, noise_settings(opts["noise"], measured, *ms), opts, keys)
-    return out
 
 
 def _row(path: str, run: Run, opts: dict, noise: dict, keys: list,

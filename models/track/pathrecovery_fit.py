@@ -81,6 +81,7 @@ from models.track.fitting import (
     plot_fit,
     refuse_strengths,
     report,
+    search_grid,
     search_values,
 )
 from models.track.options import array, flag
@@ -136,7 +137,8 @@ def fit(ctx: RunContext, train: list[str], validate: list[str], config: dict, se
     net, network = _network(runs, train, fit_net)
     keys = [jax.random.key(ctx.seed + i) for i in range(seeds)]
     with ctx.timed("search"):
-        search = _search(ctx, runs, train, net, fcfg, k_dp, axes, keys)
+        search = search_grid(ctx, axes, train, lambda s, q, p: _error(
+            p, runs[p], net, fcfg._replace(sharpness=s, hidden_likelihood=q), k_dp, keys))
     mean = {pair: float(np.mean(list(e.values()))) for pair, e in search.items()}
     own = (float(fcfg.sharpness), float(fcfg.hidden_likelihood))
     chosen = min(mean, key=lambda pair: (mean[pair], pair != own, pair))
@@ -276,18 +278,6 @@ def _error(path: str, run: Run, net, fcfg, k_dp: int, keys: list) -> float:
         score = score_path(pred, run.truth, f"{path} (recovered)", run.truth_file)
         out.append(1.0 - score["path_score"])
     return float(np.mean(out))
-
-
-def _search(ctx: RunContext, runs: dict, train: list[str], net, fcfg, k_dp: int,
-            axes: list, keys: list) -> dict:
-    """``{(kappa, q): {run: error}}`` over the training runs, with the network ``net``."""
-    grid = [(k, q) for k in axes[0] for q in axes[1]]
-    jobs = [(pair, p) for pair in grid for p in train]
-    out: dict = {pair: {} for pair in grid}
-    for (s, q), p in ctx.progress(jobs, len(jobs), "search"):
-        cfg = fcfg._replace(sharpness=s, hidden_likelihood=q)
-        out[(s, q)][p] = _error(p, runs[p], net, cfg, k_dp, keys)
-    return out
 
 
 def _row(path: str, run: Run, fcfg, fitted: tuple, k_dp: int, keys: list,

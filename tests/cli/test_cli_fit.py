@@ -353,3 +353,23 @@ def test_held_out_box_files_of_a_training_recording_are_named(tmp_path, capsys):
         capsys.readouterr().out
     summary, _ = _fit(tmp_path, "apart", str(XML), "--validate", str(tmp_path / "other.xml"))
     assert summary["parameters"]["validation_same_recording"] == {}
+
+
+def test_search_grid_runs_every_pair_on_every_training_run(tmp_path):
+    """``search_grid``: one call per pair of the two axes and training run, pair by pair in
+    the axes' order, each result under its pair and run."""
+    from models.track.context import RunContext
+    from models.track.fitting import search_grid
+
+    calls = []
+
+    def error(a: float, b: float, run: str) -> float:
+        calls.append((a, b, run))
+        return 10 * a + b + (0.5 if run == "y" else 0.0)
+
+    ctx = RunContext("localization", tmp_path, 0, quiet=True)
+    out = search_grid(ctx, ((1.0, 2.0), (3.0, 4.0, 5.0)), ["x", "y"], error)
+    pairs = [(a, b) for a in (1.0, 2.0) for b in (3.0, 4.0, 5.0)]
+    assert calls == [(a, b, r) for a, b in pairs for r in ("x", "y")]
+    assert list(out) == pairs
+    assert out[(2.0, 4.0)] == {"x": 24.0, "y": 24.5}
