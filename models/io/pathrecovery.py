@@ -170,10 +170,9 @@ def read_path(path: str | Path) -> dict[int, tuple[int, int, int, int]]:
 def write_network(path: str | Path, net) -> Path:
     """Write a :class:`models.pathrecovery.model.CameraNetwork`'s edges as ``edges.csv``
     (``from,to,prob,gap_mean``; :func:`read_network` reads it back)."""
-    src = np.repeat(np.arange(net.indptr.size - 1), np.diff(net.indptr))
     return write_rows(path, ("from", "to", "prob", "gap_mean"),
                       [(int(a), int(b), float(p), float(g))
-                       for a, b, p, g in zip(src, net.indices, net.probs, net.gap_mean)])
+                       for a, b, p, g in zip(net.rows, net.indices, net.probs, net.gap_mean)])
 
 
 def write_scene(folder: str | Path, scene) -> Path:

@@ -74,15 +74,11 @@ def count_moves(net, t: np.ndarray, cam: np.ndarray, obj: np.ndarray) -> MoveCou
     if np.any(d == 0):
         i = same[int(np.argmax(d == 0))]
         raise InputError(f"object {obj[i]} is observed twice at t = {t[i]}")
-    n = net.num_cameras
-    src = np.repeat(np.arange(n), np.diff(net.indptr))
-    keys = src * n + np.asarray(net.indices)  # increasing: CameraNetwork sorts each row
-    pos = np.clip(np.searchsorted(keys, a * n + b), 0, keys.size - 1)
-    listed = keys[pos] == a * n + b
-    ok = listed & ((d == 1) | (np.asarray(net.gap_mean)[pos] > 0))
-    e = pos[ok]
-    return MoveCounts(np.bincount(e, minlength=keys.size).astype(np.float64),
-                      np.bincount(e, weights=d[ok], minlength=keys.size),
+    edge = net.edge_index(a, b)  # -1: no such edge
+    ok = (edge >= 0) & ((d == 1) | (net.gap_mean[np.maximum(edge, 0)] > 0))
+    e = edge[ok]
+    return MoveCounts(np.bincount(e, minlength=net.num_edges).astype(np.float64),
+                      np.bincount(e, weights=d[ok], minlength=net.num_edges),
                       int(np.count_nonzero(~ok)))  # fmt: skip
 
 
@@ -100,9 +96,8 @@ def fitted_network(net, counts: MoveCounts, strength: float = PRIOR_MOVES):
 
     if not strength > 0:
         raise InputError(f"strength must be > 0 (pseudo-moves per camera), got {strength!r}")
-    src = np.repeat(np.arange(net.num_cameras), np.diff(net.indptr))
-    leaving = np.bincount(src, weights=counts.edge_moves, minlength=net.num_cameras)
-    probs = (counts.edge_moves + strength * net.probs) / (leaving[src] + strength)
+    leaving = np.bincount(net.rows, weights=counts.edge_moves, minlength=net.num_cameras)
+    probs = (counts.edge_moves + strength * net.probs) / (leaving[net.rows] + strength)
     gap = np.asarray(net.gap_mean, dtype=np.float64)
     mean = (counts.delay_sums + strength * gap) / (counts.edge_moves + strength)
     return CameraNetwork(net.indptr, net.indices, probs, np.where(gap > 0, mean, 0.0),

@@ -165,8 +165,7 @@ def path_ids(path, odb) -> np.ndarray:
 def _plot(ctx: RunContext, net, path, c0: int) -> None:
     with ctx.figure("path.png", ncols=2, figsize=(12, 4.5)) as (_, (ax0, ax1)):
         xy = net.coords
-        src = np.repeat(np.arange(net.indptr.size - 1), np.diff(net.indptr))
-        for a, b in zip(src, net.indices):
+        for a, b in zip(net.rows, net.indices):
             if a != b:
                 ax0.plot(*xy[[a, b]].T, color="0.85", lw=1, zorder=0)
         ax0.scatter(*xy.T, s=12, color="0.5")
