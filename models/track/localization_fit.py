@@ -67,9 +67,9 @@ from models.track.fitting import (
 )
 from models.track.localization import (
     NOISE_KEYS,
-    filter_means,
     run_options,
     run_sequence,
+    scan_means,
 )
 
 __all__ = ["fit", "fit_report", "keeps_bias", "SEARCH_SCALES"]
@@ -180,10 +180,11 @@ def _read_run(path: str, opts: dict) -> Run:
 
 def _rmse(seq, noise: dict, opts: dict, keys: list) -> float:
     """The mean over ``keys`` of the position RMSE of the filter's mean pose, ``noise``'s
-    model, against the run's truth at the filter's steps."""
+    model, against the run's truth at the filter's steps (:func:`scan_means`: the poses
+    ``dbntrack track`` gives)."""
     out = []
     for key in keys:
-        means = filter_means(seq, {**opts, "noise": noise}, key)
+        means = scan_means(seq, {**opts, "noise": noise}, key)
         err = np.hypot(*(means[:, :2] - seq.truth[1:, :2]).T)
         out.append(float(np.sqrt(np.mean(err**2))))
     return float(np.mean(out))

@@ -9,14 +9,17 @@ import json
 import shutil
 from pathlib import Path
 
+import jax
 import numpy as np
 import pytest
 
+from dbn.errors import ConfigError
 from models.cli import main
 from models.io.localization import read_mrclam_folder
 from models.localization.fit import noise_residuals, noise_settings, pool_residuals, robust_noise
 from models.localization.mrclam import MRCLAM_NOISE, build_sequence
 from models.track import localization_fit
+from models.track.localization import filter_means, run_options, run_sequence, scan_means
 from models.track.localization_fit import keeps_bias
 from tests.cli.test_cli_track import _bad, _fitted
 
@@ -197,6 +200,23 @@ def test_keeps_bias_compares_mean_training_errors():
             keeps_bias({"a": 0.1, "b": 0.3}, unbiased)
     with pytest.raises(ValueError, match="same training runs"):
         keeps_bias({}, {})
+
+
+@pytest.mark.parametrize("algorithm", ["apf", pytest.param("sir", marks=pytest.mark.heavy)])
+def test_the_fit_scores_the_poses_the_protocol_run_gives(runs, algorithm):
+    """The fit's one-scan filter (:func:`scan_means`) gives, from the same key, the poses of
+    the registry's tracker stepped through the protocol (:func:`filter_means`, what
+    ``dbntrack track`` runs); a bad filter setting is a ConfigError either way."""
+    opts = run_options({"duration": 4.0, "num_particles": 100, "algorithm": algorithm})
+    seq = run_sequence(read_mrclam_folder(runs, 2), runs / "Robot2_Odometry.dat", opts)[0]
+    scanned = scan_means(seq, opts, jax.random.key(0))
+    stepped = filter_means(seq, opts, jax.random.key(0))
+    np.testing.assert_allclose(scanned, stepped, rtol=0, atol=1e-9)
+    assert np.abs(scan_means(seq, opts, jax.random.key(1)) - stepped).max() > 1e-6
+    for bad in ({"num_particles": 0}, {"algorithm": "ukf"}):
+        for means in (filter_means, scan_means):
+            with pytest.raises(ConfigError, match=next(iter(bad))):
+                means(seq, {**opts, **bad}, jax.random.key(0))
 
 
 def test_refusals_name_the_run_or_option(runs, tmp_path, capsys):
