@@ -6,6 +6,11 @@ Usage::
     final, infos, means = run(jax.random.key(0), pf, observations, actions)
     log_evidence = infos.log_likelihood.sum()
 
+A model class registered with :func:`register_model` (its parameters as pytree leaves) runs
+through :func:`run_model` instead: ``run_model(key, model, observations, actions,
+algorithm=auxiliary_filter, num_particles=1000)`` traces the parameters, so a search over
+many models of the class compiles once per shape of its data.
+
 Models whose particles are ragged host data (numpy) use the same machinery from
 :mod:`inference.particle.numpy_path` (log normalisation, ESS, resamplers with a numpy
 ``Generator``), :mod:`inference.particle.numpy_filter` (the SIR step
@@ -22,12 +27,13 @@ from inference.particle.filters import (
     bootstrap_filter,
     ess,
     run,
+    run_model,
     weighted_cov,
     weighted_mean,
 )
 from inference.particle.kbest import k_best_states
 from inference.particle.linear_gaussian import LinearGaussianSSM
-from inference.particle.model import StateSpaceModel
+from inference.particle.model import StateSpaceModel, is_registered_model, register_model
 from inference.particle.resampling import (
     RESAMPLERS,
     multinomial,
@@ -47,6 +53,9 @@ __all__ = [
     "bootstrap_filter",
     "ess",
     "run",
+    "run_model",
+    "register_model",
+    "is_registered_model",
     "weighted_cov",
     "k_best_states",
     "weighted_mean",

@@ -45,6 +45,7 @@ __all__ = [
     "bootstrap_filter",
     "auxiliary_filter",
     "run",
+    "run_model",
     "ess",
     "weighted_mean",
     "weighted_cov",
@@ -346,8 +347,7 @@ def auxiliary_filter(
     return _particle_filter(model, num_particles, resampler, ess_threshold, dtype, _auxiliary_stage)
 
 
-@partial(jax.jit, static_argnames=("pf", "summary", "keep_ancestors"))
-def _run(
+def _scan(
     key: Array,
     state: ParticleState,
     observations: Any,
@@ -376,6 +376,19 @@ def _run(
 
     (final, _), (infos, outs) = jax.lax.scan(body, (state, first), (keys, shifted))
     return final, infos, outs
+
+
+_run = partial(jax.jit, static_argnames=("pf", "summary", "keep_ancestors"))(_scan)
+_STATIC = ("algorithm", "num_particles", "resampler", "ess_threshold", "dtype", "summary",
+           "keep_ancestors")  # fmt: skip
+
+
+@partial(jax.jit, static_argnames=_STATIC)
+def _run_model(key, state, observations, actions, model, algorithm, num_particles, resampler,
+               ess_threshold, dtype, summary, keep_ancestors):  # fmt: skip
+    pf = algorithm(model, num_particles, resampler=resampler, ess_threshold=ess_threshold,
+                   dtype=dtype)  # fmt: skip
+    return _scan(key, state, observations, actions, pf, summary, keep_ancestors)
 
 
 def run(
@@ -418,3 +431,62 @@ def run(
         k0, k_steps = jax.random.split(key)
         state = pf.init(k0) if initial_state is None else initial_state
         return _run(k_steps, state, observations, actions, pf, summary, keep_ancestors)
+
+
+def run_model(
+    key: Array,
+    model: StateSpaceModel,
+    observations: Any,
+    actions: Any = None,
+    *,
+    algorithm: Callable[..., ParticleFilter] = bootstrap_filter,
+    num_particles: int,
+    resampler: Resampler = systematic,
+    ess_threshold: float = 0.5,
+    dtype: Any = jnp.float64,
+    initial_state: ParticleState | None = None,
+    summary: Callable[[ParticleState], Any] | None = weighted_mean,
+    keep_ancestors: bool = False,
+) -> tuple[ParticleState, ParticleInfo, Any]:
+    """:func:`run` of ``algorithm(model, num_particles, ...)`` with the model's parameters
+    traced, not compiled in: one compilation serves every model of a registered class
+    (:func:`~inference.particle.model.register_model`) for each shape of the inputs and
+    each setting (a parameter search over ``M`` models compiles once, not ``M`` times).
+
+    The same keys as :func:`run` (``key`` split into the initial draw, made here before
+    tracing, and one key per step), so the same filter up to rounding: constants folded
+    by the compiler and traced values may differ in the last bit.
+
+    Parameters
+    ----------
+    model : StateSpaceModel
+        An instance of a class registered with :func:`~inference.particle.model.register_model`.
+    algorithm : callable
+        :func:`bootstrap_filter` or :func:`auxiliary_filter` (static, as are
+        ``num_particles``, ``resampler``, ``ess_threshold``, ``dtype`` and ``summary``: pass
+        module-level functions, a new lambda each call recompiles).
+    Others as :func:`run`.
+
+    Returns
+    -------
+    As :func:`run`.
+
+    Raises
+    ------
+    ModelError
+        ``model``'s class is not registered (use :func:`run`).
+    """
+    from inference.particle.model import is_registered_model
+
+    if not is_registered_model(model):
+        raise ModelError(f"run_model: {type(model).__name__} is not registered as a pytree "
+                         "(inference.particle.model.register_model); use run")  # fmt: skip
+    # the settings checked on the host, before tracing
+    pf = algorithm(model, num_particles, resampler=resampler, ess_threshold=ess_threshold,
+                   dtype=dtype)  # fmt: skip
+    with precision_scope(dtype):
+        k0, k_steps = jax.random.split(key)
+        state = pf.init(k0) if initial_state is None else initial_state
+        return _run_model(k_steps, state, observations, actions, model, algorithm,
+                          check_num_particles(num_particles), resampler, float(ess_threshold),
+                          dtype, summary, keep_ancestors)  # fmt: skip

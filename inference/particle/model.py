@@ -5,15 +5,24 @@ such declaration into a filter, as in the ``particles`` library (a ``StateSpaceM
 wrapped by ``Bootstrap`` / ``AuxiliaryPF``). Shapes use one vocabulary:
 ``num_particles``, ``state_dim``; an ``action`` (control input, e.g. odometry) and an
 ``observation`` are any pytrees of arrays for one time step (``None`` allowed).
+
+A model class registered with :func:`register_model` is a jax pytree of its parameters:
+:func:`inference.particle.filters.run_model` then traces them instead of baking them into
+the compiled filter, so models of one class that differ only in their numbers share one
+compilation (a parameter search compiles once per shape of its data).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
+import jax
 from jax import Array
 
-__all__ = ["StateSpaceModel"]
+from dbn.errors import ModelError
+
+__all__ = ["StateSpaceModel", "register_model", "is_registered_model"]
 
 
 class StateSpaceModel:
@@ -25,7 +34,8 @@ class StateSpaceModel:
     :math:`\mu_k^i`, seed 002 eq. 1.12), or their own :meth:`lookahead` or
     :meth:`log_eta`. All methods must be pure jax functions of their array arguments
     (they are traced under ``jax.jit``); model parameters are attributes fixed at
-    construction.
+    construction, compiled into each filter unless the class is registered with
+    :func:`register_model` (then :func:`~inference.particle.filters.run_model` traces them).
     """
 
     def sample_initial(self, key: Array, num_particles: int, dtype: Any) -> Array:
@@ -68,3 +78,36 @@ class StateSpaceModel:
         ``particles`` are :math:`s_{k-1}`; returns shape ``(num_particles,)``.
         """
         return self.log_likelihood(self.lookahead(particles, action), observation)
+
+
+def register_model(cls: type, data_fields: Sequence[str]) -> type:
+    """Register the model class ``cls`` as a jax pytree whose leaves are ``data_fields``.
+
+    ``data_fields`` name every attribute an instance holds (arrays, floats, or pytrees of
+    them); its methods must then compute with them as jax values (``jnp.log``, not
+    ``math.log``), as they may be traced. Unflattening sets the attributes without calling
+    ``__init__`` (no checks run on traced values). Flattening an instance with an attribute
+    outside ``data_fields`` is a :class:`~dbn.errors.ModelError` naming it. Returns ``cls``.
+    """
+    fields = tuple(data_fields)
+
+    def flatten(model):
+        extra = sorted(set(vars(model)) - set(fields))
+        if extra:
+            raise ModelError(f"{cls.__name__}: attribute(s) {extra} are not among the data "
+                             f"fields {list(fields)} it was registered with")  # fmt: skip
+        return tuple(getattr(model, f) for f in fields), None
+
+    def unflatten(_aux, leaves):
+        model = object.__new__(cls)
+        model.__dict__.update(zip(fields, leaves, strict=True))
+        return model
+
+    jax.tree_util.register_pytree_node(cls, flatten, unflatten)
+    cls._pytree_fields = fields
+    return cls
+
+
+def is_registered_model(model: Any) -> bool:
+    """Whether ``model``'s own class was registered with :func:`register_model`."""
+    return type(model).__dict__.get("_pytree_fields") is not None

@@ -36,7 +36,7 @@ from scipy.spatial import cKDTree
 
 from dbn.errors import InputError, NonFiniteError, ShapeError
 from inference.evidence_columns import as_column
-from inference.particle import StateSpaceModel
+from inference.particle import StateSpaceModel, register_model
 from inference.precision import honours_dtype
 
 __all__ = [
@@ -543,9 +543,14 @@ class RangeBearingLocalizationModel(RobotModel):
         eb = wrap_angle(observation.bearing.astype(dt)[None] - b_hat) / self.sigma_bearing
         log_gauss = (
             -0.5 * (er * er + eb * eb)
-            - math.log(TWO_PI * self.sigma_range * self.sigma_bearing)
-            + math.log1p(-self.outlier_prob)
+            - jnp.log(TWO_PI * self.sigma_range * self.sigma_bearing)
+            + jnp.log1p(-self.outlier_prob)
         )
-        log_out = math.log(self.outlier_prob / (self.max_range * TWO_PI))
+        log_out = jnp.log(self.outlier_prob / (self.max_range * TWO_PI))
         ll = jnp.logaddexp(log_gauss, jnp.asarray(log_out, dt))
         return jnp.sum(jnp.where(observation.mask[None], ll, 0.0), axis=1)
+
+
+register_model(RangeBearingLocalizationModel, (
+    "initial_pose", "initial_std", "noise", "landmarks", "sigma_range", "sigma_bearing",
+    "outlier_prob", "max_range", "range_bias"))  # fmt: skip

@@ -22,7 +22,9 @@ from inference.particle import (
     ParticleState,
     auxiliary_filter,
     bootstrap_filter,
+    is_registered_model,
     run,
+    run_model,
     systematic,
 )
 from inference.precision import honours_dtype, precision_scope
@@ -92,7 +94,9 @@ def localize(
     ess_threshold: float = 0.5,
     initial_state: ParticleState | None = None,
 ) -> LocalizationResult:
-    """Filter a whole sequence with ``lax.scan``.
+    """Filter a whole sequence with ``lax.scan`` (a registered model, the range-bearing one,
+    through :func:`~inference.particle.filters.run_model`: one compilation for every noise
+    setting of a sequence's shape).
 
     Parameters
     ----------
@@ -117,9 +121,15 @@ def localize(
     pf = make_filter(model, num_particles, algorithm, dtype=dtype, ess_threshold=ess_threshold)
     observations = check_sequence(model, observations, actions.shape[0], dtype)
     steps = jnp.asarray(actions, dtype)
-    final, infos, means = run(
-        key, pf, observations, steps, initial_state=initial_state, summary=_pose_summary
-    )
+    if is_registered_model(model):  # the range-bearing model: its noise traced, not compiled in
+        final, infos, means = run_model(
+            key, model, observations, steps, algorithm=ALGORITHMS[algorithm],
+            num_particles=num_particles, dtype=dtype, ess_threshold=ess_threshold,
+            initial_state=initial_state, summary=_pose_summary)  # fmt: skip
+    else:
+        final, infos, means = run(
+            key, pf, observations, steps, initial_state=initial_state, summary=_pose_summary
+        )
     return LocalizationResult(np.asarray(means), infos, final)
 
 

@@ -186,8 +186,10 @@ def scan_means(seq, opts: dict, key) -> np.ndarray:
     """:func:`filter_means` without its per-step bar, in one ``lax.scan``
     (:func:`~models.localization.tracker.localize`): the same filter from the same keys
     (``localize`` splits ``key`` as the protocol's ``run`` does), so the same poses ``(T, 3)``
-    (tested), two to three times faster (a 3,000-step MRCLAM run: 3.3 s against 6.6 s on
-    a 2-core host). The fit's many runs take it."""
+    to rounding (tested), and with the noise traced, not compiled in
+    (:func:`~inference.particle.filters.run_model`), one compilation for every noise setting
+    of a run: a 3,000-step MRCLAM run takes 2.0 s, against 6.6 s by the protocol's steps,
+    on a 2-core host. The fit's many runs take it."""
     from models.localization.mrclam import mrclam_model
     from models.localization.tracker import localize, make_filter
 
