@@ -22,6 +22,14 @@ speedup_vs_numpy
     Our own numpy reference APF (the same algorithm, float32) on the same data.
 compile_s
     jax compile (trace + XLA) time of the timed APF run.
+speedup_vs_recompiled_run
+    A noise search as ``dbntrack fit localization`` runs one: the range-bearing model on a
+    SIMULATED robot (8 landmarks, N = 1,000, 300 steps; 1,000 in full runs) at ``search_settings``
+    sensor noises (4; 8 full), each filtered by
+    :func:`~inference.particle.filters.run_model` (the noise traced: one compilation)
+    against :func:`~inference.particle.filters.run` with each setting's own filter (one
+    compilation each), compile times included (they are the difference);
+    ``search_max_mean_diff_m``: the largest difference of their mean positions (rounding).
 
 Timings on a shared machine are noisy: best of repeats is reported.
 """
@@ -38,10 +46,17 @@ import numpy as np
 from scipy.special import logsumexp
 
 from benchmarks._common import log
-from inference.particle import auxiliary_filter
+from inference.particle import auxiliary_filter, run_model
 from inference.particle import run as pf_run
+from inference.precision import precision_scope
 from models.localization.experiments import mrclam_trials, synthetic_trials
+from models.localization.model import (
+    RangeBearingLocalizationModel,
+    RangeBearingObservation,
+    circular_mean,
+)
 from models.localization.simulate import build_trained_world, knn_model_for, simulate_run
+from models.localization.tracker import check_sequence
 
 TWO_PI = 2 * math.pi
 
@@ -181,6 +196,7 @@ def run(quick: bool, seed: int) -> dict:
     if out["mrclam_rmse_m"] is not None:
         log(f"MRCLAM: {out['mrclam_rmse_m']:.3f} m ({time.perf_counter() - t_all:.1f} s)")
     out.update(_speed(seed, trained, quick, checks))
+    out.update(_search_speed(seed, quick, checks))
     out["timing_note"] = (
         "best of repeats on a possibly shared machine; the _cpu figure is process CPU time"
     )
@@ -273,6 +289,63 @@ def _speed(seed: int, trained, quick: bool, checks: list) -> dict:
     out.update(_baselines(seed, trained, model, pf, key, obs32, steps32, best_wall / steps_t, quick, checks))
     checks.append(np.isfinite(jax_log_z) and np.all(np.isfinite(jax_mean)))
     return out
+
+
+def _range_bearing_robot(seed: int, num_steps: int):
+    """A SIMULATED robot on a circle among 8 landmarks, every landmark measured at every
+    step (range sd 0.1 m, bearing sd 0.05 rad; odometry sd 0.02 m/s, 0.03 rad/s, dt 0.1 s):
+    (landmarks, odometry (T, 4), stacked RangeBearingObservation (T, 8))."""
+    rng = np.random.default_rng(seed)
+    landmarks = np.array([[x, y] for x in (-3.0, 0.0, 3.0) for y in (-3.0, 3.0)]
+                         + [[-3.0, 0.0], [3.0, 0.0]])
+    dt, v, w = 0.1, 0.4, 0.2
+    theta = w * dt * np.arange(1, num_steps + 1)
+    x, y = (v / w) * np.sin(theta), (v / w) * (1 - np.cos(theta))
+    dx, dy = landmarks[None, :, 0] - x[:, None], landmarks[None, :, 1] - y[:, None]
+    rng_ = np.hypot(dx, dy) + 0.1 * rng.standard_normal(dx.shape)
+    noise = 0.05 * rng.standard_normal(dx.shape)
+    bearing = np.angle(np.exp(1j * (np.arctan2(dy, dx) - theta[:, None] + noise)))
+    odo = np.column_stack([v * dt + 0.002 * rng.standard_normal(num_steps), np.zeros(num_steps),
+                           w * dt + 0.003 * rng.standard_normal(num_steps), np.full(num_steps, dt)])
+    lm = np.broadcast_to(np.arange(len(landmarks)), dx.shape)
+    return landmarks, odo, RangeBearingObservation(lm, rng_, bearing, np.ones(dx.shape, bool))
+
+
+def _search_speed(seed: int, quick: bool, checks: list) -> dict:
+    """4. A noise search (``speedup_vs_recompiled_run``): ``run_model`` against ``run``."""
+    steps, scales = (300, (1, 2, 4, 8)) if quick else (1000, (1, 1.5, 2, 3, 4, 6, 8, 12))
+    landmarks, odo, obs = _range_bearing_robot(seed + 2000, steps)
+    models = [RangeBearingLocalizationModel(landmarks, [0.0, 0.0, 0.0], [0.1, 0.1, 0.05],
+                                            sigma_range=0.05 * k, sigma_bearing=0.02 * k)
+              for k in scales]
+    key = jax.random.key(seed)
+    with precision_scope(jnp.float64):
+        obs = check_sequence(models[0], obs, steps)
+        actions = jnp.asarray(models[0].prepare_actions(odo))
+        warm = jax.tree_util.tree_map(lambda a: a[:7], (obs, actions))  # jax's own start-up
+        jax.block_until_ready(pf_run(key, auxiliary_filter(models[0], 1000), *warm))
+        t0 = time.perf_counter()
+        base = [pf_run(key, auxiliary_filter(m, 1000), obs, actions, summary=_pose)[2]
+                for m in models]
+        jax.block_until_ready(base)
+        t_base = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        ours = [run_model(key, m, obs, actions, algorithm=auxiliary_filter, num_particles=1000,
+                          summary=_pose)[2] for m in models]
+        jax.block_until_ready(ours)
+        t_ours = time.perf_counter() - t0
+    diff = max(float(np.abs(np.asarray(a)[:, :2] - np.asarray(b)[:, :2]).max())
+               for a, b in zip(base, ours, strict=True))
+    checks.append(diff < 1e-6)
+    log(f"noise search ({len(models)} settings, {steps} steps): run {t_base:.2f} s, "
+        f"run_model {t_ours:.2f} s")
+    return {"search_settings": len(models), "search_steps": steps,
+            "speedup_vs_recompiled_run": t_base / t_ours, "search_max_mean_diff_m": diff}
+
+
+def _pose(state):
+    """The filter's mean pose (circular mean for the heading), shape (3,)."""
+    return circular_mean(state.particles, state.log_weights)
 
 
 def _baselines(seed: int, trained, model, pf, key, obs32, steps32, jax_per_step: float, quick: bool,
