@@ -110,3 +110,16 @@ def test_a_registered_model_round_trips_as_a_pytree() -> None:
     assert leaves == [0.5, 0.3, 0.2]
     back = jax.tree_util.tree_unflatten(tree, [0.1, 0.2, 0.3])
     assert type(back) is AR1 and (back.a, back.q, back.r) == (0.1, 0.2, 0.3)
+
+
+def test_run_model_continues_from_a_state_as_run_does() -> None:
+    """``initial_state`` and ``keep_ancestors`` as :func:`run` takes them."""
+    model = AR1(0.8, 0.2, 0.4)
+    pf = bootstrap_filter(model, 300, ess_threshold=1.0)
+    start, _, _ = run(jax.random.key(2), pf, OBS[:10])
+    ref = run(jax.random.key(3), pf, OBS[10:], initial_state=start, keep_ancestors=True)
+    got = run_model(jax.random.key(3), model, OBS[10:], num_particles=300, ess_threshold=1.0,
+                    initial_state=start, keep_ancestors=True)  # fmt: skip
+    np.testing.assert_array_equal(got[1].ancestors, ref[1].ancestors)
+    np.testing.assert_allclose(got[2], ref[2], rtol=0, atol=1e-10)
+    assert got[1].ancestors.shape == (15, 300)
