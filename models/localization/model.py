@@ -543,12 +543,24 @@ class RangeBearingLocalizationModel(RobotModel):
         eb = wrap_angle(observation.bearing.astype(dt)[None] - b_hat) / self.sigma_bearing
         log_gauss = (
             -0.5 * (er * er + eb * eb)
-            - jnp.log(TWO_PI * self.sigma_range * self.sigma_bearing)
-            + jnp.log1p(-self.outlier_prob)
+            - _log(TWO_PI * self.sigma_range * self.sigma_bearing)
+            + _log1p(-self.outlier_prob)
         )
-        log_out = jnp.log(self.outlier_prob / (self.max_range * TWO_PI))
+        log_out = _log(self.outlier_prob / (self.max_range * TWO_PI))
         ll = jnp.logaddexp(log_gauss, jnp.asarray(log_out, dt))
         return jnp.sum(jnp.where(observation.mask[None], ll, 0.0), axis=1)
+
+
+def _log(x):
+    """``log(x)``: by :mod:`math` for a number (a constant the compiled filter holds, as a
+    model built with numbers always had), by :mod:`jax.numpy` for a traced parameter
+    (:func:`~inference.particle.filters.run_model`)."""
+    return math.log(x) if isinstance(x, int | float) else jnp.log(x)
+
+
+def _log1p(x):
+    """``log(1 + x)``, by :mod:`math` or :mod:`jax.numpy` as :func:`_log`."""
+    return math.log1p(x) if isinstance(x, int | float) else jnp.log1p(x)
 
 
 register_model(RangeBearingLocalizationModel, (
