@@ -185,3 +185,22 @@ def test_mrclam_event_alignment(shared_data) -> None:
     np.testing.assert_allclose(events.odometry[:, 3].sum(), 30.0, atol=1e-9)
     with pytest.raises(InputError, match="align"):
         build_sequence(data, align="nope")
+
+
+def test_localize_compiles_once_for_every_noise_setting() -> None:
+    """The range-bearing model's noise is traced (``run_model``): three settings on one
+    SIMULATED run add one compiled scan, and each setting still gives its own poses."""
+    from inference.particle import filters
+    from models.localization.model import RangeBearingLocalizationModel
+
+    rng = np.random.default_rng(3)
+    landmarks = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 2.0]])
+    odo = np.tile([0.05, 0.0, 0.02, 0.1], (17, 1))  # 17 steps: a shape no other test runs
+    obs = RangeBearingObservation(np.tile(np.arange(3), (17, 1)), 1 + rng.random((17, 3)),
+                                  rng.uniform(-1, 1, (17, 3)), np.ones((17, 3), bool))  # fmt: skip
+    before = filters._run_model._cache_size()
+    means = [localize(jax.random.key(0), RangeBearingLocalizationModel(
+                 landmarks, [1.0, 1.0, 0.0], [0.2, 0.2, 0.1], sigma_range=s), odo, obs, 200).means
+             for s in (0.1, 0.3, 0.9)]  # fmt: skip
+    assert filters._run_model._cache_size() == before + 1
+    assert min(np.abs(a - b).max() for a, b in [means[:2], means[1:]]) > 1e-3
