@@ -33,7 +33,7 @@ from jax import Array
 from jax.scipy.special import logsumexp
 
 from dbn.checks import check_count, check_nonnegative
-from dbn.errors import InputError, ModelError
+from dbn.errors import InputError, ModelError, ShapeError
 from inference.particle.model import StateSpaceModel
 from inference.particle.resampling import Resampler, systematic
 from inference.precision import precision_scope, scoped
@@ -205,6 +205,30 @@ def check_key(key: Any) -> None:
             return
     got = type(key).__name__ + ("" if dtype is None else f" of dtype {dtype}, shape {shape}")
     raise InputError(f"key must be one jax PRNG key (jax.random.key(seed)), got {got}")
+
+
+def check_run_inputs(observations: Any, actions: Any) -> int:
+    """The number of steps of a run: the leading axis every leaf of ``observations`` and of
+    ``actions`` (None: none) shares. No leaves, a scalar leaf, a leaf of another length or
+    no steps is an :class:`InputError` / :class:`ShapeError` naming the leaf (else
+    ``lax.scan`` fails naming none)."""
+    leaves = [(f"observations leaf {i}", a)
+              for i, a in enumerate(jax.tree_util.tree_leaves(observations))]  # fmt: skip
+    if not leaves:
+        raise InputError("observations hold no arrays: a run needs leaves of leading axis "
+                         "num_timesteps")  # fmt: skip
+    leaves += [(f"actions leaf {i}", a) for i, a in enumerate(jax.tree_util.tree_leaves(actions))]
+    for name, a in leaves:
+        if np.ndim(a) == 0:
+            raise ShapeError(f"{name} is a scalar: a run needs leading axis num_timesteps")
+    num_steps = np.shape(leaves[0][1])[0]
+    for name, a in leaves:
+        if np.shape(a)[0] != num_steps:
+            raise ShapeError(f"{name} has shape {np.shape(a)}: every observation and action "
+                             f"leaf needs the leading axis num_timesteps = {num_steps}")  # fmt: skip
+    if num_steps == 0:
+        raise InputError("observations have no steps (leading axis 0)")
+    return int(num_steps)
 
 
 # A first stage: ``(state, observation, action) -> (log_weights, ess, base)``: the log
@@ -426,7 +450,15 @@ def run(
         Stacked over time (``ancestors`` is None unless ``keep_ancestors``).
     summaries : pytree
         ``summary`` of each filtered state, stacked over time.
+
+    Raises
+    ------
+    InputError, ShapeError
+        A bad key (:func:`check_key`), or observations and actions without one leading
+        axis of at least one step (:func:`check_run_inputs`).
     """
+    check_key(key)
+    check_run_inputs(observations, actions)
     with precision_scope(pf.dtype):
         k0, k_steps = jax.random.split(key)
         state = pf.init(k0) if initial_state is None else initial_state
@@ -475,12 +507,16 @@ def run_model(
     ------
     ModelError
         ``model``'s class is not registered (use :func:`run`).
+    InputError, ShapeError
+        As :func:`run`.
     """
     from inference.particle.model import is_registered_model
 
     if not is_registered_model(model):
         raise ModelError(f"run_model: {type(model).__name__} is not registered as a pytree "
                          "(inference.particle.model.register_model); use run")  # fmt: skip
+    check_key(key)
+    check_run_inputs(observations, actions)
     # the settings checked on the host, before tracing
     pf = algorithm(model, num_particles, resampler=resampler, ess_threshold=ess_threshold,
                    dtype=dtype)  # fmt: skip

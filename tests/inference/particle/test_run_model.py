@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dbn.errors import ModelError
+from dbn.errors import InputError, ModelError, ShapeError
 from inference.kalman import LinearGaussianParams, kalman_filter, lgssm_sample
 from inference.particle import (
     LinearGaussianSSM,
@@ -123,3 +123,21 @@ def test_run_model_continues_from_a_state_as_run_does() -> None:
     np.testing.assert_array_equal(got[1].ancestors, ref[1].ancestors)
     np.testing.assert_allclose(got[2], ref[2], rtol=0, atol=1e-10)
     assert got[1].ancestors.shape == (15, 300)
+
+
+@pytest.mark.parametrize("how", ["run", "run_model"])
+def test_bad_run_inputs_name_the_leaf_before_any_tracing(how: str) -> None:
+    """No leaves, a scalar, leaves of different lengths, no steps or a bad key: a
+    dbn.errors class naming it, from run and run_model alike (not lax.scan's error)."""
+    model = AR1(0.5, 1, 1)
+    go = ((lambda k, o, a=None: run(k, bootstrap_filter(model, 10), o, a)) if how == "run"
+          else (lambda k, o, a=None: run_model(k, model, o, a, num_particles=10)))  # fmt: skip
+    key = jax.random.key(0)
+    for obs, act, match in ((None, None, "observations hold no arrays"),
+                            ({"y": OBS, "z": 1.0}, None, "observations leaf 1 is a scalar"),
+                            (OBS, np.zeros((24, 2)), r"actions leaf 0 has shape \(24, 2\)"),
+                            (OBS[:0], None, "no steps")):  # fmt: skip
+        with pytest.raises((InputError, ShapeError), match=match):
+            go(key, obs, act)
+    with pytest.raises(InputError, match="key must be one jax PRNG key"):
+        go(0, OBS)
