@@ -50,13 +50,9 @@ from inference.particle import auxiliary_filter, run_model
 from inference.particle import run as pf_run
 from inference.precision import precision_scope
 from models.localization.experiments import mrclam_trials, synthetic_trials
-from models.localization.model import (
-    RangeBearingLocalizationModel,
-    RangeBearingObservation,
-    circular_mean,
-)
+from models.localization.model import RangeBearingLocalizationModel, RangeBearingObservation
 from models.localization.simulate import build_trained_world, knn_model_for, simulate_run
-from models.localization.tracker import check_sequence
+from models.localization.tracker import check_sequence, pose_summary
 
 TWO_PI = 2 * math.pi
 
@@ -325,13 +321,13 @@ def _search_speed(seed: int, quick: bool, checks: list) -> dict:
         warm = jax.tree_util.tree_map(lambda a: a[:7], (obs, actions))  # jax's own start-up
         jax.block_until_ready(pf_run(key, auxiliary_filter(models[0], 1000), *warm))
         t0 = time.perf_counter()
-        base = [pf_run(key, auxiliary_filter(m, 1000), obs, actions, summary=_pose)[2]
+        base = [pf_run(key, auxiliary_filter(m, 1000), obs, actions, summary=pose_summary)[2]
                 for m in models]
         jax.block_until_ready(base)
         t_base = time.perf_counter() - t0
         t0 = time.perf_counter()
         ours = [run_model(key, m, obs, actions, algorithm=auxiliary_filter, num_particles=1000,
-                          summary=_pose)[2] for m in models]
+                          summary=pose_summary)[2] for m in models]
         jax.block_until_ready(ours)
         t_ours = time.perf_counter() - t0
     diff = max(float(np.abs(np.asarray(a)[:, :2] - np.asarray(b)[:, :2]).max())
@@ -342,10 +338,6 @@ def _search_speed(seed: int, quick: bool, checks: list) -> dict:
     return {"search_settings": len(models), "search_steps": steps,
             "speedup_vs_recompiled_run": t_base / t_ours, "search_max_mean_diff_m": diff}
 
-
-def _pose(state):
-    """The filter's mean pose (circular mean for the heading), shape (3,)."""
-    return circular_mean(state.particles, state.log_weights)
 
 
 def _baselines(seed: int, trained, model, pf, key, obs32, steps32, jax_per_step: float, quick: bool,

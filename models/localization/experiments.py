@@ -24,7 +24,7 @@ from models.localization.simulate import (
     odometry_only,
     simulate_run,
 )
-from models.localization.tracker import _pose_summary, make_filter, position_errors
+from models.localization.tracker import make_filter, pose_summary, position_errors
 
 __all__ = ["synthetic_trials", "mrclam_trials", "dead_reckoning"]
 
@@ -44,7 +44,7 @@ def _initial_states(key, model, starts: np.ndarray, num_particles: int, dtype) -
 
 def _vmapped_run(pf, keys, init, obs, steps):
     def one(k, s0, o, a):
-        return run(k, pf, o, a, initial_state=s0, summary=_pose_summary)[2]
+        return run(k, pf, o, a, initial_state=s0, summary=pose_summary)[2]
 
     return jax.vmap(one)(keys, init, obs, steps)
 
@@ -142,7 +142,7 @@ def mrclam_trials(
     steps = jnp.asarray(model.prepare_actions(seq.odometry), dtype)
     pf = make_filter(model, num_particles, algorithm, dtype=dtype)
     keys = jax.random.split(jax.random.key(seed), num_runs)
-    means = jax.vmap(lambda k: run(k, pf, obs, steps, summary=_pose_summary)[2])(keys)
+    means = jax.vmap(lambda k: run(k, pf, obs, steps, summary=pose_summary)[2])(keys)
     means = np.asarray(means)
     truth = seq.truth[1:]
     err = position_errors(means, truth)

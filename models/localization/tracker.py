@@ -46,6 +46,7 @@ __all__ = [
     "check_timestamp",
     "localize",
     "make_filter",
+    "pose_summary",
     "position_errors",
 ]
 
@@ -69,7 +70,9 @@ def make_filter(
     )
 
 
-def _pose_summary(state: ParticleState):
+def pose_summary(state: ParticleState):
+    """The filter's mean pose ``(3,)`` (circular mean for the heading): the ``summary`` the
+    scans record. Module-level, so jit's cache sees the same function every call."""
     return circular_mean(state.particles, state.log_weights)
 
 
@@ -125,10 +128,10 @@ def localize(
         final, infos, means = run_model(
             key, model, observations, steps, algorithm=ALGORITHMS[algorithm],
             num_particles=num_particles, dtype=dtype, ess_threshold=ess_threshold,
-            initial_state=initial_state, summary=_pose_summary)  # fmt: skip
+            initial_state=initial_state, summary=pose_summary)  # fmt: skip
     else:
         final, infos, means = run(
-            key, pf, observations, steps, initial_state=initial_state, summary=_pose_summary
+            key, pf, observations, steps, initial_state=initial_state, summary=pose_summary
         )
     return LocalizationResult(np.asarray(means), infos, final)
 
