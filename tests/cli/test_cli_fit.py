@@ -268,6 +268,7 @@ def test_files_of_one_name_are_shown_by_their_folders(tmp_path, capsys):
     assert "train  r1/gt.jsonl: " in out and "train  r2/gt.jsonl: " in out
 
 
+@pytest.mark.heavy  # ~12-16 s: 3 files labelled 9 times over; CI runs it (pytest -m heavy)
 def test_fit_scores_the_strokes_of_three_and_more_people(tmp_path, capsys):
     """SIMULATED meetings of five: each file's error over its strokes of 3+ people, with
     the config's and the fitted network and (training files, 2 folds) with the fit on the

@@ -178,6 +178,7 @@ def test_benchmark_dask_flag_needs_a_mapper_and_runs_the_seed_loop_on_it(client)
     }
 
 
+@pytest.mark.heavy  # ~9-16 s: dbntrack track 4 times on workers; CI runs it (pytest -m heavy)
 def test_track_runs_on_two_workers_equal_the_serial_run(client, tmp_path) -> None:
     """``models.track.sweep_task.track_task`` (``dbntrack track`` on files) on a cluster:
     the same results as in this process, timings aside."""
