@@ -5,7 +5,9 @@ consecutive slices, every name ending in ``_0`` (slice 0) or ``_1`` (slice ``t >
 The CPDs of the ``_0`` variables are the initial slice; the CPDs of the ``_1`` variables
 are the transition, whose ``_0`` parents are the previous slice. This is the unrolled
 2-TBN of pgmpy's ``DynamicBayesianNetwork`` (nodes ``(X, 0)``, ``(X, 1)``) written as BIF.
-A variable ``X_1`` whose BIF has no ``X_0`` is an error.
+A variable ``X_1`` whose BIF has no ``X_0`` is an error. :func:`write_two_slice_bif`
+writes a :class:`~dbn.dbn.TwoSliceDBN` (one from pgmpy through
+:func:`dbn.pgmpy_adapter.dbn_from_pgmpy`, say) as such a file.
 
 Evidence CSV: a header of observed variable names (the base names, without ``_0``/``_1``),
 then one row per slice; a field holds a state name (or its index, for a variable none of
@@ -31,6 +33,7 @@ from models.io.table import Row, fail, read_rows, require_file, write_rows
 
 __all__ = [
     "read_two_slice_bif",
+    "write_two_slice_bif",
     "two_slice_from_bn",
     "read_evidence",
     "write_marginals",
@@ -94,6 +97,39 @@ def read_two_slice_bif(path: str | Path) -> TwoSliceDBN:
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise FileFormatError(path, f"not a valid BIF file ({msg})") from None
     return two_slice_from_bn(bn, str(path))
+
+
+def write_two_slice_bif(path: str | Path, dbn: TwoSliceDBN) -> Path:
+    """Write a discrete two-slice DBN as a two-slice BIF file (the module docstring), which
+    :func:`read_two_slice_bif` and ``dbntrack track dbn`` read back: the net of
+    ``dbn.unroll(2)``, variables ``X_0`` with the initial CPDs and ``X_1`` with the
+    transition ones (deterministic CPDs as 0/1 tables), every probability to the last bit
+    (:func:`dbn.bif_writer.format_bif`). Read back, the variables come in sorted order.
+
+    Raises
+    ------
+    ModelError
+        ``dbn`` is not a :class:`TwoSliceDBN`, has a continuous variable, or a name BIF
+        cannot hold (:func:`dbn.bif_writer.check_bif_name`); nothing is written.
+    InputError
+        ``path`` cannot be written (its folder is missing, say).
+    """
+    from dbn.bif_writer import format_bif
+    from dbn.dbn import check_two_slice
+    from dbn.errors import InputError, ModelError
+
+    check_two_slice(dbn, "write_two_slice_bif")
+    for v in dbn.variables:
+        if not isinstance(v, DiscreteVariable):
+            raise ModelError(f"write_two_slice_bif: variable {v.name!r} is continuous; "
+                             "a BIF file holds discrete variables only")  # fmt: skip
+    text = format_bif(dbn.unroll(2))
+    path = Path(path)
+    try:
+        path.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot write the BIF file ({exc.strerror or exc})") from None
+    return path
 
 
 def _numbered(var: DiscreteVariable) -> bool:
