@@ -10,10 +10,10 @@ read back to the same doubles. Deterministic CPDs are written as their 0/1 table
 Names BIF cannot hold are refused rather than written into a file that reads back as
 another net (:func:`check_bif_name`): a variable name must be letters, digits, ``_``, ``-``
 or ``.`` (what pgmpy's grammar reads in a ``probability`` block); a state name may hold
-more (``<7.5``, as in pgmpy's bundled ``child`` network) but no separator of
-the format (``, ; ( ) { } |``), comment (``//``, ``/*``), control character or whitespace
-(pgmpy's reader splits ``no rain`` in two, or not, depending on the other states). Neither
-may hold a BIF keyword as a word.
+more (``<7.5``, as in pgmpy's bundled ``child`` network; ``no rain``) but no separator
+of the format (``, ; ( ) { } |``), comment (``//``, ``/*``), control character or
+whitespace at an end, and the only state of a variable no whitespace at all (pgmpy's reader
+splits ``{ no rain }`` in two states). Neither may hold a BIF keyword as a word.
 """
 
 from __future__ import annotations
@@ -34,22 +34,24 @@ BIF_KEYWORDS = frozenset(
 break pgmpy's reader or this library's (:func:`dbn.pgmpy_adapter.parse_bif`)."""
 
 _VARIABLE = re.compile(r"[\w.-]+")
-_STATE_BAD = re.compile(r"[\s,;(){}|\x00-\x1f\x7f]|//|/\*")
+_STATE_BAD = re.compile(r"[,;(){}|\x00-\x1f\x7f]|//|/\*")
 _KEYWORD = re.compile(r"\b(?:" + "|".join(sorted(BIF_KEYWORDS)) + r")\b")
 
 
-def check_bif_name(name: object, what: str, state: bool = False) -> str:
-    """``name`` if a BIF file can hold it as a variable name (``state``: a state name; the
-    module docstring), else a :class:`~dbn.errors.ModelError` naming ``what`` (e.g.
-    ``"state 2 of 'Rain'"``)."""
+def check_bif_name(name: object, what: str, state: bool = False, alone: bool = False) -> str:
+    """``name`` if a BIF file can hold it as a variable name (``state``: a state name,
+    ``alone``: its variable's only state; the module docstring), else a
+    :class:`~dbn.errors.ModelError` naming ``what`` (e.g. ``"state 2 of 'Rain'"``)."""
     text = str(name)
     if _KEYWORD.search(text):
         why = "a BIF keyword stands in it"
     elif not state and not _VARIABLE.fullmatch(text):
         why = "only letters, digits, '_', '-' and '.' can stand in a BIF variable name"
-    elif state and (not text or _STATE_BAD.search(text)):
-        why = ("a BIF state name must be non-empty, without whitespace (pgmpy splits "
-               "'no rain' in two) and without ', ; ( ) { } |', '//', '/*' or control characters")
+    elif state and (not text or text != text.strip() or _STATE_BAD.search(text)):
+        why = ("a BIF state name must be non-empty, without whitespace at its ends and "
+               "without ', ; ( ) { } |', '//', '/*' or control characters")
+    elif alone and text != "".join(text.split()):
+        why = "pgmpy's reader splits a variable's only state at its whitespace"
     else:
         return text
     raise ModelError(f"{what} is {text!r}: {why}; rename it before writing BIF")
@@ -103,7 +105,7 @@ def format_bif(bn: BayesNet, name: str = "unknown") -> str:
         check_bif_name(node, "a variable name")
         states = bn.variable(node).state_names
         for i, s in enumerate(states):
-            check_bif_name(s, f"state {i} of {node!r}", state=True)
+            check_bif_name(s, f"state {i} of {node!r}", state=True, alone=len(states) == 1)
         lines += [f"variable {node} {{",
                   f"    type discrete [ {len(states)} ] {{ {', '.join(states)} }};", "}"]  # fmt: skip
     for node in bn.nodes:

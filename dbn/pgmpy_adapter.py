@@ -208,8 +208,9 @@ def read_bif(path: str | Path) -> BayesNet:
     """Read a BIF file (optionally ``.gz``) through pgmpy's ``BIFReader``.
 
     The text is first checked by :func:`parse_bif` (whose errors name the file and the
-    line), so that pgmpy never sees a truncated or inconsistent file; anything pgmpy
-    still rejects becomes a :class:`~dbn.errors.FileFormatError`.
+    line), so that pgmpy never sees a truncated or inconsistent file, nor a variable whose
+    only state holds whitespace (pgmpy splits it in two); anything pgmpy still rejects
+    becomes a :class:`~dbn.errors.FileFormatError`.
     """
     with _quiet():
         from pgmpy.readwrite import BIFReader
@@ -217,7 +218,7 @@ def read_bif(path: str | Path) -> BayesNet:
     if not isinstance(path, str | Path):
         raise InputError(f"path must be a file name, got {path!r}")
     text = read_bif_text(path)
-    parse_bif(text, source=str(path))
+    _check_lone_states(parse_bif(text, source=str(path)), path)
     try:
         with _quiet():
             model = BIFReader(string=text).get_model()
@@ -228,6 +229,18 @@ def read_bif(path: str | Path) -> BayesNet:
         return from_pgmpy(model)
     except DBNError as exc:
         raise type(exc)(f"{path}: {exc}") from None
+
+
+def _check_lone_states(bn: BayesNet, path) -> None:
+    """A :class:`~dbn.errors.FileFormatError` for a variable whose only state holds
+    whitespace: pgmpy's reader splits ``{ no rain }`` in two states and then fails on the
+    table (it said "cannot reshape array of size 1")."""
+    for n in bn.nodes:
+        states = bn.variable(n).state_names
+        if len(states) == 1 and states[0] != "".join(states[0].split()):
+            raise FileFormatError(path, f"variable {n!r}: its only state {states[0]!r} holds "
+                                  "whitespace, which pgmpy's reader splits into two states; "
+                                  "rename it (parse_bif reads it as one)")  # fmt: skip
 
 
 def example_network(name: str) -> BayesNet:
