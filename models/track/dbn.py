@@ -1,9 +1,13 @@
 """``dbntrack track dbn MODEL.bif EVIDENCE.csv``: per-slice marginals of any discrete
 two-slice DBN (formats in :mod:`models.io.dbn`).
 
-``method = "exact"`` (default) runs :class:`inference.exact.DBNFilter` slice by slice and
-returns the filtered marginal of every hidden variable; ``auto``, ``bk``, ``particle`` and
-``rbpf`` go to the generic engines of ``inference.filter`` where that entry point exists.
+Every method goes to the generic engines of :func:`inference.filter`, which returns the
+filtered marginal of every hidden variable: ``method = "exact"`` (default) is its
+structured exact filter (:class:`inference.exact.structured_filter.StructuredFilter`:
+tables over the slice's frontier, never the whole interface, so ten coupled chains run
+where the dense :class:`inference.exact.DBNFilter`, which this command ran before, refused
+a 2^30-entry slice table; config key ``max_size``); ``auto``, ``bk``, ``particle`` and
+``rbpf`` as :func:`inference.filter` says.
 """
 
 from __future__ import annotations
@@ -18,24 +22,6 @@ from models.track.context import RunContext
 INPUTS = ("MODEL.bif: a two-slice BIF file (variables X_0 / X_1)",
           "EVIDENCE.csv: one row per slice, one column per observed variable")  # fmt: skip
 METHODS = ("exact", "auto", "bk", "particle", "rbpf")
-
-
-def _exact(ctx: RunContext, dbn: TwoSliceDBN, ev: dict[str, np.ndarray], T: int, hidden):
-    from inference.exact.dbn_filter import DBNFilter
-
-    f = DBNFilter(dbn)
-    out = {n: np.zeros((T, f.cards[n])) for n in hidden}
-    loglik = np.zeros(T)
-    state = None
-    for t in ctx.progress(range(T), T, "slices"):
-        e = {n: int(c[t]) for n, c in ev.items() if c[t] >= 0}
-        m = f.slice_marginals(state, e)
-        for n in hidden:
-            out[n][t] = m[n]
-        new = f.init(e) if state is None else f.step(state, e)
-        loglik[t] = new.log_likelihood - (0.0 if state is None else state.log_likelihood)
-        state = new
-    return out, loglik
 
 
 def _generic(ctx, dbn, ev, method: str, hidden, options: dict):
@@ -61,18 +47,13 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     method = config.pop("method", None) or "exact"
     if method not in METHODS:
         raise InputError(f"method = {method!r}; valid: {', '.join(METHODS)}")
-    if method == "exact" and config:  # they would be ignored
-        raise ConfigError(f"unknown config key(s) {sorted(config)}: the exact filter takes no options")
     with ctx.timed("read"):
         dbn = read_two_slice_bif(inputs[0])
         ev = read_evidence(inputs[1], dbn, model=inputs[0])
     T = len(next(iter(ev.values())))
     hidden = [n for n in dbn.names if n not in ev or (ev[n] < 0).any()]
     with ctx.timed("filter"):
-        if method == "exact":
-            marg, loglik = _exact(ctx, dbn, ev, T, hidden)
-        else:
-            marg, loglik = _generic(ctx, dbn, ev, method, hidden, config)
+        marg, loglik = _generic(ctx, dbn, ev, method, hidden, config)
     write_marginals(ctx.outdir / "marginals.csv", dbn, marg)
     _plot(ctx, dbn, marg)
     summary = {
