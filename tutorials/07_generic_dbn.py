@@ -88,20 +88,21 @@ plt.show()
 # %% [markdown]
 # The same model from the command line: `write_two_slice_bif` writes it as the two-slice
 # BIF file `dbntrack track dbn` reads (variables `x0_0` for slice 0, `x0_1` for the
-# transition), every probability to the last bit; the readings go in a CSV, one column
-# per sensor. The marginals the command writes are those above.
+# transition), every probability to the last bit, and `write_evidence` the readings as
+# its evidence CSV (a `slice` column, one column per sensor). The marginals the command
+# writes are those above.
 
 # %%
 import tempfile  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 from models.cli import main as dbntrack  # noqa: E402
-from models.io.dbn import read_marginals, write_two_slice_bif  # noqa: E402
+from models.io.dbn import read_marginals, write_evidence, write_two_slice_bif  # noqa: E402
 
 folder = Path(tempfile.mkdtemp())
-write_two_slice_bif(folder / "chains.bif", pa.dbn_from_pgmpy(pgmpy_model))
-rows = ["".join(f"{int(v)}," for v in y)[:-1] for y in ys]
-(folder / "readings.csv").write_text(",".join(evidence) + "\n" + "\n".join(rows) + "\n")
+user_dbn = pa.dbn_from_pgmpy(pgmpy_model)
+write_two_slice_bif(folder / "chains.bif", user_dbn)
+write_evidence(folder / "readings.csv", user_dbn, evidence)
 dbntrack(["track", "dbn", str(folder / "chains.bif"), str(folder / "readings.csv"),
           "-o", str(folder / "out"), "--quiet"])  # fmt: skip
 cli_on = read_marginals(folder / "out" / "marginals.csv")["x0"][1][:, 1]

@@ -36,6 +36,7 @@ __all__ = [
     "write_two_slice_bif",
     "two_slice_from_bn",
     "read_evidence",
+    "write_evidence",
     "write_marginals",
     "read_marginals",
     "read_states",
@@ -203,6 +204,53 @@ def read_states(path: str | Path, dbn: TwoSliceDBN, model: str | Path | None = N
 
 
 read_evidence = read_states
+
+
+def write_evidence(path: str | Path, dbn: TwoSliceDBN, evidence) -> Path:
+    """Write columnar evidence as the evidence CSV ``dbntrack track dbn`` reads, so that
+    :func:`read_evidence` gives back ``name -> (T,) int`` with ``-1`` where unobserved.
+
+    Parameters
+    ----------
+    evidence : mapping name -> (T,) array
+        As :func:`inference.filter` takes it (indices with ``-1``, state names with
+        ``None``, floats with NaN), discrete variables only. Written with a
+        :data:`SLICE_COLUMN` first and one row per slice, observed or not, so a state name
+        beginning with ``#`` never begins a line (the reader skips such lines as comments).
+
+    Raises
+    ------
+    DBNError
+        The checks of :func:`inference.evidence_columns.check_columns` (unknown variable,
+        state out of range, columns of different lengths); a continuous variable, a DBN
+        variable named ``slice``, or a state name the CSV reader would change (whitespace
+        at an end, a control character): nothing is written.
+    InputError
+        ``path`` cannot be written.
+    """
+    from dbn.errors import InputError, ModelError
+    from inference.evidence_columns import check_columns
+
+    cols = check_columns(dbn, evidence)
+    if cols.continuous:
+        raise ModelError(f"write_evidence: {sorted(cols.continuous)} continuous; the evidence "
+                         "CSV holds discrete variables only")  # fmt: skip
+    if SLICE_COLUMN in dbn.names:
+        raise ModelError(f"write_evidence: the DBN has a variable named {SLICE_COLUMN!r}, the "
+                         "CSV's slice column; rename it")  # fmt: skip
+    names = list(cols.discrete)
+    states = {n: dbn.initial_net.variable(n).state_names for n in names}
+    for n in names:
+        for s in states[n]:
+            if s != s.strip() or any(ord(ch) < 32 for ch in s):
+                raise ModelError(f"write_evidence: state {s!r} of {n!r} would not read back "
+                                 "(whitespace at an end or a control character)")  # fmt: skip
+    rows = [(t, *(states[n][k] if (k := int(cols.discrete[n][t])) >= 0 else "" for n in names))
+            for t in range(cols.num_timesteps)]  # fmt: skip
+    try:
+        return write_rows(path, (SLICE_COLUMN, *names), rows)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot write the evidence CSV ({exc.strerror or exc})") from None
 
 
 def write_marginals(path: str | Path, dbn: TwoSliceDBN, marginals: dict[str, np.ndarray]) -> Path:

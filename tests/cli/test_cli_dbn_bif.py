@@ -1,5 +1,5 @@
-"""``models.io.dbn.write_two_slice_bif``: a DBN declared in Python (or built in pgmpy) as a
-two-slice BIF file that ``read_two_slice_bif`` and ``dbntrack track dbn`` read back."""
+"""``models.io.dbn.write_two_slice_bif`` and ``write_evidence``: a DBN declared in Python (or
+built in pgmpy) and its evidence as the files ``dbntrack track dbn`` reads back."""
 
 from __future__ import annotations
 
@@ -12,7 +12,13 @@ from dbn.dbn import TwoSliceDBN
 from dbn.errors import InputError, ModelError
 from inference.exact.enumeration import brute_force_marginals
 from models.cli import main
-from models.io.dbn import read_marginals, read_two_slice_bif, write_two_slice_bif
+from models.io.dbn import (
+    read_evidence,
+    read_marginals,
+    read_two_slice_bif,
+    write_evidence,
+    write_two_slice_bif,
+)
 
 
 def assert_same_dbn(back: TwoSliceDBN, dbn: TwoSliceDBN) -> None:
@@ -62,9 +68,7 @@ def test_a_pgmpy_dbn_runs_through_dbntrack_as_the_model_itself(factories, tmp_pa
     user = dbn_from_pgmpy(dbn_to_pgmpy(dbn))
     bif = write_two_slice_bif(tmp_path / "model.bif", user)
     rows = _possible_observations(dbn, 3)
-    names = dbn.initial_net.variable("o").state_names
-    evidence = tmp_path / "evidence.csv"
-    evidence.write_text("o\n" + "".join(f"{names[r]}\n" for r in rows))
+    evidence = write_evidence(tmp_path / "evidence.csv", user, {"o": np.array(rows)})
     out = tmp_path / "out"
     assert main(["track", "dbn", str(bif), str(evidence), "-o", str(out), "--quiet"]) == 0
     states, got = read_marginals(out / "marginals.csv")["a"]
@@ -100,9 +104,7 @@ def test_ten_coupled_chains_run_exactly_where_the_dense_filter_refused(tmp_path)
         DBNFilter(dbn).init({})
     _, ys = sample_coupled_chains(np.random.default_rng(4), n, T)
     bif = write_two_slice_bif(tmp_path / "chains.bif", dbn)
-    evidence = tmp_path / "readings.csv"
-    evidence.write_text(",".join(f"y{i}" for i in range(n)) + "\n"
-                        + "".join(",".join(str(int(v)) for v in y) + "\n" for y in ys))  # fmt: skip
+    evidence = write_evidence(tmp_path / "readings.csv", dbn, {f"y{i}": ys[:, i] for i in range(n)})
     out = tmp_path / "out"
     assert main(["track", "dbn", str(bif), str(evidence), "-o", str(out), "--quiet"]) == 0
     got = read_marginals(out / "marginals.csv")
@@ -111,3 +113,57 @@ def test_ten_coupled_chains_run_exactly_where_the_dense_filter_refused(tmp_path)
         want = marginals(dbn.unroll(t + 1), seen)
         for i in range(n):
             np.testing.assert_allclose(got[f"x{i}"][1][t], want[f"x{i}_{t}"], atol=1e-12)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), data=st.data())
+def test_evidence_reads_back_slice_for_slice(factories, tmp_path_factory, seed: int, data) -> None:
+    """Any columns (unobserved slices anywhere, the last ones included) come back."""
+    dbn = factories.random_dbn(seed)
+    T = data.draw(st.integers(1, 6))
+    names = data.draw(st.lists(st.sampled_from(dbn.names), min_size=1, unique=True))
+    cols = {}
+    for n in names:
+        k = dbn.initial_net.variable(n).cardinality
+        cols[n] = np.array(data.draw(st.lists(st.integers(-1, k - 1), min_size=T, max_size=T)))
+    path = write_evidence(tmp_path_factory.mktemp("ev") / "ev.csv", dbn, cols)
+    back = read_evidence(path, dbn)
+    assert set(back) == set(cols)
+    for n in cols:
+        np.testing.assert_array_equal(back[n], cols[n])
+
+
+def _dbn_with_states(states: tuple[str, ...]) -> TwoSliceDBN:
+    from dbn.cpds import TabularCPD
+    from dbn.variables import DiscreteVariable
+
+    k = len(states)
+    flat = np.full(k, 1.0 / k)
+    return TwoSliceDBN([DiscreteVariable("s", k, states)], [TabularCPD("s", [], flat)],
+                       [TabularCPD("s", [], flat)])  # fmt: skip
+
+
+def test_evidence_with_odd_state_names_reads_back(tmp_path) -> None:
+    """A state beginning with ``#`` (a comment line if it came first), one with a comma or a
+    quote (CSV quoting), names given as names and None as unobserved."""
+    dbn = _dbn_with_states(("#1", 'a,"b"', "c d"))
+    path = write_evidence(tmp_path / "ev.csv", dbn, {"s": ["#1", None, 'a,"b"', "c d", None]})
+    np.testing.assert_array_equal(read_evidence(path, dbn)["s"], [0, -1, 1, 2, -1])
+
+
+def test_evidence_the_csv_cannot_hold_is_refused_and_nothing_written(factories, tmp_path) -> None:
+    from dbn.errors import DBNError
+    from dbn.examples import switching_lds
+
+    path = tmp_path / "ev.csv"
+    with pytest.raises(ModelError, match="continuous"):
+        write_evidence(path, switching_lds(), {"y": np.zeros((3, 1))})
+    with pytest.raises(ModelError, match="would not read back"):
+        write_evidence(path, _dbn_with_states(("a", " b")), {"s": [0, 1]})
+    with pytest.raises(DBNError, match="nope"):
+        write_evidence(path, factories.random_dbn(0), {"nope": [0]})
+    with pytest.raises(DBNError):
+        write_evidence(path, factories.random_dbn(0), {"a": [0, 7]})
+    with pytest.raises(InputError, match="cannot write the evidence CSV"):
+        write_evidence(tmp_path / "no" / "ev.csv", factories.random_dbn(0), {"a": [0]})
+    assert not path.exists()
