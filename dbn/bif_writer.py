@@ -1,10 +1,10 @@
 """A discrete Bayes net as the text of a BIF file, which :func:`dbn.pgmpy_adapter.parse_bif`
 and :func:`dbn.pgmpy_adapter.read_bif` (pgmpy's ``BIFReader``) read back.
 
-The layout of pgmpy's ``BIFWriter``, without properties: one ``variable`` block per node (in the net's
-order), then one ``probability`` block per node, whose parents are in the CPD's order; a
-root's block is one ``table`` row, any other one row per parent configuration, ``(s_1,
-..., s_m) p_1, ..., p_K;`` by state name. Probabilities are written with ``repr``, so they
+The layout of pgmpy's ``BIFWriter``, without properties: one ``variable`` block per node
+(in the net's order), then one ``probability`` block per node, whose parents are in the
+CPD's order; a root's block is one ``table`` row, any other one row per parent
+configuration, ``(s_1, ..., s_m) p_1, ..., p_K;`` by state name. Probabilities are written with ``repr``, so they
 read back to the same doubles. Deterministic CPDs are written as their 0/1 tables.
 
 Names BIF cannot hold are refused rather than written into a file that reads back as
@@ -106,8 +106,8 @@ def format_bif(bn: BayesNet, name: str = "unknown") -> str:
         states = bn.variable(node).state_names
         for i, s in enumerate(states):
             check_bif_name(s, f"state {i} of {node!r}", state=True, alone=len(states) == 1)
-        lines += [f"variable {node} {{",
-                  f"    type discrete [ {len(states)} ] {{ {', '.join(states)} }};", "}"]  # fmt: skip
+        declared = f"    type discrete [ {len(states)} ] {{ {', '.join(states)} }};"
+        lines += [f"variable {node} {{", declared, "}"]
     for node in bn.nodes:
         lines += _probability_block(bn, node)
     return "\n".join(lines) + "\n"
