@@ -24,17 +24,14 @@ INPUTS = ("MODEL.bif: a two-slice BIF file (variables X_0 / X_1)",
 METHODS = ("exact", "auto", "bk", "particle", "rbpf")
 
 
-def _generic(ctx, dbn, ev, method: str, hidden, options: dict):
-    try:
-        from inference import filter as generic_filter
-    except ImportError:
-        generic_filter = None
-    if not callable(generic_filter):
-        raise InputError(f"method {method!r} needs inference.filter, absent in this version")
+def _filter(ctx: RunContext, dbn: TwoSliceDBN, ev: dict[str, np.ndarray], method: str, hidden,
+            options: dict) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """:func:`inference.filter` of the evidence columns: ``name -> (T, K)`` filtered
+    marginals of ``hidden`` and the ``(T,)`` per-slice log-likelihoods."""
+    from inference import filter as generic_filter
+
     try:
         res = generic_filter(dbn, ev, method, list(hidden), key=ctx.key(), **options)
-    except ModuleNotFoundError as exc:  # an engine of inference.filter not installed yet
-        raise InputError(f"method {method!r} is not available here (missing {exc.name})") from None
     except TypeError as exc:  # an option the engine does not take
         raise ConfigError(f"method {method!r}: {exc}") from None
     return {n: np.asarray(res.marginals[n]) for n in hidden}, np.asarray(res.log_likelihoods)
@@ -53,7 +50,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     T = len(next(iter(ev.values())))
     hidden = [n for n in dbn.names if n not in ev or (ev[n] < 0).any()]
     with ctx.timed("filter"):
-        marg, loglik = _generic(ctx, dbn, ev, method, hidden, config)
+        marg, loglik = _filter(ctx, dbn, ev, method, hidden, config)
     write_marginals(ctx.outdir / "marginals.csv", dbn, marg)
     _plot(ctx, dbn, marg)
     summary = {
