@@ -52,10 +52,11 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     with ctx.timed("filter"):
         marg, loglik = _filter(ctx, dbn, ev, method, hidden, config)
     write_marginals(ctx.outdir / "marginals.csv", dbn, marg)
-    _plot(ctx, dbn, marg)
+    if marg:  # every variable observed at every slice: the log-likelihood, no heat map
+        _plot(ctx, dbn, marg)
     summary = {
         "parameters": {"method": method, "num_slices": T, "hidden": hidden, **config},
-        "outputs": ["marginals.csv", "marginals.png"],
+        "outputs": ["marginals.csv", "marginals.png"] if marg else ["marginals.csv"],
         "log_likelihood": float(np.sum(loglik)),
     }
     return summary

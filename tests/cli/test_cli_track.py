@@ -95,6 +95,23 @@ def test_dbn_track_eval_matches_forward_algorithm(tmp_path, capsys):
     _bad(capsys, ["eval", "dbn", str(out / "marginals.csv"), str(long_truth)], "long.csv:7:", "6 slices")
 
 
+def test_dbn_fully_observed_gives_the_log_likelihood_and_no_heat_map(tmp_path, capsys):
+    """Every variable observed at every slice: nothing to plot (matplotlib raised on zero
+    rows, a traceback), the log-likelihood by hand, an empty marginals file eval refuses."""
+    ev = tmp_path / "full.csv"
+    ev.write_text("Rain,Umbrella\nyes,yes\nno,no\n")
+    out = tmp_path / "out"
+    assert main(["track", "dbn", str(DATA / "dbn" / "umbrella.bif"), str(ev), "-o", str(out),
+                 "--quiet"]) == 0  # fmt: skip
+    summary = json.loads((out / "summary.json").read_text())
+    # P(R0 = yes) P(U0 = yes | yes) * P(R1 = no | yes) P(U1 = no | no) = 0.5 0.9 * 0.3 0.8
+    assert summary["log_likelihood"] == pytest.approx(math.log(0.45 * 0.24), abs=1e-12)
+    assert summary["outputs"] == ["marginals.csv"] and not list(out.glob("*.png"))
+    truth = tmp_path / "truth.csv"
+    truth.write_text("Rain\nyes\nno\n")
+    _bad(capsys, ["eval", "dbn", str(out / "marginals.csv"), str(truth)], "no marginals to score")
+
+
 def test_dbn_bad_evidence_names_file_and_line(tmp_path, capsys):
     d = DATA / "dbn"
     _bad(capsys, ["track", "dbn", str(d / "umbrella.bif"), str(d / "bad_evidence.csv"),
