@@ -36,15 +36,17 @@ from inference.evidence_columns import check_columns, columns_from_slices
 from inference.exact.frontier import MAX_FRONTIER_SIZE, check_max_size
 from inference.results import DBNFilterResult
 
-__all__ = ["filter", "online_filter", "as_two_slice_dbn", "METHODS"]
+__all__ = ["filter", "online_filter", "as_two_slice_dbn", "METHODS", "METHOD_OPTIONS"]
 
 METHODS = ("auto", "exact", "bk", "particle", "rbpf")
-_OPTIONS = {  # and max_size under "auto" whatever it chose (it bounds the choice)
+METHOD_OPTIONS = {  # and max_size under "auto" whatever it chose (it bounds the choice)
     "exact": {"max_size"},
     "bk": {"clusters"},
     "particle": {"num_particles", "particle_method"},
     "rbpf": {"num_particles"},
 }
+"""The ``**options`` each method of :func:`filter` takes (``auto``: ``max_size`` and those of
+the method it chooses)."""
 _UNBOUNDED = 2**62
 
 
@@ -176,7 +178,7 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     if method == "auto":
         evars = [*(evidence or {}), *(soft_evidence or {})]
         method, info = _choose(dbn, evars, query, max_size)
-    unknown = set(options) - _OPTIONS[method] - allowed
+    unknown = set(options) - METHOD_OPTIONS[method] - allowed
     if unknown:
         raise InputError(f"options {sorted(unknown)} do not apply to method {method!r}")
     if method != "exact" and num_timesteps is not None and not (evidence or soft_evidence):

@@ -37,6 +37,20 @@ def _filter(ctx: RunContext, dbn: TwoSliceDBN, ev: dict[str, np.ndarray], method
     return {n: np.asarray(res.marginals[n]) for n in hidden}, np.asarray(res.log_likelihoods)
 
 
+def _check_options(method: str, config: dict) -> None:
+    """A :class:`~dbn.errors.ConfigError` (``dbntrack track`` names the config file) for a
+    key ``method`` does not take (:data:`inference.api.METHOD_OPTIONS`), before any
+    reading; the values are the engines' to check."""
+    from inference.api import METHOD_OPTIONS
+
+    known = (set().union({"max_size"}, *METHOD_OPTIONS.values()) if method == "auto"
+             else METHOD_OPTIONS[method])  # fmt: skip
+    unknown = sorted(set(config) - known)
+    if unknown:
+        raise ConfigError(f"unknown config key(s) {unknown} for method {method!r}; "
+                          f"valid: {sorted(known)}")  # fmt: skip
+
+
 def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     """Filter the evidence; write ``marginals.csv`` and ``marginals.png``."""
     if len(inputs) != 2:
@@ -44,6 +58,7 @@ def track(ctx: RunContext, inputs: list[str], config: dict) -> dict:
     method = config.pop("method", None) or "exact"
     if method not in METHODS:
         raise InputError(f"method = {method!r}; valid: {', '.join(METHODS)}")
+    _check_options(method, config)
     with ctx.timed("read"):
         dbn = read_two_slice_bif(inputs[0])
         ev = read_evidence(inputs[1], dbn, model=inputs[0])

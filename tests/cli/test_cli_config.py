@@ -210,3 +210,13 @@ def test_rjmcmc3d_floor_errors_name_their_source(capsys, tmp_path):
     assert "calibration.xml" in err and "give floor" in err, err
     rc, err = _run(capsys, tmp_path, "rjmcmc3d", {"floor": [1, 0, 0, 1]})
     assert rc == 2 and "opts.json" in err and "floor" in err, err
+
+
+@pytest.mark.parametrize("method, key", [("bk", "num_particles"), ("particle", "clusters"),
+                                         ("exact", "clusters"), ("auto", "bogus_key")])
+def test_dbn_key_of_another_method_names_the_config_file(capsys, tmp_path, method, key):
+    """Every method of ``dbntrack track dbn``, not only the default one, names the config
+    file for a key it does not take (``inference.filter`` named the key alone)."""
+    rc, err = _run(capsys, tmp_path, "dbn", {"method": method, key: 1})
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "opts.json" in err and key in err and repr(method) in err, err
