@@ -50,7 +50,7 @@ def test_the_text_reads_back_as_the_net(factories, seed: int, data) -> None:
     assert_same_net(parse_bif(format_bif(bn)), bn)
 
 
-@settings(max_examples=3, deadline=None)  # pgmpy parses ~1 s a net
+@settings(max_examples=2, deadline=None)  # pgmpy parses ~1 s a net
 @given(seed=st.integers(0, 2**31 - 1), data=st.data())
 def test_pgmpy_reads_the_same_net(factories, tmp_path_factory, seed: int, data) -> None:
     bn = _named_net(factories, seed, data)

@@ -73,6 +73,7 @@ def test_rbpf_without_effective_switches_is_the_kalman_filter(switch: bool) -> N
     assert abs(out.means["x"][5, 0] - m5) < 1e-9
 
 
+@pytest.mark.heavy  # ~9 s: a comparison over seeds; the enumeration oracle stays; CI runs it
 def test_rbpf_beats_bootstrap_with_the_same_particles() -> None:
     dbn = switching_lds()
     rng = np.random.default_rng(11)
