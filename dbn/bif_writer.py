@@ -25,7 +25,7 @@ import numpy as np
 from dbn.bayesnet import BayesNet, check_discrete_net
 from dbn.errors import InputError, ModelError
 
-__all__ = ["BIF_KEYWORDS", "format_bif", "check_bif_name"]
+__all__ = ["BIF_KEYWORDS", "format_bif", "check_bif_name", "pgmpy_splits_lone_state"]
 
 BIF_KEYWORDS = frozenset(
     {"network", "variable", "probability", "property", "type", "discrete", "table", "default"}
@@ -50,11 +50,17 @@ def check_bif_name(name: object, what: str, state: bool = False, alone: bool = F
     elif state and (not text or text != text.strip() or _STATE_BAD.search(text)):
         why = ("a BIF state name must be non-empty, without whitespace at its ends and "
                "without ', ; ( ) { } |', '//', '/*' or control characters")
-    elif alone and text != "".join(text.split()):
+    elif alone and pgmpy_splits_lone_state(text):
         why = "pgmpy's reader splits a variable's only state at its whitespace"
     else:
         return text
     raise ModelError(f"{what} is {text!r}: {why}; rename it before writing BIF")
+
+
+def pgmpy_splits_lone_state(state: str) -> bool:
+    """Whether pgmpy's BIF reader splits ``state`` when it is its variable's only state
+    (``{ no rain }``: no comma, so it splits at the whitespace)."""
+    return any(ch.isspace() for ch in state)
 
 
 def _numbers(row: np.ndarray) -> str:

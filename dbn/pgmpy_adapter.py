@@ -235,9 +235,11 @@ def _check_lone_states(bn: BayesNet, path) -> None:
     """A :class:`~dbn.errors.FileFormatError` for a variable whose only state holds
     whitespace: pgmpy's reader splits ``{ no rain }`` in two states and then fails on the
     table (it said "cannot reshape array of size 1")."""
+    from dbn.bif_writer import pgmpy_splits_lone_state
+
     for n in bn.nodes:
         states = bn.variable(n).state_names
-        if len(states) == 1 and states[0] != "".join(states[0].split()):
+        if len(states) == 1 and pgmpy_splits_lone_state(states[0]):
             raise FileFormatError(path, f"variable {n!r}: its only state {states[0]!r} holds "
                                   "whitespace, which pgmpy's reader splits into two states; "
                                   "rename it (parse_bif reads it as one)")  # fmt: skip
