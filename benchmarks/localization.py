@@ -339,7 +339,6 @@ def _search_speed(seed: int, quick: bool, checks: list) -> dict:
             "speedup_vs_recompiled_run": t_base / t_ours, "search_max_mean_diff_m": diff}
 
 
-
 def _baselines(seed: int, trained, model, pf, key, obs32, steps32, jax_per_step: float, quick: bool,
                checks: list) -> dict:
     """The numpy reference APF and the ``particles`` library's AuxiliaryPF on the speed
