@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from dbn.dbn import TwoSliceDBN
-from dbn.errors import ConfigError, InputError
+from dbn.errors import ConfigError, FrontierTooLargeError, InputError
 from models.io.dbn import read_evidence, read_states, read_two_slice_bif, write_marginals
 from models.track.context import RunContext
 
@@ -34,6 +34,11 @@ def _filter(ctx: RunContext, dbn: TwoSliceDBN, ev: dict[str, np.ndarray], method
         res = generic_filter(dbn, ev, method, list(hidden), key=ctx.key(), **options)
     except TypeError as exc:  # an option the engine does not take
         raise ConfigError(f"method {method!r}: {exc}") from None
+    except FrontierTooLargeError as exc:  # its remedies name Python calls: add the CLI's
+        raise FrontierTooLargeError(
+            f"{exc}; from dbntrack: --method bk (Boyen-Koller), particle, rbpf or auto, or "
+            '"max_size" in the --config JSON'
+        ) from None
     return {n: np.asarray(res.marginals[n]) for n in hidden}, np.asarray(res.log_likelihoods)
 
 

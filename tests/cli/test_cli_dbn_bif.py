@@ -115,6 +115,29 @@ def test_ten_coupled_chains_run_exactly_where_the_dense_filter_refused(tmp_path)
             np.testing.assert_allclose(got[f"x{i}"][1][t], want[f"x{i}_{t}"], atol=1e-12)
 
 
+def test_a_table_above_max_size_names_the_command_lines_remedies(capsys, tmp_path) -> None:
+    """The size guard's message names Python calls; the CLI adds its own ways out, writes
+    nothing, and ``--method auto`` under the same limit runs (Boyen-Koller)."""
+    import json
+
+    from dbn.examples import coupled_chains, sample_coupled_chains
+
+    dbn = coupled_chains(4)
+    _, ys = sample_coupled_chains(np.random.default_rng(1), 4, 3)
+    bif = write_two_slice_bif(tmp_path / "chains.bif", dbn)
+    evidence = write_evidence(tmp_path / "readings.csv", dbn, {f"y{i}": ys[:, i] for i in range(4)})
+    config = tmp_path / "opts.json"
+    config.write_text(json.dumps({"max_size": 4}))
+    args = ["track", "dbn", str(bif), str(evidence), "--config", str(config), "--quiet"]
+    assert main([*args, "-o", str(tmp_path / "exact")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "above the limit of 4 entries" in err, err
+    assert "--method bk" in err and '"max_size" in the --config' in err, err
+    assert not (tmp_path / "exact" / "marginals.csv").exists()
+    assert main([*args, "--method", "auto", "-o", str(tmp_path / "auto")]) == 0
+    assert read_marginals(tmp_path / "auto" / "marginals.csv")["x0"][1].shape == (3, 2)
+
+
 @settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 2**31 - 1), data=st.data())
 def test_evidence_reads_back_slice_for_slice(factories, tmp_path_factory, seed: int, data) -> None:
