@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping, Sequence
+from types import MappingProxyType
 from typing import Any
 
 from numpy.typing import ArrayLike
@@ -39,12 +40,12 @@ from inference.results import DBNFilterResult
 __all__ = ["filter", "online_filter", "as_two_slice_dbn", "METHODS", "METHOD_OPTIONS"]
 
 METHODS = ("auto", "exact", "bk", "particle", "rbpf")
-METHOD_OPTIONS = {  # and max_size under "auto" whatever it chose (it bounds the choice)
-    "exact": {"max_size"},
-    "bk": {"clusters"},
-    "particle": {"num_particles", "particle_method"},
-    "rbpf": {"num_particles"},
-}
+METHOD_OPTIONS: Mapping[str, frozenset[str]] = MappingProxyType({  # read-only: one table
+    "exact": frozenset({"max_size"}),  # and max_size under "auto" whatever it chose
+    "bk": frozenset({"clusters"}),
+    "particle": frozenset({"num_particles", "particle_method"}),
+    "rbpf": frozenset({"num_particles"}),
+})
 """The ``**options`` each method of :func:`filter` takes (``auto``: ``max_size`` and those of
 the method it chooses)."""
 _UNBOUNDED = 2**62

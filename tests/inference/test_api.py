@@ -378,6 +378,26 @@ def test_bad_arguments_raise_the_library_error_naming_them(method, kwargs, error
         inference.filter(dbn, evidence, method, **kwargs)
 
 
+_ONE_VALUE = {"max_size": 2**20, "clusters": [["x0"], ["x1"]], "num_particles": 16,
+              "particle_method": "auxiliary"}
+
+
+@pytest.mark.parametrize("method", sorted(api.METHOD_OPTIONS))
+def test_method_options_is_what_each_method_takes_and_is_read_only(method) -> None:
+    """Every option :data:`inference.api.METHOD_OPTIONS` lists for a method (the table
+    ``dbntrack track dbn`` checks a config file against) runs; the table cannot be changed
+    by a caller (it held mutable sets)."""
+    dbn, ev = _chains(2, 3)
+    opts = {k: _ONE_VALUE[k] for k in api.METHOD_OPTIONS[method]}
+    res = inference.filter(dbn, ev, method, key=jax.random.key(0), **opts)
+    assert res.method == method and res.num_timesteps == 3
+    with pytest.raises(AttributeError):
+        api.METHOD_OPTIONS[method].add("bogus")  # type: ignore[attr-defined]
+    with pytest.raises(TypeError):
+        api.METHOD_OPTIONS[method] = frozenset()  # type: ignore[index]
+    assert set(api.METHOD_OPTIONS) == set(api.METHODS) - {"auto"}
+
+
 @pytest.mark.parametrize("method", ["bk", "particle"])
 def test_num_timesteps_is_never_ignored(method) -> None:
     """``num_timesteps=9`` with 5 slices of evidence ran 5 slices under bk and particle
