@@ -23,7 +23,7 @@ import numpy as np
 
 from dbn.errors import InputError
 from models.io.table import fail, read_rows, write_rows
-from models.zajdel.data import Observations
+from models.zajdel.data import MAX_APPEARANCE, MAX_TIME, Observations
 
 __all__ = ["PassTable", "read_observations", "write_labels", "read_labels", "write_partition"]
 
@@ -46,17 +46,37 @@ def _app_columns(path, header: list[str]) -> list[str]:
     return cols
 
 
+def _time(r, col: str) -> float:
+    """Column ``col`` of row ``r``: a time, ``|t| <=`` :data:`MAX_TIME`."""
+    t = r.float(col)
+    if abs(t) > MAX_TIME:
+        raise r.fail(f"{col} = {t:g}: |time| must be <= {MAX_TIME:g} s (a unit mistake?)")
+    return t
+
+
+def _appearance(r, cols: list[str]) -> list[float]:
+    """The appearance columns of row ``r``, each ``|a| <=`` :data:`MAX_APPEARANCE`
+    (:func:`models.zajdel.data.validate_observations` checks the same, by index; the
+    trackers' data-driven prior is computed before it runs and went NaN)."""
+    out = [r.float(c) for c in cols]
+    for c, v in zip(cols, out):
+        if abs(v) > MAX_APPEARANCE:
+            raise r.fail(f"{c} = {v:g}: |appearance| must be <= {MAX_APPEARANCE:g} "
+                         "(features are expected of order 1-1000; rescale them)")  # fmt: skip
+    return out
+
+
 def _from_passes(path, header, rows):
     app_cols = _app_columns(path, header)
     out = []
     for i, r in enumerate(rows):
-        te, tq = r.float("t_enter"), r.float("t_quit")
+        te, tq = _time(r, "t_enter"), _time(r, "t_quit")
         if tq < te:
             raise r.fail(f"t_quit = {tq} comes before t_enter = {te}")
         pid = r.int("pass") if "pass" in header else i
         person = r.int("person") if "person" in header and r["person"] != "" else None
         out.append((pid, te, tq, r.int("camera"), r.int("border_enter"), r.int("border_quit"),
-                    [r.float(c) for c in app_cols], person, r))  # fmt: skip
+                    _appearance(r, app_cols), person, r))  # fmt: skip
     return out
 
 
@@ -72,9 +92,9 @@ def _from_events(path, header, rows):
             raise r.fail(f"pass {r['pass']} has a second {ev} event")
         if "camera" in p and p["camera"] != r.int("camera"):
             raise r.fail(f"pass {r['pass']} changes camera ({p['camera']} -> {r['camera']})")
-        p[ev], p["camera"] = (r.float("time"), r.int("border")), r.int("camera")
+        p[ev], p["camera"] = (_time(r, "time"), r.int("border")), r.int("camera")
         if all(r[c] != "" for c in app_cols):
-            p["apps"].append([r.float(c) for c in app_cols])
+            p["apps"].append(_appearance(r, app_cols))
         if "person" in header and r["person"] != "":
             p["person"] = r.int("person")
     out = []

@@ -21,6 +21,7 @@ __all__ = [
     "concat_observations",
     "take",
     "MAX_APPEARANCE",
+    "MAX_TIME",
 ]
 
 #: Largest accepted ``|appearance|`` entry. Appearance features (colour descriptors,
@@ -28,6 +29,11 @@ __all__ = [
 #: Normal-inverse-Wishart updates lose all precision (an appearance of 1e50 put NaN into
 #: the ADF state, issue 14), so they are rejected and must be rescaled.
 MAX_APPEARANCE = 1e6
+
+#: Largest accepted ``|t_enter|``, ``|t_quit|`` (seconds). The travel-time Gaussians square
+#: time differences; a time of 1e300 overflowed them (an ADF run warned and went on) and
+#: is a unit mistake, so it is rejected (the bound of the trackers' time settings).
+MAX_TIME = 1e100
 
 
 class Observations(NamedTuple):
@@ -37,8 +43,8 @@ class Observations(NamedTuple):
     ----------
     appearance : float (num_obs, obs_dim)   finite, |value| <= MAX_APPEARANCE (1e6)
     camera : int (num_obs,)          camera index l_k in [0, num_cameras)
-    t_enter : float (num_obs,)       te_k
-    t_quit : float (num_obs,)        tq_k >= te_k, nondecreasing in k
+    t_enter : float (num_obs,)       te_k, |te_k| <= MAX_TIME (1e100)
+    t_quit : float (num_obs,)        tq_k >= te_k, nondecreasing in k, |tq_k| <= MAX_TIME
     border_enter : int (num_obs,)    be_k in [0, num_borders)
     border_quit : int (num_obs,)     bq_k in [0, num_borders)
     """
@@ -105,6 +111,9 @@ def validate_observations(
         if not np.isfinite(v).all():
             k = int(np.argmax(~np.isfinite(v)))
             raise NonFiniteError(f"{name}[{k}] = {v[k]} is not finite")
+        if (np.abs(v) > MAX_TIME).any():
+            k = int(np.argmax(np.abs(v) > MAX_TIME))
+            raise InputError(f"{name}[{k}] = {v[k]:g}: |time| must be <= {MAX_TIME:g} s")
     limits = {"camera": num_cameras, "border_enter": num_borders, "border_quit": num_borders}
     clean = {name: _index_column(name, v, limits[name]) for name, v in ints.items()}
     te, tq = fields["t_enter"], fields["t_quit"]
