@@ -25,7 +25,8 @@ from models.io.table import as_float, fail, read_lines, read_rows, write_rows
 from models.localization.model import TWO_PI
 from models.localization.mrclam import MRCLAMRobot
 
-__all__ = ["read_dat", "mrclam_file", "read_mrclam_folder", "read_generic", "write_poses", "read_poses"]
+__all__ = ["read_dat", "mrclam_file", "read_mrclam_folder", "read_generic", "write_poses", "read_poses",
+           "MAX_MAGNITUDE"]
 
 
 def read_dat(path: str | Path, num_columns: int) -> np.ndarray:
@@ -109,6 +110,24 @@ def _check_repeats(meas: np.ndarray, path, lines: list[int]) -> None:
 
 _MAX_ID = 2**31
 
+MAX_MAGNITUDE = 1e7
+"""Largest accepted ``|value|`` of a speed (m/s, rad/s), position or range (m) or heading
+(rad): 10,000 km, a UTM northing's range. A velocity of 1e200 sent the robot to 4e198 m
+and the run ended with rc 0; larger values are unit mistakes."""
+
+
+def _check_magnitudes(arr: np.ndarray, columns: tuple[str, ...], path, lines: list[int]) -> None:
+    """A :class:`FileFormatError` at the line of the first value of ``columns`` (the
+    named columns of ``arr``, None for one not checked) beyond :data:`MAX_MAGNITUDE`."""
+    idx = [i for i, c in enumerate(columns) if c is not None]
+    big = np.abs(arr[:, idx]) > MAX_MAGNITUDE
+    if big.any():
+        row, j = (int(v) for v in np.argwhere(big)[0])
+        name = columns[idx[j]]
+        unit = _UNITS[name]
+        raise fail(path, lines[row], f"{name} = {arr[row, idx[j]]:g} {unit} is beyond "
+                   f"{MAX_MAGNITUDE:g} {unit}: a unit mistake?")  # fmt: skip
+
 
 def _check_ids(ids: np.ndarray, path, lines: list[int], what: str, unique: bool = True) -> None:
     """A :class:`FileFormatError` at the line of the first id that is not an integer, is
@@ -135,20 +154,28 @@ def read_mrclam_folder(folder: str | Path, robot: int = 1) -> MRCLAMRobot:
     meas_p = _find(folder, f"Robot{robot}_Measurement")
     gt_p = _find(folder, f"Robot{robot}_Groundtruth", required=False)
     timed = [(p, *_read_dat(p, n)) for p, n in ((odo_p, 3), (meas_p, 4), (gt_p, 4)) if p]
-    for p, arr, lines in timed:
+    for (p, arr, lines), cols in zip(timed, (_ODO, _MEAS, _GT)):
         _check_sorted(arr[:, 0], p, lines)
+        _check_magnitudes(arr, cols, p, lines)
     odo, meas = timed[0][1], timed[1][1]
     _check_ids(meas[:, 1], meas_p, timed[1][2], "measured barcode", unique=False)
     _check_range_bearing(meas, meas_p, timed[1][2])
     gt = timed[2][1] if gt_p else None
     lm_p, codes_p = _find(folder, "Landmark_Groundtruth"), _find(folder, "Barcodes")
     lm, lm_lines = _read_dat(lm_p, 3)
+    _check_magnitudes(lm, (None, "x", "y"), lm_p, lm_lines)
     codes, code_lines = _read_dat(codes_p, 2)
     _check_ids(lm[:, 0], lm_p, lm_lines, "landmark subject")
     _check_ids(codes[:, 1], codes_p, code_lines, "barcode")
     _check_ids(codes[:, 0], codes_p, code_lines, "barcode subject", unique=False)
     barcodes = {int(b): int(s) for s, b in codes}
     return MRCLAMRobot(odo, meas, gt, lm[:, 1:3].copy(), lm[:, 0].astype(int), barcodes)
+
+
+_UNITS = {"v": "m/s", "w": "rad/s", "range": "m", "x": "m", "y": "m", "theta": "rad"}
+_ODO, _MEAS, _GT = (None, "v", "w"), (None, None, "range", None), (None, "x", "y", "theta")
+"""The columns of each timed file :func:`_check_magnitudes` checks (bearings have their
+own check, times and ids theirs)."""
 
 
 def _csv(path, columns: tuple[str, ...], what: str) -> np.ndarray:
@@ -179,13 +206,15 @@ def read_generic(
         )
         if p
     ]
-    for p, arr, lines in timed:
+    for (p, arr, lines), cols in zip(timed, (_ODO, _MEAS, _GT)):
         _check_sorted(arr[:, 0], p, lines)
+        _check_magnitudes(arr, cols, p, lines)
     odo, meas = timed[0][1], timed[1][1]
     _check_ids(meas[:, 1], measurements, timed[1][2], "measured landmark", unique=False)
     _check_range_bearing(meas, measurements, timed[1][2])
     gt = timed[2][1] if groundtruth else None
     lm, lm_lines = _csv_lines(landmarks, ("id", "x", "y"), "landmarks CSV")
+    _check_magnitudes(lm, (None, "x", "y"), landmarks, lm_lines)
     _check_ids(lm[:, 0], landmarks, lm_lines, "landmark id")
     ids = lm[:, 0].astype(int)
     return MRCLAMRobot(odo, meas, gt, lm[:, 1:3].copy(), ids, {int(i): int(i) for i in ids})

@@ -237,6 +237,52 @@ def test_localization_refuses_degrees_and_negative_ranges(tmp_path, capsys, colu
     _bad(capsys, argv, "Robot1_Measurement.dat:", needle)
 
 
+def _set_first_row(path: Path, column: int, value: str, sep: str | None = ",") -> int:
+    """Set ``column`` of the first data row of ``path`` (after a header for CSVs, after
+    ``#`` comments for .dat) to ``value``; its 1-based line number."""
+    lines = path.read_text().splitlines()
+    k = next(i for i, ln in enumerate(lines) if ln and not ln.startswith("#"))
+    k += sep == ","  # a CSV's first line is its header
+    fields = lines[k].split(sep)
+    fields[column] = value
+    lines[k] = (sep or " ").join(fields)
+    path.write_text("\n".join(lines) + "\n")
+    return k + 1
+
+
+@pytest.mark.parametrize(("csv", "column", "dat", "unit"), [
+    ("odometry", "v", ("Robot1_Odometry", 1), "m/s"),
+    ("odometry", "w", ("Robot1_Odometry", 2), "rad/s"),
+    ("measurements", "range", ("Robot1_Measurement", 2), "m"),
+    ("landmarks", "y", ("Landmark_Groundtruth", 2), "m"),
+    ("groundtruth", "theta", ("Robot1_Groundtruth", 3), "rad"),
+])
+def test_localization_refuses_values_beyond_ten_thousand_km(tmp_path, capsys, csv, column, dat,
+                                                             unit):
+    """A velocity of 1e200 sent the robot to 4e198 m with rc 0 (a position or heading of
+    1e200 likewise): beyond :data:`models.io.localization.MAX_MAGNITUDE` (1e7) a value is
+    refused at its line in both layouts; at it, it is read."""
+    from models.io.localization import MAX_MAGNITUDE, read_generic
+
+    d = DATA / "localization"
+    names = ("odometry", "measurements", "landmarks", "groundtruth")
+    for value, ok in ((f"{MAX_MAGNITUDE:g}", True), ("-1e200", False)):
+        folder = tmp_path / value
+        shutil.copytree(d, folder)
+        path = folder / f"{csv}.csv"
+        col = path.read_text().splitlines()[0].split(",").index(column)
+        line = _set_first_row(path, col, value)
+        if ok:
+            read_generic(*(folder / f"{n}.csv" for n in names))
+            continue
+        argv = ["track", "localization", *(str(folder / f"{n}.csv") for n in names),
+                "-o", str(folder / "out")]  # fmt: skip
+        _bad(capsys, argv, f"{csv}.csv:{line}: {column} = -1e+200 {unit} is beyond 1e+07 {unit}")
+        line = _set_first_row(folder / "mrclam" / f"{dat[0]}.dat", dat[1], value, sep=None)
+        argv = ["track", "localization", str(folder / "mrclam"), "-o", str(folder / "out2")]
+        _bad(capsys, argv, f"{dat[0]}.dat:{line}: {column} = -1e+200 {unit}")
+
+
 def test_localization_refuses_a_measurement_read_twice(tmp_path, capsys):
     """A repeated measurement row (one landmark, one time) counted its evidence twice; it
     is refused at its line in both layouts (a second landmark at that time is not)."""
