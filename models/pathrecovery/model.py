@@ -24,10 +24,17 @@ from scipy.special import ndtr
 
 from dbn.errors import InputError, ModelError, NegativeProbabilityError, NotNormalizedError
 
-__all__ = ["CameraNetwork", "GAP_SD_FACTOR", "check_cameras", "delay_support", "propagate", "whiten"]
+__all__ = ["CameraNetwork", "GAP_SD_FACTOR", "MAX_DELAY_TABLE", "check_cameras", "delay_support",
+           "propagate", "whiten"]
 
 #: Standard deviation of a travel time relative to its mean: T_ij ~ N(mu, 0.2 mu) (sec. 7.1.1).
 GAP_SD_FACTOR = 0.2
+
+#: Largest delay pmf table (entries, float64: 256 MiB), ``num_edges x (max d_max + 1)``.
+#: A gap_mean of 1e7 steps on one edge of a 96-edge network asked for 12.9 GiB (and ran
+#: out of memory, or took it where it was there); one of 1e200 wrapped in the int cast and
+#: ran as a one-step edge.
+MAX_DELAY_TABLE = 2**25
 
 
 def delay_support(gap_mean: np.ndarray) -> np.ndarray:
@@ -42,8 +49,26 @@ def delay_support(gap_mean: np.ndarray) -> np.ndarray:
     (num_edges,) int64 array, ``d_max >= 1``.
     """
     mu = np.asarray(gap_mean, dtype=np.float64)
-    dmax = np.ceil(mu + 4.0 * GAP_SD_FACTOR * mu).astype(np.int64)
-    return np.where(mu > 0, np.maximum(dmax, 1), 1)
+    dmax = np.ceil(mu + 4.0 * GAP_SD_FACTOR * mu)
+    if np.any(dmax >= 2.0**62):  # the cast would wrap
+        raise ModelError(f"gap_mean {mu.max():g} steps: too long a gap to discretise")
+    return np.where(mu > 0, np.maximum(dmax.astype(np.int64), 1), 1)
+
+
+def _check_delay_table(gap_mean: np.ndarray, indices: np.ndarray, rows: np.ndarray) -> None:
+    """A :class:`ModelError` naming the edge of the longest gap, before the delay pmf
+    table (:data:`MAX_DELAY_TABLE`) is built, when it would be too large."""
+    if not gap_mean.size:
+        return
+    worst = int(np.argmax(gap_mean))
+    width = float(np.ceil(gap_mean[worst] + 4.0 * GAP_SD_FACTOR * gap_mean[worst])) + 1
+    if gap_mean.size * width > MAX_DELAY_TABLE:
+        cols = f"{width:,.0f}" if width < 1e12 else f"{width:.3g}"
+        raise ModelError(
+            f"gap_mean {gap_mean[worst]:g} on edge {rows[worst]} -> {indices[worst]}: its delay "
+            f"pmf table would hold {gap_mean.size:,} x {cols} entries (limit "
+            f"{MAX_DELAY_TABLE:,}); gaps are in time steps (a unit mistake?)"
+        )
 
 
 def _delay_pmf_table(gap_mean: np.ndarray, dmax: np.ndarray) -> np.ndarray:
@@ -148,6 +173,7 @@ class CameraNetwork:
             raise ModelError(f"gap_mean must be finite and >= 0, min is {np.nanmin(gap_mean)}")
         if np.any(gap_mean[self_edge] != 0):
             raise ModelError("self loops cannot have a gap (gap_mean must be 0 on them)")
+        _check_delay_table(gap_mean, indices, rows)
         dmax = delay_support(gap_mean)
         set_ = object.__setattr__
         set_(self, "indptr", indptr)

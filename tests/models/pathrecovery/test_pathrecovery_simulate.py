@@ -130,6 +130,27 @@ def test_network_rejects_bad_declarations():
         manhattan_grid(0, p_self=1.5)
 
 
+@pytest.mark.parametrize("gap", [1e7, 1e200])
+def test_a_gap_whose_delay_table_would_not_fit_is_refused_naming_the_edge(gap, monkeypatch):
+    """gap_mean 1e7 (steps) on one edge asked for a 96 x 18,000,001 table (12.9 GiB; it
+    ran out of memory, or took it where it was there); 1e200 wrapped in the int cast and
+    ran as a one-step edge. At the limit the table is built."""
+    from models.pathrecovery import model
+
+    ok = dict(indptr=np.array([0, 2, 4]), indices=np.array([0, 1, 0, 1]),
+              probs=np.array([0.5, 0.5, 0.5, 0.5]), coords=np.zeros((2, 2)))  # fmt: skip
+    with pytest.raises(ModelError, match=r"gap_mean .* on edge 1 -> 0: its delay pmf table"):
+        CameraNetwork(**ok, gap_mean=np.array([0, 5.0, gap, 0]))
+    mu = 1000.0  # at the limit the table is built; one step beyond, refused
+    monkeypatch.setattr(model, "MAX_DELAY_TABLE", 4 * (int(np.ceil(mu * 1.8)) + 1))
+    net = CameraNetwork(**ok, gap_mean=np.array([0, 5.0, mu, 0]))
+    assert net.delay_pmf.shape == (4, int(np.ceil(mu * 1.8)) + 1)
+    with pytest.raises(ModelError, match="1 -> 0"):
+        CameraNetwork(**ok, gap_mean=np.array([0, 5.0, mu + 1, 0]))
+    with pytest.raises(ModelError, match="too long a gap"):
+        model.delay_support(np.array([gap * 1e15]))
+
+
 def test_confusion_measure_by_hand():
     # GT similarities 0.9, 0.5 -> a = 0.5; others 0.6, 0.95 inside Omega, 0.4 outside
     s = np.array([0.9, 0.5, 0.6, 0.4, 0.95])
