@@ -29,6 +29,19 @@ _TSAI = {
     "Extrinsic": ("tx", "ty", "tz", "rx", "ry", "rz"),
 }
 _POSITIVE = ("width", "height", "dpx", "dpy", "focal", "sx")
+_BOUNDS = {  # attribute -> (largest |value|, what it is beyond that)
+    **dict.fromkeys(("rx", "ry", "rz"), (2 * math.pi, "beyond one turn: angles are radians "
+                                                     "(degrees?)")),
+    **dict.fromkeys(("tx", "ty", "tz"), (1e9, "beyond 1e9 mm (1,000 km): a unit mistake?")),
+    **dict.fromkeys(("width", "height"), (1e5, "beyond 1e5 pixels")),
+    **dict.fromkeys(("cx", "cy"), (1e6, "beyond 1e6 pixels")),
+}
+"""Ranges of the calibration's attributes: a rotation of 1e200 rad and a principal point
+of 1e200 px ran (rc 0, or numpy's "Singular matrix"); outside them a value is a mistake."""
+_FOCAL_PX = (1.0, 1e6)
+"""Range of the focal lengths in pixels, ``sx focal / dpx`` and ``focal / dpy``: below one
+pixel the camera matrix is singular to rounding (dpx = 1e200 gave numpy's "Singular
+matrix"), above 1e6 its projections overflow."""
 
 
 def _read_tsai(path) -> tuple[dict, dict, dict]:
@@ -51,8 +64,16 @@ def _read_tsai(path) -> tuple[dict, dict, dict]:
             if not math.isfinite(v) or (k in _POSITIVE and v <= 0):
                 need = "a finite number > 0" if k in _POSITIVE else "a finite number"
                 raise FileFormatError(path, f"<{tag} {k}={text!r}>: must be {need}")
+            if k in _BOUNDS and abs(v) > _BOUNDS[k][0]:
+                raise FileFormatError(path, f"<{tag} {k}={text!r}>: {_BOUNDS[k][1]}")
             values[k] = v
         out.append(values)
+    g, i, _ = out
+    for name, f in (("sx focal / dpx", i["sx"] * i["focal"] / g["dpx"]),
+                    ("focal / dpy", i["focal"] / g["dpy"])):  # fmt: skip
+        if not _FOCAL_PX[0] <= f <= _FOCAL_PX[1]:
+            raise FileFormatError(path, f"focal length {name} = {f:g} pixels, outside "
+                                  f"[{_FOCAL_PX[0]:g}, {_FOCAL_PX[1]:g}]: a unit mistake?")  # fmt: skip
     return out[0], out[1], out[2]
 
 

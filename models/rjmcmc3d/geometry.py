@@ -227,5 +227,13 @@ def rectified_projection(camera: Camera) -> tuple[np.ndarray, Rectification]:
     (seed 003, section 2 and fig. 3).
     """
     P = projection_matrix(camera)
-    rect = rectification(vertical_vanishing_point(P), np.array([camera.width, camera.height]) / 2)
+    centre = np.array([camera.width, camera.height]) / 2
+    try:
+        rect = rectification(vertical_vanishing_point(P), centre)
+    except InputError:  # it said "v_perp=[...] coincides with x0=[...]"
+        raise InputError(
+            "a camera looks straight down (or up): the image of the vertical is the image "
+            "centre, so the image cannot be rectified (seed 003 needs cameras that see the "
+            "floor obliquely)"
+        ) from None
     return rect.H @ P, rect

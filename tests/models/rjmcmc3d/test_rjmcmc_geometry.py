@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 import math
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dbn.errors import InputError, ShapeError
+from dbn.errors import FileFormatError, InputError, ShapeError
 from models.rjmcmc3d.geometry import (
+    Camera,
     apply_homography,
     ground_homography,
     homography_jacobian,
@@ -105,6 +108,48 @@ def test_unrectified_camera_has_slant_and_ground_homography() -> None:
         vertical_vanishing_point(np.zeros((3, 3)))
     with pytest.raises(InputError, match="v_perp"):
         rectification(np.array([10.0, 10.0, 1.0]), np.array([10.0, 10.0]))
+
+
+_EXAMPLE = Path(__file__).resolve().parents[2] / "data" / "rjmcmc3d" / "view0" / "calibration.xml"
+
+
+@pytest.mark.parametrize(("attr", "value", "needle"), [
+    ("rx", "143.6", "<Extrinsic rx='143.6'>: beyond one turn: angles are radians (degrees?)"),
+    ("tz", "-1e200", "<Extrinsic tz='-1e200'>: beyond 1e9 mm"),
+    ("cx", "1e200", "<Intrinsic cx='1e200'>: beyond 1e6 pixels"),
+    ("width", "1e200", "<Geometry width='1e200'>: beyond 1e5 pixels"),
+    ("dpx", "1e200", "focal length sx focal / dpx = 3e-198 pixels, outside [1, 1e+06]"),
+    ("focal", "1e200", "focal length sx focal / dpx = 1e+200 pixels"),
+    ("dpy", "1e-200", "focal length focal / dpy = 3e+202 pixels"),
+])
+def test_tsai_values_out_of_range_name_the_file_and_attribute(tmp_path, attr, value, needle):
+    """dpx, cx or sx of 1e200 ended in numpy's "Singular matrix" traceback; a rotation of
+    1e200 rad or a focal length of 1e200 ran to rc 0 (found by a mutation probe)."""
+    text = _EXAMPLE.read_text()
+    path = tmp_path / "calibration.xml"
+    path.write_text(re.sub(rf' {attr}="[^"]*"', f' {attr}="{value}"', text, count=1))
+    with pytest.raises(FileFormatError) as exc:
+        load_tsai_xml(path)
+    assert str(path) in str(exc.value) and needle in str(exc.value), str(exc.value)
+
+
+def test_tsai_values_at_their_bounds_are_read(tmp_path) -> None:
+    """The bounds themselves: a turn, 1e9 mm, 1e6 px principal point, 1 px focal length."""
+    text = _EXAMPLE.read_text()
+    for attr, value in (("rx", f"{2 * np.pi!r}"), ("tz", "1e9"), ("cx", "-1e6"),
+                        ("dpx", "300.0"), ("width", "1e5")):  # fmt: skip
+        path = tmp_path / f"{attr}.xml"
+        path.write_text(re.sub(rf' {attr}="[^"]*"', f' {attr}="{value}"', text, count=1))
+        cam, _ = load_tsai_xml(path)
+        assert np.isfinite(cam.K).all()
+
+
+def test_a_camera_looking_straight_down_is_named() -> None:
+    """rx = 0 gave "v_perp=[192.0, 144.0, 1.0] coincides with x0=[192.0, 144.0]"."""
+    cam = Camera(np.array([[300.0, 0, 192], [0, 300, 144], [0, 0, 1]]), np.eye(3),
+                 np.array([0.0, 0.0, 8.0]), 384, 288)  # fmt: skip
+    with pytest.raises(InputError, match="looks straight down"):
+        rectified_projection(cam)
 
 
 def test_pets2009_tsai_camera(shared_data) -> None:
