@@ -20,7 +20,7 @@ Fields:
 * ``colours``: the dominant colours seen in the region, distinct indices into a pool of
   ``NetworkConfig.pool_size`` colours (12 by default; the config's ``network.pool_size``);
 * ``palette`` (optional): the colours a label created at this stroke gets (seed 004,
-  sec. 4.1), default ``colours``;
+  sec. 4.1), not empty, default ``colours``;
 * ``truth`` (optional): the people in the region, ids >= 0, for scoring (``dbntrack eval``
   needs it on every stroke);
 * ``parents`` (optional; on every line or on none): the earlier strokes your tracker saw
@@ -161,7 +161,8 @@ def _stroke(path: Path, line_no: int, text: str, index: int):
         raise fail(path, line_no, f"frames {frames.tolist()}: expected increasing frame numbers")
     boxes = _boxes(path, line_no, obj["boxes"], frames.size)
     colours = _ints(path, line_no, "colours", obj["colours"], non_empty=True, distinct=True)
-    palette = _ints(path, line_no, "palette", obj.get("palette", colours.tolist()), distinct=True)
+    palette = _ints(path, line_no, "palette", obj.get("palette", colours.tolist()),
+                    non_empty=True, distinct=True)  # fmt: skip
     truth = _ints(path, line_no, "truth", obj.get("truth", []), distinct=True)
     links = None
     if "parents" in obj:

@@ -69,6 +69,7 @@ def _with(**change) -> str:
     ([_with(boxes=[[10, 20, True, 16]] * 3)], 1, "expected a list of [x_centre"),
     ([_with(colours=[])], 1, "colours: empty"),
     ([_with(colours=[3, 3])], 1, "colours = [3, 3]: repeated"),
+    ([_with(palette=[])], 1, "palette: empty"),  # "colour_log_likelihood: empty colour set"
     ([_with(truth=[-1])], 1, "truth = [-1]: expected integers >= 0"),
     ([_with(parents=[0])], 1, "stroke 0 links to earlier strokes only"),
     ([_with(), _with(frames=[4, 5, 6], parents=[0])], 2, "parents: on every line or on none"),
