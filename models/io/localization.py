@@ -25,8 +25,8 @@ from models.io.table import as_float, fail, read_lines, read_rows, write_rows
 from models.localization.model import TWO_PI
 from models.localization.mrclam import MRCLAMRobot
 
-__all__ = ["read_dat", "mrclam_file", "read_mrclam_folder", "read_generic", "write_poses", "read_poses",
-           "MAX_MAGNITUDE"]
+__all__ = ["read_dat", "mrclam_file", "read_mrclam_folder", "read_generic", "write_poses",
+           "read_poses", "MAX_MAGNITUDE"]
 
 
 def read_dat(path: str | Path, num_columns: int) -> np.ndarray:

@@ -72,8 +72,9 @@ def _read_tsai(path) -> tuple[dict, dict, dict]:
     for name, f in (("sx focal / dpx", i["sx"] * i["focal"] / g["dpx"]),
                     ("focal / dpy", i["focal"] / g["dpy"])):  # fmt: skip
         if not _FOCAL_PX[0] <= f <= _FOCAL_PX[1]:
+            lo, hi = _FOCAL_PX
             raise FileFormatError(path, f"focal length {name} = {f:g} pixels, outside "
-                                  f"[{_FOCAL_PX[0]:g}, {_FOCAL_PX[1]:g}]: a unit mistake?")  # fmt: skip
+                                  f"[{lo:g}, {hi:g}]: a unit mistake?")  # fmt: skip
     return out[0], out[1], out[2]
 
 

@@ -58,7 +58,8 @@ def test_the_bounds_themselves_are_read() -> None:
     te, tq = obs.t_enter - MAX_TIME, obs.t_quit.copy()
     tq[-1] = MAX_TIME
     big = obs._replace(appearance=app, t_enter=te, t_quit=tq)
-    ncam, nb = int(obs.camera.max()) + 1, int(max(obs.border_enter.max(), obs.border_quit.max())) + 1
+    ncam = int(obs.camera.max()) + 1
+    nb = int(max(obs.border_enter.max(), obs.border_quit.max())) + 1
     validate_observations(big, app.shape[1], ncam, nb)
     with pytest.raises(InputError, match=r"t_quit\[.*\] = 1e\+101: \|time\| must be <= 1e\+100"):
         validate_observations(big._replace(t_quit=np.where(tq == MAX_TIME, 1e101, tq)),
