@@ -237,4 +237,5 @@ def read_poses(path: str | Path, robot: int = 1) -> tuple[np.ndarray, np.ndarray
     else:
         arr, lines = _csv_lines(path, ("t", "x", "y", "theta"), "pose CSV")
     _check_sorted(arr[:, 0], path, lines)
+    _check_magnitudes(arr, _GT, path, lines)  # a pose of 1e200 m made the RMSE None
     return arr[:, 0], arr[:, 1:4]

@@ -283,6 +283,19 @@ def test_localization_refuses_values_beyond_ten_thousand_km(tmp_path, capsys, cs
         _bad(capsys, argv, f"{dat[0]}.dat:{line}: {column} = -1e+200 {unit}")
 
 
+def test_localization_eval_refuses_a_pose_beyond_ten_thousand_km(tmp_path, capsys):
+    """A pose of 1e200 m in the truth or the result made ``dbntrack eval`` print
+    ``rmse_m: None`` (its square overflowed) with rc 0."""
+    gt = DATA / "localization" / "groundtruth.csv"
+    for name in ("truth.csv", "result.csv"):
+        bad = tmp_path / name
+        shutil.copy(gt, bad)
+        line = _set_first_row(bad, 1, "1e200")
+        pair = (bad, gt) if name == "result.csv" else (gt, bad)
+        _bad(capsys, ["eval", "localization", *map(str, pair)],
+             f"{name}:{line}: x = 1e+200 m is beyond 1e+07 m")  # fmt: skip
+
+
 def test_localization_refuses_a_measurement_read_twice(tmp_path, capsys):
     """A repeated measurement row (one landmark, one time) counted its evidence twice; it
     is refused at its line in both layouts (a second landmark at that time is not)."""
