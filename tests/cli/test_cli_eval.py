@@ -283,6 +283,19 @@ def test_rjmcmc3d_eval_of_a_far_frame_does_not_walk_every_frame(tmp_path, capsys
                   str(truth)], "neg.txt:1:", "frame = -1")  # fmt: skip
 
 
+def test_rjmcmc3d_eval_refuses_a_position_beyond_a_thousand_km(tmp_path, capsys):
+    """A truth at x = 1e200 m was scored (a miss) after motmetrics' squared distance
+    overflowed; the tracker's own detections are bounded by 1e6 m."""
+    rows = _rows3d([1, 2])
+    far = [r.replace(",0.0,0.1,", ",1e200,0.1,") for r in rows]  # id 0 in frame 1
+    truth = _write(tmp_path / "truth3d.txt", far)
+    result = _write(tmp_path / "tracks3d.txt", rows)
+    _bad(capsys, ["eval", "rjmcmc3d", str(result), str(truth)],
+         "truth3d.txt:1: x, y = 1e+200, 0.1: beyond 1e+06 m")  # fmt: skip
+    edge = [r.replace(",0.0,0.1,", ",-1e6,0.1,") for r in rows]  # the bound itself
+    _metrics(capsys, ["eval", "rjmcmc3d", str(result), str(_write(tmp_path / "e.txt", edge))])
+
+
 # -- pathrecovery: path.csv ------------------------------------------------------------------
 
 
