@@ -263,7 +263,8 @@ def test_jorge_strokes_csv_keeps_the_links_and_eval_checks_them(tmp_path, capsys
 
 
 def _rows3d(frames, ids=(0, 1)) -> list[str]:
-    return [f"{f},{i},-1,-1,-1,-1,1,{2.0 * i},{0.1 * f},0" for f in frames for i in ids]
+    """Rows of ``ids`` at x = 2 id, y = 0.1 (frame mod 1000) m (within the 1e6 m bound)."""
+    return [f"{f},{i},-1,-1,-1,-1,1,{2.0 * i},{0.1 * (f % 1000)},0" for f in frames for i in ids]
 
 
 def test_rjmcmc3d_eval_scores_the_truth_span_only(tmp_path, capsys):
