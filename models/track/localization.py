@@ -60,6 +60,8 @@ def run_options(config: dict) -> dict:
     initial = array(config, "initial_pose") if "initial_pose" in config else None
     if initial is not None and initial.shape != (3,):
         raise ConfigError(f"config initial_pose = {config['initial_pose']!r}: need [x, y, theta]")
+    if initial is not None:
+        _check_magnitude(config, "initial_pose", initial)
     opts = {"robot": integer(config, "robot", 1), "initial_pose": initial, "dt": number(config, "dt", 0.1),
             "duration": number(config, "duration") if config.get("duration") is not None else None,
             "start": number(config, "start") if config.get("start") is not None else None,
@@ -99,7 +101,21 @@ def config_noise(config: dict) -> dict:
                           "probability in (0, 1)")  # fmt: skip
     out.update({k: number(config, k) for k in ("sigma_range", "sigma_bearing", "max_range",
                                                "outlier_prob", "range_bias") if k in config})
+    for key in NOISE_KEYS:
+        if key in config:
+            _check_magnitude(config, key, np.asarray(out[key], float))
     return out
+
+
+def _check_magnitude(config: dict, key: str, value: np.ndarray) -> None:
+    """A :class:`ConfigError` for a value of ``key`` beyond
+    :data:`~models.io.localization.MAX_MAGNITUDE` (1e7, the files' bound): an initial pose
+    or a motion noise of 1e200 ran to rc 0."""
+    from models.io.localization import MAX_MAGNITUDE
+
+    if np.any(np.abs(value) > MAX_MAGNITUDE):
+        raise ConfigError(f"config {key} = {config[key]!r}: beyond {MAX_MAGNITUDE:g} "
+                          "(m, rad, or a noise scale): a unit mistake?")  # fmt: skip
 
 
 def run_sequence(data, odometry: Path, opts: dict, end: float | None = None):
@@ -124,6 +140,9 @@ def run_sequence(data, odometry: Path, opts: dict, end: float | None = None):
             data_end = "odometry ends" if end is None else "run's data end"
             raise InputError(f"{odometry}: the {data_end} at t = {last:.6g}, less than one step "
                              f"(dt = {dt:g}) after {what}")  # fmt: skip
+        if not duration / dt <= _MAX_STEPS:  # dt = 1e-9 asked for 59 GiB of step indices
+            raise ConfigError(f"config dt = {dt:g}: the run's {duration:.6g} s would be "
+                              f"{duration / dt:.3g} steps, more than {_MAX_STEPS:g}")  # fmt: skip
     try:
         seq = build_sequence(data, duration=duration, dt=dt, start=start)
     except InputError as exc:  # a span outside the odometry's

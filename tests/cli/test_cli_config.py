@@ -119,6 +119,11 @@ RANGE_CASES = [
     ("localization", {"motion": [0.1, -0.1, 0.1, 0.1]}, "motion"),
     ("localization", {"initial_std": [0.1, 0.1, 0.1, 0.1]}, "initial_std"),
     ("localization", {"range_bias": "5cm"}, "range_bias"),
+    ("localization", {"initial_pose": [1e200, 0, 0]}, "initial_pose"),  # ran to rc 0
+    ("localization", {"initial_pose": [0, 0, -1e8]}, "initial_pose"),
+    ("localization", {"motion": [1e200, 0, 0, 0]}, "motion"),  # ran to rc 0
+    ("localization", {"range_bias": 2e7}, "range_bias"),
+    ("localization", {"dt": 1e-9}, "dt"),  # 7.95e9 steps: asked for 59 GiB
     ("pathrecovery", {"c0": 0}, "c0"),  # without f0 it was ignored
     ("pathrecovery", {"c0": 16, "f0": [0.1, 0.2]}, "f0"),
     ("rjmcmc3d", {"tau": 1e308}, "tau"),  # six such fields overflowed once squared
