@@ -239,6 +239,12 @@ class OnlineLabeller:
         self.windows: list = []
         self.keep_windows = keep_windows
         self._period_frames = self.config.period_s * self.fps
+        if self._period_frames < 1.0:  # fps = 1e-9 ran 1e11 inferences per 100 frames (a hang)
+            raise ModelError(
+                f"OnlineConfig.period_s x fps = {self.config.period_s:g} s x {self.fps:g} fps = "
+                f"{self._period_frames:g} frames: the inference period must span at least one "
+                f"frame (period_s, the config's online.period_s, >= {1.0 / self.fps:g} s here)"
+            )
         self._next_inference: float | None = None
         self._inferred: set[int] = set()
         self.instant_pruned_mass: list[float] = []

@@ -87,6 +87,21 @@ def test_label_online_takes_the_stroke_sets_frame_rate_and_needs_one_for_a_list(
             build()
 
 
+def test_an_inference_period_shorter_than_a_frame_is_refused():
+    """fps = 1e-9 (a unit mistake) made ``add_stroke`` run 1e11 periodic inferences to
+    reach a stroke 100 frames on (``dbntrack track jorge`` hung); a period of at least one
+    frame is what the labeller can run, and a slow frame rate with a longer period runs."""
+    strokes = build_strokes(5, simulate_ground_truth(5, num_people=3, num_frames=120))
+    for fps in (1e-9, 0.5):
+        with pytest.raises(ModelError, match=r"period_s x fps = 1 s x .* frames: the inference"):
+            OnlineLabeller(fps=fps)
+        with pytest.raises(ModelError, match="at least one frame"):
+            label_online(dataclasses.replace(strokes, fps=fps))
+    slow = dataclasses.replace(strokes, fps=0.5)
+    res = label_online(slow, OnlineConfig(period_s=2.0))
+    assert res.labeller.periodic_inferences >= 1 and len(res.labels) == len(strokes)
+
+
 def test_colour_only_and_network_on_an_easy_case():
     s = _strokes()
     assert colour_only_labels(s) == [F({0}), F({1}), F({0}), F({1})]
