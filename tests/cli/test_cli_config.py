@@ -109,6 +109,9 @@ RANGE_CASES = [
     ("zajdel_learnsearch", {"travel_mean": 1e308}, "travel_mean"),
     ("zajdel_learnsearch", {"em_tol": -1}, "em_tol"),
     ("zajdel_learnsearch", {"close_z": 3.0}, "close_z"),  # without stream_window
+    ("zajdel_adf", {"within_std": 1e-300}, "within_std"),  # said "prior.kappa = 0.0"
+    ("zajdel_learnsearch", {"travel_std": 1e-300}, "travel_std"),  # overflowed, ran to rc 0
+    ("zajdel_learnsearch", {"window": 1e-300}, "window"),
     ("localization", {"duration": 1e308}, "duration"),
     ("localization", {"sigma_range": 0}, "sigma_range"),  # the likelihood divides by it
     ("localization", {"sigma_bearing": -0.1}, "sigma_bearing"),
