@@ -16,13 +16,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.errors import InputError
+from dbn.errors import InputError, ModelError
 from models.rjmcmc3d.geometry import ground_homography
 from models.rjmcmc3d.projection import visible_views
 from models.rjmcmc3d.types import Scene
 
 __all__ = [
     "GroundNoiseMap",
+    "MAX_NOISE_CELLS",
     "TrackerParams",
     "gauss2_logpdf",
     "ground_noise_map",
@@ -210,6 +211,11 @@ def gauss2_logpdf(x: np.ndarray, mean: np.ndarray, L: np.ndarray) -> np.ndarray:
     return -0.5 * (z1 * z1 + z2 * z2) - np.log(L[..., 0, 0] * L[..., 1, 1]) - LOG_2PI
 
 
+MAX_NOISE_CELLS = 2**22
+"""Most cells of the ground noise map (:func:`ground_noise_map`; 4.2e6 cells of 0.1 m,
+134 MB of 2 x 2 covariances)."""
+
+
 def ground_noise_map(
     scene: Scene, params: TrackerParams, step: float = 0.1, margin: float = 1.0
 ) -> GroundNoiseMap:
@@ -238,6 +244,14 @@ def ground_noise_map(
     """
     lo = scene.floor[[0, 2]] - margin
     hi = scene.floor[[1, 3]] + margin
+    nx, ny = (float(v) for v in np.floor((hi - lo) / step) + 1)
+    cells = nx * ny  # a Python float: inf past 1e308, without numpy's overflow warning
+    if not cells <= MAX_NOISE_CELLS:  # a floor of 1e200 m: numpy's "Maximum allowed size"
+        raise ModelError(
+            f"floor {scene.floor.tolist()} (m) with a {margin:g} m margin makes a ground "
+            f"noise map of {cells:.3g} cells of {step:g} m, more than {MAX_NOISE_CELLS:,} "
+            "(about 200 m x 200 m): give the floor the cameras see, in metres"
+        )
     xs = np.arange(lo[0], hi[0] + step / 2, step)
     ys = np.arange(lo[1], hi[1] + step / 2, step)
     gx, gy = np.meshgrid(xs, ys, indexing="ij")

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from dbn.errors import InputError, ShapeError
+from dbn.errors import InputError, ModelError, ShapeError
 from models.rjmcmc3d.chain import ADD, DELETE, LEAVE, STAY
 from models.rjmcmc3d.geometry import apply_homography, ground_homography, homography_jacobian
 from models.rjmcmc3d.metrics import evaluate
@@ -191,6 +191,24 @@ def test_ground_noise_map_matches_linearisation(scene) -> None:
     assert np.trace(noise.view_cov[0, i_far, j_far]) > 2 * np.trace(
         noise.view_cov[0, i_near, j_near]
     )
+
+
+@pytest.mark.parametrize("x_max", [1e200, 2000.0])
+def test_a_floor_whose_noise_map_would_not_fit_is_refused(scene, x_max, monkeypatch) -> None:
+    """A floor of 1e200 m ended in numpy's "Maximum allowed size exceeded" traceback (a
+    config probe); one of 2 km x 2 km asked for 4e8 cells. At the limit it is built."""
+    from models.rjmcmc3d import model
+
+    params = TrackerParams()
+    big = scene._replace(floor=np.array([0.0, x_max, 0.0, x_max]))
+    with pytest.raises(ModelError, match=r"ground noise map of .* cells of 0\.1 m, more than"):
+        ground_noise_map(big, params)
+    monkeypatch.setattr(model, "MAX_NOISE_CELLS", 11 * 21)  # 11 x 21 cells of 0.5 m
+    at = scene._replace(floor=np.array([0.0, 3.0, 0.0, 8.0]))  # (3 + 2) / 0.5 + 1 = 11
+    noise = ground_noise_map(at, params, step=0.5)
+    assert noise.cov.shape[:2] == (11, 21)
+    with pytest.raises(ModelError, match="more than 231"):
+        ground_noise_map(scene._replace(floor=np.array([0.0, 3.5, 0.0, 8.0])), params, step=0.5)
 
 
 def test_prediction_with_and_without_ground_noise(scene) -> None:
