@@ -31,8 +31,9 @@ __all__ = [
 MAX_APPEARANCE = 1e6
 
 #: Largest accepted ``|t_enter|``, ``|t_quit|`` (seconds). The travel-time Gaussians square
-#: time differences; a time of 1e300 overflowed them (an ADF run warned and went on) and
-#: is a unit mistake, so it is rejected (the bound of the trackers' time settings).
+#: time differences; a t_enter of -1e300 ran both trackers to rc 0 (-1e308 with an overflow
+#: warning). Such a time is a unit mistake, so it is rejected (the bound of the trackers'
+#: time settings).
 MAX_TIME = 1e100
 
 
