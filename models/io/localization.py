@@ -26,7 +26,7 @@ from models.localization.model import TWO_PI
 from models.localization.mrclam import MRCLAMRobot
 
 __all__ = ["read_dat", "mrclam_file", "read_mrclam_folder", "read_generic", "write_poses",
-           "read_poses", "MAX_MAGNITUDE"]
+           "read_poses", "MAX_MAGNITUDE", "MAX_TIME"]
 
 
 def read_dat(path: str | Path, num_columns: int) -> np.ndarray:
@@ -115,18 +115,23 @@ MAX_MAGNITUDE = 1e7
 (rad): 10,000 km, a UTM northing's range. A velocity of 1e200 sent the robot to 4e198 m
 and the run ended with rc 0; larger values are unit mistakes."""
 
+MAX_TIME = 1e100
+"""Largest accepted ``|t|`` (s): any clock's seconds (MRCLAM's are Unix times); a first
+row at t = -1e200 was taken. As :data:`models.zajdel.data.MAX_TIME`."""
+
 
 def _check_magnitudes(arr: np.ndarray, columns: tuple[str, ...], path, lines: list[int]) -> None:
     """A :class:`FileFormatError` at the line of the first value of ``columns`` (the
     named columns of ``arr``, None for one not checked) beyond :data:`MAX_MAGNITUDE`."""
     idx = [i for i, c in enumerate(columns) if c is not None]
-    big = np.abs(arr[:, idx]) > MAX_MAGNITUDE
+    limits = np.array([_LIMITS[columns[i]][1] for i in idx])
+    big = np.abs(arr[:, idx]) > limits
     if big.any():
         row, j = (int(v) for v in np.argwhere(big)[0])
         name = columns[idx[j]]
-        unit = _UNITS[name]
+        unit, limit = _LIMITS[name]
         raise fail(path, lines[row], f"{name} = {arr[row, idx[j]]:g} {unit} is beyond "
-                   f"{MAX_MAGNITUDE:g} {unit}: a unit mistake?")  # fmt: skip
+                   f"{limit:g} {unit}: a unit mistake?")  # fmt: skip
 
 
 def _check_ids(ids: np.ndarray, path, lines: list[int], what: str, unique: bool = True) -> None:
@@ -172,10 +177,12 @@ def read_mrclam_folder(folder: str | Path, robot: int = 1) -> MRCLAMRobot:
     return MRCLAMRobot(odo, meas, gt, lm[:, 1:3].copy(), lm[:, 0].astype(int), barcodes)
 
 
-_UNITS = {"v": "m/s", "w": "rad/s", "range": "m", "x": "m", "y": "m", "theta": "rad"}
-_ODO, _MEAS, _GT = (None, "v", "w"), (None, None, "range", None), (None, "x", "y", "theta")
+_LIMITS = {"v": ("m/s", MAX_MAGNITUDE), "w": ("rad/s", MAX_MAGNITUDE),
+           "range": ("m", MAX_MAGNITUDE), "x": ("m", MAX_MAGNITUDE), "y": ("m", MAX_MAGNITUDE),
+           "theta": ("rad", MAX_MAGNITUDE), "t": ("s", MAX_TIME)}  # fmt: skip
+_ODO, _MEAS, _GT = ("t", "v", "w"), ("t", None, "range", None), ("t", "x", "y", "theta")
 """The columns of each timed file :func:`_check_magnitudes` checks (bearings have their
-own check, times and ids theirs)."""
+own check, ids theirs)."""
 
 
 def _csv(path, columns: tuple[str, ...], what: str) -> np.ndarray:
