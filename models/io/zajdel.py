@@ -93,7 +93,12 @@ def _from_events(path, header, rows):
         if "camera" in p and p["camera"] != r.int("camera"):
             raise r.fail(f"pass {r['pass']} changes camera ({p['camera']} -> {r['camera']})")
         p[ev], p["camera"] = (_time(r, "time"), r.int("border")), r.int("camera")
-        if all(r[c] != "" for c in app_cols):
+        given = [c for c in app_cols if r[c] != ""]
+        if given and len(given) < len(app_cols):  # the row's appearance was dropped
+            empty = [c for c in app_cols if r[c] == ""]
+            raise r.fail(f"appearance columns {empty} are empty where {given} are not: "
+                         "give a row all of them or none")  # fmt: skip
+        if given:
             p["apps"].append(_appearance(r, app_cols))
         if "person" in header and r["person"] != "":
             p["person"] = r.int("person")

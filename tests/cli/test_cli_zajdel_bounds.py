@@ -73,3 +73,13 @@ def test_dbntrack_track_says_it_in_one_line(capsys, tmp_path, tracker) -> None:
     err = capsys.readouterr().err.strip()
     assert rc == 2 and len(err.splitlines()) == 1, err
     assert f"{path}:6: a3 = 1e+200" in err and "nan" not in err, err
+
+
+def test_an_event_row_with_part_of_an_appearance_is_refused(tmp_path) -> None:
+    """An enter row with a0 given and a1..a8 empty was read as a row without appearance:
+    its a0 was dropped without a word."""
+    path = _with(tmp_path, "events.csv", 2, "a0", "0.5")
+    with pytest.raises(FileFormatError) as exc:
+        read_observations(path)
+    assert f"{path}:2: appearance columns ['a1'," in str(exc.value)
+    assert "are empty where ['a0'] are not" in str(exc.value)
