@@ -122,7 +122,8 @@ row at t = -1e200 was taken. As :data:`models.zajdel.data.MAX_TIME`."""
 
 def _check_magnitudes(arr: np.ndarray, columns: tuple[str, ...], path, lines: list[int]) -> None:
     """A :class:`FileFormatError` at the line of the first value of ``columns`` (the
-    named columns of ``arr``, None for one not checked) beyond :data:`MAX_MAGNITUDE`."""
+    named columns of ``arr``, None for one not checked) beyond its limit in ``_LIMITS``
+    (:data:`MAX_MAGNITUDE`, :data:`MAX_TIME` for times)."""
     idx = [i for i, c in enumerate(columns) if c is not None]
     limits = np.array([_LIMITS[columns[i]][1] for i in idx])
     big = np.abs(arr[:, idx]) > limits
