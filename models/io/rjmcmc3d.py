@@ -25,6 +25,7 @@ import numpy as np
 
 from dbn.errors import DBNError, FileFormatError, InputError
 from models.io.table import as_float, as_int, fail, read_lines, write_rows
+from models.rjmcmc3d.frames import MAX_METRES
 
 __all__ = ["ViewFolder", "read_view", "warp", "detections", "write_tracks3d", "read_tracks3d"]
 
@@ -140,14 +141,11 @@ def write_tracks3d(path, frames: list[int], ids: list, X: list, presence: list) 
     return path
 
 
-_MAX_GROUND_M = 1e6
-"""Largest ``|x|``, ``|y|`` (m) of a 3-D track file, the bound the tracker puts on its
-detections' ground positions (:func:`models.rjmcmc3d.frames.check_frame`)."""
-
-
 def read_tracks3d(path: str | Path) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """``frame -> (ids (n,), ground positions (n, 2))`` of a MOT 3-D file (frames and ids
-    >= 0; an id at most once per frame; ``|x|, |y| <= 1e6`` m)."""
+    >= 0; an id at most once per frame; ``|x|, |y| <=``
+    :data:`~models.rjmcmc3d.frames.MAX_METRES`, 1e6 m, the tracker's bound on its
+    detections' ground positions)."""
     path = Path(path)
     out: dict[int, tuple[list, list]] = {}
     for line_no, line in enumerate(read_lines(path, "tracks file"), start=1):
@@ -164,9 +162,9 @@ def read_tracks3d(path: str | Path) -> dict[int, tuple[np.ndarray, np.ndarray]]:
         if fr < 0 or i < 0:
             raise fail(path, line_no, f"frame = {fr}, id = {i}: both count from 0")
         xy = [as_float(fields[k], path, line_no, "xyz"[k - 7]) for k in (7, 8)]
-        if max(map(abs, xy)) > _MAX_GROUND_M:  # 1e200 overflowed motmetrics' distances
+        if max(map(abs, xy)) > MAX_METRES:  # 1e200 overflowed motmetrics' distances
             raise fail(path, line_no, f"x, y = {xy[0]:g}, {xy[1]:g}: beyond "
-                       f"{_MAX_GROUND_M:g} m (a unit mistake?)")  # fmt: skip
+                       f"{MAX_METRES:g} m (a unit mistake?)")  # fmt: skip
         ids, pos = out.setdefault(fr, ([], []))
         if i in ids:
             raise fail(path, line_no, f"id {i} appears twice in frame {fr}")

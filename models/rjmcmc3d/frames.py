@@ -14,9 +14,9 @@ import numpy as np
 
 from dbn.errors import InputError, NonFiniteError, ShapeError
 
-__all__ = ["check_frame", "unit_image"]
+__all__ = ["MAX_METRES", "check_frame", "unit_image"]
 
-_MAX_METRES = 1e6
+MAX_METRES = 1e6
 
 
 def unit_image(image: np.ndarray) -> np.ndarray:
@@ -79,5 +79,5 @@ def check_frame(scene, frame) -> None:
     if dv.size and (dv.min() < 0 or dv.max() >= scene.num_views):
         raise InputError(f"frame.det_view holds a view outside 0..{scene.num_views - 1}")
     n = dv.shape[0]
-    _check_points("det_px", np.asarray(frame.det_px), n, _MAX_METRES)
-    _check_points("det_ground", np.asarray(frame.det_ground), n, _MAX_METRES)
+    _check_points("det_px", np.asarray(frame.det_px), n, MAX_METRES)
+    _check_points("det_ground", np.asarray(frame.det_ground), n, MAX_METRES)
