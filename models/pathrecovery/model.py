@@ -49,10 +49,15 @@ def delay_support(gap_mean: np.ndarray) -> np.ndarray:
     (num_edges,) int64 array, ``d_max >= 1``.
     """
     mu = np.asarray(gap_mean, dtype=np.float64)
-    dmax = np.ceil(mu + 4.0 * GAP_SD_FACTOR * mu)
+    dmax = _longest_delay(mu)
     if np.any(dmax >= 2.0**62):  # the cast would wrap
         raise ModelError(f"gap_mean {mu.max():g} steps: too long a gap to discretise")
     return np.where(mu > 0, np.maximum(dmax.astype(np.int64), 1), 1)
+
+
+def _longest_delay(mu: np.ndarray) -> np.ndarray:
+    """``ceil(mu + 4 sd)`` of each gap mean, as floats (no cast: huge gaps stay huge)."""
+    return np.ceil(mu + 4.0 * GAP_SD_FACTOR * mu)
 
 
 def _check_delay_table(gap_mean: np.ndarray, indices: np.ndarray, rows: np.ndarray) -> None:
@@ -61,7 +66,7 @@ def _check_delay_table(gap_mean: np.ndarray, indices: np.ndarray, rows: np.ndarr
     if not gap_mean.size:
         return
     worst = int(np.argmax(gap_mean))
-    width = float(np.ceil(gap_mean[worst] + 4.0 * GAP_SD_FACTOR * gap_mean[worst])) + 1
+    width = float(_longest_delay(gap_mean[worst])) + 1
     if gap_mean.size * width > MAX_DELAY_TABLE:
         cols = f"{width:,.0f}" if width < 1e12 else f"{width:.3g}"
         raise ModelError(
