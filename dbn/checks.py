@@ -11,7 +11,17 @@ import numpy as np
 
 from dbn.errors import DBNError, EvidenceError, InputError
 
-__all__ = ["check_count", "check_mapping", "check_nonnegative"]
+__all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative"]
+
+MAX_SCALE = 1e100
+"""Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
+square, 1e200, is still finite in float64 (1e155 squared overflows). A value beyond it is a
+unit mistake or a corrupt export (a Zajdel ``t_enter`` of -1e300 ran both trackers to rc 0),
+so readers and configs refuse it, naming the field."""
+
+MIN_SCALE = 1e-100
+"""Smallest spread a tracker takes: its square, 1e-200, is still a normal float64 (a
+``within_std`` of 1e-300 made the ADF prior's ``kappa`` 0.0)."""
 
 
 def check_count(name: str, value: Any, error: type[DBNError] = InputError) -> int:

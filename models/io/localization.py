@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dbn.checks import MAX_SCALE
 from dbn.errors import InputError, TimeOrderError
 from models.io.table import as_float, fail, read_lines, read_rows, write_rows
 from models.localization.model import TWO_PI
@@ -115,9 +116,9 @@ MAX_MAGNITUDE = 1e7
 (rad): 10,000 km, a UTM northing's range. A velocity of 1e200 sent the robot to 4e198 m
 and the run ended with rc 0; larger values are unit mistakes."""
 
-MAX_TIME = 1e100
+MAX_TIME = MAX_SCALE
 """Largest accepted ``|t|`` (s): any clock's seconds (MRCLAM's are Unix times); a first
-row at t = -1e200 was taken. As :data:`models.zajdel.data.MAX_TIME`."""
+row at t = -1e200 was taken. The library's bound on times, :data:`dbn.checks.MAX_SCALE`."""
 
 
 def _check_magnitudes(arr: np.ndarray, columns: tuple[str, ...], path, lines: list[int]) -> None:

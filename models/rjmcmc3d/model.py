@@ -16,6 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dbn.checks import MAX_SCALE
 from dbn.errors import InputError, ModelError
 from models.rjmcmc3d.geometry import ground_homography
 from models.rjmcmc3d.projection import visible_views
@@ -34,7 +35,6 @@ __all__ = [
 LOG_2PI = math.log(2.0 * math.pi)
 
 
-_MAX_MAGNITUDE = 1e100  # a parameter beyond it is a unit mistake, and overflows once squared
 
 
 class TrackerParams(NamedTuple):
@@ -101,9 +101,9 @@ class TrackerParams(NamedTuple):
             if isinstance(v, bool) or not isinstance(v, int | np.integer):
                 raise InputError(f"TrackerParams.{name}={v!r} must be an int")
         for name, v in self._asdict().items():  # lengths, times, weights: squared somewhere
-            if isinstance(v, float | np.floating) and not abs(v) < _MAX_MAGNITUDE:
+            if isinstance(v, float | np.floating) and not abs(v) < MAX_SCALE:
                 raise InputError(
-                    f"TrackerParams.{name}={v!r} must be finite, |x| < {_MAX_MAGNITUDE:g}"
+                    f"TrackerParams.{name}={v!r} must be finite, |x| < {MAX_SCALE:g}"
                 )
         for name in ("h_mean", "d_min", "leave_ramp", "add_gate", "det_gate"):
             if not getattr(self, name) > 0:

@@ -22,6 +22,7 @@ from __future__ import annotations
 import jax
 import numpy as np
 
+from dbn.checks import MAX_SCALE, MIN_SCALE
 from dbn.errors import ConfigError, InputError
 from models.io.zajdel import read_labels, read_observations, write_labels, write_partition
 from models.track.context import RunContext
@@ -33,9 +34,9 @@ _MODEL_KEYS = {"num_cameras", "num_borders", "trans", "entry", "travel_mean", "t
                "window", "p_new"}  # fmt: skip
 _RUNNER_KEYS = {"zajdel_adf": {"within_std", "between_std", "decode"},
                 "zajdel_learnsearch": {"stream_window", "close_z"}}  # fmt: skip
-_MAX_SCALE = 1e100  # times and spreads beyond it overflow once squared (a unit mistake)
-_MIN_SPREAD = 1e-100  # spreads below it underflow once squared: within_std = 1e-300 made the
-# ADF's prior say "prior.kappa = 0.0", travel_std = 1e-300 overflowed the travel z-scores
+# Times and spreads beyond MAX_SCALE overflow once squared (a unit mistake); spreads below
+# MIN_SCALE underflow once squared: within_std = 1e-300 made the ADF's prior say
+# "prior.kappa = 0.0", travel_std = 1e-300 overflowed the travel z-scores.
 
 
 _MAX_PATH_ENTRIES = 10**7  # the dense (C, B, C, B) transition table: 80 MB
@@ -95,25 +96,25 @@ def _split_config(config: dict, cls, name: str) -> tuple[dict, object]:
 
 def _check_model_options(config: dict) -> None:
     """Ranges of the model keys (:class:`ConfigError` naming the key): counts >= 1, a
-    window and spreads in [:data:`_MIN_SPREAD`, :data:`_MAX_SCALE`), ``p_new`` in (0, 1),
-    times below :data:`_MAX_SCALE`."""
+    window and spreads in [:data:`dbn.checks.MIN_SCALE`, :data:`dbn.checks.MAX_SCALE`),
+    ``p_new`` in (0, 1), times below :data:`dbn.checks.MAX_SCALE`."""
     for key in ("num_cameras", "num_borders", "stream_window"):
         if key in config and integer(config, key) < 1:
             raise ConfigError(f"config {key} = {config[key]!r}: expected an integer >= 1")
     for key in ("window", "within_std", "between_std", "close_z"):
-        if key in config and not _MIN_SPREAD <= number(config, key) < _MAX_SCALE:
+        if key in config and not MIN_SCALE <= number(config, key) < MAX_SCALE:
             raise ConfigError(f"config {key} = {config[key]!r}: expected a number in "
-                              f"[{_MIN_SPREAD:g}, {_MAX_SCALE:g})")  # fmt: skip
+                              f"[{MIN_SCALE:g}, {MAX_SCALE:g})")  # fmt: skip
     if "p_new" in config and not 0 < number(config, "p_new") < 1:
         raise ConfigError(f"config p_new = {config['p_new']!r}: expected a probability in (0, 1)")
-    for key, interval in (("travel_mean", "[0, "), ("travel_std", f"[{_MIN_SPREAD:g}, ")):
+    for key, interval in (("travel_mean", "[0, "), ("travel_std", f"[{MIN_SCALE:g}, ")):
         if key not in config:
             continue
         v = array(config, key)
-        above = v >= _MIN_SPREAD if key == "travel_std" else v >= 0
-        if v.size == 0 or not np.all(above & (v < _MAX_SCALE)):
+        above = v >= MIN_SCALE if key == "travel_std" else v >= 0
+        if v.size == 0 or not np.all(above & (v < MAX_SCALE)):
             raise ConfigError(f"config {key} = {config[key]!r}: expected numbers in "
-                              f"{interval}{_MAX_SCALE:g})")  # fmt: skip
+                              f"{interval}{MAX_SCALE:g})")  # fmt: skip
     if "close_z" in config and "stream_window" not in config:
         raise ConfigError("config close_z: applies to the streaming search; give stream_window too")
 

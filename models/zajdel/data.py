@@ -13,6 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dbn.checks import MAX_SCALE
 from dbn.errors import InputError, NonFiniteError, ShapeError, TimeOrderError
 
 __all__ = [
@@ -30,11 +31,11 @@ __all__ = [
 #: the ADF state, issue 14), so they are rejected and must be rescaled.
 MAX_APPEARANCE = 1e6
 
-#: Largest accepted ``|t_enter|``, ``|t_quit|`` (seconds). The travel-time Gaussians square
-#: time differences; a t_enter of -1e300 ran both trackers to rc 0 (-1e308 with an overflow
-#: warning). Such a time is a unit mistake, so it is rejected (the bound of the trackers'
-#: time settings).
-MAX_TIME = 1e100
+#: Largest accepted ``|t_enter|``, ``|t_quit|`` (seconds): :data:`dbn.checks.MAX_SCALE`.
+#: The travel-time Gaussians square time differences; a t_enter of -1e300 ran both trackers
+#: to rc 0 (-1e308 with an overflow warning). Such a time is a unit mistake, so it is
+#: rejected (the bound of the trackers' time settings).
+MAX_TIME = MAX_SCALE
 
 
 class Observations(NamedTuple):

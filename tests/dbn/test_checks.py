@@ -1,0 +1,40 @@
+"""dbn.checks: the argument checks and the one bound on times, spreads and parameters."""
+
+import numpy as np
+import pytest
+
+from dbn.checks import MAX_SCALE, MIN_SCALE, check_count, check_nonnegative
+from dbn.errors import ConfigError, InputError
+
+
+def test_scale_bounds_square_to_normal_finite_floats():
+    """The readers' and configs' bounds hold their promise: a value at the bound survives
+    squaring in float64 (neither inf nor a subnormal), so no Gaussian overflows on it."""
+    with np.errstate(all="raise"):
+        big, small = np.float64(MAX_SCALE) ** 2, np.float64(MIN_SCALE) ** 2
+    assert np.isfinite(big) and small >= np.finfo(np.float64).tiny
+
+
+def test_trackers_share_the_scale_bound():
+    """The Zajdel and localization readers take their time bound from dbn.checks."""
+    from models.io import localization
+    from models.zajdel import data
+
+    assert data.MAX_TIME == localization.MAX_TIME == MAX_SCALE
+
+
+@pytest.mark.parametrize("value", [0, -1, 2.5, True, "3", None])
+def test_check_count_refuses_non_counts(value):
+    with pytest.raises(ConfigError, match="n_items"):
+        check_count("n_items", value, ConfigError)
+
+
+@pytest.mark.parametrize("value", [-1e-9, float("nan"), True, "1"])
+def test_check_nonnegative_refuses(value):
+    with pytest.raises(InputError, match="rate"):
+        check_nonnegative("rate", value)
+
+
+def test_checks_return_plain_python_numbers():
+    assert type(check_count("n", np.int64(3))) is int
+    assert type(check_nonnegative("x", np.float32(0.5))) is float
