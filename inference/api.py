@@ -37,7 +37,8 @@ from inference.evidence_columns import check_columns, columns_from_slices
 from inference.exact.frontier import MAX_FRONTIER_SIZE, check_max_size
 from inference.results import DBNFilterResult
 
-__all__ = ["filter", "online_filter", "as_two_slice_dbn", "METHODS", "METHOD_OPTIONS"]
+__all__ = ["filter", "online_filter", "as_two_slice_dbn", "method_options", "METHODS",
+           "METHOD_OPTIONS"]
 
 METHODS = ("auto", "exact", "bk", "particle", "rbpf")
 METHOD_OPTIONS: Mapping[str, frozenset[str]] = MappingProxyType({  # read-only: one table
@@ -49,6 +50,24 @@ METHOD_OPTIONS: Mapping[str, frozenset[str]] = MappingProxyType({  # read-only: 
 """The ``**options`` each method of :func:`filter` takes (``auto``: ``max_size`` and those of
 the method it chooses)."""
 _UNBOUNDED = 2**62
+
+
+def method_options(method: str, chosen: str | None = None) -> frozenset[str]:
+    """The ``**options`` keys :func:`filter` takes under ``method``: those of
+    :data:`METHOD_OPTIONS`; under ``auto``, ``max_size`` and those of the method it ``chose``
+    (before the choice, of any method: what a config file may hold for ``auto``).
+
+    Raises :class:`~dbn.errors.InputError` for a method not in :data:`METHODS`, or a
+    ``chosen`` not a method ``auto`` may choose."""
+    if method not in METHODS:
+        raise InputError(f"method must be one of {METHODS}, got {method!r}")
+    if chosen is not None and (method != "auto" or chosen not in METHOD_OPTIONS):
+        raise InputError(f"chosen = {chosen!r}: only 'auto' chooses, one of "
+                         f"{tuple(METHOD_OPTIONS)}")  # fmt: skip
+    if method != "auto":
+        return METHOD_OPTIONS[method]
+    chosen_options = METHOD_OPTIONS.values() if chosen is None else [METHOD_OPTIONS[chosen]]
+    return frozenset({"max_size"}).union(*chosen_options)
 
 
 def as_two_slice_dbn(model: Any) -> TwoSliceDBN:
@@ -175,13 +194,11 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     evidence, soft_evidence = _check_evidence(dbn, evidence, soft_evidence, num_timesteps)
     max_size = check_max_size(options.get("max_size", MAX_FRONTIER_SIZE))
     info: dict[str, Any] = {}
-    allowed = {"max_size"} if method == "auto" else set()
+    _check_options(options, method)  # a key no method takes: before auto's size estimate
     if method == "auto":
         evars = [*(evidence or {}), *(soft_evidence or {})]
         method, info = _choose(dbn, evars, query, max_size)
-    unknown = set(options) - METHOD_OPTIONS[method] - allowed
-    if unknown:
-        raise InputError(f"options {sorted(unknown)} do not apply to method {method!r}")
+        _check_options(options, "auto", method)
     if method != "exact" and num_timesteps is not None and not (evidence or soft_evidence):
         raise InputError(f"method {method!r} takes the number of slices from the evidence "
                          "columns: num_timesteps without evidence is read by 'exact' only")
@@ -204,6 +221,15 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
             raise
         raise oom from None
     return dataclasses.replace(res, info={**res.info, **info})
+
+
+def _check_options(options: Mapping[str, Any], method: str, chosen: str | None = None) -> None:
+    """:class:`~dbn.errors.InputError` for keys :func:`method_options` does not list."""
+    unknown = set(options) - method_options(method, chosen)
+    if unknown:
+        name = method if chosen is None else chosen
+        raise InputError(f"options {sorted(unknown)} do not apply to method {name!r}; valid: "
+                         f"{sorted(method_options(method, chosen))}")
 
 
 def _dispatch(method, dbn, evidence, query, key, soft, num_timesteps, options, max_size):

@@ -44,12 +44,11 @@ def _filter(ctx: RunContext, dbn: TwoSliceDBN, ev: dict[str, np.ndarray], method
 
 def _check_options(method: str, config: dict) -> None:
     """A :class:`~dbn.errors.ConfigError` (``dbntrack track`` names the config file) for a
-    key ``method`` does not take (:data:`inference.api.METHOD_OPTIONS`), before any
+    key ``method`` does not take (:func:`inference.api.method_options`), before any
     reading; the values are the engines' to check."""
-    from inference.api import METHOD_OPTIONS
+    from inference.api import method_options
 
-    known = (set().union({"max_size"}, *METHOD_OPTIONS.values()) if method == "auto"
-             else METHOD_OPTIONS[method])  # fmt: skip
+    known = method_options(method)
     unknown = sorted(set(config) - known)
     if unknown:
         raise ConfigError(f"unknown config key(s) {unknown} for method {method!r}; "

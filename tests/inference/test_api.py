@@ -499,3 +499,26 @@ def test_every_engine_refuses_a_model_of_another_kind_by_name() -> None:
                     entry(model)
                 text = str(exc.value)
                 assert (convert in text) if convert else ("pgmpy" not in text)
+
+
+def test_method_options_under_auto_before_and_after_the_choice() -> None:
+    """``auto`` takes ``max_size`` and, before it chooses, any method's options (what
+    ``dbntrack track dbn`` checks a config file against); after, those of the method it
+    chose. A key no method takes is refused before the size estimate, naming the valid
+    keys; one the chosen method does not take is refused naming that method."""
+    every = set().union(*api.METHOD_OPTIONS.values())
+    assert api.method_options("auto") == every | {"max_size"}
+    assert api.method_options("auto", "bk") == {"max_size", "clusters"}
+    for method in api.METHOD_OPTIONS:
+        assert api.method_options(method) == api.METHOD_OPTIONS[method]
+    for bad in (("nope",), ("bk", "exact"), ("auto", "auto"), ("auto", "nope")):
+        with pytest.raises(InputError, match="auto|nope"):
+            api.method_options(*bad)
+    dbn, ev = _chains(2, 3)
+    with pytest.raises(InputError, match=r"\['num_particle'\] do not apply to method 'auto'"
+                       r".*'num_particles'"):  # fmt: skip
+        inference.filter(dbn, ev, "auto", num_particle=10)
+    with pytest.raises(InputError, match=r"\['num_particles'\] do not apply to method 'exact'"):
+        inference.filter(dbn, ev, "auto", num_particles=10)  # two small chains: exact
+    res = inference.filter(dbn, ev, "auto", max_size=1)  # bk: max_size is still taken
+    assert res.method == "bk"
