@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from models.cli import main
+from tests.cells import data_line, set_cell
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 
@@ -237,17 +238,10 @@ def test_localization_refuses_degrees_and_negative_ranges(tmp_path, capsys, colu
     _bad(capsys, argv, "Robot1_Measurement.dat:", needle)
 
 
-def _set_first_row(path: Path, column: int, value: str, sep: str | None = ",") -> int:
-    """Set ``column`` of the first data row of ``path`` (after a header for CSVs, after
-    ``#`` comments for .dat) to ``value``; its 1-based line number."""
-    lines = path.read_text().splitlines()
-    k = next(i for i, ln in enumerate(lines) if ln and not ln.startswith("#"))
-    k += sep == ","  # a CSV's first line is its header
-    fields = lines[k].split(sep)
-    fields[column] = value
-    lines[k] = (sep or " ").join(fields)
-    path.write_text("\n".join(lines) + "\n")
-    return k + 1
+def _set_first_row(path: Path, column: int | str, value: str) -> int:
+    """Set ``column`` of the first data row of ``path`` to ``value``; its 1-based line."""
+    set_cell(path, line := data_line(path), column, value)
+    return line
 
 
 @pytest.mark.parametrize(("csv", "column", "dat", "unit"), [
@@ -270,15 +264,14 @@ def test_localization_refuses_values_beyond_ten_thousand_km(tmp_path, capsys, cs
         folder = tmp_path / value
         shutil.copytree(d, folder)
         path = folder / f"{csv}.csv"
-        col = path.read_text().splitlines()[0].split(",").index(column)
-        line = _set_first_row(path, col, value)
+        line = _set_first_row(path, column, value)
         if ok:
             read_generic(*(folder / f"{n}.csv" for n in names))
             continue
         argv = ["track", "localization", *(str(folder / f"{n}.csv") for n in names),
                 "-o", str(folder / "out")]  # fmt: skip
         _bad(capsys, argv, f"{csv}.csv:{line}: {column} = -1e+200 {unit} is beyond 1e+07 {unit}")
-        line = _set_first_row(folder / "mrclam" / f"{dat[0]}.dat", dat[1], value, sep=None)
+        line = _set_first_row(folder / "mrclam" / f"{dat[0]}.dat", dat[1], value)
         argv = ["track", "localization", str(folder / "mrclam"), "-o", str(folder / "out2")]
         _bad(capsys, argv, f"{dat[0]}.dat:{line}: {column} = -1e+200 {unit}")
 

@@ -14,21 +14,14 @@ from dbn.errors import FileFormatError, InputError
 from models.cli import main
 from models.io.zajdel import read_observations
 from models.zajdel.data import MAX_APPEARANCE, MAX_TIME, validate_observations
+from tests.cells import set_cell
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "zajdel"
 
 
 def _with(tmp_path: Path, name: str, line: int, column: str, value: str) -> Path:
     """A copy of ``DATA/name`` with ``column`` of 1-based ``line`` set to ``value``."""
-    lines = (DATA / name).read_text().splitlines()
-    header_at = next(i for i, ln in enumerate(lines) if not ln.startswith("#"))
-    col = lines[header_at].split(",").index(column)
-    fields = lines[line - 1].split(",")
-    fields[col] = value
-    lines[line - 1] = ",".join(fields)
-    out = tmp_path / name
-    out.write_text("\n".join(lines) + "\n")
-    return out
+    return set_cell(DATA / name, line, column, value, out=tmp_path / name)
 
 
 _CASES = [  # (file, line, column, value, needle)

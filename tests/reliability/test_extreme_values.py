@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from models.cli import main
+from tests.cells import columns, data_line, set_cell
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 LOC = ("localization/odometry.csv", "localization/measurements.csv",
@@ -39,23 +40,12 @@ UNREAD = {  # (file, column) -> why a huge value there is not refused
 }
 
 
-def _rows(path: Path) -> tuple[list[str], int, list]:
-    """The file's lines, the index of its first data line and its columns (header names,
-    else indices); ``#`` lines are comments."""
-    lines = path.read_text().splitlines()
-    first = next(i for i, ln in enumerate(lines) if ln and not ln.startswith("#"))
-    if path.suffix == ".csv":
-        return lines, first + 1, lines[first].split(",")
-    return lines, first, list(range(len(lines[first].split(","))))
-
-
 def _cells() -> list:
     out = []
     for case, (_, _, inputs) in CASES.items():
         for rel in dict.fromkeys(inputs):
-            _, row, cols = _rows(DATA / rel)
             out += [pytest.param(case, rel, c, id=f"{case}-{Path(rel).name}-{c}")
-                    for c in cols if (rel, c) not in UNREAD]  # fmt: skip
+                    for c in columns(DATA / rel) if (rel, c) not in UNREAD]  # fmt: skip
     return out
 
 
@@ -66,14 +56,10 @@ def test_a_huge_number_in_any_read_column_is_refused_at_its_line(capsys, tmp_pat
     for src in dict.fromkeys(inputs):
         (tmp_path / src).parent.mkdir(parents=True, exist_ok=True)
         shutil.copy(DATA / src, tmp_path / src)
-    lines, row, cols = _rows(tmp_path / rel)
-    if rel == "zajdel/events.csv":
-        row += 1  # the first pass's leave row: its enter row holds no appearance
+    path, line = tmp_path / rel, data_line(tmp_path / rel)
+    line += rel == "zajdel/events.csv"  # the first pass's leave row (enter: no appearance)
     for value in ("1e200", "-1e200"):
-        fields = lines[row].split(",")
-        fields[cols.index(column)] = value
-        path = tmp_path / rel
-        path.write_text("\n".join([*lines[:row], ",".join(fields), *lines[row + 1:]]) + "\n")
+        set_cell(path, line, column, value)
         argv = [command, tracker, *(str(tmp_path / p) for p in inputs)]
         argv += ["-o", str(tmp_path / "out"), "--quiet"] if command == "track" else []
         rc = main(argv)
