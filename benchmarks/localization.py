@@ -50,7 +50,8 @@ from inference.particle import auxiliary_filter, run_model
 from inference.particle import run as pf_run
 from inference.precision import precision_scope
 from models.localization.experiments import mrclam_trials, synthetic_trials
-from models.localization.model import RangeBearingLocalizationModel, RangeBearingObservation
+from models.localization.landmarks import measure_landmarks
+from models.localization.model import RangeBearingLocalizationModel
 from models.localization.simulate import build_trained_world, knn_model_for, simulate_run
 from models.localization.tracker import check_sequence, pose_summary
 
@@ -297,14 +298,10 @@ def _range_bearing_robot(seed: int, num_steps: int):
     dt, v, w = 0.1, 0.4, 0.2
     theta = w * dt * np.arange(1, num_steps + 1)
     x, y = (v / w) * np.sin(theta), (v / w) * (1 - np.cos(theta))
-    dx, dy = landmarks[None, :, 0] - x[:, None], landmarks[None, :, 1] - y[:, None]
-    rng_ = np.hypot(dx, dy) + 0.1 * rng.standard_normal(dx.shape)
-    noise = 0.05 * rng.standard_normal(dx.shape)
-    bearing = np.angle(np.exp(1j * (np.arctan2(dy, dx) - theta[:, None] + noise)))
+    obs = measure_landmarks(rng, landmarks, np.column_stack([x, y, theta]), 0.1, 0.05)
     odo = np.column_stack([v * dt + 0.002 * rng.standard_normal(num_steps), np.zeros(num_steps),
                            w * dt + 0.003 * rng.standard_normal(num_steps), np.full(num_steps, dt)])
-    lm = np.broadcast_to(np.arange(len(landmarks)), dx.shape)
-    return landmarks, odo, RangeBearingObservation(lm, rng_, bearing, np.ones(dx.shape, bool))
+    return landmarks, odo, obs
 
 
 def _search_speed(seed: int, quick: bool, checks: list) -> dict:

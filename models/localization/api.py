@@ -23,6 +23,7 @@ from dbn.errors import CheckpointError, InputError, ShapeError
 from inference.checkpoint import load_arrays, save_arrays
 from inference.particle import ParticleInfo, ParticleState
 from inference.precision import precision_scope
+from models.localization.landmarks import measure_landmarks
 from models.localization.model import (
     RangeBearingLocalizationModel,
     RangeBearingObservation,
@@ -143,10 +144,8 @@ def example(key: jax.Array) -> Example:
         odo = np.array([0.2, 0.0, 0.1, 0.1])
         c, s = np.cos(pose[2]), np.sin(pose[2])
         pose = pose + np.array([c * odo[0], s * odo[0], odo[2]])
-        d = landmarks - pose[:2]
-        rng_ = np.hypot(d[:, 0], d[:, 1]) + 0.05 * rng.standard_normal(3)
-        bearing = np.arctan2(d[:, 1], d[:, 0]) - pose[2] + 0.02 * rng.standard_normal(3)
-        obs = RangeBearingObservation(np.arange(3), rng_, bearing, np.ones(3, bool))
+        obs = measure_landmarks(rng, landmarks, pose[None], 0.05, 0.02)  # one pose: (1, 3)
+        obs = RangeBearingObservation(*(a[0] for a in obs))
         steps.append(LocalizationStep(odo, obs, 0.1 * (t + 1)))
     bad_obs = steps[1].observation._replace(range=np.array([1.0, np.nan, 2.0]))
     return Example(make(model, 200), steps, steps[1]._replace(observation=bad_obs))

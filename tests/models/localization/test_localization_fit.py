@@ -17,7 +17,7 @@ from models.localization.fit import (
     pool_residuals,
     robust_noise,
 )
-from models.localization.model import RangeBearingObservation
+from models.localization.landmarks import measure_landmarks
 from models.localization.mrclam import MRCLAM_NOISE, MRCLAMSequence
 
 
@@ -34,13 +34,7 @@ def _sequence(rng, steps: int, *, sr: float, sb: float, bias: float, sxy: float,
     d = np.diff(truth, axis=0)
     rel = np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1], d[:, 2]])
     odo = rel - rng.normal(0.0, 1.0, rel.shape) * [sxy, sxy, sth]
-    pose = truth[1:, None]
-    dx, dy = landmarks[None, :, 0] - pose[..., 0], landmarks[None, :, 1] - pose[..., 1]
-    rng_ = np.hypot(dx, dy) + bias + rng.normal(0.0, sr, dx.shape)
-    brg = np.arctan2(dy, dx) - pose[..., 2] + rng.normal(0.0, sb, dx.shape)
-    brg = np.angle(np.exp(1j * brg))
-    lm = np.broadcast_to(np.arange(3, dtype=np.int32), dx.shape).copy()
-    obs = RangeBearingObservation(lm, rng_, brg, np.ones(dx.shape, bool))
+    obs = measure_landmarks(rng, landmarks, truth[1:], sr, sb, bias)
     times = 0.1 * np.arange(steps + 1)
     return MRCLAMSequence(times, np.column_stack([odo, np.full(steps, 0.1)]), obs, truth,
                           landmarks, np.ones(steps, bool))  # fmt: skip
