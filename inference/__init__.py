@@ -11,9 +11,17 @@ where a benchmark shows it keeps the accuracy.
 
 
 # --- lazy entry points (issue 11): ``inference.filter`` without importing every engine ---
+__all__ = ["filter", "online_filter", "method_options"]
+
+
 def __getattr__(name: str):
-    if name in ("filter", "online_filter"):
+    if name in __all__:
         from inference import api
 
         return getattr(api, name)
     raise AttributeError(f"module 'inference' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    """The lazy entry points with the module's own names (tab completion shows them)."""
+    return sorted({*globals(), *__all__})

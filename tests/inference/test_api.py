@@ -522,3 +522,15 @@ def test_method_options_under_auto_before_and_after_the_choice() -> None:
         inference.filter(dbn, ev, "auto", num_particles=10)  # two small chains: exact
     res = inference.filter(dbn, ev, "auto", max_size=1)  # bk: max_size is still taken
     assert res.method == "bk"
+
+
+def test_the_package_lists_its_lazy_entry_points() -> None:
+    """``inference.filter``, ``online_filter`` and ``method_options`` are importable from the
+    package, listed by ``dir`` (tab completion) and ``__all__``; other names still raise."""
+    star: dict = {}
+    exec("from inference import *", star)  # noqa: S102  (a star import needs module level)
+    assert star["filter"] is api.filter and star["method_options"] is api.method_options
+    for name in ("filter", "online_filter", "method_options"):
+        assert name in dir(inference) and getattr(inference, name) is getattr(api, name)
+    with pytest.raises(AttributeError, match="no attribute 'filters'"):
+        inference.filters  # noqa: B018
