@@ -33,7 +33,7 @@ from dbn.errors import (
     as_memory_limit,
 )
 from dbn.variables import DiscreteVariable
-from inference.evidence_columns import check_columns, columns_from_slices
+from inference.evidence_columns import check_columns, columns_from_frame, columns_from_slices
 from inference.exact.frontier import MAX_FRONTIER_SIZE, check_max_size
 from inference.results import DBNFilterResult
 
@@ -156,7 +156,9 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
         of whole numbers, NaN = unobserved) or ``(T,)`` state names (``None`` =
         unobserved), continuous ``name -> (T, dim) float`` (a row of NaN = unobserved).
         Or pgmpy's ``{(name, t): state}`` (discrete), read as pgmpy reads it by
-        :func:`~inference.evidence_columns.columns_from_slices`.
+        :func:`~inference.evidence_columns.columns_from_slices`. Or a pandas
+        ``DataFrame``, a column per variable and a row per slice, missing values
+        unobserved (:func:`~inference.evidence_columns.columns_from_frame`).
     method : {"auto", "exact", "bk", "particle", "rbpf"}
     query : sequence of str, optional
         Variables whose marginals are returned (default: the engine's default, the
@@ -189,6 +191,7 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     dbn = as_two_slice_dbn(model)
     if method not in METHODS:
         raise InputError(f"method must be one of {METHODS}, got {method!r}")
+    evidence = columns_from_frame(evidence)  # a pandas DataFrame: its columns
     if isinstance(evidence, Mapping) and any(isinstance(k, tuple) for k in evidence):
         evidence = columns_from_slices(dbn, evidence, num_timesteps)  # pgmpy's {(name, t): s}
     evidence, soft_evidence = _check_evidence(dbn, evidence, soft_evidence, num_timesteps)

@@ -13,7 +13,9 @@ Columnar evidence maps a variable name to one array over the slices:
   soft evidence at that slice.
 
 Every check runs before any filtering, and each error names the column and the value.
-pgmpy's evidence ``{(name, t): state}`` becomes columns with :func:`columns_from_slices`.
+pgmpy's evidence ``{(name, t): state}`` becomes columns with :func:`columns_from_slices`,
+a pandas ``DataFrame`` (a column per variable, a row per slice) with
+:func:`columns_from_frame`.
 One slice's evidence (the on-line ``init`` / ``step`` of every engine) is ``name -> state``,
 by index or by name, ``-1`` or ``None`` = unobserved: :func:`slice_states`.
 """
@@ -37,8 +39,9 @@ from dbn.errors import (
 )
 from dbn.variables import ContinuousVariable, DiscreteVariable
 
-__all__ = ["Columns", "as_column", "check_columns", "check_query", "columns_from_slices",
-           "first_bad_row", "slice_states", "soft_column", "state_column"]
+__all__ = ["Columns", "as_column", "check_columns", "check_query", "columns_from_frame",
+           "columns_from_slices", "first_bad_row", "slice_states", "soft_column",
+           "state_column"]
 
 
 class Columns(NamedTuple):
@@ -233,6 +236,48 @@ def columns_from_slices(
             arr[t] = x
         out[name] = arr
     return out
+
+
+def columns_from_frame(frame) -> dict[str, np.ndarray]:
+    """A pandas ``DataFrame`` as evidence columns: one column per variable (named by its
+    column label), one row per slice, in the frame's row order (the index is not read).
+
+    A missing value (NaN, None, ``pd.NA``, ``NaT``) is unobserved: a column of numbers
+    becomes floats with NaN (whole numbers read as state indices, as a nullable ``Int64``
+    column with a gap gives them), any other column (state names, a ``category``) objects
+    with None. Anything that is not a ``DataFrame`` is returned as is.
+
+    Raises
+    ------
+    EvidenceError
+        A column label that is not a string (a ``MultiIndex``'s tuple, an int), or one
+        label given twice.
+    """
+    if not (type(frame).__module__.startswith("pandas") and type(frame).__name__ == "DataFrame"):
+        return frame
+    labels = list(frame.columns)
+    bad = [c for c in labels if not isinstance(c, str)]
+    if bad:
+        raise EvidenceError(f"evidence DataFrame: column labels must be variable names "
+                            f"(str), got {bad[0]!r}")  # fmt: skip
+    twice = sorted({c for c in labels if labels.count(c) > 1})
+    if twice:
+        raise EvidenceError(f"evidence DataFrame: columns {twice} given more than once")
+    return {c: _frame_column(frame[c]) for c in labels}
+
+
+def _frame_column(series) -> np.ndarray:
+    """One ``DataFrame`` column as a numpy column, missing values as NaN or None."""
+    missing = np.asarray(series.isna(), bool)
+    if series.dtype.kind in "iuf" and not missing.any():
+        return series.to_numpy()
+    values = series.to_numpy(dtype=object)
+    numbers = all(isinstance(x, int | float | np.integer | np.floating)
+                  and not isinstance(x, bool | np.bool_) for x in values[~missing])  # fmt: skip
+    if numbers:
+        return np.where(missing, np.nan, values).astype(np.float64)
+    values[missing] = None
+    return values
 
 
 def _slice_key(key: object, variables: Mapping[str, DiscreteVariable]) -> tuple[str, int]:

@@ -1,0 +1,71 @@
+"""Evidence as a pandas DataFrame (a column per variable, a row per slice) filters as the
+same columns given as arrays: the oracle is ``inference.filter`` on the dict of columns."""
+
+from __future__ import annotations
+
+import jax
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import inference
+from dbn.errors import EvidenceError, UnknownEvidenceError
+from dbn.examples import coupled_chains
+from inference.evidence_columns import columns_from_frame
+
+DBN = coupled_chains(2)
+
+
+def _same(a, b) -> None:
+    assert a.method == b.method
+    for name in b.marginals:
+        np.testing.assert_allclose(a.marginals[name], b.marginals[name], atol=1e-12)
+    np.testing.assert_allclose(a.log_likelihoods, b.log_likelihoods, atol=1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.integers(-1, 1), st.integers(-1, 1)), min_size=1, max_size=10),
+       st.sampled_from(["Int64", "float", "category", "names"]))  # fmt: skip
+def test_a_frame_with_gaps_filters_as_its_columns(rows, kind) -> None:
+    """Gaps as pandas writes them (``pd.NA`` in a nullable Int64, NaN in floats, a missing
+    category, None among state names) are unobserved slices (-1 in the oracle)."""
+    cols = {"y0": np.array([r[0] for r in rows]), "y1": np.array([r[1] for r in rows])}
+    frame = pd.DataFrame({k: pd.array([None if s < 0 else int(s) for s in v], dtype="Int64")
+                          for k, v in cols.items()})  # fmt: skip
+    if kind == "float":
+        frame = frame.astype("float64")
+    elif kind == "category":
+        frame = frame.astype("category")
+    elif kind == "names":
+        frame = frame.astype(object).apply(lambda c: c.map(lambda s: None if s is pd.NA
+                                                           else str(s)))  # fmt: skip
+    _same(inference.filter(DBN, frame), inference.filter(DBN, cols))
+
+
+@pytest.mark.parametrize("method", ["exact", "bk", "particle"])
+def test_every_method_reads_a_frame(method) -> None:
+    frame = pd.DataFrame({"y0": [0, 1, 1, 0], "y1": [1, 1, 0, 0]})
+    key = jax.random.key(0) if method == "particle" else None
+    _same(inference.filter(DBN, frame, method, key=key),
+          inference.filter(DBN, {c: frame[c].to_numpy() for c in frame}, method, key=key))
+
+
+@pytest.mark.parametrize(("frame", "error", "needle"), [
+    (pd.DataFrame([[0, 1]]), EvidenceError, "column labels must be variable names (str), got 0"),
+    (pd.DataFrame([[0, 1]], columns=["y0", "y0"]), EvidenceError, "['y0'] given more than once"),
+    (pd.DataFrame({("y0", 0): [1]}), EvidenceError, "got ('y0', 0)"),
+    (pd.DataFrame({"zz": [0]}), UnknownEvidenceError, "unknown variable 'zz'"),
+    (pd.DataFrame({"y0": [0.5]}), EvidenceError, "'y0' at slice 0: 0.5 is not a state"),
+    (pd.DataFrame({"y0": [True]}), EvidenceError, "'y0' at slice 0: True is not a state name"),
+])  # fmt: skip
+def test_a_bad_frame_is_refused_naming_the_column(frame, error, needle) -> None:
+    with pytest.raises(error) as exc:
+        inference.filter(DBN, frame)
+    assert needle in str(exc.value)
+
+
+def test_other_evidence_passes_through_unchanged() -> None:
+    ev = {"y0": [0, 1]}
+    assert columns_from_frame(ev) is ev and columns_from_frame(None) is None
