@@ -16,8 +16,9 @@ Every check runs before any filtering, and each error names the column and the v
 pgmpy's evidence ``{(name, t): state}`` becomes columns with :func:`columns_from_slices`,
 a pandas ``DataFrame`` (a column per variable, a row per slice) with
 :func:`columns_from_frame`.
-One slice's evidence (the on-line ``init`` / ``step`` of every engine) is ``name -> state``,
-by index or by name, ``-1`` or ``None`` = unobserved: :func:`slice_states`.
+One slice's evidence (the on-line ``init`` / ``step`` of every engine) is ``name -> state``
+(or a pandas ``Series``, a ``DataFrame``'s row), by index or by name, ``-1``, ``None`` or NaN
+= unobserved, whole-number floats read as indices as in a column: :func:`slice_states`.
 """
 
 from __future__ import annotations
@@ -163,14 +164,16 @@ def _state_indices(name: str, v: DiscreteVariable, arr: np.ndarray) -> np.ndarra
 def slice_states(
     variables: Mapping[str, DiscreteVariable], evidence: Mapping | None
 ) -> dict[str, int]:
-    """One slice's hard evidence, ``name -> state`` by index or by name (``-1`` or
-    ``None`` = unobserved, as in a column), as ``name -> index`` of the observed ones.
+    """One slice's hard evidence, ``name -> state`` by index or by name (``-1``, ``None``
+    or NaN = unobserved, a whole-number float an index, as in a column; or a pandas
+    ``Series``), as ``name -> index`` of the observed ones.
 
     Raises
     ------
     UnknownEvidenceError, EvidenceError
         Not a mapping, an unknown variable, a state out of range or not a state name.
     """
+    evidence = _series_mapping(evidence)
     check_mapping("evidence", evidence)
     out: dict[str, int] = {}
     for name, state in (evidence or {}).items():
@@ -179,12 +182,35 @@ def slice_states(
             raise UnknownEvidenceError(
                 f"evidence on unknown variable {name!r} (known: {sorted(variables)})"
             )
+        state = _slice_state(state)
         missing = state is None or (
             isinstance(state, int | np.integer) and not isinstance(state, bool) and state == -1
         )
         if not missing:
             out[name] = v.index(state)
     return out
+
+
+def _series_mapping(evidence):
+    """A pandas ``Series`` (a ``DataFrame``'s row: index = variable names) as a dict;
+    anything else as is."""
+    if type(evidence).__module__.startswith("pandas") and type(evidence).__name__ == "Series":
+        return evidence.to_dict()
+    return evidence
+
+
+def _slice_state(state):
+    """One slice's state as a column reads it: NaN and pandas' ``NA`` / ``NaT`` are
+    unobserved (None), a float of a whole number its index (a row of a column with a gap
+    holds floats); anything else as is."""
+    if type(state).__name__ in ("NAType", "NaTType"):
+        return None
+    if isinstance(state, float | np.floating):
+        if np.isnan(state):
+            return None
+        if np.isfinite(state) and state == round(state) and abs(state) < 2.0**53:
+            return int(state)
+    return state
 
 
 def columns_from_slices(

@@ -90,10 +90,10 @@ def slice_likelihoods(
 ) -> dict[str, np.ndarray]:
     """One slice's evidence (name -> state, name -> likelihood vector) as likelihoods,
     each of shape (1, cardinality)."""
-    check_mapping("evidence", evidence)
+    hard = slice_states(variables, evidence)  # checks the mapping (or a pandas Series)
     check_mapping("soft evidence", soft_evidence)
     lam: dict[str, np.ndarray] = {}
-    for name, state in slice_states(variables, evidence).items():
+    for name, state in hard.items():
         lam[name] = np.eye(variables[name].cardinality)[state][None]
     for name, vec in (soft_evidence or {}).items():
         v = _variable(variables, name, "soft evidence")

@@ -69,3 +69,29 @@ def test_a_bad_frame_is_refused_naming_the_column(frame, error, needle) -> None:
 def test_other_evidence_passes_through_unchanged() -> None:
     ev = {"y0": [0, 1]}
     assert columns_from_frame(ev) is ev and columns_from_frame(None) is None
+
+
+@pytest.mark.parametrize("engine", ["structured", "bk"])
+def test_rows_of_a_frame_step_the_online_filters_as_its_columns_filter(engine) -> None:
+    """``for _, row in frame.iterrows(): step(state, row)``: a row of a column with a gap
+    holds floats (1.0) and NaN, which the column reader takes and the slice reader
+    refused ("state must be an int or a name, got 1.0"); a Series was not a mapping."""
+    from inference.adf.boyen_koller import BoyenKoller
+
+    frame = pd.DataFrame({"y0": [0, 1, None, 1, 0], "y1": [1, 1, 0, None, 0]}, dtype="Int64")
+    flt = inference.online_filter(DBN) if engine == "structured" else BoyenKoller(DBN)
+    batch = inference.filter(DBN, frame, "exact" if engine == "structured" else "bk")
+    state = None
+    for t, (_, row) in enumerate(frame.astype(float).iterrows()):
+        assert isinstance(row["y0"], float)
+        state = flt.init(row) if state is None else flt.step(state, row)
+        for name in ("x0", "x1"):
+            marginal = (flt.marginals(state)[name] if engine == "structured"
+                        else flt.marginal(state, name))  # fmt: skip
+            np.testing.assert_allclose(marginal, batch.marginals[name][t], atol=1e-12)
+
+
+@pytest.mark.parametrize(("state", "needle"), [(0.5, "got 0.5"), (float("inf"), "got inf")])
+def test_a_slice_state_that_is_no_whole_number_is_refused(state, needle) -> None:
+    with pytest.raises(EvidenceError, match=needle):
+        inference.online_filter(DBN).init({"y0": state})
