@@ -38,7 +38,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from dbn.bayesnet import BayesNet, check_evidence
-from dbn.errors import EvidenceError, MemoryLimitError, UnknownVariableError
+from dbn.checks import check_count
+from dbn.errors import EvidenceError, InputError, MemoryLimitError, UnknownVariableError
 from inference.exact.cliquetree import CliqueTree, compile_tree
 from inference.exact.pruning import NetIndex, requisite
 from inference.exact.triangulation import Triangulation, triangulate
@@ -90,23 +91,40 @@ class Marginals:
     compiled: bool
 
 
+def _restarts(value) -> int:
+    """``restarts`` as an int >= 0 (``int("a")`` raised ValueError, -1 ran as 0)."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
+        raise InputError(f"restarts must be an integer >= 0, got {value!r}")
+    return int(value)
+
+
 class ExactInference:
     """Pruned, cached exact inference on a discrete :class:`~dbn.bayesnet.BayesNet`.
 
     Parameters
     ----------
-    bn : BayesNet
-        A discrete net (its acyclicity is checked when it is built).
-    max_table_size : int, optional
+    bn : BayesNet or pgmpy DiscreteBayesianNetwork
+        A discrete net (its acyclicity is checked when it is built); a pgmpy model is
+        converted by :func:`dbn.pgmpy_adapter.from_pgmpy` when given (here or to
+        :attr:`bn`): a later change to the pgmpy model is not seen until it is given again.
+    max_table_size : int >= 1, optional
         Largest clique table (entries) any engine may allocate; default
         :func:`default_table_limit`.
-    restarts : int
+    restarts : int >= 0
         Randomised triangulation restarts per heuristic (for trees above 1e5 entries).
+
+    Raises
+    ------
+    InputError
+        ``max_table_size`` or ``restarts`` not an integer in range (before any work).
+    ModelError
+        Not a discrete Bayes net.
     """
 
     def __init__(self, bn: BayesNet, max_table_size: int | None = None, restarts: int = 2) -> None:
-        self.max_table_size = int(max_table_size or default_table_limit())
-        self.restarts = int(restarts)
+        self.max_table_size = (default_table_limit() if max_table_size is None
+                               else check_count("max_table_size", max_table_size))  # fmt: skip
+        self.restarts = _restarts(restarts)
         self._net: NetIndex | None = None
         self.bn = bn
 
@@ -117,6 +135,10 @@ class ExactInference:
 
     @bn.setter
     def bn(self, bn: BayesNet) -> None:
+        if type(bn).__module__.startswith("pgmpy"):  # as inference.filter takes a pgmpy DBN
+            from dbn.pgmpy_adapter import from_pgmpy
+
+            bn = from_pgmpy(bn)
         net = NetIndex.of(bn)
         if self._net is None or net.fingerprint != self._net.fingerprint:
             self.clear_cache()  # another structure: every compiled tree is stale
@@ -323,6 +345,9 @@ def posterior_marginals(
 ) -> Marginals:
     """:meth:`ExactInference.marginals` on a per-net engine kept for the last few nets
     used (:class:`inference.model_cache.ModelCache`), so that repeated calls on one net
-    reuse its compiled trees."""
+    reuse its compiled trees. A pgmpy model is converted at each call, not kept (a change
+    to it would not be seen)."""
+    if type(bn).__module__.startswith("pgmpy"):
+        return ExactInference(bn).marginals(evidence, nodes, engine)
     inf = _ENGINES.get(bn, lambda: ExactInference(bn))
     return inf.marginals(evidence, nodes, engine)

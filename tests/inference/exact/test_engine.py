@@ -190,3 +190,42 @@ def test_posterior_marginals_keeps_one_engine_per_net() -> None:
     expected, _ = brute_force_marginals(bn, {"c": 1})
     np.testing.assert_allclose(again.marginals["b"], expected["b"], atol=TOL)
     assert posterior_marginals(_chain_net(), {"c": 1}).compiled  # another net object
+
+
+def test_a_pgmpy_network_is_taken_and_answers_as_its_conversion() -> None:
+    """``ExactInference(pgmpy_model)`` (and ``posterior_marginals``) convert it, as
+    ``inference.filter`` converts a pgmpy DBN; it was refused ("needs a dbn BayesNet").
+    Oracle: the same query on the converted net, and pgmpy's own variable elimination."""
+    from inference.exact import posterior_marginals
+
+    bn = pa.bundled_network("asia")
+    theirs = pa.to_pgmpy(bn)
+    ev = {"smoke": "yes", "xray": "no"}
+    ours = ExactInference(theirs).marginals(ev).marginals
+    again = posterior_marginals(theirs, ev).marginals
+    oracle = ExactInference(bn).marginals(ev).marginals
+    pgmpy_ve = pa.pgmpy_marginals(theirs, ["lung", "bronc"], ev)
+    for n in ("lung", "bronc"):
+        np.testing.assert_allclose(ours[n], oracle[n], atol=1e-12)
+        np.testing.assert_allclose(again[n], oracle[n], atol=1e-12)
+        np.testing.assert_allclose(ours[n], pgmpy_ve[n], atol=TOL)
+
+
+@pytest.mark.parametrize(("kwargs", "needle"), [
+    ({"max_table_size": "x"}, "max_table_size must be an integer >= 1, got 'x'"),
+    ({"max_table_size": 2.5}, "max_table_size must be an integer >= 1, got 2.5"),
+    ({"max_table_size": 0}, "max_table_size must be an integer >= 1, got 0"),
+    ({"max_table_size": -3}, "got -3"),
+    ({"restarts": "a"}, "restarts must be an integer >= 0, got 'a'"),
+    ({"restarts": -1}, "restarts must be an integer >= 0, got -1"),
+    ({"restarts": True}, "got True"),
+])  # fmt: skip
+def test_bad_settings_are_refused_naming_them(kwargs, needle) -> None:
+    """They raised int()'s ValueError ('x', 'a'), were truncated (2.5 ran as 2), or ran
+    as something else (0 as the default limit, -3 refused every clique, -1 restarts)."""
+    from dbn.errors import InputError
+
+    with pytest.raises(InputError) as exc:
+        ExactInference(_chain_net(), **kwargs)
+    assert needle in str(exc.value)
+    assert ExactInference(_chain_net(), restarts=0).restarts == 0
