@@ -451,7 +451,9 @@ def test_running_out_of_memory_is_a_memory_limit_error(monkeypatch) -> None:
     assert info.value is other
 
 
-def _bn_entries():
+def _bn_entries(pgmpy_taken: bool = True):
+    """The Bayes-net entry points; without those that take a pgmpy model as it is
+    (``ExactInference``, ``posterior_marginals``) unless ``pgmpy_taken``."""
     from inference.exact import (
         ExactInference,
         JunctionTree,
@@ -462,9 +464,9 @@ def _bn_entries():
     )
     from inference.exact.enumeration import brute_force_marginals
 
+    taking = [ExactInference, posterior_marginals] if pgmpy_taken else []
     return [lambda m: variable_elimination(m, ["x"]), lambda m: log_evidence(m, {}),
-            map_assignment, JunctionTree, ExactInference, posterior_marginals,
-            brute_force_marginals]  # fmt: skip
+            map_assignment, JunctionTree, *taking, brute_force_marginals]  # fmt: skip
 
 
 def _dbn_entries():
@@ -484,12 +486,13 @@ def test_every_engine_refuses_a_model_of_another_kind_by_name() -> None:
     """A pgmpy model, a Bayes net where a DBN is needed (or the reverse), or None gave
     Python's AttributeError ('DynamicBayesianNetwork' object has no attribute 'variables')
     in every engine but the structured filter; each now says what it needs, and for a
-    pgmpy model how to convert it."""
+    pgmpy model how to convert it (``ExactInference`` and ``posterior_marginals`` now
+    convert a pgmpy Bayes net themselves: tested in ``test_engine``)."""
     dbn = coupled_chains(2)
     bn = dbn.unroll(2)
     for entries, wrong, needs, convert in [
         (_bn_entries(), [dbn, None], "BayesNet", None),
-        (_bn_entries(), [pa.to_pgmpy(bn)], "BayesNet", "from_pgmpy"),
+        (_bn_entries(pgmpy_taken=False), [pa.to_pgmpy(bn)], "BayesNet", "from_pgmpy"),
         (_dbn_entries(), [bn, None], "TwoSliceDBN", None),
         (_dbn_entries(), [pa.dbn_to_pgmpy(dbn)], "TwoSliceDBN", "dbn_from_pgmpy"),
     ]:
@@ -534,3 +537,4 @@ def test_the_package_lists_its_lazy_entry_points() -> None:
         assert name in dir(inference) and getattr(inference, name) is getattr(api, name)
     with pytest.raises(AttributeError, match="no attribute 'filters'"):
         inference.filters  # noqa: B018
+
