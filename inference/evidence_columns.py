@@ -33,6 +33,7 @@ from dbn.checks import check_count, check_mapping
 from dbn.dbn import TwoSliceDBN
 from dbn.errors import (
     EvidenceError,
+    InputError,
     NonFiniteError,
     ShapeError,
     UnknownEvidenceError,
@@ -421,13 +422,26 @@ def check_columns(
 
 
 def check_query(dbn: TwoSliceDBN, query, default: tuple[str, ...]) -> tuple[str, ...]:
-    """The query as a tuple of known variable names (``None`` gives ``default``)."""
+    """The query as a tuple of known variable names: a name, a sequence of names, or
+    ``None`` for ``default``.
+
+    Raises
+    ------
+    InputError
+        Neither a name nor an iterable (an int raised Python's ``TypeError``).
+    UnknownVariableError
+        A name the DBN does not declare.
+    """
     if query is None:
         return tuple(default)
     if isinstance(query, str):
         query = (query,)
     names = set(dbn.names)
-    out = tuple(query)
+    try:
+        out = tuple(query)
+    except TypeError:
+        raise InputError(f"query must be a variable name or a sequence of names, got "
+                         f"{type(query).__name__} {query!r}") from None  # fmt: skip
     for q in out:
         if q not in names:
             raise UnknownVariableError(f"query names unknown variable {q!r}")

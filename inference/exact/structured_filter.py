@@ -43,9 +43,9 @@ from dbn.errors import (
     FrontierTooLargeError,
     MemoryLimitError,
     ModelError,
-    UnknownVariableError,
 )
 from dbn.variables import DiscreteVariable
+from inference.evidence_columns import check_query
 from inference.exact.dbn_evidence import distinct_rows, sequence_likelihoods, slice_likelihoods
 from inference.exact.frontier import (
     MAX_FRONTIER_SIZE,
@@ -152,6 +152,8 @@ class StructuredFilter:
     ModelError
         A continuous variable, or a query naming an unknown variable
         (:class:`~dbn.errors.UnknownVariableError`).
+    InputError
+        A query that is neither a name nor a sequence of names.
     FrontierTooLargeError
         Even without evidence, a slice would allocate more than ``max_size`` entries.
     """
@@ -173,13 +175,7 @@ class StructuredFilter:
         self.dbn = dbn
         self.variables = {v.name: v for v in dbn.variables}
         self.interface = tuple(dbn.interface)
-        if isinstance(query, str):  # one name (tuple() would split it into letters)
-            query = (query,)
-        query = self.interface if query is None else tuple(query)
-        for q in query:
-            if q not in self.variables:
-                raise UnknownVariableError(f"query names unknown variable {q!r}")
-        self.query = tuple(dict.fromkeys(query))
+        self.query = tuple(dict.fromkeys(check_query(dbn, query, self.interface)))
         self.extras = tuple(q for q in self.query if q not in self.interface)
         self.max_size = check_max_size(max_size)
         self.cards = {n: v.cardinality for n, v in self.variables.items()}

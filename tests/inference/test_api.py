@@ -538,3 +538,19 @@ def test_the_package_lists_its_lazy_entry_points() -> None:
     with pytest.raises(AttributeError, match="no attribute 'filters'"):
         inference.filters  # noqa: B018
 
+
+@pytest.mark.parametrize("method", ["exact", "bk", "particle", "rbpf"])
+def test_a_query_that_is_no_name_nor_sequence_is_refused_naming_it(method) -> None:
+    """``query=5`` raised Python's "'int' object is not iterable" from StructuredFilter and
+    BoyenKoller; every engine now says what a query is."""
+    from inference.adf.boyen_koller import BoyenKoller
+    from inference.exact.structured_filter import StructuredFilter
+
+    dbn, ev = _chains(2, 3)
+    needle = "query must be a variable name or a sequence of names, got int 5"
+    with pytest.raises(InputError, match=needle):
+        inference.filter(dbn, ev, method, query=5, key=jax.random.key(0))
+    for build in (lambda: StructuredFilter(dbn, 5), lambda: BoyenKoller(dbn, query=5)):
+        with pytest.raises(InputError, match=needle):
+            build()
+    assert StructuredFilter(dbn, ["x0", "x0"]).query == ("x0",)  # repeated: once
