@@ -17,6 +17,7 @@ from dbn.errors import (
     CycleError,
     DuplicateNameError,
     EvidenceError,
+    InputError,
     ModelError,
     UnknownVariableError,
 )
@@ -244,10 +245,20 @@ class BayesNet:
                 total += float(np.log(self._tables[n][idx]))
         return total
 
-    def sample(self, rng: np.random.Generator, num_samples: int) -> dict[str, np.ndarray]:
-        """Ancestral samples of a discrete net: name -> int array of shape ``(num_samples,)``."""
+    def sample(self, rng: np.random.Generator | int, num_samples: int) -> dict[str, np.ndarray]:
+        """Ancestral samples of a discrete net: name -> int array of shape ``(num_samples,)``.
+
+        ``rng`` is a numpy ``Generator`` or an int seed (``np.random.default_rng(seed)``);
+        ``num_samples >= 0``. Anything else is an :class:`InputError` naming it."""
         if not self.is_discrete:
             raise ModelError("sample needs a discrete net")
+        if isinstance(rng, int | np.integer) and not isinstance(rng, bool) and rng >= 0:
+            rng = np.random.default_rng(rng)
+        if not isinstance(rng, np.random.Generator):
+            raise InputError(f"rng must be a numpy Generator or an int seed >= 0, got {rng!r}")
+        ok = isinstance(num_samples, int | np.integer) and not isinstance(num_samples, bool)
+        if not ok or num_samples < 0:
+            raise InputError(f"num_samples must be an integer >= 0, got {num_samples!r}")
         out: dict[str, np.ndarray] = {}
         for n in self._order:
             table = self._tables[n]

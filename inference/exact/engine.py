@@ -177,11 +177,18 @@ class ExactInference:
             part of the net the queries need).
         UnknownVariableError
             A queried node is not in the net.
+        InputError
+            ``nodes`` neither a name nor a sequence of names; an unknown ``engine``.
         MemoryLimitError
             The chosen (or, for ``"auto"``, every) engine needs a table over the limit.
         """
         if engine not in ENGINES:
-            raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
+            raise InputError(f"engine must be one of {ENGINES}, got {engine!r}")
+        if isinstance(nodes, str):  # one name ("lung" was read as 'l', 'u', 'n', 'g')
+            nodes = [nodes]
+        if nodes is not None and not isinstance(nodes, Iterable):
+            raise InputError(f"nodes must be a variable name or a sequence of names, got "
+                             f"{type(nodes).__name__} {nodes!r}")  # fmt: skip
         net = self._net
         hard, _ = check_evidence(self._bn, evidence)
         ev = {net.index[n]: s for n, s in hard.items()}

@@ -246,3 +246,20 @@ def test_a_cycle_is_named_along_its_path() -> None:
     with pytest.raises(CycleError, match=r"cycle: (a -> b -> c -> a|b -> c -> a -> b|c -> a -> b -> c)"):
         BayesNet([a, b, c], [TabularCPD("a", ["c"], half), TabularCPD("b", ["a"], half),
                              TabularCPD("c", ["b"], half)])
+
+
+def test_bayes_net_sample_takes_a_seed_and_refuses_bad_sizes() -> None:
+    """``BayesNet.sample``: an int seed is ``np.random.default_rng(seed)`` (it raised
+    AttributeError: 'int' object has no attribute 'random'); a negative or fractional
+    size raised numpy's ValueError or Python's TypeError."""
+    from dbn.errors import InputError
+    from dbn.pgmpy_adapter import bundled_network
+
+    bn = bundled_network("asia")
+    by_seed, by_rng = bn.sample(7, 50), bn.sample(np.random.default_rng(7), 50)
+    assert all(np.array_equal(by_seed[n], by_rng[n]) for n in bn.nodes)
+    assert all(v.shape == (0,) for v in bn.sample(0, 0).values())
+    for rng, n, needle in ((0, -1, "num_samples"), (0, 2.5, "num_samples"),
+                           (0, True, "num_samples"), (-3, 1, "rng"), ("x", 1, "rng")):
+        with pytest.raises(InputError, match=needle):
+            bn.sample(rng, n)

@@ -229,3 +229,19 @@ def test_bad_settings_are_refused_naming_them(kwargs, needle) -> None:
         ExactInference(_chain_net(), **kwargs)
     assert needle in str(exc.value)
     assert ExactInference(_chain_net(), restarts=0).restarts == 0
+
+
+def test_one_node_by_name_and_bad_nodes_or_engine() -> None:
+    """``nodes="lung"`` was read letter by letter ("query of unknown variable 'l'"),
+    ``nodes=5`` raised Python's TypeError and ``engine="xx"`` a bare ValueError."""
+    from dbn.errors import InputError
+
+    inf = ExactInference(pa.bundled_network("asia"))
+    one = inf.marginals({"smoke": "yes"}, "lung").marginals
+    assert list(one) == ["lung"]
+    np.testing.assert_allclose(one["lung"], inf.marginals({"smoke": "yes"}, ["lung"])
+                               .marginals["lung"])  # fmt: skip
+    with pytest.raises(InputError, match="nodes must be a variable name or a sequence"):
+        inf.marginals({}, 5)
+    with pytest.raises(InputError, match="engine must be one of"):
+        inf.marginals({}, ["lung"], engine="xx")
