@@ -47,10 +47,17 @@ ROW_TOLERANCE = 1e-9
 """Rows of a probability table must sum to 1 within this absolute tolerance."""
 
 
+def _name_hint(value: object) -> str:
+    """For a :class:`~dbn.variables.Variable` given where its name is wanted: how to fix it."""
+    name = getattr(value, "name", None)
+    return f" (a CPD names its variables: give {name!r})" if isinstance(name, str) else ""
+
+
 def _parents_tuple(variable: str, parents: Sequence[str]) -> tuple[str, ...]:
     """The parents as a tuple of names (checked, with the CPD's own name)."""
     if not isinstance(variable, str) or not variable:
-        raise ModelError(f"a CPD's variable must be a non-empty name, got {variable!r}")
+        raise ModelError(f"a CPD's variable must be a non-empty name, got {variable!r}"
+                         f"{_name_hint(variable)}")  # fmt: skip
     if isinstance(parents, str) or not isinstance(parents, Iterable):
         raise ModelError(
             f"CPD of {variable!r}: parents must be a sequence of names, got {parents!r}"
@@ -58,9 +65,8 @@ def _parents_tuple(variable: str, parents: Sequence[str]) -> tuple[str, ...]:
     out = tuple(parents)
     for p in out:
         if not isinstance(p, str) or not p:
-            raise ModelError(
-                f"CPD of {variable!r}: parent names must be non-empty strings, got {p!r}"
-            )
+            raise ModelError(f"CPD of {variable!r}: parent names must be non-empty strings, "
+                             f"got {p!r}{_name_hint(p)}")  # fmt: skip
     if len(set(out)) != len(out):
         raise ModelError(f"CPD of {variable!r}: a parent is listed twice in {out}")
     if variable in out:

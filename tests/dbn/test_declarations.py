@@ -263,3 +263,15 @@ def test_bayes_net_sample_takes_a_seed_and_refuses_bad_sizes() -> None:
                            (0, True, "num_samples"), (-3, 1, "rng"), ("x", 1, "rng")):
         with pytest.raises(InputError, match=needle):
             bn.sample(rng, n)
+
+
+def test_a_variable_object_where_a_name_is_wanted_says_to_give_its_name() -> None:
+    from dbn.cpds import TabularCPD
+    from dbn.errors import ModelError
+    from dbn.variables import DiscreteVariable
+
+    a, b = DiscreteVariable("a", 2), DiscreteVariable("b", 2)
+    with pytest.raises(ModelError, match=r"give 'a'\)"):
+        TabularCPD(a, [], [0.5, 0.5])
+    with pytest.raises(ModelError, match=r"parent names .* give 'b'\)"):
+        TabularCPD("a", [b], [[0.5, 0.5]] * 2)
