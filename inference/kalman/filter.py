@@ -26,6 +26,7 @@ __all__ = [
     "LinearGaussianParams",
     "KalmanResult",
     "kalman_filter",
+    "check_params",
     "lgssm_sample",
     "lgssm_joint_log_likelihood",
 ]
@@ -96,11 +97,10 @@ def _check_covariances(params: LinearGaussianParams) -> None:
             raise InputError(f"{name} is not positive semi-definite (a covariance)")
 
 
-def _check(
-    params: LinearGaussianParams, observations: np.ndarray
-) -> tuple[LinearGaussianParams, np.ndarray]:
-    """``params`` as finite float64 arrays of consistent shapes (Q, R and P0 covariances)
-    and the observations as a finite ``(num_timesteps, obs_dim)`` array."""
+def check_params(params: LinearGaussianParams) -> LinearGaussianParams:
+    """``params`` as finite float64 arrays of consistent shapes, ``Q``, ``R`` and ``P0``
+    covariances (symmetric, positive semi-definite); else the library's error naming the
+    field (:class:`InputError`, :class:`ShapeError`, :class:`NonFiniteError`)."""
     if not isinstance(params, LinearGaussianParams):
         raise InputError(f"params must be a LinearGaussianParams, got {type(params).__name__}")
     p = LinearGaussianParams(*(_real(name, v) for name, v in zip(params._fields, params)))
@@ -115,6 +115,16 @@ def _check(
     if p.H.shape != (m, d) or p.R.shape != (m, m):
         raise ShapeError(f"H {p.H.shape} / R {p.R.shape} do not fit state_dim {d}")
     _check_covariances(p)
+    return p
+
+
+def _check(
+    params: LinearGaussianParams, observations: np.ndarray
+) -> tuple[LinearGaussianParams, np.ndarray]:
+    """:func:`check_params` and the observations as a finite ``(num_timesteps, obs_dim)``
+    array."""
+    p = check_params(params)
+    m = p.H.shape[0]
     try:
         y = np.asarray(observations, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -193,19 +203,32 @@ def lgssm_sample(
 
     Parameters
     ----------
-    seed : int
+    seed : int >= 0
         Seed of a local ``numpy.random.Generator``.
     params : LinearGaussianParams
-    num_timesteps : int
+        Checked as :func:`kalman_filter` checks them.
+    num_timesteps : int >= 0
+
+    Raises
+    ------
+    InputError, ShapeError, NonFiniteError
+        A bad seed, count or parameter, naming it.
     """
+    ok = isinstance(seed, int | np.integer) and not isinstance(seed, bool) and seed >= 0
+    if not ok:
+        raise InputError(f"seed must be an integer >= 0, got {seed!r}")
+    ok = isinstance(num_timesteps, int | np.integer) and not isinstance(num_timesteps, bool)
+    if not ok or num_timesteps < 0:
+        raise InputError(f"num_timesteps must be an integer >= 0, got {num_timesteps!r}")
+    params = check_params(params)
     rng = np.random.default_rng(seed)
     s = rng.multivariate_normal(params.m0, params.P0)
-    xs, ys = [], []
-    for _ in range(num_timesteps):
+    xs, ys = np.zeros((num_timesteps, len(s))), np.zeros((num_timesteps, params.H.shape[0]))
+    for k in range(num_timesteps):
         s = params.F @ s + rng.multivariate_normal(np.zeros(len(s)), params.Q)
-        xs.append(s)
-        ys.append(params.H @ s + rng.multivariate_normal(np.zeros(params.H.shape[0]), params.R))
-    return np.array(xs), np.array(ys)
+        xs[k] = s
+        ys[k] = params.H @ s + rng.multivariate_normal(np.zeros(params.H.shape[0]), params.R)
+    return xs, ys
 
 
 def lgssm_joint_log_likelihood(params: LinearGaussianParams, observations: np.ndarray) -> float:

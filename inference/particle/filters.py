@@ -35,7 +35,7 @@ from jax.scipy.special import logsumexp
 from dbn.checks import check_count, check_nonnegative
 from dbn.errors import InputError, ModelError, ShapeError
 from inference.particle.model import StateSpaceModel
-from inference.particle.resampling import Resampler, systematic
+from inference.particle.resampling import RESAMPLERS, Resampler, systematic
 from inference.precision import precision_scope, scoped
 
 __all__ = [
@@ -180,6 +180,30 @@ def check_threshold(ess_threshold: Any) -> None:
     check_nonnegative("ess_threshold", ess_threshold)
 
 
+def check_resampler(resampler: Any) -> Resampler:
+    """A resampler: a callable ``(key, log_weights, n) -> ancestors`` or the name of one in
+    :data:`~inference.particle.resampling.RESAMPLERS`; else :class:`InputError` (a name
+    was taken, then raised "'str' object is not callable" inside the traced step)."""
+    if isinstance(resampler, str) and resampler in RESAMPLERS:
+        return RESAMPLERS[resampler]
+    if isinstance(resampler, str) or not callable(resampler):
+        raise InputError(f"resampler must be one of {sorted(RESAMPLERS)} or a callable "
+                         f"(key, log_weights, n) -> ancestors, got {resampler!r}")  # fmt: skip
+    return resampler
+
+
+def check_float_dtype(dtype: Any) -> None:
+    """Raise :class:`InputError` unless ``dtype`` is a float dtype (an int32 filter ran,
+    its particles and weights truncated to integers)."""
+    try:
+        kind = np.dtype(dtype).kind
+    except TypeError:
+        kind = None
+    if kind != "f":
+        raise InputError(f"dtype must be a float dtype (jnp.float32 or jnp.float64), "
+                         f"got {dtype!r}")  # fmt: skip
+
+
 MAX_PARTICLES = 2**31 - 1
 """The most particles a filter takes: jax indexes them with int32."""
 
@@ -279,6 +303,8 @@ def _particle_filter(
     """The filter both algorithms share: a first stage (:data:`FirstStage`), adaptive
     resampling on its ESS, propagation and weighting by the likelihood."""
     check_threshold(ess_threshold)
+    check_float_dtype(dtype)
+    resampler = check_resampler(resampler)
     n = check_num_particles(num_particles)
     stage = first_stage(model, math.log(n), dtype)
 
@@ -330,8 +356,9 @@ def bootstrap_filter(
         Declares ``sample_initial``, ``sample_transition``, ``log_likelihood``.
     num_particles : int
         :math:`N` (static).
-    resampler : callable
-        ``(key, log_weights, n) -> ancestors`` (:mod:`inference.particle.resampling`).
+    resampler : callable or str
+        ``(key, log_weights, n) -> ancestors`` (:mod:`inference.particle.resampling`), or
+        the name of one in :data:`~inference.particle.resampling.RESAMPLERS`.
     ess_threshold : float
         :math:`\tau`; resample when ESS < tau N; ``>= 1`` resamples every step.
     dtype : float dtype

@@ -10,10 +10,22 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from dbn.errors import InputError, ShapeError
 from inference.kalman import LinearGaussianParams
+from inference.kalman.filter import check_params
 from inference.particle.model import StateSpaceModel
 
 __all__ = ["LinearGaussianSSM"]
+
+
+def _square_root(S: np.ndarray) -> np.ndarray:
+    """``L`` with ``L L^T = S`` for a covariance: Cholesky, or (``S`` singular, as a noise-
+    free component makes it) ``V sqrt(max(w, 0))`` from ``S = V diag(w) V^T``."""
+    try:
+        return np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        w, V = np.linalg.eigh(S)
+        return V * np.sqrt(np.clip(w, 0.0, None))
 
 
 class LinearGaussianSSM(StateSpaceModel):
@@ -22,16 +34,25 @@ class LinearGaussianSSM(StateSpaceModel):
     The same law as :func:`inference.kalman.kalman_filter`; the look-ahead point is the
     transition mean :math:`F s_{k-1}` (seed 002, eq. 1.12). Observations are arrays of
     shape ``(obs_dim,)``; actions are ignored.
+
+    Raises
+    ------
+    InputError, ShapeError, NonFiniteError
+        Parameters :func:`~inference.kalman.filter.check_params` refuses (a raw
+        ``LinAlgError`` before), or an ``R`` that is not positive definite (the likelihood
+        needs its inverse; ``Q`` and ``P0`` may be singular: their draws use a square root).
     """
 
     def __init__(self, params: LinearGaussianParams) -> None:
+        params = check_params(params)
         self.params = params
-        self._F = np.asarray(params.F, dtype=np.float64)
-        self._H = np.asarray(params.H, dtype=np.float64)
-        self._m0 = np.asarray(params.m0, dtype=np.float64)
-        self._L0 = np.linalg.cholesky(np.asarray(params.P0, dtype=np.float64))
-        self._LQ = np.linalg.cholesky(np.asarray(params.Q, dtype=np.float64))
-        LR = np.linalg.cholesky(np.asarray(params.R, dtype=np.float64))
+        self._F, self._H, self._m0 = params.F, params.H, params.m0
+        self._L0, self._LQ = _square_root(params.P0), _square_root(params.Q)
+        try:
+            LR = np.linalg.cholesky(params.R)
+        except np.linalg.LinAlgError:
+            raise InputError("R must be positive definite: the particle likelihood "
+                             "N(y; H s, R) needs its inverse") from None  # fmt: skip
         self._LR = LR
         self._R_logdet = 2.0 * float(np.sum(np.log(np.diag(LR))))
 
@@ -54,6 +75,9 @@ class LinearGaussianSSM(StateSpaceModel):
     def log_likelihood(self, particles: Array, observation: Array) -> Array:
         """``log N(y; H s, R)`` per particle, by a triangular solve with chol(R)."""
         dt = particles.dtype
+        if jnp.shape(observation) != (self._H.shape[0],):  # static under jit: checked once
+            raise ShapeError(f"an observation has shape {jnp.shape(observation)}, expected "
+                             f"({self._H.shape[0]},) (obs_dim)")  # fmt: skip
         resid = jnp.asarray(observation, dt) - particles @ jnp.asarray(self._H.T, dt)
         sol = jax.scipy.linalg.solve_triangular(jnp.asarray(self._LR, dt), resid.T, lower=True)
         m = self._H.shape[0]
