@@ -193,8 +193,8 @@ def check_resampler(resampler: Any) -> Resampler:
 
 
 def check_float_dtype(dtype: Any) -> None:
-    """Raise :class:`InputError` unless ``dtype`` is a float dtype (an int32 filter ran,
-    its particles and weights truncated to integers)."""
+    """Raise :class:`InputError` unless ``dtype`` is a float dtype (an int32 filter was
+    built, then failed inside the model's first draw with jax's own ValueError)."""
     try:
         kind = np.dtype(dtype).kind
     except TypeError:

@@ -47,7 +47,7 @@ def test_a_resampler_by_name_is_that_resampler() -> None:
 @pytest.mark.parametrize("algorithm", [bootstrap_filter, auxiliary_filter])
 def test_bad_filter_arguments_are_refused_naming_them(algorithm, kwargs, needle) -> None:
     """A resampler's name was taken and then failed inside the traced step ("'str' object
-    is not callable"); an int32 filter ran on truncated particles."""
+    is not callable"); an int32 filter failed inside the model's first draw."""
     with pytest.raises(InputError, match=needle):
         algorithm(LinearGaussianSSM(PARAMS), 16, **kwargs)
 
