@@ -20,7 +20,12 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from dbn.errors import InputError
-from inference.mcmc.kernel import _check_move_probs, metropolis_accept_batch
+from inference.mcmc.kernel import (
+    _check_move_probs,
+    check_run,
+    check_start_value,
+    metropolis_accept_batch,
+)
 
 __all__ = [
     "BatchInfo",
@@ -236,9 +241,8 @@ def run_batch(
     -------
     BatchRecord
     """
-    num_steps = int(num_steps)
-    if num_steps < 1:
-        raise InputError(f"num_steps={num_steps} must be >= 1")
+    num_steps = check_run(rng, num_steps)
+    check_start_value(log_target_value)
     value = np.asarray(log_target_value, dtype=np.float64).copy()
     num_chains = value.shape[0]
     num_moves = len(kernel.moves)

@@ -19,7 +19,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from dbn.errors import InputError
-from inference.mcmc.kernel import MoveKernel
+from inference.mcmc.kernel import MoveKernel, check_run, check_start_value
 
 __all__ = ["ChainRecord", "sample"]
 
@@ -100,11 +100,11 @@ def sample(
     -------
     ChainRecord
     """
-    num_steps = int(num_steps)
-    if num_steps < 1:
-        raise InputError(f"num_steps={num_steps} must be >= 1")
-    if not 0 <= int(burn_in) <= num_steps:
-        raise InputError(f"burn_in={burn_in} must be in [0, num_steps={num_steps}]")
+    num_steps = check_run(rng, num_steps)
+    whole = isinstance(burn_in, int | np.integer) and not isinstance(burn_in, bool)
+    if not whole or not 0 <= burn_in <= num_steps:
+        raise InputError(f"burn_in={burn_in!r} must be an integer in [0, num_steps={num_steps}]")
+    check_start_value(log_target_value)
     num_moves = len(kernel.moves)
     tried = [0] * num_moves
     accepted = [0] * num_moves

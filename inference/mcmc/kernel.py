@@ -38,6 +38,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from dbn.checks import check_count
 from dbn.errors import InputError, NegativeProbabilityError, NotNormalizedError
 
 __all__ = [
@@ -212,6 +213,23 @@ def metropolis_accept_batch(rng: np.random.Generator, log_accept_ratio: np.ndarr
         return (log_a >= 0.0) | (np.log(u) < log_a)
 
 
+def check_run(rng: Any, num_steps: Any) -> int:
+    """``num_steps`` as an int >= 1 (2.5 ran 2 steps), after checking that ``rng`` is a
+    numpy ``Generator`` (an int raised AttributeError at the first draw); else
+    :class:`InputError` naming the argument. Shared by the runners."""
+    if not isinstance(rng, np.random.Generator):
+        raise InputError(f"rng must be a numpy Generator (np.random.default_rng(seed)), "
+                         f"got {type(rng).__name__}")  # fmt: skip
+    return check_count("num_steps", num_steps)
+
+
+def check_start_value(log_target_value: Any) -> None:
+    """Raise :class:`InputError` if the start's log target is NaN anywhere: the chain
+    would never accept a move (its log acceptance ratios are NaN)."""
+    if np.isnan(np.asarray(log_target_value, dtype=np.float64)).any():
+        raise InputError("log_target_value is NaN: the chain could never accept a move")
+
+
 def _check_move_probs(move_probs: np.ndarray, num_moves: int) -> np.ndarray:
     probs = np.asarray(move_probs, dtype=np.float64)
     if probs.shape != (num_moves,):
@@ -259,6 +277,10 @@ class MoveKernel:
         self.moves = tuple(moves)
         if not self.moves:
             raise InputError("moves is empty: a kernel needs at least one move")
+        for m, mv in enumerate(self.moves):
+            if not isinstance(mv, Move):
+                raise InputError(f"moves[{m}] must be a Move(name, propose, reverse), got "
+                                 f"{type(mv).__name__}")  # fmt: skip
         self.probs = _check_move_probs(np.asarray(move_probs), len(self.moves))
         for m, mv in enumerate(self.moves):
             if not 0 <= int(mv.reverse) < len(self.moves):
@@ -479,12 +501,12 @@ def run_chain(
         The chain after each step.
     infos : list of RJInfo, length num_steps
     """
-    if int(num_steps) < 1:
-        raise InputError(f"num_steps={num_steps} must be >= 1")
+    num_steps = check_run(rng, num_steps)
     kernel = MoveKernel(moves, move_probs)
     value = float(log_target(state))
+    check_start_value(value)
     states, infos = [], []
-    for _ in range(int(num_steps)):
+    for _ in range(num_steps):
         state, info = kernel.step(rng, state, value, log_target)
         value = info.log_target
         states.append(state)

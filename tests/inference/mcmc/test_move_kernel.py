@@ -205,3 +205,36 @@ def test_batch_chains_reach_the_exact_stationary_law() -> None:
     wrong = np.exp(LOG_W) * (0.5 / 0.2) ** np.arange(len(LOG_W))
     wrong /= wrong.sum()
     assert ((cnt - C * wrong) ** 2 / (C * wrong)).sum() > 100
+
+
+def _batch_kernel() -> BatchKernel:
+    def prop(rng, x):
+        return BatchProposal(x, np.zeros(len(x)), np.zeros(len(x)), np.zeros(len(x)))
+
+    return BatchKernel([BatchMove("stay", prop, 0)], [1.0], lambda st, cand: (
+        np.zeros(len(st)), cand), lambda st, scored, keep: st)  # fmt: skip
+
+
+@pytest.mark.parametrize(("run", "needle"), [
+    (lambda rng: sample(rng, MoveKernel(MOVES, PROBS), 0, 2.5, 0.0, log_target),
+     "num_steps must be an integer >= 1, got 2.5"),
+    (lambda rng: sample(0, MoveKernel(MOVES, PROBS), 0, 5, 0.0, log_target),
+     "rng must be a numpy Generator"),
+    (lambda rng: sample(rng, MoveKernel(MOVES, PROBS), 0, 5, 0.0, log_target, burn_in=1.5),
+     "burn_in=1.5 must be an integer"),
+    (lambda rng: sample(rng, MoveKernel(MOVES, PROBS), 0, 5, math.nan, log_target),
+     "log_target_value is NaN"),
+    (lambda rng: run_chain(rng, 0, 3.0, MOVES, log_target, PROBS), "num_steps must be"),
+    (lambda rng: run_chain(rng, 0, 3, MOVES, lambda x: math.nan, PROBS), "is NaN"),
+    (lambda rng: run_batch(rng, _batch_kernel(), np.zeros(2), 2.5, np.zeros(2)),
+     "num_steps must be"),
+    (lambda rng: run_batch(rng, _batch_kernel(), np.zeros(2), 3, np.array([0.0, math.nan])),
+     "is NaN"),
+    (lambda rng: MoveKernel([up], [1.0]), "moves[0] must be a Move(name, propose, reverse)"),
+])  # fmt: skip
+def test_runners_refuse_bad_arguments_naming_them(run, needle) -> None:
+    """2.5 steps ran 2, an int rng raised AttributeError at the first draw, a NaN start
+    ran a chain that never moved, a bare function as a move raised AttributeError."""
+    with pytest.raises(InputError) as exc:
+        run(np.random.default_rng(0))
+    assert needle in str(exc.value)
