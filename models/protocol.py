@@ -44,6 +44,7 @@ import jax
 import numpy as np
 
 from dbn.errors import InputError, TimeOrderError
+from inference.particle.filters import check_key
 
 __all__ = [
     "Example",
@@ -95,8 +96,10 @@ def seed_from_key(key: jax.Array) -> int:
 
     For trackers whose randomness is a ``numpy.random.Generator`` or an int seed: the
     same key always gives the same seed, distinct keys give (almost surely) distinct seeds
-    (the key's data words hashed by ``numpy.random.SeedSequence``).
+    (the key's data words hashed by ``numpy.random.SeedSequence``). Anything but one jax
+    PRNG key is an :class:`~dbn.errors.InputError` (it was jax's TypeError).
     """
+    check_key(key)
     words = np.asarray(jax.random.key_data(key), dtype=np.uint32).ravel().tolist()
     # hash the key's words on the host (no jax computation: ~60 us, a third of a randint)
     return int(np.random.SeedSequence(words).generate_state(1)[0] >> 1)
@@ -180,7 +183,7 @@ class StepTracker:
         -------
         (states, infos) : lists of length ``len(observations)``
         """
-        state, steps = self._start(key, list(observations), None)
+        state, steps = self._start(key, observations, None)
         states, infos = [], []
         for k, obs in steps:
             state, info = self.step(k, state, obs)
@@ -206,17 +209,24 @@ class StepTracker:
             ``run``'s last state (the ``init`` state when there are no observations) and
             its infos, a list of length ``len(observations)``.
         """
-        state, steps = self._start(key, list(observations), progress)
+        state, steps = self._start(key, observations, progress)
         infos = []
         for k, obs in steps:
             state, info = self.step(k, state, obs)
             infos.append(info)
         return state, infos
 
-    def _start(self, key: jax.Array, observations: list,
+    def _start(self, key: jax.Array, observations: Iterable[Any],
                progress: Callable[[Iterable, int], Iterable] | None) -> tuple[Any, Iterable]:
         """``init``'s state and the ``(key, observation)`` pairs of :meth:`run` (wrapped in
-        ``progress`` if given)."""
+        ``progress`` if given). A key that is not one jax PRNG key, or observations that
+        are not a sequence, are an :class:`~dbn.errors.InputError` (they were jax's or
+        Python's TypeError)."""
+        check_key(key)
+        if isinstance(observations, str | bytes) or not isinstance(observations, Iterable):
+            raise InputError(f"observations must be a sequence of per-step observations, "
+                             f"got {type(observations).__name__}")  # fmt: skip
+        observations = list(observations)
         k_init, keys = split_run_keys(key, len(observations))
         steps: Iterable = zip(keys, observations, strict=False)
         return self.init(k_init), steps if progress is None else progress(steps, len(observations))

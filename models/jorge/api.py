@@ -108,7 +108,7 @@ class JorgeTracker(StepTracker):
         own labeller takes every stroke in place, so ``K`` strokes cost the labelling alone,
         not ``O(K^2)`` copying. The same final state and infos as ``run``; a rejected stroke
         raises (the partial state is dropped)."""
-        state, steps = self._start(key, list(observations), progress)
+        state, steps = self._start(key, observations, progress)
         return state, [_add(state.labeller, obs) for _, obs in steps]
 
     def save(self, state: JorgeState, path) -> None:

@@ -171,6 +171,9 @@ class LabelGraph(LinkRule):
             Ends before it starts, or starts before the previous stroke.
         """
         k = len(self.nodes)
+        if not isinstance(stroke, Stroke):  # a str's .index method passed the check below
+            raise InputError(f"stroke {k}: expected a Stroke (or a LinkedStroke), got "
+                             f"{type(stroke).__name__}")  # fmt: skip
         for name in ("index", "start", "end"):
             v = getattr(stroke, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)):

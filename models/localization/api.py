@@ -22,6 +22,7 @@ import numpy as np
 from dbn.errors import CheckpointError, InputError, ShapeError
 from inference.checkpoint import load_arrays, save_arrays
 from inference.particle import ParticleInfo, ParticleState
+from inference.particle.filters import check_key
 from inference.precision import precision_scope
 from models.localization.landmarks import measure_landmarks
 from models.localization.model import (
@@ -78,6 +79,7 @@ class LocalizationTracker(StepTracker):
         self, key: jax.Array, state: LocalizationState, obs
     ) -> tuple[LocalizationState, ParticleInfo]:
         """Move by the odometry, weigh by the observation (all input checked first)."""
+        check_key(key)
         if not isinstance(obs, tuple) or len(obs) not in (2, 3):
             raise InputError(
                 f"obs must be (odometry, observation[, timestamp]), got {type(obs).__name__}"

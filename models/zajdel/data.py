@@ -126,7 +126,11 @@ def validate_observations(
 def _as_arrays(obs: Observations) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
     """The observations as numpy arrays: appearance (float64, a single 1-D observation made
     a row), the times (float64) and the indices (as given); complex or unreadable input
-    raises."""
+    raises, as does an object without :class:`Observations`' fields."""
+    missing = [name for name in Observations._fields if not hasattr(obs, name)]
+    if missing:
+        raise InputError(f"expected Observations (fields {', '.join(Observations._fields)}), "
+                         f"got {type(obs).__name__}")  # fmt: skip
     for name in Observations._fields:
         if np.iscomplexobj(getattr(obs, name)):
             raise InputError(f"{name}: expected real numbers, got a complex array")

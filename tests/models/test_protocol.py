@@ -254,3 +254,31 @@ def test_step_key_list_is_list_of_the_split_keys(make) -> None:
         # a step draws the same numbers from either
         draws = [np.asarray(jax.random.uniform(k, (3,))) for k in (g, w)]
         np.testing.assert_array_equal(*draws)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_anything_but_an_observation_or_a_key_is_refused_naming_it(name: str) -> None:
+    """``step`` on None, an int, a str, a list or a dict, ``run`` / ``fold`` on a non-
+    sequence and a key that is not a PRNG key raised Python's or jax's own errors
+    (AttributeError: 'NoneType' object has no attribute 'appearance'; a str passed the
+    jorge stroke check through its ``.index`` method; TypeError: 'int' object is not
+    iterable; jax's invalid PRNG key data). Each is now a dbn.errors class and the state
+    is left as it was."""
+    ex = _example(name)
+    tr = ex.tracker
+    state = tr.init(jax.random.key(1))
+    snapshot = copy.deepcopy(tr.fingerprint(state))
+    for obs in (None, 5, "abc", [], {}):
+        with pytest.raises(DBNError):
+            tr.step(jax.random.key(2), state, obs)
+    for observations in (None, 5, "ab"):
+        for method in (tr.run, tr.fold):
+            with pytest.raises(InputError, match="observations must be a sequence"):
+                method(jax.random.key(2), observations)
+    for key in (0, None, np.zeros(3)):
+        with pytest.raises(InputError, match="key must be one jax PRNG key"):
+            tr.run(key, ex.observations[:1])
+        if name not in ("jorge", "zajdel_adf", "zajdel_learnsearch"):  # these use no key
+            with pytest.raises(InputError, match="key must be one jax PRNG key"):
+                tr.step(key, state, ex.observations[0])
+    _assert_same(tr.fingerprint(state), snapshot)
