@@ -180,7 +180,16 @@ def check_sequence(model: RobotModel, observations: Any, num_steps: int, dtype: 
 
 
 def position_errors(means: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    """Euclidean position errors ``(num_timesteps,)`` between estimated and true poses."""
+    """Euclidean position errors ``(..., num_timesteps)`` between estimated poses
+    ``(..., num_timesteps, 3)`` (leading axes: runs) and true poses of the same shape or
+    ``(num_timesteps, 3)``. Other shapes are a :class:`ShapeError` (one true pose broadcast
+    against every estimate; a truth one step longer raised numpy's broadcast error)."""
+    means, truth = np.asarray(means, dtype=np.float64), np.asarray(truth, dtype=np.float64)
+    ok = (means.ndim >= 2 and truth.ndim >= 2 and min(means.shape[-1], truth.shape[-1]) >= 2
+          and means.shape[-2] == truth.shape[-2] and truth.shape[:-2] in ((), means.shape[:-2]))
+    if not ok:
+        raise ShapeError(f"means {means.shape} and truth {truth.shape}: expected "
+                         "(..., num_timesteps, 3) and (num_timesteps, 3) or the same shape")
     return np.hypot(means[..., 0] - truth[..., 0], means[..., 1] - truth[..., 1])
 
 

@@ -39,8 +39,9 @@ def evaluate(
     """
     if len(truth) != len(results):
         raise InputError(f"truth has {len(truth)} frames but results has {len(results)}")
-    if threshold <= 0:
-        raise InputError(f"threshold={threshold} must be positive")
+    real = isinstance(threshold, int | float | np.integer | np.floating)
+    if isinstance(threshold, bool) or not real or not 0 < threshold < float("inf"):
+        raise InputError(f"threshold={threshold!r} must be a positive number (m)")  # nan ran
     acc = mm.MOTAccumulator(auto_id=True)
     for ft, res in zip(truth, results, strict=True):
         hyp = res.X[:, :2] if len(res.ids) else np.zeros((0, 2))

@@ -204,3 +204,16 @@ def test_localize_compiles_once_for_every_noise_setting() -> None:
              for s in (0.1, 0.3, 0.9)]  # fmt: skip
     assert filters._run_model._cache_size() == before + 1
     assert min(np.abs(a - b).max() for a, b in [means[:2], means[1:]]) > 1e-3
+
+
+def test_position_errors_refuse_shapes_that_only_broadcast() -> None:
+    """One true pose against every estimate broadcast silently; a truth one step longer
+    raised numpy's broadcast error. Runs (leading axes) still share one truth."""
+    from dbn.errors import ShapeError
+
+    means, truth = np.zeros((2, 5, 3)), np.ones((5, 3))
+    np.testing.assert_allclose(position_errors(means, truth), np.full((2, 5), np.sqrt(2)))
+    for m, t in ((means[0], truth[:1]), (means[0], np.ones((6, 3))),
+                 (means, np.ones((3, 5, 3))), (np.zeros(3), np.ones(3))):  # fmt: skip
+        with pytest.raises(ShapeError, match="expected"):
+            position_errors(m, t)

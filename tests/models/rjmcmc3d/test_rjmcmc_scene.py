@@ -120,3 +120,6 @@ def test_metrics_through_motmetrics() -> None:
     assert m3["mota"] < 0 and m3["misses"] == m3["num_objects"]
     with pytest.raises(InputError, match="frames"):
         evaluate(truth.frames, perfect[:-1])
+    for bad in (float("nan"), 0.0, -1.0, "0.5", float("inf")):  # nan ran
+        with pytest.raises(InputError, match="must be a positive number"):
+            evaluate(truth.frames, perfect, threshold=bad)
