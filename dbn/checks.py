@@ -11,7 +11,8 @@ import numpy as np
 
 from dbn.errors import DBNError, EvidenceError, InputError
 
-__all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative"]
+__all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative",
+           "make_rng"]
 
 MAX_SCALE = 1e100
 """Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
@@ -47,3 +48,17 @@ def check_mapping(what: str, value: Any, error: type[DBNError] = EvidenceError) 
     a list of pairs raised ``AttributeError`` deep inside)."""
     if value is not None and not isinstance(value, Mapping):
         raise error(f"{what} must be a mapping name -> value, got {type(value).__name__}")
+
+
+def make_rng(seed: Any, name: str = "seed") -> np.random.Generator:
+    """``np.random.default_rng(seed)`` for what numpy takes as a seed (an int >= 0, a
+    sequence of them, a ``SeedSequence``, a ``Generator`` returned as is), not a bool
+    (True seeded as 1); else :class:`InputError` naming ``name`` (numpy's own ValueError
+    "expected non-negative integer" or TypeError named no argument)."""
+    if isinstance(seed, bool | np.bool_):
+        raise InputError(f"{name} must be an integer >= 0, got {seed!r}")
+    try:
+        return np.random.default_rng(seed)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be an integer >= 0 (or a numpy Generator), got "
+                         f"{seed!r}") from None

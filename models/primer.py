@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from dbn.bayesnet import BayesNet
+from dbn.checks import make_rng
 from dbn.cpds import TabularCPD
 from dbn.dbn import TwoSliceDBN, prev
 from dbn.variables import DiscreteVariable
@@ -79,7 +80,7 @@ def simulate_corridor(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Draw ``(zones, readings)``, each an int array of shape ``(num_timesteps,)``."""
     dbn = dbn or corridor_dbn()
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     bn = dbn.unroll(1)
     first = bn.sample(rng, 1)
     zones = np.empty(num_timesteps, dtype=np.int64)

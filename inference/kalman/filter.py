@@ -20,6 +20,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
+from dbn.checks import make_rng
 from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 
 __all__ = [
@@ -221,7 +222,7 @@ def lgssm_sample(
     if not ok or num_timesteps < 0:
         raise InputError(f"num_timesteps must be an integer >= 0, got {num_timesteps!r}")
     params = check_params(params)
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     s = rng.multivariate_normal(params.m0, params.P0)
     xs, ys = np.zeros((num_timesteps, len(s))), np.zeros((num_timesteps, params.H.shape[0]))
     for k in range(num_timesteps):

@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dbn.checks import make_rng
 from dbn.errors import InputError
 from models.jorge.strokes import GroundTruth, check_lower_rate, resample
 
@@ -156,7 +157,7 @@ def simulate_meeting(
         )
     if fps is not None:
         fps = check_lower_rate(fps, FPS, "simulate_meeting")
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     k = group_size
     n = k + num_walkers
     sizes = np.stack([rng.uniform(20, 45, n), rng.uniform(14, 32, n)], axis=1)

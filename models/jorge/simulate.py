@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dbn.checks import make_rng
 from dbn.errors import InputError
 from models.jorge.strokes import GroundTruth
 
@@ -37,7 +38,7 @@ def simulate_ground_truth(seed, num_people: int = 5, num_frames: int = 600,
     """
     if num_people < 1 or num_frames < 10:
         raise InputError(f"need num_people >= 1 and num_frames >= 10, got {num_people}, {num_frames}")
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     width, height = 384.0, 288.0
     boxes = np.full((num_frames, num_people, 4), np.nan)
     t = np.arange(num_frames)

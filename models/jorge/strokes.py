@@ -44,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dbn.checks import check_nonnegative
+from dbn.checks import check_nonnegative, make_rng
 from dbn.errors import (
     DBNError,
     FileFormatError,
@@ -764,7 +764,7 @@ def gap_mask(seed, visible: np.ndarray, config: StrokeConfig) -> np.ndarray:
     ndarray of bool, shape (num_frames, num_ids)
         True where the person is hidden by the simulated occlusion.
     """
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     num_frames, num_ids = visible.shape
     rate = config.gaps_per_100 / 100.0
     p_start = min(1.0, rate)

@@ -22,6 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dbn.checks import make_rng
 from dbn.errors import InputError
 from models.localization.model import (
     KNNLocalizationModel,
@@ -191,7 +192,7 @@ def simulate_run(
     world : World
     num_timesteps : int
     """
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     wps = _waypoints(world)
     start_x = rng.uniform(1.0, world.width - 3.0)
     pose = np.array([start_x, world.height / 4, 0.0])
@@ -288,7 +289,7 @@ def build_trained_world(
         cell_xy=cell_xy,
         cell_theta=2 * math.pi / num_orientations,
     )
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     cand = np.column_stack([rng.uniform(0, world.width, 2000), rng.uniform(0, world.height, 2000)])
     cand = cand[free_space(world, cand)][:400]
     cal = np.column_stack([cand, rng.uniform(-math.pi, math.pi, len(cand))])

@@ -81,7 +81,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.linalg import cholesky
 
-from dbn.checks import check_count
+from dbn.checks import check_count, make_rng
 from dbn.errors import InputError, NonFiniteError, ShapeError
 from inference.particle.filters import ParticleState
 from inference.particle.kbest import k_best_states
@@ -617,7 +617,7 @@ def run_filter(
     -------
     KBestLists.
     """
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     time_ptr = np.asarray(odb.time_ptr)
     if time_ptr.ndim != 1 or time_ptr.size < 3 or np.any(np.diff(time_ptr) < 0):
         raise InputError("odb.time_ptr must be 1-D, non-decreasing, with at least 2 steps")

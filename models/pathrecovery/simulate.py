@@ -43,6 +43,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.linalg import cholesky
 
+from dbn.checks import make_rng
 from dbn.errors import InputError, ModelError, ShapeError
 from models.pathrecovery.model import CameraNetwork, propagate, whiten
 
@@ -135,7 +136,7 @@ def manhattan_grid(
     CameraNetwork with ``4 n_rows n_cols + block[0] n_rows (n_cols - 1)
     + block[1] n_cols (n_rows - 1)`` cameras.
     """
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     if n_rows < 1 or n_cols < 1 or min(block) < 1:
         raise ModelError(f"need n_rows, n_cols >= 1 and block >= 1, got {n_rows}, {n_cols}, {block}")
     bh, bv = int(block[0]), int(block[1])
@@ -199,7 +200,7 @@ def street(
     -------
     CameraNetwork with ``2 n_per_side`` cameras; camera ``side * n_per_side + i``.
     """
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     if n_per_side < 2:
         raise ModelError(f"n_per_side must be >= 2, got {n_per_side!r}")
     n = n_per_side
@@ -402,7 +403,7 @@ def simulate_scene(
     -------
     Scene.
     """
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     sigma, chol = _check_scene(num_objects, num_timesteps, cm, spread, feature_dim, gamma, sigma)
     M, T, d = int(num_objects), int(num_timesteps), int(feature_dim)
     target = int(rng.integers(M))

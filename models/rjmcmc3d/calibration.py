@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dbn.checks import make_rng
 from dbn.errors import FileFormatError, InputError
 from models.io.xmlfile import read_xml_root
 from models.rjmcmc3d.geometry import (
@@ -148,7 +149,7 @@ def scene_from_cameras(
     colour_gain : ndarray, shape (num_views, 3)
     sigma_px : ndarray, shape (num_views,)
     """
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     width, height = cameras[0].width, cameras[0].height
     if any(c.width != width or c.height != height for c in cameras):
         raise InputError("cameras: every view must have the same image size")

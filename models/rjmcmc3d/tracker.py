@@ -31,6 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dbn.checks import make_rng
 from dbn.errors import InputError
 from inference.progress import progress_bar
 from models.protocol import next_frame_index
@@ -221,7 +222,7 @@ class RJMCMCTracker:
         """
         self._check_frame(frame)
         index = next_frame_index(int(state.frame), frame.t, "frame.t")
-        rng = np.random.default_rng(seed)
+        rng = make_rng(seed)
         chain = FrameChain(self, state, frame, self.likelihood)
         out = chain.run(rng)
         new_state, result = self._posterior(state, chain, out)

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from dbn.checks import make_rng
 from dbn.errors import InputError
 from models.rjmcmc3d.types import FrameTruth, Scene, Truth
 
@@ -89,7 +90,7 @@ def simulate_walkers(
     """
     if num_frames < 1 or num_people < 1:
         raise InputError(f"num_frames={num_frames} and num_people={num_people} must be >= 1")
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     a = math.exp(-beta * tau)
     b = 0.3 * speed * math.sqrt(1 - a * a)
     floor = scene.floor

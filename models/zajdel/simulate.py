@@ -36,6 +36,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.stats import truncnorm
 
+from dbn.checks import make_rng
 from dbn.errors import ModelError
 from models.zajdel.data import Observations
 from models.zajdel.params import ZajdelParams, default_prior
@@ -220,7 +221,7 @@ def simulate_office(seed: int, config: OfficeConfig | None = None) -> Scenario:
     cfg = default_config() if config is None else config
     if cfg.num_people < 1 or cfg.num_obs < cfg.num_people or cfg.num_cameras < 1:
         raise ModelError(f"config: need 1 <= num_people <= num_obs and cameras >= 1, got {cfg}")
-    rng = np.random.default_rng(seed)
+    rng = make_rng(seed)
     C, B, r, P = cfg.num_cameras, cfg.num_borders, cfg.obs_dim, cfg.num_people
     trans, entry, mu, sd = _layout(rng, C, B, cfg)
     ws = cfg.within_std

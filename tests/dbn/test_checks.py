@@ -38,3 +38,27 @@ def test_check_nonnegative_refuses(value):
 def test_checks_return_plain_python_numbers():
     assert type(check_count("n", np.int64(3))) is int
     assert type(check_nonnegative("x", np.float32(0.5))) is float
+
+
+def test_make_rng_is_numpy_seeding_with_the_library_error() -> None:
+    from dbn.checks import make_rng
+
+    a, b = make_rng(7).random(3), np.random.default_rng(7).random(3)
+    np.testing.assert_array_equal(a, b)
+    g = np.random.default_rng(1)
+    assert make_rng(g) is g and make_rng([1, 2]).random() == np.random.default_rng([1, 2]).random()
+    for bad in (-1, 2.5, "x", True, object()):
+        with pytest.raises(InputError, match="seed must be an integer >= 0"):
+            make_rng(bad)
+
+
+@pytest.mark.parametrize("simulate", [
+    "models.jorge.simulate:simulate_ground_truth", "models.zajdel.simulate:simulate_office",
+])  # fmt: skip
+def test_simulators_name_a_bad_seed(simulate) -> None:
+    """numpy's "expected non-negative integer" named no argument."""
+    import importlib
+
+    module, name = simulate.split(":")
+    with pytest.raises(InputError, match=r"seed must be an integer >= 0 .*, got -1"):
+        getattr(importlib.import_module(module), name)(-1)
