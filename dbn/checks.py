@@ -12,7 +12,7 @@ import numpy as np
 from dbn.errors import DBNError, EvidenceError, InputError
 
 __all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative",
-           "make_rng"]
+           "instance_of", "make_rng"]
 
 MAX_SCALE = 1e100
 """Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
@@ -62,3 +62,11 @@ def make_rng(seed: Any, name: str = "seed") -> np.random.Generator:
     except (TypeError, ValueError):
         raise InputError(f"{name} must be an integer >= 0 (or a numpy Generator), got "
                          f"{seed!r}") from None
+
+
+def instance_of(obj: Any, package: str, kind: str) -> bool:
+    """Whether ``obj`` is an instance of ``package``'s class ``kind`` or of a subclass
+    (yours included), told by the classes' names and modules so that ``package`` (pgmpy,
+    pandas) is not imported to ask."""
+    return any(c.__name__ == kind and c.__module__.split(".")[0] == package
+               for c in type(obj).__mro__)  # fmt: skip

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from dbn.bayesnet import BayesNet, check_discrete_net
-from dbn.checks import check_nonnegative
+from dbn.checks import check_nonnegative, instance_of
 from dbn.cpds import ROW_TOLERANCE, TabularCPD
 from dbn.dbn import TwoSliceDBN, check_two_slice, is_prev, prev, unprev
 from dbn.errors import DBNError, EvidenceError, FileFormatError, InputError, ModelError
@@ -137,9 +137,8 @@ def _check_pgmpy(model: Any, kind: str) -> None:
     """A :class:`ModelError` unless ``model`` is an instance of pgmpy's class ``kind`` or of
     a subclass (yours included), told by the class's name and module so that pgmpy is not
     imported here."""
-    cls = type(model)
-    if not any(c.__name__ == kind and c.__module__.startswith("pgmpy") for c in cls.__mro__):
-        raise ModelError(f"expected a pgmpy {kind}, got {cls.__name__}")
+    if not instance_of(model, "pgmpy", kind):
+        raise ModelError(f"expected a pgmpy {kind}, got {type(model).__name__}")
 
 
 def _renormalized(name: Any, table: np.ndarray, tol: float) -> np.ndarray:

@@ -23,7 +23,7 @@ from typing import Any
 
 from numpy.typing import ArrayLike
 
-from dbn.checks import check_count, check_mapping
+from dbn.checks import check_count, check_mapping, instance_of
 from dbn.dbn import TwoSliceDBN
 from dbn.errors import (
     FrontierTooLargeError,
@@ -75,10 +75,7 @@ def as_two_slice_dbn(model: Any) -> TwoSliceDBN:
     :func:`dbn.pgmpy_adapter.dbn_from_pgmpy` (node names become ``str``)."""
     if isinstance(model, TwoSliceDBN):
         return model
-    if (
-        type(model).__module__.startswith("pgmpy")
-        and type(model).__name__ == "DynamicBayesianNetwork"
-    ):
+    if instance_of(model, "pgmpy", "DynamicBayesianNetwork"):  # or a subclass of it
         from dbn.pgmpy_adapter import dbn_from_pgmpy
 
         return dbn_from_pgmpy(model)

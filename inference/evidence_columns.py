@@ -29,7 +29,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dbn.checks import check_count, check_mapping
+from dbn.checks import check_count, check_mapping, instance_of
 from dbn.dbn import TwoSliceDBN
 from dbn.errors import (
     EvidenceError,
@@ -195,7 +195,7 @@ def slice_states(
 def _series_mapping(evidence):
     """A pandas ``Series`` (a ``DataFrame``'s row: index = variable names) as a dict;
     anything else as is."""
-    if type(evidence).__module__.startswith("pandas") and type(evidence).__name__ == "Series":
+    if instance_of(evidence, "pandas", "Series"):
         return evidence.to_dict()
     return evidence
 
@@ -280,7 +280,7 @@ def columns_from_frame(frame) -> dict[str, np.ndarray]:
         A column label that is not a string (a ``MultiIndex``'s tuple, an int), or one
         label given twice.
     """
-    if not (type(frame).__module__.startswith("pandas") and type(frame).__name__ == "DataFrame"):
+    if not instance_of(frame, "pandas", "DataFrame"):
         return frame
     labels = list(frame.columns)
     bad = [c for c in labels if not isinstance(c, str)]

@@ -95,3 +95,21 @@ def test_rows_of_a_frame_step_the_online_filters_as_its_columns_filter(engine) -
 def test_a_slice_state_that_is_no_whole_number_is_refused(state, needle) -> None:
     with pytest.raises(EvidenceError, match=needle):
         inference.online_filter(DBN).init({"y0": state})
+
+
+def test_subclasses_of_pandas_and_pgmpy_classes_are_read_as_theirs() -> None:
+    """A DataFrame subclass (a user's, geopandas') and a pgmpy DBN subclass were refused:
+    the checks compared the class's own name."""
+    from dbn import pgmpy_adapter as pa
+    from dbn.checks import instance_of
+
+    class Frame(pd.DataFrame):
+        pass
+
+    frame = Frame({"y0": [0, 1, 1], "y1": [1, 0, 0]})
+    cols = {c: frame[c].to_numpy() for c in ("y0", "y1")}
+    _same(inference.filter(DBN, frame), inference.filter(DBN, cols))
+    theirs = pa.dbn_to_pgmpy(DBN)
+    theirs.__class__ = type("MyDBN", (type(theirs),), {})
+    _same(inference.filter(theirs, cols), inference.filter(DBN, cols))
+    assert instance_of(frame, "pandas", "DataFrame") and not instance_of(cols, "pandas", "dict")

@@ -8,7 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from dbn.errors import InputError, ModelError, ShapeError
@@ -80,13 +80,17 @@ def test_run_model_is_run_with_the_parameters_traced(algo: str) -> None:
 
 @settings(max_examples=6, deadline=None)
 @given(a=st.floats(-0.95, 0.95), q=st.floats(0.05, 2.0), r=st.floats(0.05, 2.0))
+@example(a=0.8984375, q=1.5, r=0.3)  # found by a local (random) run: see the docstring
 def test_run_model_tracks_the_kalman_filter(a: float, q: float, r: float) -> None:
-    """With its parameters traced the filter still computes its model's law: over 4,000
-    particles the filtered means within a quarter of Kalman's posterior standard deviation
-    (about ten Monte Carlo errors), the log evidence within 0.3."""
+    """With its parameters traced the filter still computes its model's law: over 16,000
+    particles the filtered means within a quarter of Kalman's posterior standard deviation,
+    the log evidence within 0.3. With 4,000 particles the log evidence's spread over keys
+    was 0.13 at a = 0.898, q = 1.5, r = 0.3 (twelve keys), so 0.3 was 2.3 of its standard
+    deviations and key 0 missed it (0.307, a random example of a local run); with 16,000
+    the spread is 0.064 (the same twelve keys), making the bar about 4.7 of them."""
     _, ys = lgssm_sample(7, _params(a, q, r), 25)
     kf = kalman_filter(_params(a, q, r), ys)
-    _, infos, means = run_model(jax.random.key(0), AR1(a, q, r), ys, num_particles=4000)
+    _, infos, means = run_model(jax.random.key(0), AR1(a, q, r), ys, num_particles=16000)
     sd = np.sqrt(kf.filtered_covs[:, 0, 0])
     assert np.all(np.abs(np.asarray(means)[:, 0] - kf.filtered_means[:, 0]) < 0.25 * sd)
     assert abs(float(infos.log_likelihood.sum()) - float(kf.log_likelihood)) < 0.3
