@@ -10,14 +10,13 @@ import networkx as nx
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dbn.checks import check_mapping
+from dbn.checks import check_mapping, check_size, make_rng
 from dbn.cpds import ContinuousCPD, DeterministicCPD, LinearGaussianCPD, TabularCPD
 from dbn.errors import (
     CPDShapeError,
     CycleError,
     DuplicateNameError,
     EvidenceError,
-    InputError,
     ModelError,
     UnknownVariableError,
 )
@@ -252,13 +251,8 @@ class BayesNet:
         ``num_samples >= 0``. Anything else is an :class:`InputError` naming it."""
         if not self.is_discrete:
             raise ModelError("sample needs a discrete net")
-        if isinstance(rng, int | np.integer) and not isinstance(rng, bool) and rng >= 0:
-            rng = np.random.default_rng(rng)
-        if not isinstance(rng, np.random.Generator):
-            raise InputError(f"rng must be a numpy Generator or an int seed >= 0, got {rng!r}")
-        ok = isinstance(num_samples, int | np.integer) and not isinstance(num_samples, bool)
-        if not ok or num_samples < 0:
-            raise InputError(f"num_samples must be an integer >= 0, got {num_samples!r}")
+        rng = make_rng(rng, "rng")
+        num_samples = check_size("num_samples", num_samples)
         out: dict[str, np.ndarray] = {}
         for n in self._order:
             table = self._tables[n]

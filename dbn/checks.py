@@ -12,7 +12,7 @@ import numpy as np
 from dbn.errors import DBNError, EvidenceError, InputError
 
 __all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative",
-           "instance_of", "make_rng"]
+           "check_size", "instance_of", "make_rng"]
 
 MAX_SCALE = 1e100
 """Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
@@ -31,6 +31,15 @@ def check_count(name: str, value: Any, error: type[DBNError] = InputError) -> in
     ok = isinstance(value, int | np.integer) and not isinstance(value, bool)
     if not ok or value < 1:
         raise error(f"{name} must be an integer >= 1, got {value!r}")
+    return int(value)
+
+
+def check_size(name: str, value: Any, error: type[DBNError] = InputError) -> int:
+    """``value`` as an int >= 0 (a count that may be zero: samples, steps, restarts): a
+    Python or numpy integer, not a bool or a float; else ``error`` naming ``name``."""
+    ok = isinstance(value, int | np.integer) and not isinstance(value, bool)
+    if not ok or value < 0:
+        raise error(f"{name} must be an integer >= 0, got {value!r}")
     return int(value)
 
 

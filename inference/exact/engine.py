@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dbn.bayesnet import BayesNet, check_evidence
-from dbn.checks import check_count
+from dbn.checks import check_count, check_size
 from dbn.errors import EvidenceError, InputError, MemoryLimitError, UnknownVariableError
 from inference.exact.cliquetree import CliqueTree, compile_tree
 from inference.exact.pruning import NetIndex, requisite
@@ -91,13 +91,6 @@ class Marginals:
     compiled: bool
 
 
-def _restarts(value) -> int:
-    """``restarts`` as an int >= 0 (``int("a")`` raised ValueError, -1 ran as 0)."""
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
-        raise InputError(f"restarts must be an integer >= 0, got {value!r}")
-    return int(value)
-
-
 class ExactInference:
     """Pruned, cached exact inference on a discrete :class:`~dbn.bayesnet.BayesNet`.
 
@@ -124,7 +117,7 @@ class ExactInference:
     def __init__(self, bn: BayesNet, max_table_size: int | None = None, restarts: int = 2) -> None:
         self.max_table_size = (default_table_limit() if max_table_size is None
                                else check_count("max_table_size", max_table_size))  # fmt: skip
-        self.restarts = _restarts(restarts)
+        self.restarts = check_size("restarts", restarts)  # "a": int()'s ValueError; -1 ran
         self._net: NetIndex | None = None
         self.bn = bn
 

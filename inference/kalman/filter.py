@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
-from dbn.checks import make_rng
+from dbn.checks import check_size, make_rng
 from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 
 __all__ = [
@@ -215,14 +215,9 @@ def lgssm_sample(
     InputError, ShapeError, NonFiniteError
         A bad seed, count or parameter, naming it.
     """
-    ok = isinstance(seed, int | np.integer) and not isinstance(seed, bool) and seed >= 0
-    if not ok:
-        raise InputError(f"seed must be an integer >= 0, got {seed!r}")
-    ok = isinstance(num_timesteps, int | np.integer) and not isinstance(num_timesteps, bool)
-    if not ok or num_timesteps < 0:
-        raise InputError(f"num_timesteps must be an integer >= 0, got {num_timesteps!r}")
-    params = check_params(params)
     rng = make_rng(seed)
+    num_timesteps = check_size("num_timesteps", num_timesteps)
+    params = check_params(params)
     s = rng.multivariate_normal(params.m0, params.P0)
     xs, ys = np.zeros((num_timesteps, len(s))), np.zeros((num_timesteps, params.H.shape[0]))
     for k in range(num_timesteps):

@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from dbn.checks import check_size
 from dbn.errors import InputError
 from inference.mcmc.kernel import MoveKernel, check_run, check_start_value
 
@@ -101,9 +102,8 @@ def sample(
     ChainRecord
     """
     num_steps = check_run(rng, num_steps)
-    whole = isinstance(burn_in, int | np.integer) and not isinstance(burn_in, bool)
-    if not whole or not 0 <= burn_in <= num_steps:
-        raise InputError(f"burn_in={burn_in!r} must be an integer in [0, num_steps={num_steps}]")
+    if check_size("burn_in", burn_in) > num_steps:
+        raise InputError(f"burn_in={burn_in} must be in [0, num_steps={num_steps}]")
     check_start_value(log_target_value)
     num_moves = len(kernel.moves)
     tried = [0] * num_moves

@@ -62,3 +62,12 @@ def test_simulators_name_a_bad_seed(simulate) -> None:
     module, name = simulate.split(":")
     with pytest.raises(InputError, match=r"seed must be an integer >= 0 .*, got -1"):
         getattr(importlib.import_module(module), name)(-1)
+
+
+def test_check_size_takes_zero_and_refuses_the_rest() -> None:
+    from dbn.checks import check_size
+
+    assert check_size("n", 0) == 0 and type(check_size("n", np.int64(3))) is int
+    for bad in (-1, 2.5, True, "3", None):
+        with pytest.raises(ConfigError, match="n must be an integer >= 0"):
+            check_size("n", bad, ConfigError)

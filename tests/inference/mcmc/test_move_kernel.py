@@ -221,7 +221,7 @@ def _batch_kernel() -> BatchKernel:
     (lambda rng: sample(0, MoveKernel(MOVES, PROBS), 0, 5, 0.0, log_target),
      "rng must be a numpy Generator"),
     (lambda rng: sample(rng, MoveKernel(MOVES, PROBS), 0, 5, 0.0, log_target, burn_in=1.5),
-     "burn_in=1.5 must be an integer"),
+     "burn_in must be an integer >= 0, got 1.5"),
     (lambda rng: sample(rng, MoveKernel(MOVES, PROBS), 0, 5, math.nan, log_target),
      "log_target_value is NaN"),
     (lambda rng: run_chain(rng, 0, 3.0, MOVES, log_target, PROBS), "num_steps must be"),
