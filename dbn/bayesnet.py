@@ -10,7 +10,7 @@ import networkx as nx
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dbn.checks import check_mapping, check_size, make_rng
+from dbn.checks import check_mapping, check_size, evidence_mapping, evidence_state, make_rng
 from dbn.cpds import ContinuousCPD, DeterministicCPD, LinearGaussianCPD, TabularCPD
 from dbn.errors import (
     CPDShapeError,
@@ -288,7 +288,10 @@ def check_evidence(
     Parameters
     ----------
     evidence : mapping name -> state index or state name, optional
-        Hard evidence ``X = x``.
+        Hard evidence ``X = x``; ``None``, ``-1``, NaN or pandas' ``NA`` = unobserved, a
+        whole-number float an index, as a DBN slice reads them
+        (:func:`dbn.checks.evidence_state`); or a pandas ``Series`` (a case of a
+        ``DataFrame``).
     soft_evidence : mapping name -> array_like of shape ``(cardinality,)``, optional
         Virtual evidence: a likelihood ``lambda(x) = p(observation | X = x)`` per state,
         nonnegative, finite and not all zero (its scale does not matter for posteriors but
@@ -304,6 +307,7 @@ def check_evidence(
     EvidenceError
         Unknown variable, state out of range, wrong length, negative/NaN/all-zero vector.
     """
+    evidence = evidence_mapping(evidence)
     check_mapping("evidence", evidence)
     check_mapping("soft evidence", soft_evidence)
     hard: dict[str, int] = {}
@@ -315,7 +319,9 @@ def check_evidence(
             raise EvidenceError(
                 f"hard evidence on continuous variable {name!r} is not supported here"
             )
-        hard[name] = v.index(state)
+        state = evidence_state(state)
+        if state is not None:
+            hard[name] = v.index(state)
     soft: dict[str, np.ndarray] = {}
     for name, lik in (soft_evidence or {}).items():
         if name not in bn:

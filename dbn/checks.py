@@ -12,7 +12,7 @@ import numpy as np
 from dbn.errors import DBNError, EvidenceError, InputError
 
 __all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative",
-           "check_size", "instance_of", "make_rng"]
+           "check_size", "evidence_mapping", "evidence_state", "instance_of", "make_rng"]
 
 MAX_SCALE = 1e100
 """Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
@@ -79,3 +79,26 @@ def instance_of(obj: Any, package: str, kind: str) -> bool:
     pandas) is not imported to ask."""
     return any(c.__name__ == kind and c.__module__.split(".")[0] == package
                for c in type(obj).__mro__)  # fmt: skip
+
+
+def evidence_mapping(evidence: Any) -> Any:
+    """One case's evidence as a mapping: a pandas ``Series`` (a ``DataFrame``'s row, its
+    index the variable names) as a dict; anything else as is (then checked as a mapping)."""
+    return evidence.to_dict() if instance_of(evidence, "pandas", "Series") else evidence
+
+
+def evidence_state(state: Any) -> Any:
+    """One observed state as a column of evidence reads it: ``None``, ``-1``, NaN and
+    pandas' ``NA`` / ``NaT`` are unobserved (``None``); a float of a whole number is its
+    index (a ``DataFrame`` row with a gap holds floats); anything else as is (the
+    variable then checks it)."""
+    if type(state).__name__ in ("NAType", "NaTType"):
+        return None
+    if isinstance(state, float | np.floating):
+        if np.isnan(state):
+            return None
+        if np.isfinite(state) and state == round(state) and abs(state) < 2.0**53:
+            state = int(state)
+    if isinstance(state, int | np.integer) and not isinstance(state, bool) and state == -1:
+        return None
+    return state

@@ -29,7 +29,13 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dbn.checks import check_count, check_mapping, instance_of
+from dbn.checks import (
+    check_count,
+    check_mapping,
+    evidence_mapping,
+    evidence_state,
+    instance_of,
+)
 from dbn.dbn import TwoSliceDBN
 from dbn.errors import (
     EvidenceError,
@@ -174,7 +180,7 @@ def slice_states(
     UnknownEvidenceError, EvidenceError
         Not a mapping, an unknown variable, a state out of range or not a state name.
     """
-    evidence = _series_mapping(evidence)
+    evidence = evidence_mapping(evidence)
     check_mapping("evidence", evidence)
     out: dict[str, int] = {}
     for name, state in (evidence or {}).items():
@@ -183,35 +189,10 @@ def slice_states(
             raise UnknownEvidenceError(
                 f"evidence on unknown variable {name!r} (known: {sorted(variables)})"
             )
-        state = _slice_state(state)
-        missing = state is None or (
-            isinstance(state, int | np.integer) and not isinstance(state, bool) and state == -1
-        )
-        if not missing:
+        state = evidence_state(state)
+        if state is not None:
             out[name] = v.index(state)
     return out
-
-
-def _series_mapping(evidence):
-    """A pandas ``Series`` (a ``DataFrame``'s row: index = variable names) as a dict;
-    anything else as is."""
-    if instance_of(evidence, "pandas", "Series"):
-        return evidence.to_dict()
-    return evidence
-
-
-def _slice_state(state):
-    """One slice's state as a column reads it: NaN and pandas' ``NA`` / ``NaT`` are
-    unobserved (None), a float of a whole number its index (a row of a column with a gap
-    holds floats); anything else as is."""
-    if type(state).__name__ in ("NAType", "NaTType"):
-        return None
-    if isinstance(state, float | np.floating):
-        if np.isnan(state):
-            return None
-        if np.isfinite(state) and state == round(state) and abs(state) < 2.0**53:
-            return int(state)
-    return state
 
 
 def columns_from_slices(

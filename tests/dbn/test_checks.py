@@ -71,3 +71,15 @@ def test_check_size_takes_zero_and_refuses_the_rest() -> None:
     for bad in (-1, 2.5, True, "3", None):
         with pytest.raises(ConfigError, match="n must be an integer >= 0"):
             check_size("n", bad, ConfigError)
+
+
+def test_evidence_state_reads_a_state_as_a_column_does() -> None:
+    import pandas as pd
+
+    from dbn.checks import evidence_state
+
+    for unobserved in (None, -1, np.int64(-1), float("nan"), np.float32("nan"), pd.NA, pd.NaT):
+        assert evidence_state(unobserved) is None
+    assert evidence_state(2.0) == 2 and type(evidence_state(np.float64(2.0))) is int
+    for kept in (0.5, float("inf"), "wet", True, 3):
+        assert evidence_state(kept) is kept

@@ -245,3 +245,25 @@ def test_one_node_by_name_and_bad_nodes_or_engine() -> None:
         inf.marginals({}, 5)
     with pytest.raises(InputError, match="engine must be one of"):
         inf.marginals({}, ["lung"], engine="xx")
+
+
+def test_a_case_reads_as_a_dbn_slice_does() -> None:
+    """A DataFrame row of cases (pandas Series; a gap makes the row's numbers floats and
+    NaN) and None / -1 / NaN for unobserved read as in a DBN slice; they were refused
+    ("state must be an int or a name, got 1.0"; a Series "must be a mapping"). Oracle:
+    the same query with only the observed states, and brute-force enumeration."""
+    import pandas as pd
+
+    bn = _chain_net()
+    rows = pd.DataFrame({"a": [1, None], "c": [0, 1]}, dtype="Int64").astype(float)
+    inf = ExactInference(bn)
+    for (_, row), seen in zip(rows.iterrows(), ({"a": 1, "c": 0}, {"c": 1}), strict=True):
+        assert isinstance(row["c"], float)
+        expected, _ = brute_force_marginals(bn, seen)
+        got = inf.marginals(row, ["b"]).marginals["b"]
+        np.testing.assert_allclose(got, expected["b"], atol=TOL)
+    for unobserved in (None, -1, float("nan")):
+        np.testing.assert_allclose(inf.marginals({"a": unobserved, "c": 0}, ["b"]).marginals["b"],
+                                   inf.marginals({"c": 0}, ["b"]).marginals["b"])  # fmt: skip
+    with pytest.raises(EvidenceError, match="got 0.5"):
+        inf.marginals({"a": 0.5})
