@@ -55,6 +55,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from dbn.checks import check_size
 from dbn.errors import InputError
 
 __all__ = [
@@ -299,8 +300,7 @@ def adf_filter_lag(
     -------
     ADFOutput (``records`` holds one entry per observation)
     """
-    if not isinstance(lag, int | np.integer) or lag < 0:
-        raise InputError(f"lag = {lag!r}: must be an integer >= 0")
+    lag = check_size("lag", lag)
     if hooks.window_predict is None:
         raise InputError("fixed-lag revision needs a window_predict hook")
     K = _num_obs(xs)

@@ -54,6 +54,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dbn.checks import make_rng
 from dbn.errors import InputError
 from inference.mcmc import BatchKernel, BatchMove, BatchProposal, run_batch
 from models.zajdel.data import Observations, validate_observations
@@ -500,7 +501,7 @@ def partition_mcmc(
     if K < 1:
         raise InputError("num_obs = 0: nothing to sample")
     start = time.perf_counter()
-    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    rng = make_rng(seed)  # a Generator as is
     lab0 = _initial_labels(rng, obs, params, cfg, num_chains, init_labels)
     t = _terms(obs, params)
     state = chain_init(lab0, obs, params)

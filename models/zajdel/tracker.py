@@ -42,6 +42,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from dbn.checks import check_size
 from dbn.errors import InputError, ModelError
 from inference.adf.checkpoint import load_state, save_state
 from inference.adf.driver import adf_filter, adf_filter_lag, adf_step, x64_context
@@ -282,8 +283,7 @@ class ZajdelADF:
         (final state, RunResult)
         """
         state = self.init() if state is None else state
-        if not isinstance(lag, int | np.integer) or lag < 0:
-            raise InputError(f"lag = {lag!r}: must be an integer >= 0")
+        lag = check_size("lag", lag)
         o = self._validate(obs, state)
         first = int(state.k)
         cfg = self.config

@@ -85,3 +85,12 @@ def test_window_scores_equal_brute_force(belief, seed: int, n: int, branch: int)
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
     # a chain through a window member is among the hypotheses (the test reaches that branch)
     assert (combos >= S).any()
+
+
+@pytest.mark.parametrize("lag", [-1, 1.5, True, "2"])
+def test_a_lag_that_is_no_count_is_refused(belief, lag) -> None:
+    from dbn.errors import InputError
+
+    sc, state = belief
+    with pytest.raises(InputError, match="lag must be an integer >= 0"):
+        ZajdelADF(sc.params, CFG).run(take(sc.obs, slice(6, 8)), state, lag=lag)
