@@ -12,7 +12,8 @@ import numpy as np
 from dbn.errors import DBNError, EvidenceError, InputError
 
 __all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative",
-           "check_size", "evidence_mapping", "evidence_state", "instance_of", "make_rng"]
+           "check_size", "evidence_mapping", "evidence_state", "instance_of", "is_whole",
+           "make_rng"]
 
 MAX_SCALE = 1e100
 """Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
@@ -97,8 +98,14 @@ def evidence_state(state: Any) -> Any:
     if isinstance(state, float | np.floating):
         if np.isnan(state):
             return None
-        if np.isfinite(state) and state == round(state) and abs(state) < 2.0**53:
+        if is_whole(state):
             state = int(state)
     if isinstance(state, int | np.integer) and not isinstance(state, bool) and state == -1:
         return None
     return state
+
+
+def is_whole(value: Any) -> Any:
+    """Where a float (scalar or array) is a whole number an int64 holds exactly: finite,
+    equal to its rounding, below 2**53 in size (a state index written as a float)."""
+    return np.isfinite(value) & (value == np.round(value)) & (np.abs(value) < 2.0**53)

@@ -35,6 +35,7 @@ from dbn.checks import (
     evidence_mapping,
     evidence_state,
     instance_of,
+    is_whole,
 )
 from dbn.dbn import TwoSliceDBN
 from dbn.errors import (
@@ -138,7 +139,7 @@ def state_column(
 def _whole_states(name: str, arr: np.ndarray) -> np.ndarray:
     """A float column of whole numbers, NaN = unobserved (pandas writes an integer column
     with a missing value so), as int64 with -1 for NaN; any other float is refused."""
-    whole = np.isfinite(arr) & (arr == np.round(arr)) & (np.abs(arr) < 2.0**53)
+    whole = is_whole(arr)
     bad = ~np.isnan(arr) & ~whole
     if bad.any():
         t = int(np.argmax(bad))
