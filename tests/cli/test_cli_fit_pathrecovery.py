@@ -84,6 +84,8 @@ def test_write_scene_reads_back(runs):
         [scene.true_cam, scene.true_ta, scene.true_obs]))
 
 
+# ~9 s (the fit's ties, refusals and network stay in the default run): CI runs it
+@pytest.mark.heavy
 def test_fit_keeps_the_least_training_error_and_scores_as_track_and_eval(runs, tmp_path, capsys):
     """``edges.csv`` is the network counted from the training runs' objects, ``config.json``
     the config with the pair of the least mean training error; each run's errors are those
