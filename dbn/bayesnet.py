@@ -10,7 +10,14 @@ import networkx as nx
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dbn.checks import check_mapping, check_size, evidence_mapping, evidence_state, make_rng
+from dbn.checks import (
+    check_mapping,
+    check_size,
+    evidence_mapping,
+    evidence_state,
+    from_package,
+    make_rng,
+)
 from dbn.cpds import ContinuousCPD, DeterministicCPD, LinearGaussianCPD, TabularCPD
 from dbn.errors import (
     CPDShapeError,
@@ -272,7 +279,7 @@ def check_discrete_net(bn: Any, what: str) -> None:
     ``AttributeError``; the message says how to convert one."""
     if not isinstance(bn, BayesNet):
         how = (" (convert a pgmpy model with dbn.pgmpy_adapter.from_pgmpy)"
-               if type(bn).__module__.startswith("pgmpy") else "")
+               if from_package(bn, "pgmpy") else "")
         raise ModelError(f"{what} needs a dbn BayesNet, got {type(bn).__name__}{how}")
     if not bn.is_discrete:
         raise ModelError(f"{what} needs a discrete Bayes net (all variables discrete)")

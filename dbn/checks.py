@@ -82,6 +82,12 @@ def instance_of(obj: Any, package: str, kind: str) -> bool:
                for c in type(obj).__mro__)  # fmt: skip
 
 
+def from_package(obj: Any, package: str) -> bool:
+    """Whether ``obj``'s class is defined in ``package`` (``"pgmpy"``), told by its
+    module's name so that ``package`` is not imported to ask."""
+    return type(obj).__module__.split(".")[0] == package
+
+
 def evidence_mapping(evidence: Any) -> Any:
     """One case's evidence as a mapping: a pandas ``Series`` (a ``DataFrame``'s row, its
     index the variable names) as a dict; anything else as is (then checked as a mapping)."""

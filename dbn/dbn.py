@@ -22,7 +22,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from dbn.bayesnet import CPD, BayesNet, check_sequence
-from dbn.checks import check_count
+from dbn.checks import check_count, from_package
 from dbn.cpds import DeterministicCPD, LinearGaussianCPD, TabularCPD
 from dbn.errors import ModelError, UnknownVariableError
 from dbn.variables import DiscreteVariable, Variable
@@ -234,5 +234,5 @@ def check_two_slice(dbn: object, what: str) -> None:
     if not isinstance(dbn, TwoSliceDBN):
         how = (" (inference.filter takes a pgmpy DynamicBayesianNetwork as it is; "
                "dbn.pgmpy_adapter.dbn_from_pgmpy converts one)"
-               if type(dbn).__module__.startswith("pgmpy") else "")
+               if from_package(dbn, "pgmpy") else "")
         raise ModelError(f"{what} needs a TwoSliceDBN, got {type(dbn).__name__}{how}")

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dbn.bayesnet import BayesNet, check_evidence
-from dbn.checks import check_count, check_size
+from dbn.checks import check_count, check_size, from_package
 from dbn.errors import EvidenceError, InputError, MemoryLimitError, UnknownVariableError
 from inference.exact.cliquetree import CliqueTree, compile_tree
 from inference.exact.pruning import NetIndex, requisite
@@ -128,7 +128,7 @@ class ExactInference:
 
     @bn.setter
     def bn(self, bn: BayesNet) -> None:
-        if type(bn).__module__.startswith("pgmpy"):  # as inference.filter takes a pgmpy DBN
+        if from_package(bn, "pgmpy"):  # as inference.filter takes a pgmpy DBN
             from dbn.pgmpy_adapter import from_pgmpy
 
             bn = from_pgmpy(bn)
@@ -347,7 +347,7 @@ def posterior_marginals(
     used (:class:`inference.model_cache.ModelCache`), so that repeated calls on one net
     reuse its compiled trees. A pgmpy model is converted at each call, not kept (a change
     to it would not be seen)."""
-    if type(bn).__module__.startswith("pgmpy"):
+    if from_package(bn, "pgmpy"):
         return ExactInference(bn).marginals(evidence, nodes, engine)
     inf = _ENGINES.get(bn, lambda: ExactInference(bn))
     return inf.marginals(evidence, nodes, engine)

@@ -819,7 +819,7 @@ def build_strokes(seed, truth: GroundTruth, config: StrokeConfig | None = None) 
     config = StrokeConfig() if config is None else config
     if config.num_colours > config.pool_size:
         raise InputError(f"num_colours {config.num_colours} > pool_size {config.pool_size}")
-    ss = np.random.SeedSequence(seed)
+    ss = make_rng(seed).bit_generator.seed_seq  # SeedSequence(seed); seed -1: InputError
     gap_seed, palette_seed, colour_seed = ss.spawn(3)
     boxes = truth.boxes
     visible = ~np.isnan(boxes[..., 0])

@@ -98,6 +98,10 @@ def test_bad_inputs():
     s1 = make_stroke(1, 0, 9, (0, 0), (1, 1), [1, 2])
     with pytest.raises(TimeOrderError):
         StrokeSet.from_strokes([s0, s1], fps=25.0)
+    truth = simulate_ground_truth(1, num_people=2, num_frames=20)
+    for seed in (-1, True, "7"):  # -1: numpy's ValueError from SeedSequence named no field
+        with pytest.raises(InputError, match="seed must be an integer"):
+            build_strokes(seed, truth)
 
 
 def test_loader_rejects_frames_out_of_order(tmp_path):
