@@ -230,8 +230,17 @@ def check_start_value(log_target_value: Any) -> None:
         raise InputError("log_target_value is NaN: the chain could never accept a move")
 
 
-def _check_move_probs(move_probs: np.ndarray, num_moves: int) -> np.ndarray:
-    probs = np.asarray(move_probs, dtype=np.float64)
+def _check_move_probs(move_probs: Any, num_moves: int | None = None) -> np.ndarray:
+    """``move_probs`` as float64 of shape ``(num_moves,)`` (``None``: any length) that are
+    finite, >= 0 and sum to 1 within 1e-9; else a :mod:`dbn.errors` class naming it."""
+    try:
+        probs = np.asarray(move_probs, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"move_probs must be numbers, got {move_probs!r}") from None
+    if num_moves is None and probs.ndim != 1:
+        raise InputError(f"move_probs has shape {probs.shape}, expected one axis (num_moves,)")
+    if num_moves is None:
+        num_moves = probs.shape[0]
     if probs.shape != (num_moves,):
         raise InputError(f"move_probs has shape {probs.shape}, expected ({num_moves},)")
     if np.any(~np.isfinite(probs)) or np.any(probs < 0):
@@ -393,7 +402,15 @@ def select_move(rng: np.random.Generator, move_probs: np.ndarray) -> int:
         Explicit source of randomness (one uniform is drawn).
     move_probs : ndarray, shape (num_moves,)
         Selection probabilities, summing to one.
+
+    Raises
+    ------
+    InputError, NegativeProbabilityError, NotNormalizedError
+        ``move_probs`` not one axis of numbers, negative or NaN, or not summing to one
+        (before any draw; a NaN was chosen never and weights summing to 2 put every draw
+        on the first moves).
     """
+    move_probs = _check_move_probs(move_probs)
     u = rng.random()
     idx = int(np.searchsorted(np.cumsum(move_probs), u, side="right"))
     return min(idx, len(move_probs) - 1)

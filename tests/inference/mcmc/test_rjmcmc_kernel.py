@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dbn.errors import InputError, NotNormalizedError
+from dbn.errors import InputError, NegativeProbabilityError, NotNormalizedError
 from inference.mcmc import (
     Move,
     Proposal,
@@ -23,6 +23,7 @@ from inference.mcmc import (
     mh_step,
     rj_step,
     run_chain,
+    select_move,
 )
 
 WEIGHTS = np.array([1.0, 2.0, 3.0, 1.5])  # unnormalised prior mass of dimension k
@@ -173,6 +174,24 @@ def test_same_seed_same_chain_and_bad_input() -> None:
     with pytest.raises(InputError, match="reverse"):
         rj_step(np.random.default_rng(0), state, bad, log_target, MOVE_PROBS)
     assert state == (0.5,)
+
+
+def test_select_move_draws_by_the_probabilities_and_refuses_bad_ones_before_drawing() -> None:
+    """Frequencies within 5 binomial standard errors of ``move_probs``; probabilities that
+    are NaN, negative, not summing to one or not one axis of numbers are refused before
+    the uniform is drawn (NaN was silently never chosen, a sum of 2 skewed every draw)."""
+    rng = np.random.default_rng(4)
+    n = 20000
+    counts = np.bincount([select_move(rng, MOVE_PROBS) for _ in range(n)], minlength=3)
+    se = np.sqrt(MOVE_PROBS * (1 - MOVE_PROBS) / n)
+    assert np.all(np.abs(counts / n - MOVE_PROBS) < 5 * se), counts
+    for bad, error in (([0.5, 1.5], NotNormalizedError), ([np.nan, 1.0], NegativeProbabilityError),
+                       ([-0.5, 1.5], NegativeProbabilityError), ("ab", InputError),
+                       ([[0.5, 0.5]], InputError), (1.0, InputError), ([], NotNormalizedError)):
+        rng = np.random.default_rng(0)
+        with pytest.raises(error, match="move_probs"):
+            select_move(rng, bad)
+        assert rng.random() == np.random.default_rng(0).random(), bad  # nothing drawn
 
 
 def test_incremental_target_delta_gives_the_same_chain() -> None:
