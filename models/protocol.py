@@ -17,7 +17,9 @@ Contract (checked for every registered tracker by ``tests/models/test_protocol.p
   tracker object is never mutated, the state handed in is never mutated, and the same key
   with the same state and observation gives the same result. Randomness comes only from
   the key (a tracker that wants an int seed gets :func:`seed_from_key`; a deterministic
-  tracker ignores it).
+  tracker ignores its value). Every ``init`` and ``step`` refuses anything but one jax
+  PRNG key (:func:`check_key`: an :class:`~dbn.errors.InputError`), the deterministic
+  trackers' too, so that a key that works with one tracker works with all.
 * A rejected observation raises a :mod:`dbn.errors` class (a ``ValueError``) naming the
   field, before anything changes: the state handed in is left exactly as it was.
 * ``run(key, observations) -> (states, infos)``: ``init`` with the first half of the key,
@@ -50,6 +52,7 @@ __all__ = [
     "Example",
     "Tracker",
     "StepTracker",
+    "check_key",
     "seed_from_key",
     "split_run_keys",
     "step_key_list",

@@ -33,7 +33,7 @@ import numpy as np
 from models.jorge.checkpoint import load_labeller, save_labeller
 from models.jorge.online import OnlineConfig, OnlineLabeller
 from models.jorge.strokes import Stroke
-from models.protocol import Example, StepTracker, seed_from_key
+from models.protocol import Example, StepTracker, check_key, seed_from_key
 
 __all__ = ["JorgeState", "JorgeInfo", "LinkedStroke", "JorgeTracker", "make", "example"]
 
@@ -90,13 +90,15 @@ class JorgeTracker(StepTracker):
         self.fps = OnlineLabeller(self.config, fps).fps  # checks the configuration and the rate now
 
     def init(self, key: jax.Array) -> JorgeState:
-        """An empty labeller (deterministic: the key is not used)."""
+        """An empty labeller (deterministic: the key is checked, not used)."""
+        check_key(key)
         return JorgeState(OnlineLabeller(self.config, self.fps))
 
     def step(self, key: jax.Array, state: JorgeState,
              obs: Stroke | LinkedStroke) -> tuple[JorgeState, JorgeInfo]:
         """Add one stroke (in start order) to a copy of the labeller; a
-        :class:`LinkedStroke` brings its own links."""
+        :class:`LinkedStroke` brings its own links (the key is checked, not used)."""
+        check_key(key)
         stroke = obs.stroke if isinstance(obs, LinkedStroke) else obs
         state.labeller.graph.check_stroke(stroke)  # reject before copying (the links: on the copy)
         new = copy.deepcopy(state.labeller)

@@ -22,7 +22,6 @@ import numpy as np
 from dbn.errors import CheckpointError, InputError, ShapeError
 from inference.checkpoint import load_arrays, save_arrays
 from inference.particle import ParticleInfo, ParticleState
-from inference.particle.filters import check_key
 from inference.precision import precision_scope
 from models.localization.landmarks import measure_landmarks
 from models.localization.model import (
@@ -31,7 +30,7 @@ from models.localization.model import (
     RobotModel,
 )
 from models.localization.tracker import check_observation, check_timestamp, make_filter
-from models.protocol import Example, StepTracker, seed_from_key
+from models.protocol import Example, StepTracker, check_key, seed_from_key
 
 __all__ = ["LocalizationStep", "LocalizationState", "LocalizationTracker", "make", "example"]
 
@@ -72,6 +71,7 @@ class LocalizationTracker(StepTracker):
 
     def init(self, key: jax.Array) -> LocalizationState:
         """The initial cloud drawn with ``key`` (``model.sample_initial``)."""
+        check_key(key)  # else jax's TypeError "invalid PRNG key data"
         with precision_scope(self.dtype):
             return LocalizationState(self._pf.init(key), None)
 

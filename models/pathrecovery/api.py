@@ -27,7 +27,7 @@ from models.pathrecovery.filter import (
     make_model,
     step,
 )
-from models.protocol import Example, StepTracker, next_frame_index, seed_from_key
+from models.protocol import Example, StepTracker, check_key, next_frame_index, seed_from_key
 
 _FORMAT = "dbntrack-pathrecovery-state-1"
 
@@ -64,7 +64,8 @@ class PathRecoveryTracker(StepTracker):
         self.model = model
 
     def init(self, key: jax.Array) -> PathState:
-        """All particles at ``C_0`` with ``f_0`` (deterministic: the key is not used)."""
+        """All particles at ``C_0`` with ``f_0`` (deterministic: the key is checked, not used)."""
+        check_key(key)
         return PathState(init(self.model), 0)
 
     def step(self, key: jax.Array, state: PathState, obs) -> tuple[PathState, StepInfo]:

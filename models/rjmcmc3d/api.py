@@ -14,7 +14,7 @@ import numpy as np
 
 from dbn.errors import CheckpointError, InputError
 from inference.checkpoint import load_arrays, save_arrays
-from models.protocol import Example, StepTracker, seed_from_key
+from models.protocol import Example, StepTracker, check_key, seed_from_key
 from models.rjmcmc3d.model import TrackerParams
 from models.rjmcmc3d.scene import Frame, Scene
 from models.rjmcmc3d.tracker import FrameResult, RJMCMCTracker, TrackState
@@ -35,7 +35,8 @@ class RJMCMC3DTracker(StepTracker):
         self.tracker = tracker
 
     def init(self, key: jax.Array) -> TrackState:
-        """No one tracked yet (deterministic: the key is not used)."""
+        """No one tracked yet (deterministic: the key is checked, not used)."""
+        check_key(key)
         return self.tracker.init_state()
 
     def step(self, key: jax.Array, state: TrackState, obs: Frame) -> tuple[TrackState, FrameResult]:

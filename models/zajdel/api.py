@@ -16,7 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from inference.precision import precision_scope
-from models.protocol import Example, StepTracker, seed_from_key
+from models.protocol import Example, StepTracker, check_key, seed_from_key
 from models.zajdel.data import Observations, take
 from models.zajdel.tracker import ADFConfig, ADFInfo, ADFState, ZajdelADF
 
@@ -34,12 +34,14 @@ class ZajdelADFTracker(StepTracker):
         self.adf = adf
 
     def init(self, key: jax.Array) -> ADFState:
-        """Empty belief (deterministic: the key is not used)."""
+        """Empty belief (deterministic: the key is checked, not used)."""
+        check_key(key)
         with precision_scope(jnp.float64):
             return self.adf.init()
 
     def step(self, key: jax.Array, state: ADFState, obs: Observations) -> tuple[ADFState, ADFInfo]:
-        """One ADF update with one observation (the key is not used)."""
+        """One ADF update with one observation (the key is checked, not used)."""
+        check_key(key)
         with precision_scope(jnp.float64):
             return self.adf.step(state, obs)
 

@@ -25,7 +25,7 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
-from models.protocol import Example, StepTracker, seed_from_key
+from models.protocol import Example, StepTracker, check_key, seed_from_key
 from models.zajdel.data import Observations, concat_observations, take, validate_observations
 from models.zajdel.learnsearch import LearnSearchConfig, LSParams, learn_search
 from models.zajdel.learnsearch_checkpoint import load_search, load_stream, save_search, save_stream
@@ -75,7 +75,8 @@ class LearnSearchTracker(StepTracker):
         self.config = LearnSearchConfig() if config is None else config
 
     def init(self, key: jax.Array) -> LearnSearchState:
-        """No observation yet (deterministic: the key is not used)."""
+        """No observation yet (deterministic: the key is checked, not used)."""
+        check_key(key)
         d = self.params.obs_dim
         empty = Observations(np.zeros((0, d)), np.zeros(0, np.int64), np.zeros(0), np.zeros(0),
                              np.zeros(0, np.int64), np.zeros(0, np.int64))  # fmt: skip
@@ -85,6 +86,7 @@ class LearnSearchTracker(StepTracker):
 
     def step(self, key: jax.Array, state: LearnSearchState, obs: Observations):
         """Append ``obs`` (one or more observations) and search again over all of them."""
+        check_key(key)
         p = self.params
         tq = np.asarray(state.observations.t_quit)
         last = float(tq[-1]) if tq.size else -np.inf
@@ -137,11 +139,13 @@ class StreamLearnSearchTracker(StepTracker):
         StreamSearch(params, self.config, window, close_z)  # check the arguments now
 
     def init(self, key: jax.Array) -> StreamSearch:
-        """No observation yet (deterministic: the key is not used)."""
+        """No observation yet (deterministic: the key is checked, not used)."""
+        check_key(key)
         return StreamSearch(self.params, self.config, self.window, self.close_z)
 
     def step(self, key: jax.Array, state: StreamSearch, obs: Observations):
         """Push ``obs`` (one or more observations, validated first) into a copy of ``state``."""
+        check_key(key)
         p = self.params
         tq = np.asarray(state.buf.t_quit)
         last = float(tq[-1]) if tq.size else -np.inf
