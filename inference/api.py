@@ -155,7 +155,8 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
         Or pgmpy's ``{(name, t): state}`` (discrete), read as pgmpy reads it by
         :func:`~inference.evidence_columns.columns_from_slices`. Or a pandas
         ``DataFrame``, a column per variable and a row per slice, missing values
-        unobserved (:func:`~inference.evidence_columns.columns_from_frame`).
+        unobserved; ``(name, component)`` column pairs for a continuous variable's
+        dimensions (:func:`~inference.evidence_columns.columns_from_frame`).
     method : {"auto", "exact", "bk", "particle", "rbpf"}
     query : sequence of str, optional
         Variables whose marginals are returned (default: the engine's default, the
@@ -164,6 +165,7 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
         Required by ``particle`` and ``rbpf`` (and ``auto`` on continuous models).
     soft_evidence : mapping name -> (T, cardinality) float, optional
         Likelihood rows on discrete variables (all-NaN row = none): exact and bk only.
+        Or a ``DataFrame`` with ``(name, state)`` column pairs.
     num_timesteps : int, optional
         ``T``: with evidence, every column's length must equal it; without, only
         ``exact`` reads it.
@@ -189,6 +191,7 @@ def filter(  # noqa: A001  (the library's verb; shadows the builtin inside this 
     if method not in METHODS:
         raise InputError(f"method must be one of {METHODS}, got {method!r}")
     evidence = columns_from_frame(evidence)  # a pandas DataFrame: its columns
+    soft_evidence = columns_from_frame(soft_evidence)
     if isinstance(evidence, Mapping) and any(isinstance(k, tuple) for k in evidence):
         evidence = columns_from_slices(dbn, evidence, num_timesteps)  # pgmpy's {(name, t): s}
     evidence, soft_evidence = _check_evidence(dbn, evidence, soft_evidence, num_timesteps)

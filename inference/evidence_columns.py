@@ -254,25 +254,49 @@ def columns_from_frame(frame) -> dict[str, np.ndarray]:
     A missing value (NaN, None, ``pd.NA``, ``NaT``) is unobserved: a column of numbers
     becomes floats with NaN (whole numbers read as state indices, as a nullable ``Int64``
     column with a gap gives them), any other column (state names, a ``category``) objects
-    with None. Anything that is not a ``DataFrame`` is returned as is.
+    with None. Two-level column labels ``(name, component)`` (``pd.concat({"y": ys},
+    axis=1)`` makes them) give a variable several columns, read in the frame's order as
+    one ``(num_timesteps, num_components)`` float column: a continuous variable's
+    dimensions, or soft evidence's states; a name with one component is a plain column.
+    Anything that is not a ``DataFrame`` is returned as is.
 
     Raises
     ------
     EvidenceError
-        A column label that is not a string (a ``MultiIndex``'s tuple, an int), or one
-        label given twice.
+        A column label that is neither a string nor a ``(name, component)`` pair with a
+        string name (an int, a three-level label), one label given twice, or a component
+        that is not numbers.
     """
     if not instance_of(frame, "pandas", "DataFrame"):
         return frame
     labels = list(frame.columns)
-    bad = [c for c in labels if not isinstance(c, str)]
-    if bad:
+    pairs = frame.columns.nlevels == 2
+    bad = [c for c in labels if not isinstance(c[0] if pairs else c, str)]
+    if bad or frame.columns.nlevels > 2:
         raise EvidenceError(f"evidence DataFrame: column labels must be variable names "
-                            f"(str), got {bad[0]!r}")  # fmt: skip
+                            f"(str) or (name, component) pairs, got "
+                            f"{(bad or labels)[0]!r}")  # fmt: skip
     twice = sorted({c for c in labels if labels.count(c) > 1})
     if twice:
         raise EvidenceError(f"evidence DataFrame: columns {twice} given more than once")
-    return {c: _frame_column(frame[c]) for c in labels}
+    if not pairs:
+        return {c: _frame_column(frame[c]) for c in labels}
+    groups: dict[str, list] = {}
+    for label in labels:
+        groups.setdefault(label[0], []).append(label)
+    return {name: _components(name, [_frame_column(frame[c]) for c in group])
+            for name, group in groups.items()}  # fmt: skip
+
+
+def _components(name: str, parts: list[np.ndarray]) -> np.ndarray:
+    """The columns of one variable's ``(name, component)`` labels: a plain column for one,
+    else stacked as ``(num_timesteps, num_components)`` floats."""
+    if len(parts) == 1:
+        return parts[0]
+    if any(p.dtype == object for p in parts):
+        raise EvidenceError(f"evidence DataFrame: {name!r} has {len(parts)} component "
+                            f"columns, and they must hold numbers")  # fmt: skip
+    return np.column_stack(parts).astype(np.float64)
 
 
 def _frame_column(series) -> np.ndarray:

@@ -11,8 +11,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import inference
-from dbn.errors import EvidenceError, UnknownEvidenceError
+from dbn.cpds import LinearGaussianCPD
+from dbn.dbn import TwoSliceDBN, prev
+from dbn.errors import EvidenceError, ShapeError, UnknownEvidenceError
 from dbn.examples import coupled_chains
+from dbn.variables import ContinuousVariable
 from inference.evidence_columns import columns_from_frame
 
 DBN = coupled_chains(2)
@@ -53,9 +56,13 @@ def test_every_method_reads_a_frame(method) -> None:
 
 
 @pytest.mark.parametrize(("frame", "error", "needle"), [
-    (pd.DataFrame([[0, 1]]), EvidenceError, "column labels must be variable names (str), got 0"),
+    (pd.DataFrame([[0, 1]]), EvidenceError, "variable names (str) or (name, component) pairs, got 0"),
     (pd.DataFrame([[0, 1]], columns=["y0", "y0"]), EvidenceError, "['y0'] given more than once"),
-    (pd.DataFrame({("y0", 0): [1]}), EvidenceError, "got ('y0', 0)"),
+    (pd.DataFrame({(0, "a"): [1]}), EvidenceError, "or (name, component) pairs, got (0, 'a')"),
+    (pd.DataFrame({("y0", 0, "a"): [1]}), EvidenceError, "got ('y0', 0, 'a')"),
+    (pd.DataFrame({("y0", 0): [1], ("y0", 1): ["a"]}), EvidenceError,
+     "'y0' has 2 component columns, and they must hold numbers"),
+    (pd.DataFrame({("y0", 0): [1], ("y0", 1): [0]}), ShapeError, "'y0'"),
     (pd.DataFrame({"zz": [0]}), UnknownEvidenceError, "unknown variable 'zz'"),
     (pd.DataFrame({"y0": [0.5]}), EvidenceError, "'y0' at slice 0: 0.5 is not a state"),
     (pd.DataFrame({"y0": [True]}), EvidenceError, "'y0' at slice 0: True is not a state name"),
@@ -113,3 +120,43 @@ def test_subclasses_of_pandas_and_pgmpy_classes_are_read_as_theirs() -> None:
     theirs.__class__ = type("MyDBN", (type(theirs),), {})
     _same(inference.filter(theirs, cols), inference.filter(DBN, cols))
     assert instance_of(frame, "pandas", "DataFrame") and not instance_of(cols, "pandas", "dict")
+
+
+def _planar_dbn() -> TwoSliceDBN:
+    """A 2-D position seen through 2-D noise: continuous variables of dimension 2."""
+    move = [[0.9, 0.1], [0.0, 0.8]]
+    see = LinearGaussianCPD("y", ["x"], [np.eye(2)], [0, 0], 0.5 * np.eye(2))
+    return TwoSliceDBN([ContinuousVariable("x", 2), ContinuousVariable("y", 2)],
+                       [LinearGaussianCPD("x", [], [], [0, 0], np.eye(2)), see],
+                       [LinearGaussianCPD("x", [prev("x")], [move], [0, 0], 0.3 * np.eye(2)),
+                        see])  # fmt: skip
+
+
+def test_a_continuous_variable_s_dimensions_as_column_pairs_filter_as_its_array() -> None:
+    """``pd.concat({"y": frame}, axis=1)`` labels the columns ``("y", "east")``, ...: they
+    are ``y``'s dimensions in the frame's order (a MultiIndex was refused, so a
+    continuous variable of dimension > 1 could not come in a DataFrame); a NaN row is an
+    unobserved slice. The oracle: the same particle filter run on the (T, 2) array."""
+    ys = np.random.default_rng(0).normal(size=(6, 2))
+    ys[2] = np.nan
+    frame = pd.concat({"y": pd.DataFrame({"east": ys[:, 0], "north": ys[:, 1]})}, axis=1)
+    assert frame.columns.tolist() == [("y", "east"), ("y", "north")]
+    key, dbn = jax.random.key(3), _planar_dbn()
+    got = inference.filter(dbn, frame, "particle", key=key, num_particles=300)
+    want = inference.filter(dbn, {"y": ys}, "particle", key=key, num_particles=300)
+    np.testing.assert_array_equal(got.means["x"], want.means["x"])
+    np.testing.assert_array_equal(got.log_likelihoods, want.log_likelihoods)
+    assert columns_from_frame(frame)["y"].shape == (6, 2)
+
+
+def test_soft_evidence_and_single_components_as_column_pairs() -> None:
+    """Soft evidence as ``(name, state)`` pairs is the (T, cardinality) array; a name
+    with one component is its plain column (state names stay names)."""
+    like = np.array([[0.9, 0.1], [np.nan, np.nan], [0.2, 0.8], [0.5, 0.5]])
+    soft = pd.DataFrame(like, columns=pd.MultiIndex.from_product([["y0"], [0, 1]]))
+    ev = pd.concat({"y1": pd.DataFrame({"": ["1", "0", None, "1"]})}, axis=1)
+    got = inference.filter(DBN, ev, soft_evidence=soft)
+    want = inference.filter(DBN, {"y1": np.array([1, 0, -1, 1])}, soft_evidence={"y0": like})
+    _same(got, want)
+    assert not np.allclose(got.marginals["x0"], inference.filter(DBN, {"y1": [1, 0, -1, 1]})
+                           .marginals["x0"])  # fmt: skip
