@@ -14,7 +14,7 @@ with ``fold``, the same outputs byte for byte).
 :func:`~models.jorge.online.label_online` stays the batch entry point.
 :meth:`JorgeTracker.save` / ``load`` write and resume the labeller
 (:mod:`models.jorge.checkpoint`: its strokes and links, added again on loading).
-Deterministic (the key is not used). Info's ``log_prob`` is the log eq. 12 posterior
+Deterministic (the key is checked, not used). Info's ``log_prob`` is the log eq. 12 posterior
 probability of the label given to the new stroke. An observation is a
 :class:`~models.jorge.strokes.Stroke` (linked by the on-line link rule) or a
 :class:`LinkedStroke` (a stroke with the links a low-level tracker reported for it).

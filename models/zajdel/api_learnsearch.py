@@ -8,7 +8,7 @@ immutable :class:`LearnSearchState` holds the observations seen and the current 
 re-runs :func:`learn_search` on the whole prefix. Cost: one full search per step, so
 ``O(K)`` per step and ``O(K^2)`` over a run of ``K`` observations -- the protocol's
 reference semantics; call :func:`learn_search` once for a batch. Deterministic (the key is
-not used). Info's ``log_score`` is the unnormalised log posterior of the MAP partition.
+checked, not used). Info's ``log_score`` is the unnormalised log posterior of the MAP partition.
 Both adapters save and load their state (:mod:`models.zajdel.learnsearch_checkpoint`).
 
 ``make(..., window=W)`` gives the streaming form instead (:class:`StreamLearnSearchTracker`,
