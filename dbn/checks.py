@@ -90,8 +90,18 @@ def from_package(obj: Any, package: str) -> bool:
 
 def evidence_mapping(evidence: Any) -> Any:
     """One case's evidence as a mapping: a pandas ``Series`` (a ``DataFrame``'s row, its
-    index the variable names) as a dict; anything else as is (then checked as a mapping)."""
-    return evidence.to_dict() if instance_of(evidence, "pandas", "Series") else evidence
+    index the variable names) as a dict; anything else as is (then checked as a mapping).
+    A two-level index ``(name, component)`` (a row of a frame with column pairs, read as
+    :func:`inference.evidence_columns.columns_from_frame` reads the frame) maps each name
+    to its one value, or to the list of its components' values in the row's order."""
+    if not instance_of(evidence, "pandas", "Series"):
+        return evidence
+    if evidence.index.nlevels != 2:
+        return evidence.to_dict()
+    parts: dict[Any, list] = {}
+    for (name, _), value in evidence.items():
+        parts.setdefault(name, []).append(value)
+    return {name: values[0] if len(values) == 1 else values for name, values in parts.items()}
 
 
 def evidence_state(state: Any) -> Any:

@@ -56,7 +56,7 @@ def test_every_method_reads_a_frame(method) -> None:
 
 
 @pytest.mark.parametrize(("frame", "error", "needle"), [
-    (pd.DataFrame([[0, 1]]), EvidenceError, "variable names (str) or (name, component) pairs, got 0"),
+    (pd.DataFrame([[0, 1]]), EvidenceError, "(str) or (name, component) pairs, got 0"),
     (pd.DataFrame([[0, 1]], columns=["y0", "y0"]), EvidenceError, "['y0'] given more than once"),
     (pd.DataFrame({(0, "a"): [1]}), EvidenceError, "or (name, component) pairs, got (0, 'a')"),
     (pd.DataFrame({("y0", 0, "a"): [1]}), EvidenceError, "got ('y0', 0, 'a')"),
@@ -78,8 +78,9 @@ def test_other_evidence_passes_through_unchanged() -> None:
     assert columns_from_frame(ev) is ev and columns_from_frame(None) is None
 
 
+@pytest.mark.parametrize("pairs", [False, True], ids=["names", "pairs"])
 @pytest.mark.parametrize("engine", ["structured", "bk"])
-def test_rows_of_a_frame_step_the_online_filters_as_its_columns_filter(engine) -> None:
+def test_rows_of_a_frame_step_the_online_filters_as_its_columns_filter(engine, pairs) -> None:
     """``for _, row in frame.iterrows(): step(state, row)``: a row of a column with a gap
     holds floats (1.0) and NaN, which the column reader takes and the slice reader
     refused ("state must be an int or a name, got 1.0"); a Series was not a mapping."""
@@ -89,8 +90,11 @@ def test_rows_of_a_frame_step_the_online_filters_as_its_columns_filter(engine) -
     flt = inference.online_filter(DBN) if engine == "structured" else BoyenKoller(DBN)
     batch = inference.filter(DBN, frame, "exact" if engine == "structured" else "bk")
     state = None
-    for t, (_, row) in enumerate(frame.astype(float).iterrows()):
-        assert isinstance(row["y0"], float)
+    if pairs:  # a row's index is (name, component): each name's one value
+        frame = pd.concat({"y0": frame[["y0"]], "y1": frame[["y1"]]}, axis=1)
+    rows = frame.astype(float).iterrows()
+    for t, (_, row) in enumerate(rows):
+        assert isinstance(row["y0"], float) if not pairs else row.index.nlevels == 2
         state = flt.init(row) if state is None else flt.step(state, row)
         for name in ("x0", "x1"):
             marginal = (flt.marginals(state)[name] if engine == "structured"
