@@ -79,7 +79,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy.linalg import cholesky
 
 from dbn.checks import check_count, make_rng
 from dbn.errors import InputError, NonFiniteError, ShapeError
@@ -87,7 +86,13 @@ from inference.particle.filters import ParticleState
 from inference.particle.kbest import k_best_states
 from inference.particle.numpy_filter import run_steps, sir_step
 from inference.particle.numpy_path import multinomial, systematic
-from models.pathrecovery.model import CameraNetwork, check_cameras, propagate, whiten
+from models.pathrecovery.model import (
+    CameraNetwork,
+    check_cameras,
+    propagate,
+    sigma_cholesky,
+    whiten,
+)
 
 __all__ = [
     "FilterConfig",
@@ -280,13 +285,7 @@ def make_model(
         raise ShapeError(f"f0 must be 1-D, got shape {f0.shape}")
     if not np.all(np.isfinite(f0)):
         raise NonFiniteError(f"f0 holds non-finite values: {f0!r}")
-    sigma = np.asarray(sigma, dtype=np.float64)
-    if sigma.shape != (f0.size, f0.size):
-        raise ShapeError(f"sigma must have shape ({f0.size}, {f0.size}), got {sigma.shape}")
-    try:
-        chol = cholesky(sigma, lower=True)
-    except np.linalg.LinAlgError as exc:
-        raise InputError("sigma is not symmetric positive definite") from exc
+    _, chol = sigma_cholesky(sigma, f0.size)
     if not isinstance(c0, int | np.integer):
         raise InputError(f"c0 must be an int camera id, got {c0!r}")
     check_cameras("c0", np.array([c0]), network)

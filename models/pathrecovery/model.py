@@ -20,12 +20,20 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.linalg import cholesky
 from scipy.special import ndtr
 
-from dbn.errors import InputError, ModelError, NegativeProbabilityError, NotNormalizedError
+from dbn.errors import (
+    InputError,
+    ModelError,
+    NegativeProbabilityError,
+    NonFiniteError,
+    NotNormalizedError,
+    ShapeError,
+)
 
 __all__ = ["CameraNetwork", "GAP_SD_FACTOR", "MAX_DELAY_TABLE", "check_cameras", "delay_support",
-           "propagate", "whiten"]
+           "propagate", "sigma_cholesky", "whiten"]
 
 #: Standard deviation of a travel time relative to its mean: T_ij ~ N(mu, 0.2 mu) (sec. 7.1.1).
 GAP_SD_FACTOR = 0.2
@@ -359,6 +367,31 @@ def propagate(
         else:
             new_ta[vis] = 0
     return new_cam, new_ta, moved_from
+
+
+def sigma_cholesky(sigma, feature_dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(Sigma, L)``: the features' covariance of eq. 2 as float64 and its lower Cholesky
+    factor (``Sigma = L L^T``).
+
+    Raises
+    ------
+    InputError, ShapeError, NonFiniteError
+        ``sigma`` not numbers, not ``(feature_dim, feature_dim)``, holding NaN or
+        infinity (scipy's own ValueError "array must not contain infs or NaNs" before),
+        or not symmetric positive definite.
+    """
+    try:
+        sigma = np.asarray(sigma, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"sigma must be a matrix of numbers, got {sigma!r}") from None
+    if sigma.shape != (feature_dim, feature_dim):
+        raise ShapeError(f"sigma must have shape ({feature_dim}, {feature_dim}), got {sigma.shape}")
+    if not np.all(np.isfinite(sigma)):
+        raise NonFiniteError("sigma holds NaN or infinity")
+    try:
+        return sigma, cholesky(sigma, lower=True)
+    except np.linalg.LinAlgError:
+        raise InputError("sigma is not symmetric positive definite") from None
 
 
 def whiten(chol: np.ndarray, x: np.ndarray) -> np.ndarray:

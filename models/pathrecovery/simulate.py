@@ -41,11 +41,10 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy.linalg import cholesky
 
 from dbn.checks import make_rng
 from dbn.errors import InputError, ModelError, ShapeError
-from models.pathrecovery.model import CameraNetwork, propagate, whiten
+from models.pathrecovery.model import CameraNetwork, propagate, sigma_cholesky, whiten
 
 __all__ = [
     "ObservationDB",
@@ -457,13 +456,7 @@ def _check_scene(
         raise InputError(f"cm must lie in (0, 1), got {cm!r}")
     if spread is not None and not spread > 0:
         raise InputError(f"spread must be > 0, got {spread!r}")
-    sigma = np.eye(feature_dim) if sigma is None else np.asarray(sigma, dtype=np.float64)
-    if sigma.shape != (feature_dim, feature_dim):
-        raise ShapeError(f"sigma must have shape ({feature_dim}, {feature_dim}), got {sigma.shape}")
-    try:
-        return sigma, cholesky(sigma, lower=True)
-    except np.linalg.LinAlgError as exc:
-        raise InputError("sigma is not symmetric positive definite") from exc
+    return sigma_cholesky(np.eye(feature_dim) if sigma is None else sigma, feature_dim)
 
 
 def _walk(

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from dbn.errors import InputError, ModelError, NotNormalizedError, ShapeError
+from dbn.errors import InputError, ModelError, NonFiniteError, NotNormalizedError, ShapeError
 from models.pathrecovery import (
     CameraNetwork,
     confusion_measure,
@@ -237,3 +237,6 @@ def test_scene_bad_input(grid):
         simulate_scene(0, grid, num_objects=50, num_timesteps=20, cm=0.2, gamma=1.0)
     with pytest.raises(ShapeError):
         simulate_scene(0, grid, num_objects=50, num_timesteps=20, cm=0.2, sigma=np.eye(3))
+    with pytest.raises(NonFiniteError, match="sigma"):  # was scipy's ValueError
+        simulate_scene(0, grid, num_objects=50, num_timesteps=20, cm=0.2,
+                       sigma=np.full((4, 4), np.nan))  # fmt: skip
