@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.special import logsumexp
 
-from dbn.errors import InputError, NonFiniteError, ShapeError
+from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 from models.localization.model import (
     KNNLocalizationModel,
     KNNObservation,
@@ -207,3 +207,35 @@ def test_range_bearing_likelihood_matches_formula() -> None:
             tot += math.log(g + 0.1 / (8.0 * 2 * math.pi))
         want.append(tot)
     np.testing.assert_allclose(got, want, rtol=1e-10)
+
+
+_LMS = np.array([[0.0, 0.0], [3.0, 1.0]])
+
+
+@pytest.mark.parametrize(("change", "error", "needle"), [
+    ({"initial_pose": [0, 0]}, ShapeError, "initial_pose has 2 numbers"),
+    ({"initial_pose": ["a", 0, 0]}, ModelError, "initial_pose must be numbers"),
+    ({"initial_std": [-1, 1, 1]}, ModelError, "initial_std"),
+    ({"initial_std": [1e300, 1, 1]}, NonFiniteError, "initial_std"),
+    ({"noise": MotionNoise(np.nan)}, NonFiniteError, "noise"),
+    ({"noise": MotionNoise(-0.1)}, ModelError, "noise"),
+    ({"noise": (0.1, 0.2)}, ShapeError, "noise has 2 numbers"),
+    ({"landmarks": np.array([[np.nan, 0.0]])}, NonFiniteError, "landmarks"),
+    ({"landmarks": np.zeros((0, 2))}, ShapeError, "landmarks"),
+    ({"landmarks": [["a", "b"]]}, ModelError, "landmarks must be numbers"),
+    ({"sigma_range": 0.0}, ModelError, "sigma_range"),
+    ({"sigma_bearing": np.nan}, NonFiniteError, "sigma_bearing"),
+    ({"outlier_prob": 0.0}, ModelError, "outlier_prob"),
+    ({"outlier_prob": 1.5}, ModelError, "outlier_prob"),
+    ({"max_range": -1.0}, ModelError, "max_range"),
+    ({"range_bias": np.inf}, NonFiniteError, "range_bias"),
+])  # fmt: skip
+def test_a_bad_model_parameter_is_refused_naming_it(change, error, needle) -> None:
+    """The Python constructor checks what ``dbntrack``'s config reader checks: a zero
+    sigma_range or a NaN noise term ran to NaN log-likelihoods, an outlier_prob of 0 to
+    math's "domain error", a 2-number pose to numpy's reshape error."""
+    args = {"landmarks": _LMS, "initial_pose": [0, 0, 0], "initial_std": [1, 1, 1],
+            "noise": MotionNoise()} | change  # fmt: skip
+    with pytest.raises(error, match=needle):
+        RangeBearingLocalizationModel(args.pop("landmarks"), args.pop("initial_pose"),
+                                      args.pop("initial_std"), **args)  # fmt: skip
