@@ -12,8 +12,8 @@ import numpy as np
 from dbn.errors import DBNError, EvidenceError, InputError
 
 __all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative",
-           "check_size", "evidence_mapping", "evidence_state", "instance_of", "is_whole",
-           "make_rng"]
+           "check_number_fields", "check_size", "evidence_mapping", "evidence_state",
+           "from_package", "instance_of", "is_whole", "make_rng"]
 
 MAX_SCALE = 1e100
 """Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
@@ -51,6 +51,35 @@ def check_nonnegative(name: str, value: Any, error: type[DBNError] = InputError)
     if isinstance(value, bool) or not real or not value >= 0:
         raise error(f"{name} must be a number >= 0, got {value!r}")
     return float(value)
+
+
+def check_number_fields(obj: Any, error: type[DBNError] = InputError) -> None:
+    """Check the numeric fields of a config (a dataclass or a ``NamedTuple``) by their
+    defaults' types, before its own range checks compare them: a field whose default is
+    an int holds an int (a Python or numpy integer: not a float, a bool or NaN), one whose
+    default is a float a real number (an int too), finite with ``|x| <=``
+    :data:`MAX_SCALE`; else ``error`` naming ``Class.field``. (NaN passed range checks
+    written as ``x < 1``, 2.5 was truncated or compared as it was, a string raised
+    Python's ``TypeError`` on comparison, and 1e300 overflowed once squared.)"""
+    import dataclasses
+
+    if dataclasses.is_dataclass(obj):
+        defaults = {f.name: f.default for f in dataclasses.fields(obj)}
+    else:
+        defaults = dict(getattr(type(obj), "_field_defaults", {}))
+    cls = type(obj).__name__
+    for name, default in defaults.items():
+        value = getattr(obj, name)
+        if type(default) is int:
+            if isinstance(value, bool) or not isinstance(value, int | np.integer):
+                raise error(f"{cls}.{name} must be an integer, got {value!r}")
+        elif type(default) is float:
+            if isinstance(value, np.floating):  # float32 compared with 1e100 overflows
+                value = float(value)
+            real = isinstance(value, int | float | np.integer)
+            if isinstance(value, bool) or not real or not abs(value) <= MAX_SCALE:
+                raise error(f"{cls}.{name} must be a finite number, |x| <= {MAX_SCALE:g}, "
+                            f"got {value!r}")  # fmt: skip
 
 
 def check_mapping(what: str, value: Any, error: type[DBNError] = EvidenceError) -> None:

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from dbn.checks import check_number_fields
 from dbn.errors import ModelError
 from models.jorge.evidence import gain_bins_rise
 from models.jorge.labels import LabelParams
@@ -709,6 +710,16 @@ class NetworkConfig:
     merge_cover: float = 0.2
 
     def __post_init__(self) -> None:
+        check_number_fields(self, ModelError)
+        for name, low in (("pool_size", 1), ("sibling_window", 0), ("size_min_reference", 0),
+                          ("size_reference_neighbours", 0)):  # fmt: skip
+            if getattr(self, name) < low:
+                raise ModelError(f"NetworkConfig.{name} must be >= {low}, "
+                                 f"got {getattr(self, name)}")  # fmt: skip
+        if not 0.0 <= self.size_reference_quantile <= 1.0 or not self.nested_links >= 0:
+            raise ModelError(f"NetworkConfig: size_reference_quantile must be in [0, 1] and "
+                             f"nested_links >= 0, got {self.size_reference_quantile} / "
+                             f"{self.nested_links}")  # fmt: skip
         self._check_links()
         self._check_palette()
         self._check_size_and_colour()

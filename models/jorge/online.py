@@ -51,6 +51,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from dbn.checks import check_number_fields
 from dbn.errors import InputError, ModelError
 from inference.exact import JunctionTree, map_assignment
 from models.jorge.labels import Label, prune_labels
@@ -144,6 +145,7 @@ class OnlineConfig:
     network: NetworkConfig = field(default_factory=NetworkConfig)
 
     def __post_init__(self) -> None:
+        check_number_fields(self, ModelError)
         if not self.period_s > 0:
             raise ModelError(f"OnlineConfig.period_s must be > 0, got {self.period_s}")
         for name in ("max_active", "max_labels"):

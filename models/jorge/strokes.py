@@ -44,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dbn.checks import check_nonnegative, make_rng
+from dbn.checks import check_nonnegative, check_number_fields, make_rng
 from dbn.errors import (
     DBNError,
     FileFormatError,
@@ -414,6 +414,7 @@ class StrokeConfig:
     match_prob: float = 0.8
 
     def __post_init__(self) -> None:
+        check_number_fields(self)
         if not 0.0 <= self.iou_threshold < 1.0:
             raise InputError(f"StrokeConfig.iou_threshold must be in [0, 1), got {self.iou_threshold}")
         if self.gaps_per_100 < 0:

@@ -80,7 +80,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.checks import check_count, make_rng
+from dbn.checks import check_count, check_number_fields, make_rng
 from dbn.errors import InputError, NonFiniteError, ShapeError
 from inference.particle.filters import ParticleState
 from inference.particle.kbest import k_best_states
@@ -149,6 +149,7 @@ class FilterConfig(NamedTuple):
 
     def validate(self) -> None:
         """Raise :class:`InputError` naming the first bad field."""
+        check_number_fields(self, InputError)
         for name in ("num_particles", "k", "n_fc"):
             check_count(f"FilterConfig.{name}", getattr(self, name))  # True was read as 1
         for name in ("alpha", "beta", "p_update", "p_switch"):

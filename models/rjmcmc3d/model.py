@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.checks import MAX_SCALE
+from dbn.checks import MAX_SCALE, check_number_fields
 from dbn.errors import InputError, ModelError
 from models.rjmcmc3d.geometry import ground_homography
 from models.rjmcmc3d.projection import visible_views
@@ -96,6 +96,7 @@ class TrackerParams(NamedTuple):
 
     def validate(self) -> TrackerParams:
         """Raise :class:`~dbn.errors.InputError` naming a bad field; return ``self``."""
+        check_number_fields(self, InputError)
         for name in ("num_moves", "max_objects", "num_refs", "colour_levels", "burn_in"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int | np.integer):

@@ -9,6 +9,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
+from dbn.checks import check_number_fields
 from dbn.errors import ModelError
 from models.zajdel.path import PathModel
 
@@ -88,6 +89,7 @@ class ADFConfig(NamedTuple):
     def validate(self) -> None:
         """Raise :class:`~dbn.errors.ModelError` naming the first field the filter cannot
         run with (sizes, thresholds, switches); called by the tracker and the CLI."""
+        check_number_fields(self, ModelError)
         if self.old_update not in ("seed", "keep"):
             raise ModelError(f"old_update = {self.old_update!r}: must be 'seed' or 'keep'")
         for name in ("max_open", "persons_per_slot", "chunk", "init_persons", "mix_top",

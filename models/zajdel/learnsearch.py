@@ -48,6 +48,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.special import logsumexp
 
+from dbn.checks import check_number_fields
 from dbn.errors import InputError, ModelError
 from models.zajdel.data import Observations, take, validate_observations
 from models.zajdel.oracle import enumerate_partitions
@@ -145,6 +146,7 @@ class LearnSearchConfig(NamedTuple):
     def validate(self) -> None:
         """Raise :class:`~dbn.errors.InputError` naming the first field the search cannot
         run with; called by :func:`learn_search` and the CLI."""
+        check_number_fields(self, InputError)
         if self.num_hypotheses < 1:
             raise InputError(f"num_hypotheses = {self.num_hypotheses}: must be >= 1")
         if self.batch < 1:

@@ -1,0 +1,79 @@
+"""Every tracker's config refuses a bad number in any numeric field, naming it.
+
+For each config class (dataclasses check on construction, ``NamedTuple`` configs in their
+``validate()``), every field whose default is an int and every one whose default is a
+float is given bad values one at a time (:func:`dbn.checks.check_number_fields`): NaN
+passed range checks written as ``x < 1`` (``ADFConfig(chunk=nan)``, ``NetworkConfig(radius
+=nan)`` ran), 2.5 in an int field ran as 2.5, a string raised Python's ``TypeError`` on
+comparison, and 1e300 overflowed once squared. Each must raise a :mod:`dbn.errors` class
+whose message names the field.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from dbn.checks import check_number_fields
+from dbn.errors import DBNError, InputError
+from models.jorge.config import NetworkConfig
+from models.jorge.online import OnlineConfig
+from models.jorge.strokes import StrokeConfig
+from models.pathrecovery.filter import FilterConfig
+from models.rjmcmc3d.model import TrackerParams
+from models.zajdel.adf_types import ADFConfig
+from models.zajdel.learnsearch import LearnSearchConfig
+
+CONFIGS = [NetworkConfig, OnlineConfig, StrokeConfig, FilterConfig, TrackerParams, ADFConfig,
+           LearnSearchConfig]  # fmt: skip
+
+
+def _numeric_fields(cls) -> list[tuple[str, type]]:
+    if dataclasses.is_dataclass(cls):
+        defaults = {f.name: f.default for f in dataclasses.fields(cls)}
+    else:
+        defaults = cls._field_defaults
+    return [(name, type(d)) for name, d in defaults.items() if type(d) in (int, float)]
+
+
+def _make(cls, **change):
+    default = cls()
+    obj = (dataclasses.replace(default, **change) if dataclasses.is_dataclass(cls)
+           else default._replace(**change))  # fmt: skip
+    if callable(getattr(obj, "validate", None)):
+        obj.validate()
+    return obj
+
+
+@pytest.mark.parametrize("cls", CONFIGS, ids=lambda c: c.__name__)
+def test_every_numeric_field_refuses_a_bad_number_naming_it(cls) -> None:
+    fields = _numeric_fields(cls)
+    assert len(fields) >= 3
+    _make(cls)  # the defaults pass
+    for name, kind in fields:
+        bad = [np.nan, "a", None, True] + ([2.5] if kind is int else [np.inf, -1e300])
+        for value in bad:
+            with pytest.raises(DBNError, match=name):
+                _make(cls, **{name: value})
+
+
+def test_check_number_fields_reads_the_defaults_types() -> None:
+    """An int field takes numpy integers, a float field ints; a field with another default
+    (a string, a bool, None, a table) is not read."""
+
+    @dataclasses.dataclass
+    class Toy:
+        count: int = 3
+        scale: float = 1.0
+        mode: str = "a"
+        flag: bool = False
+        table: tuple = ()
+
+    check_number_fields(Toy(count=np.int64(-2), scale=4, mode=5, flag=2.5, table=None))
+    for change, needle in (({"count": 3.0}, "Toy.count must be an integer, got 3.0"),
+                           ({"scale": 1e101}, "Toy.scale must be a finite number"),
+                           ({"scale": np.float32("nan")}, "Toy.scale")):  # fmt: skip
+        with pytest.raises(InputError, match=needle):
+            check_number_fields(Toy(**change))
