@@ -91,6 +91,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dbn.checks import check_number_fields
 from dbn.errors import InputError, ModelError
 from models.jorge.evidence import (  # re-exported: they lived here before they had a module
     colour_log_likelihood,
@@ -223,6 +224,7 @@ class LabelParams:
     split_normalise: bool = False
 
     def __post_init__(self) -> None:
+        check_number_fields(self, ModelError)
         q = np.asarray(self.new_group_probs, dtype=np.float64)
         if q.ndim != 1 or q.size < 1 or np.any(q < 0) or not np.all(np.isfinite(q)) or q[0] <= 0:
             raise ModelError(

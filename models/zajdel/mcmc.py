@@ -54,7 +54,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.checks import make_rng
+from dbn.checks import check_number_fields, make_rng
 from dbn.errors import InputError
 from inference.mcmc import BatchKernel, BatchMove, BatchProposal, run_batch
 from models.zajdel.data import Observations, validate_observations
@@ -394,6 +394,9 @@ def chain_step(
 
 def _check_config(cfg: MCMCConfig, num_samples: int, num_chains: int) -> np.ndarray:
     """Validated move probabilities (4,); raises InputError naming the bad field."""
+    check_number_fields(cfg)
+    if cfg.burn_in < 0:
+        raise InputError(f"burn_in = {cfg.burn_in}: must be >= 0")
     probs = np.asarray(cfg.move_probs, float)
     if probs.shape != (4,) or (probs < 0).any() or abs(probs.sum() - 1.0) > 1e-9:
         raise InputError(f"move_probs = {cfg.move_probs}: need 4 non-negative numbers summing to 1")

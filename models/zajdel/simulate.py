@@ -36,7 +36,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.stats import truncnorm
 
-from dbn.checks import make_rng
+from dbn.checks import check_number_fields, make_rng
 from dbn.errors import ModelError
 from models.zajdel.data import Observations
 from models.zajdel.params import ZajdelParams, default_prior
@@ -219,8 +219,17 @@ def simulate_office(seed: int, config: OfficeConfig | None = None) -> Scenario:
     first people).
     """
     cfg = default_config() if config is None else config
+    check_number_fields(cfg, ModelError)
     if cfg.num_people < 1 or cfg.num_obs < cfg.num_people or cfg.num_cameras < 1:
         raise ModelError(f"config: need 1 <= num_people <= num_obs and cameras >= 1, got {cfg}")
+    if cfg.obs_dim < 1 or cfg.num_borders < 1:
+        raise ModelError(f"config: need obs_dim >= 1 and num_borders >= 1, got {cfg.obs_dim} / "
+                         f"{cfg.num_borders}")  # fmt: skip
+    for name in ("separability", "camera_bias", "travel_cv", "arrival_window"):
+        if getattr(cfg, name) < 0:  # -5 s of arrival window: numpy's "high - low < 0"
+            raise ModelError(f"OfficeConfig.{name} must be >= 0, got {getattr(cfg, name)}")
+    if not cfg.within_std > 0:  # 0: Python's ZeroDivisionError
+        raise ModelError(f"OfficeConfig.within_std must be > 0, got {cfg.within_std}")
     rng = make_rng(seed)
     C, B, r, P = cfg.num_cameras, cfg.num_borders, cfg.obs_dim, cfg.num_people
     trans, entry, mu, sd = _layout(rng, C, B, cfg)

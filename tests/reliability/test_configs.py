@@ -17,14 +17,16 @@ import numpy as np
 import pytest
 
 from dbn.checks import check_number_fields
-from dbn.errors import DBNError, InputError
+from dbn.errors import DBNError, InputError, ModelError
 from models.jorge.config import NetworkConfig
+from models.jorge.labels import LabelParams
 from models.jorge.online import OnlineConfig
 from models.jorge.strokes import StrokeConfig
 from models.pathrecovery.filter import FilterConfig
 from models.rjmcmc3d.model import TrackerParams
 from models.zajdel.adf_types import ADFConfig
 from models.zajdel.learnsearch import LearnSearchConfig
+from models.zajdel.simulate import OfficeConfig, simulate_office
 
 CONFIGS = [NetworkConfig, OnlineConfig, StrokeConfig, FilterConfig, TrackerParams, ADFConfig,
            LearnSearchConfig]  # fmt: skip
@@ -77,3 +79,24 @@ def test_check_number_fields_reads_the_defaults_types() -> None:
                            ({"scale": np.float32("nan")}, "Toy.scale")):  # fmt: skip
         with pytest.raises(InputError, match=needle):
             check_number_fields(Toy(**change))
+
+
+@pytest.mark.parametrize(("change", "needle"), [
+    ({"num_people": np.nan}, "OfficeConfig.num_people must be an integer"),
+    ({"obs_dim": 2.5}, "OfficeConfig.obs_dim must be an integer"),
+    ({"num_borders": 0}, "num_borders >= 1"),  # numpy's "high <= 0"
+    ({"within_std": 0.0}, "within_std must be > 0"),  # Python's ZeroDivisionError
+    ({"arrival_window": -5.0}, "arrival_window must be >= 0"),  # numpy's "high - low < 0"
+    ({"travel_cv": 1e300}, "travel_cv must be a finite number"),
+])  # fmt: skip
+def test_the_office_simulator_names_a_bad_config_field(change, needle) -> None:
+    with pytest.raises(ModelError, match=needle):
+        simulate_office(0, OfficeConfig(**change))
+
+
+def test_label_params_name_a_bad_number() -> None:
+    """LabelParams(max_group_size=nan) raised numpy's "cannot convert float NaN to
+    integer" and 2.5 ran."""
+    for value in (np.nan, 2.5):
+        with pytest.raises(ModelError, match="LabelParams.max_group_size"):
+            LabelParams(max_group_size=value)

@@ -165,3 +165,6 @@ def test_bad_config_raises():
         partition_mcmc(0, obs, params, 10, MCMCConfig(init="nope"))
     with pytest.raises(InputError):
         partition_mcmc(0, obs, params, 0)
+    for value in (np.nan, 2.5, -1):  # all three ran
+        with pytest.raises(InputError, match="burn_in"):
+            partition_mcmc(0, obs, params, 10, MCMCConfig(burn_in=value))
