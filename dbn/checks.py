@@ -9,11 +9,18 @@ from typing import Any
 
 import numpy as np
 
-from dbn.errors import DBNError, EvidenceError, InputError
+from dbn.errors import (
+    DBNError,
+    EvidenceError,
+    InputError,
+    ModelError,
+    NonFiniteError,
+    ShapeError,
+)
 
 __all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative",
-           "check_number_fields", "check_size", "evidence_mapping", "evidence_state",
-           "from_package", "instance_of", "is_whole", "make_rng"]
+           "check_number_fields", "check_numbers", "check_size", "evidence_mapping",
+           "evidence_state", "from_package", "instance_of", "is_whole", "make_rng"]
 
 MAX_SCALE = 1e100
 """Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
@@ -80,6 +87,27 @@ def check_number_fields(obj: Any, error: type[DBNError] = InputError) -> None:
             if isinstance(value, bool) or not real or not abs(value) <= MAX_SCALE:
                 raise error(f"{cls}.{name} must be a finite number, |x| <= {MAX_SCALE:g}, "
                             f"got {value!r}")  # fmt: skip
+
+
+def check_numbers(name: str, value: Any, size: int, low: float | None = None,
+                  error: type[DBNError] = ModelError) -> np.ndarray:
+    """``value`` as ``size`` float64 numbers (any shape of that size, returned flat),
+    finite, ``|x| <=`` :data:`MAX_SCALE` and ``>= low`` where given; else a
+    :mod:`dbn.errors` class naming ``name``: ``error`` for what is not numbers or is below
+    ``low``, :class:`ShapeError` for another count, :class:`NonFiniteError` for NaN,
+    infinity or a number beyond the bound (numpy's reshape or float errors before)."""
+    try:
+        v = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise error(f"{name} must be numbers, got {value!r}") from None
+    if v.size != size:
+        raise ShapeError(f"{name} has {v.size} numbers (shape {v.shape}), expected {size}")
+    v = v.reshape(size)
+    if not np.all(np.isfinite(v)) or np.any(np.abs(v) > MAX_SCALE):
+        raise NonFiniteError(f"{name} = {v.tolist()}: every number finite, |x| <= {MAX_SCALE:g}")
+    if low is not None and np.any(v < low):
+        raise error(f"{name} = {v.tolist()}: every number must be >= {low:g}")
+    return v
 
 
 def check_mapping(what: str, value: Any, error: type[DBNError] = EvidenceError) -> None:

@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dbn.checks import make_rng
+from dbn.checks import check_count, check_size, make_rng
 from dbn.errors import InputError
 from models.jorge.strokes import GroundTruth, check_lower_rate, resample
 
@@ -150,7 +150,11 @@ def simulate_meeting(
         absent; ``name = "simulated meeting k=<group_size>"``; ``groups`` lists, per
         frame, the members standing in the group (two or more).
     """
-    if group_size < 2 or num_walkers < 0 or not 0.0 <= pair_prob <= 1.0:
+    check_count("group_size", group_size)  # 2.5, NaN: numpy's "expected a sequence of integers"
+    check_size("num_walkers", num_walkers)
+    if num_frames is not None:
+        check_count("num_frames", num_frames)
+    if group_size < 2 or not 0.0 <= pair_prob <= 1.0:
         raise InputError(
             f"simulate_meeting: need group_size >= 2, num_walkers >= 0 and pair_prob in "
             f"[0, 1], got {group_size}, {num_walkers}, {pair_prob}"

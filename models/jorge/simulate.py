@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from dbn.checks import make_rng
+from dbn.checks import check_count, make_rng
 from dbn.errors import InputError
-from models.jorge.strokes import GroundTruth
+from models.jorge.strokes import GroundTruth, check_frame_rate
 
 __all__ = ["simulate_ground_truth"]
 
@@ -36,7 +36,10 @@ def simulate_ground_truth(seed, num_people: int = 5, num_frames: int = 600,
         ``boxes`` of shape ``(num_frames, num_people, 4)``, NaN outside each walker's
         presence; ``name = "simulated"``.
     """
-    if num_people < 1 or num_frames < 10:
+    num_people = check_count("num_people", num_people)  # 2.5: Python's TypeError
+    num_frames = check_count("num_frames", num_frames)
+    fps = check_frame_rate(fps, "simulate_ground_truth", InputError)  # NaN, -1 ran
+    if num_frames < 10:
         raise InputError(f"need num_people >= 1 and num_frames >= 10, got {num_people}, {num_frames}")
     rng = make_rng(seed)
     width, height = 384.0, 288.0

@@ -34,7 +34,7 @@ import numpy as np
 from jax import Array
 from scipy.spatial import cKDTree
 
-from dbn.checks import MAX_SCALE, MIN_SCALE
+from dbn.checks import MIN_SCALE, check_numbers
 from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 from inference.evidence_columns import as_column
 from inference.particle import StateSpaceModel, register_model
@@ -135,28 +135,9 @@ class MotionNoise(NamedTuple):
 DEFAULT_NOISE = MotionNoise()
 
 
-def _numbers(name: str, value: Any, size: int, low: float | None = None) -> np.ndarray:
-    """``value`` as ``size`` float64 numbers (any shape of that size), finite, ``|x| <=``
-    :data:`~dbn.checks.MAX_SCALE` and ``>= low`` where given; else a :mod:`dbn.errors`
-    class naming ``name`` (numpy's reshape or float errors before; a NaN, negative or
-    missing noise term ran)."""
-    try:
-        v = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ModelError(f"{name} must be numbers, got {value!r}") from None
-    if v.size != size:
-        raise ShapeError(f"{name} has {v.size} numbers (shape {v.shape}), expected {size}")
-    v = v.reshape(size)
-    if not np.all(np.isfinite(v)) or np.any(np.abs(v) > MAX_SCALE):
-        raise NonFiniteError(f"{name} = {v.tolist()}: every number finite, |x| <= {MAX_SCALE:g}")
-    if low is not None and np.any(v < low):
-        raise ModelError(f"{name} = {v.tolist()}: every number must be >= {low:g}")
-    return v
-
-
 def _scale(name: str, value: Any) -> float:
     """A spread the likelihood divides by: a float in ``[MIN_SCALE, MAX_SCALE]``."""
-    v = float(_numbers(name, value, 1)[0])
+    v = float(check_numbers(name, value, 1)[0])
     if not MIN_SCALE <= v:
         raise ModelError(f"{name} = {v!r} must be >= {MIN_SCALE:g} (the likelihood divides by it)")
     return v
@@ -175,9 +156,9 @@ class RobotModel(StateSpaceModel):
     """
 
     def __init__(self, initial_pose, initial_std, noise: MotionNoise = DEFAULT_NOISE) -> None:
-        self.initial_pose = _numbers("initial_pose", initial_pose, 3)
-        self.initial_std = _numbers("initial_std", initial_std, 3, low=0.0)
-        self.noise = MotionNoise(*_numbers("noise", noise, len(MotionNoise._fields), low=0.0))
+        self.initial_pose = check_numbers("initial_pose", initial_pose, 3)
+        self.initial_std = check_numbers("initial_std", initial_std, 3, low=0.0)
+        self.noise = MotionNoise(*check_numbers("noise", noise, len(MotionNoise._fields), low=0.0))
 
     def sample_initial(self, key: Array, num_particles: int, dtype: Any) -> Array:
         """``(num_particles, 3)`` poses from the Gaussian initial belief (angle wrapped)."""
@@ -549,14 +530,14 @@ class RangeBearingLocalizationModel(RobotModel):
         shape = np.shape(landmarks)
         if len(shape) != 2 or shape[1] != 2 or shape[0] < 1:
             raise ShapeError(f"landmarks has shape {shape}, expected (num_landmarks >= 1, 2)")
-        self.landmarks = _numbers("landmarks", landmarks, shape[0] * 2).reshape(shape)
+        self.landmarks = check_numbers("landmarks", landmarks, shape[0] * 2).reshape(shape)
         self.sigma_range = _scale("sigma_range", sigma_range)
         self.sigma_bearing = _scale("sigma_bearing", sigma_bearing)
-        self.outlier_prob = float(_numbers("outlier_prob", outlier_prob, 1)[0])
+        self.outlier_prob = float(check_numbers("outlier_prob", outlier_prob, 1)[0])
         if not 0.0 < self.outlier_prob < 1.0:  # its log and log1p(-it) are taken
             raise ModelError(f"outlier_prob = {self.outlier_prob!r} must lie in (0, 1)")
         self.max_range = _scale("max_range", max_range)
-        self.range_bias = float(_numbers("range_bias", range_bias, 1)[0])
+        self.range_bias = float(check_numbers("range_bias", range_bias, 1)[0])
 
     def log_likelihood(self, particles: Array, observation: RangeBearingObservation) -> Array:
         """Sum over the step's measurements; shape (num_particles,)."""

@@ -22,8 +22,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.checks import make_rng
-from dbn.errors import InputError
+from dbn.checks import check_count, check_numbers, make_rng
+from dbn.errors import InputError, ModelError
 from models.localization.model import (
     KNNLocalizationModel,
     KNNSensor,
@@ -63,8 +63,27 @@ class World(NamedTuple):
     height: float
 
 
+MAX_STRIPES = 10_000
+"""Most wall stripes a simulated world has (a width of 1e100 m looped for ever)."""
+
+
 def make_world(width: float = 12.0, height: float = 6.0, period: float = 2.0) -> World:
-    """The aliased floor plan (simulated): striped walls and identical pillars every ``period`` m."""
+    """The aliased floor plan (simulated): striped walls and identical pillars every ``period`` m.
+
+    Raises
+    ------
+    ModelError, NonFiniteError
+        A size not finite and > 0 (NaN raised numpy's "cannot convert float NaN to
+        integer", a negative width ran), or more than :data:`MAX_STRIPES` wall stripes.
+    """
+    width, height, period = (float(check_numbers(name, v, 1)[0]) for name, v in
+                             (("width", width), ("height", height), ("period", period)))  # fmt: skip
+    if not min(width, height, period) > 0:
+        raise ModelError(f"make_world: width, height and period must be > 0, got {width}, "
+                         f"{height}, {period}")  # fmt: skip
+    if width / (period / 2) > MAX_STRIPES:
+        raise ModelError(f"make_world: width / (period / 2) = {width / (period / 2):g} wall "
+                         f"stripes, more than {MAX_STRIPES}")  # fmt: skip
     segs, cols = [], []
     n = int(round(width / (period / 2)))
     for i in range(n):  # bottom and top walls, stripes of period/2 alternating colours
@@ -191,7 +210,22 @@ def simulate_run(
         Seed of a local ``numpy.random.Generator``.
     world : World
     num_timesteps : int
+
+    Raises
+    ------
+    InputError, ModelError, NonFiniteError
+        A count that is not an int >= 1, ``outlier_rate`` outside [0, 1], a negative or
+        non-finite ``step_length``, ``scan_noise`` or noise term (NaN ran; 2.5 steps
+        raised Python's TypeError).
     """
+    check_count("num_timesteps", num_timesteps)
+    check_count("num_rays", num_rays)
+    rate = float(check_numbers("outlier_rate", outlier_rate, 1, low=0.0)[0])
+    if rate > 1:
+        raise ModelError(f"outlier_rate = {rate} must be a probability in [0, 1]")
+    check_numbers("step_length", step_length, 1, low=0.0)
+    check_numbers("scan_noise", scan_noise, 1, low=0.0)
+    noise = MotionNoise(*check_numbers("noise", noise, len(MotionNoise._fields), low=0.0))
     rng = make_rng(seed)
     wps = _waypoints(world)
     start_x = rng.uniform(1.0, world.width - 3.0)

@@ -42,7 +42,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.checks import make_rng
+from dbn.checks import check_count, make_rng
 from dbn.errors import InputError, ModelError, ShapeError
 from models.pathrecovery.model import CameraNetwork, propagate, sigma_cholesky, whiten
 
@@ -446,8 +446,11 @@ def _check_scene(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Validate :func:`simulate_scene`'s arguments; returns ``sigma`` as a (d, d) float64
     array (identity by default) and its lower Cholesky factor."""
-    if num_objects < 1 or num_timesteps < 2:
-        raise InputError(f"need num_objects >= 1 and num_timesteps >= 2, got {num_objects}, {num_timesteps}")
+    for name, value in (("num_objects", num_objects), ("num_timesteps", num_timesteps),
+                        ("feature_dim", feature_dim)):  # fmt: skip
+        check_count(name, value)  # NaN: numpy's "cannot convert float NaN"; 2.5 ran
+    if num_timesteps < 2:
+        raise InputError(f"need num_timesteps >= 2, got {num_timesteps}")
     if not 0.0 < gamma < 1.0:
         raise InputError(f"gamma must lie in (0, 1), got {gamma!r}")
     if (cm is None) == (spread is None):
