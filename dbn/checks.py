@@ -19,8 +19,9 @@ from dbn.errors import (
 )
 
 __all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative",
-           "check_number_fields", "check_numbers", "check_size", "evidence_mapping",
-           "evidence_state", "from_package", "instance_of", "is_whole", "make_rng"]
+           "check_number_fields", "check_numbers", "check_size", "check_type",
+           "evidence_mapping", "evidence_state", "from_package", "instance_of", "is_whole",
+           "make_rng"]
 
 MAX_SCALE = 1e100
 """Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
@@ -108,6 +109,18 @@ def check_numbers(name: str, value: Any, size: int, low: float | None = None,
     if low is not None and np.any(v < low):
         raise error(f"{name} = {v.tolist()}: every number must be >= {low:g}")
     return v
+
+
+def check_type(name: str, value: Any, kind: type | tuple[type, ...],
+               error: type[DBNError] = ModelError) -> Any:
+    """``value`` if it is an instance of ``kind`` (a class or a tuple of them), else
+    ``error`` naming ``name``, the class(es) it needs and the one it got (a constructor
+    given the wrong object raised ``AttributeError`` deep inside, or later, at a step)."""
+    if not isinstance(value, kind):
+        kinds = kind if isinstance(kind, tuple) else (kind,)
+        raise error(f"{name} must be an instance of {' or '.join(k.__name__ for k in kinds)}, "
+                    f"got {type(value).__name__}")  # fmt: skip
+    return value
 
 
 def check_mapping(what: str, value: Any, error: type[DBNError] = EvidenceError) -> None:

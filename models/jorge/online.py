@@ -51,7 +51,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dbn.checks import check_number_fields
+from dbn.checks import check_number_fields, check_type
 from dbn.errors import InputError, ModelError
 from inference.exact import JunctionTree, map_assignment
 from models.jorge.labels import Label, prune_labels
@@ -230,7 +230,8 @@ class OnlineLabeller:
 
     def __init__(self, config: OnlineConfig | None = None, fps: float | None = None,
                  keep_windows: bool = False) -> None:
-        self.config = OnlineConfig() if config is None else config
+        self.config = OnlineConfig() if config is None else check_type("config", config,
+                                                                       OnlineConfig)
         self.graph = LabelGraph(self.config.network, fps=fps)  # checks fps
         self.fps = self.graph.fps
         self.labels: dict[int, Label] = {}

@@ -19,6 +19,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from dbn.checks import check_type
 from dbn.errors import CheckpointError, InputError, ShapeError
 from inference.checkpoint import load_arrays, save_arrays
 from inference.particle import ParticleInfo, ParticleState
@@ -62,7 +63,7 @@ class LocalizationTracker(StepTracker):
 
     def __init__(self, model: RobotModel, num_particles: int, algorithm: str = "apf", *,
                  dtype: Any = jnp.float64, ess_threshold: float = 0.5) -> None:  # fmt: skip
-        self.model = model
+        self.model = check_type("model", model, RobotModel)
         self.dtype = dtype
         self._pf = make_filter(
             model, num_particles, algorithm, dtype=dtype, ess_threshold=ess_threshold

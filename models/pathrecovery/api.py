@@ -15,6 +15,7 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
+from dbn.checks import check_type
 from dbn.errors import CheckpointError, InputError
 from inference.checkpoint import load_arrays, save_arrays
 from inference.particle import ParticleState
@@ -61,7 +62,7 @@ class PathRecoveryTracker(StepTracker):
     can_save = True
 
     def __init__(self, model: PathFilterModel) -> None:
-        self.model = model
+        self.model = check_type("model", model, PathFilterModel)  # (from make_model)
 
     def init(self, key: jax.Array) -> PathState:
         """All particles at ``C_0`` with ``f_0`` (deterministic: the key is checked, not used)."""

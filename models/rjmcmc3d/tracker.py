@@ -31,7 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.checks import make_rng
+from dbn.checks import check_type, make_rng
 from dbn.errors import InputError
 from inference.progress import progress_bar
 from models.protocol import next_frame_index
@@ -134,10 +134,11 @@ class RJMCMCTracker:
         noise: GroundNoiseMap | None = None,
         likelihood: str = "incremental",
     ) -> None:
-        self.params = (params or TrackerParams()).validate()
+        self.params = (TrackerParams() if params is None
+                       else check_type("params", params, TrackerParams, InputError)).validate()
         if likelihood not in ("incremental", "full"):
             raise InputError(f"likelihood={likelihood!r} must be 'incremental' or 'full'")
-        self.scene = scene
+        self.scene = check_type("scene", scene, Scene, InputError)
         self.noise = noise if noise is not None else ground_noise_map(scene, self.params)
         self.likelihood = likelihood
         self.num_bins = self.params.colour_levels**3

@@ -25,6 +25,7 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
+from dbn.checks import check_type
 from models.protocol import Example, StepTracker, check_key, seed_from_key
 from models.zajdel.data import Observations, concat_observations, take, validate_observations
 from models.zajdel.learnsearch import LearnSearchConfig, LSParams, learn_search
@@ -71,8 +72,9 @@ class LearnSearchTracker(StepTracker):
     can_save = True
 
     def __init__(self, params: LSParams, config: LearnSearchConfig | None = None) -> None:
-        self.params = params
+        self.params = check_type("params", params, LSParams)
         self.config = LearnSearchConfig() if config is None else config
+        check_type("config", self.config, LearnSearchConfig).validate()
 
     def init(self, key: jax.Array) -> LearnSearchState:
         """No observation yet (deterministic: the key is checked, not used)."""
@@ -133,8 +135,9 @@ class StreamLearnSearchTracker(StepTracker):
     can_save = True
 
     def __init__(self, params, config, window: int, close_z: float | None = 5.0) -> None:
-        self.params = params
+        self.params = check_type("params", params, LSParams)
         self.config = LearnSearchConfig() if config is None else config
+        check_type("config", self.config, LearnSearchConfig)
         self.window, self.close_z = window, close_z
         StreamSearch(params, self.config, window, close_z)  # check the arguments now
 

@@ -6,6 +6,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dbn.checks import check_type
 from dbn.errors import ModelError
 from inference.adf.niw import NIW
 from models.zajdel.path import PathModel
@@ -53,6 +54,7 @@ def default_prior(mean: np.ndarray, within_std: float, between_std: float, dof_e
 
 def check_params(params: ZajdelParams) -> None:
     """Raise :class:`~dbn.errors.ModelError` for an invalid prior or label prior."""
+    check_type("params", params, ZajdelParams)
     a, kappa, eta, C = (np.asarray(x, float) for x in params.prior)
     if a.ndim != 1:
         raise ModelError(f"prior.a: expected shape (obs_dim,), got {a.shape}")

@@ -42,7 +42,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from dbn.checks import check_size
+from dbn.checks import check_size, check_type
 from dbn.errors import InputError, ModelError
 from inference.adf.checkpoint import load_state, save_state
 from inference.adf.driver import adf_filter, adf_filter_lag, adf_step, x64_context
@@ -151,7 +151,7 @@ class ZajdelADF:
             params = params.to_params()
         check_params(params)
         self.params: ZajdelParams = params
-        self.config = ADFConfig() if config is None else config
+        self.config = ADFConfig() if config is None else check_type("config", config, ADFConfig)
         cfg = self.config
         cfg.validate()
         if cfg.birth_leave and not (

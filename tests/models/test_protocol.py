@@ -283,3 +283,19 @@ def test_anything_but_an_observation_or_a_key_is_refused_naming_it(name: str) ->
             with pytest.raises(InputError, match="key must be one jax PRNG key"):
                 call(key)
     _assert_same(tr.fingerprint(state), snapshot)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_make_refuses_the_wrong_object_naming_the_argument(name: str) -> None:
+    """``models.get(name).make`` given None, an int, a str or a dict where its model,
+    parameters, scene or config belong raised ``AttributeError`` ('NoneType' object has no
+    attribute 'prior' / 'network' / 'floor'), or, for the learn-search and path-recovery
+    trackers, built a tracker that failed at its first step. Each is now a dbn.errors
+    class naming the argument and the class it needs."""
+    entry = models.get(name)
+    more = (10,) if name == "localization" else (7.0,) if name == "jorge" else ()
+    for bad in (None, 5, "abc", {}):
+        if name == "jorge" and bad is None:
+            continue  # None is the default OnlineConfig
+        with pytest.raises(DBNError, match=r"^(params|config|model|scene) must be an instance"):
+            entry.make(bad, *more)
