@@ -21,7 +21,7 @@ from dbn.errors import (
 __all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative",
            "check_number_fields", "check_numbers", "check_size", "check_type",
            "evidence_mapping", "evidence_state", "from_package", "instance_of", "is_whole",
-           "make_rng"]
+           "make_rng", "refuse_complex"]
 
 MAX_SCALE = 1e100
 """Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
@@ -97,6 +97,7 @@ def check_numbers(name: str, value: Any, size: int, low: float | None = None,
     :mod:`dbn.errors` class naming ``name``: ``error`` for what is not numbers or is below
     ``low``, :class:`ShapeError` for another count, :class:`NonFiniteError` for NaN,
     infinity or a number beyond the bound (numpy's reshape or float errors before)."""
+    refuse_complex(name, value, error)
     try:
         v = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
@@ -121,6 +122,19 @@ def check_type(name: str, value: Any, kind: type | tuple[type, ...],
         raise error(f"{name} must be an instance of {' or '.join(k.__name__ for k in kinds)}, "
                     f"got {type(value).__name__}")  # fmt: skip
     return value
+
+
+def refuse_complex(what: str, value: Any, error: type[DBNError] = InputError) -> None:
+    """Raise ``error`` naming ``what`` if ``value`` holds complex numbers: numpy's float
+    conversion drops their imaginary parts with only a ``ComplexWarning``. (What numpy
+    cannot read as one array passes, for the caller's conversion to name.)"""
+    try:
+        complex_ = np.iscomplexobj(value)
+    except (TypeError, ValueError):
+        return
+    if complex_:
+        raise error(f"{what} holds complex numbers: expected real ones (numpy would drop "
+                    "the imaginary parts)")  # fmt: skip
 
 
 def check_mapping(what: str, value: Any, error: type[DBNError] = EvidenceError) -> None:

@@ -36,6 +36,7 @@ from dbn.checks import (
     evidence_state,
     instance_of,
     is_whole,
+    refuse_complex,
 )
 from dbn.dbn import TwoSliceDBN
 from dbn.errors import (
@@ -72,7 +73,9 @@ class Columns(NamedTuple):
 
 def as_column(name: str, col: ArrayLike, what: str = "evidence column", dtype=None) -> np.ndarray:
     """``col`` as an array (of ``dtype``): a ragged or non-numeric one is an
-    :class:`EvidenceError` naming ``what`` and ``name``, not numpy's error."""
+    :class:`EvidenceError` naming ``what`` and ``name``, not numpy's error; so is a
+    complex one (its imaginary parts were dropped with a warning)."""
+    refuse_complex(f"{what} {name!r}", col, EvidenceError)
     try:
         return np.asarray(col, dtype=dtype)
     except (TypeError, ValueError) as exc:

@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
-from dbn.checks import check_size, make_rng
+from dbn.checks import check_size, make_rng, refuse_complex
 from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 
 __all__ = [
@@ -77,6 +77,7 @@ class KalmanResult(NamedTuple):
 
 def _real(name: str, value) -> np.ndarray:
     """A parameter or the observations as a finite float64 array, else the library's error."""
+    refuse_complex(name, value)
     try:
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -126,6 +127,7 @@ def _check(
     array."""
     p = check_params(params)
     m = p.H.shape[0]
+    refuse_complex("observations", observations)
     try:
         y = np.asarray(observations, dtype=np.float64)
     except (TypeError, ValueError) as exc:
