@@ -4,6 +4,7 @@ numpy's or Python's own."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
@@ -69,8 +70,6 @@ def check_number_fields(obj: Any, error: type[DBNError] = InputError) -> None:
     :data:`MAX_SCALE`; else ``error`` naming ``Class.field``. (NaN passed range checks
     written as ``x < 1``, 2.5 was truncated or compared as it was, a string raised
     Python's ``TypeError`` on comparison, and 1e300 overflowed once squared.)"""
-    import dataclasses
-
     if dataclasses.is_dataclass(obj):
         defaults = {f.name: f.default for f in dataclasses.fields(obj)}
     else:

@@ -76,8 +76,8 @@ def make_world(width: float = 12.0, height: float = 6.0, period: float = 2.0) ->
         A size not finite and > 0 (NaN raised numpy's "cannot convert float NaN to
         integer", a negative width ran), or more than :data:`MAX_STRIPES` wall stripes.
     """
-    width, height, period = (float(check_numbers(name, v, 1)[0]) for name, v in
-                             (("width", width), ("height", height), ("period", period)))  # fmt: skip
+    sizes = {"width": width, "height": height, "period": period}
+    width, height, period = (float(check_numbers(k, v, 1)[0]) for k, v in sizes.items())
     if not min(width, height, period) > 0:
         raise ModelError(f"make_world: width, height and period must be > 0, got {width}, "
                          f"{height}, {period}")  # fmt: skip

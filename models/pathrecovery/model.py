@@ -23,6 +23,7 @@ import numpy as np
 from scipy.linalg import cholesky
 from scipy.special import ndtr
 
+from dbn.checks import refuse_complex
 from dbn.errors import (
     InputError,
     ModelError,
@@ -376,10 +377,11 @@ def sigma_cholesky(sigma, feature_dim: int) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     InputError, ShapeError, NonFiniteError
-        ``sigma`` not numbers, not ``(feature_dim, feature_dim)``, holding NaN or
+        ``sigma`` not real numbers, not ``(feature_dim, feature_dim)``, holding NaN or
         infinity (scipy's own ValueError "array must not contain infs or NaNs" before),
         or not symmetric positive definite.
     """
+    refuse_complex("sigma", sigma)
     try:
         sigma = np.asarray(sigma, dtype=np.float64)
     except (TypeError, ValueError):

@@ -332,8 +332,10 @@ def test_bad_model_and_config():
     with pytest.raises(NonFiniteError):
         make_model(net, 0, np.array([np.nan, 0.0]), np.eye(2))
     # scipy's ValueError "array must not contain infs or NaNs" named no argument
-    for bad, error in ((np.full((2, 2), np.nan), NonFiniteError), (np.diag([np.inf, 1.0]), NonFiniteError),
-                       ([["a", "b"], ["c", "d"]], InputError)):  # fmt: skip
+    for bad, error in ((np.full((2, 2), np.nan), NonFiniteError),
+                       (np.diag([np.inf, 1.0]), NonFiniteError),
+                       ([["a", "b"], ["c", "d"]], InputError),
+                       (np.eye(2) * (1 + 1j), InputError)):  # fmt: skip
         with pytest.raises(error, match="sigma"):
             make_model(net, 0, np.zeros(2), bad)
     for field, value in (("num_particles", 0), ("alpha", 1.5), ("hidden_likelihood", 0.0), ("k", 2.5)):
