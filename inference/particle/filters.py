@@ -217,6 +217,20 @@ def check_num_particles(num_particles: Any) -> int:
     return n
 
 
+MODEL_METHODS = ("sample_initial", "sample_transition", "log_likelihood")
+"""What a particle filter calls on its model (a :class:`StateSpaceModel` declares them)."""
+
+
+def check_model(model: Any) -> None:
+    """Raise :class:`ModelError` unless ``model`` declares :data:`MODEL_METHODS` (a
+    :class:`StateSpaceModel` or any object with them): a filter built on anything else
+    failed at its first ``init`` with Python's ``AttributeError``."""
+    missing = [m for m in MODEL_METHODS if not callable(getattr(model, m, None))]
+    if missing:
+        raise ModelError(f"model must be a StateSpaceModel (declare {', '.join(MODEL_METHODS)})"
+                         f"; {type(model).__name__} lacks {', '.join(missing)}")  # fmt: skip
+
+
 def check_key(key: Any) -> None:
     """Raise :class:`InputError` unless ``key`` is one jax PRNG key: a typed key
     (``jax.random.key(seed)``, shape ``()``) or a legacy one (``jax.random.PRNGKey(seed)``,
@@ -302,6 +316,7 @@ def _particle_filter(
 ) -> ParticleFilter:
     """The filter both algorithms share: a first stage (:data:`FirstStage`), adaptive
     resampling on its ESS, propagation and weighting by the likelihood."""
+    check_model(model)
     check_threshold(ess_threshold)
     check_float_dtype(dtype)
     resampler = check_resampler(resampler)
@@ -480,11 +495,15 @@ def run(
 
     Raises
     ------
-    InputError, ShapeError
-        A bad key (:func:`check_key`), or observations and actions without one leading
-        axis of at least one step (:func:`check_run_inputs`).
+    InputError, ShapeError, ModelError
+        A bad key (:func:`check_key`), observations and actions without one leading
+        axis of at least one step (:func:`check_run_inputs`), or ``pf`` not a
+        :class:`ParticleFilter`.
     """
     check_key(key)
+    if not isinstance(pf, ParticleFilter):  # else AttributeError: no attribute 'dtype'
+        raise ModelError(f"pf must be a ParticleFilter (bootstrap_filter, auxiliary_filter), "
+                         f"got {type(pf).__name__}")  # fmt: skip
     check_run_inputs(observations, actions)
     with precision_scope(pf.dtype):
         k0, k_steps = jax.random.split(key)

@@ -8,7 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from dbn.errors import InputError, ShapeError
+from dbn.errors import InputError, ModelError, ShapeError
 from inference.kalman import LinearGaussianParams, kalman_filter, lgssm_sample
 from inference.particle import (
     RESAMPLERS,
@@ -90,3 +90,30 @@ def test_lgssm_sample_checks_its_arguments() -> None:
                          ((0, PARAMS._replace(Q=-I2), 2), "Q is not positive")):  # fmt: skip
         with pytest.raises(InputError, match=needle):
             lgssm_sample(*args)
+
+
+class _Walk:
+    """A model by duck typing (no StateSpaceModel base): a Gaussian random walk."""
+
+    def sample_initial(self, key, num_particles, dtype):
+        return jax.random.normal(key, (num_particles, 1), dtype)
+
+    def sample_transition(self, key, particles, action):
+        return particles + jax.random.normal(key, particles.shape, particles.dtype)
+
+    def log_likelihood(self, particles, observation):
+        return -0.5 * jnp.sum((particles - observation) ** 2, axis=-1)
+
+
+def test_a_model_or_filter_of_another_kind_is_refused_naming_it() -> None:
+    """bootstrap_filter(None) built a filter whose init raised AttributeError ('NoneType'
+    object has no attribute 'sample_initial'); run(key, None) raised "no attribute
+    'dtype'". A model needs the three methods a filter calls, whatever its class."""
+    for bad in (None, 5, {}, object()):
+        for algorithm in (bootstrap_filter, auxiliary_filter):
+            with pytest.raises(ModelError, match="model must be a StateSpaceModel.*lacks"):
+                algorithm(bad, 10)
+        with pytest.raises(ModelError, match="pf must be a ParticleFilter"):
+            run(jax.random.key(0), bad, np.zeros((3, 1)))
+    _, _, means = run(jax.random.key(0), bootstrap_filter(_Walk(), 50), np.zeros((3, 1)))
+    assert np.asarray(means).shape == (3, 1) and np.all(np.isfinite(np.asarray(means)))
