@@ -16,8 +16,9 @@ def read_xml_root(path: str | Path, what: str = "XML file") -> ET.Element:
     """The root element of an XML file (``.gz`` read through gzip).
 
     A missing, unreadable, malformed or truncated file, or one whose declaration names an
-    unknown encoding, is a :class:`~dbn.errors.FileFormatError` naming the file (and the
-    line where the parser stopped); never a raw ``ParseError`` / ``LookupError``.
+    unknown encoding or a multi-byte one expat cannot read (UTF-7, UTF-32, Shift-JIS, ...),
+    is a :class:`~dbn.errors.FileFormatError` naming the file (and the line where the
+    parser stopped); never a raw ``ParseError`` / ``LookupError`` / ``ValueError``.
     """
     path = Path(path)
     opener = gzip.open if path.suffix == ".gz" else open
@@ -31,5 +32,8 @@ def read_xml_root(path: str | Path, what: str = "XML file") -> ET.Element:
         raise FileFormatError(path, f"not well-formed XML ({exc})", line) from None
     except (LookupError, UnicodeError) as exc:  # e.g. encoding="u-f-8" in the declaration
         raise FileFormatError(path, f"XML in an unknown or wrong encoding ({exc})", 1) from None
+    except ValueError as exc:  # expat: "multi-byte encodings are not supported" (UTF-7, Shift-JIS)
+        raise FileFormatError(path, f"XML in an encoding the parser cannot read ({exc}): save "
+                                    "it as UTF-8", 1) from None  # fmt: skip
     except (OSError, EOFError, zlib.error) as exc:
         raise FileFormatError(path, f"unreadable {what} ({exc})") from None

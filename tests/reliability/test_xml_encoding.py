@@ -12,21 +12,24 @@ from dbn.errors import FileFormatError
 DATA = Path(__file__).resolve().parent.parent / "data"
 
 
-def _flip_encoding(src: Path, dst: Path) -> Path:
-    """``src`` with its declaration's encoding replaced by the unknown ``u-f-8``."""
+def _flip_encoding(src: Path, dst: Path, encoding: str = "u-f-8") -> Path:
+    """``src`` with its declaration's encoding replaced by ``encoding``."""
     raw = src.read_bytes()
     assert raw.startswith(b"<?xml"), src
     end = raw.index(b"?>")
-    dst.write_bytes(b'<?xml version="1.0" encoding="u-f-8"' + raw[end:])
+    dst.write_bytes(f'<?xml version="1.0" encoding="{encoding}"'.encode() + raw[end:])
     return dst
 
 
+# u-f-8: LookupError; UTF-7 (hypothesis drew it), UTF-32, Shift-JIS: expat's ValueError
+# "multi-byte encodings are not supported", which escaped as itself
+@pytest.mark.parametrize("encoding", ["u-f-8", "UTF-7", "UTF-32", "shift_jis"])
 @pytest.mark.parametrize("name", ["caviar.xml", "pets2009.xml"])
-def test_box_xml_with_unknown_encoding(tmp_path: Path, name: str) -> None:
+def test_box_xml_with_unknown_encoding(tmp_path: Path, name: str, encoding: str) -> None:
     from models.io.jorge import read_boxes
     from models.jorge.strokes import load_caviar, load_pets2009
 
-    bad = _flip_encoding(DATA / "jorge" / name, tmp_path / name)
+    bad = _flip_encoding(DATA / "jorge" / name, tmp_path / name, encoding)
     for read in (load_caviar if name == "caviar.xml" else load_pets2009, read_boxes):
         with pytest.raises(FileFormatError, match=f"{name}:1:.*encoding"):
             read(bad)
