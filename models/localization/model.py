@@ -34,7 +34,7 @@ import numpy as np
 from jax import Array
 from scipy.spatial import cKDTree
 
-from dbn.checks import MIN_SCALE, check_numbers
+from dbn.checks import MIN_SCALE, check_numbers, refuse_complex
 from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 from inference.evidence_columns import as_column
 from inference.particle import StateSpaceModel, register_model
@@ -179,8 +179,7 @@ class RobotModel(StateSpaceModel):
         ------
         ShapeError, NonFiniteError, InputError (negative ``dt``)
         """
-        if np.iscomplexobj(odometry):
-            raise InputError("odometry must hold real numbers, got complex")
+        refuse_complex("odometry", odometry)
         u = as_column("odometry", odometry, "observation field", np.float64)
         if u.shape[-1:] != (4,) or u.ndim not in (1, 2):
             raise ShapeError(
@@ -338,8 +337,7 @@ class KNNSensor:
 
     def check(self, observations: np.ndarray, name: str = "observations") -> np.ndarray:
         """Validate raw observations ``(num_timesteps, obs_dim)`` or ``(obs_dim,)``; raise before any use."""
-        if np.iscomplexobj(observations):
-            raise InputError(f"{name} must hold real numbers, got complex")
+        refuse_complex(name, observations)
         y = np.asarray(observations, dtype=np.float64)
         if y.shape[-1:] != (self.obs_dim,) or y.ndim not in (1, 2):
             raise ShapeError(f"{name} has shape {y.shape}, expected (..., {self.obs_dim})")

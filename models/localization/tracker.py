@@ -15,6 +15,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from dbn.checks import refuse_complex
 from dbn.errors import InputError, NonFiniteError, ShapeError, TimeOrderError
 from inference.evidence_columns import as_column
 from inference.particle import (
@@ -225,8 +226,7 @@ def check_observation(model: RobotModel, observation: Any, dtype: Any = jnp.floa
                 f"observation must be a RangeBearingObservation, got {type(observation).__name__}"
             )
         for name in RangeBearingObservation._fields:
-            if np.iscomplexobj(getattr(observation, name)):
-                raise InputError(f"observation.{name} must hold real numbers, got complex")
+            refuse_complex(f"observation.{name}", getattr(observation, name))
         lm = np.asarray(observation.landmark)
         if not np.issubdtype(lm.dtype, np.integer):
             raise InputError(f"observation.landmark must hold integer ids, got dtype {lm.dtype}")

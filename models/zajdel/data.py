@@ -13,7 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.checks import MAX_SCALE
+from dbn.checks import MAX_SCALE, refuse_complex
 from dbn.errors import InputError, NonFiniteError, ShapeError, TimeOrderError
 
 __all__ = [
@@ -132,8 +132,7 @@ def _as_arrays(obs: Observations) -> tuple[np.ndarray, dict[str, np.ndarray], di
         raise InputError(f"expected Observations (fields {', '.join(Observations._fields)}), "
                          f"got {type(obs).__name__}")  # fmt: skip
     for name in Observations._fields:
-        if np.iscomplexobj(getattr(obs, name)):
-            raise InputError(f"{name}: expected real numbers, got a complex array")
+        refuse_complex(name, getattr(obs, name))
     try:
         app = np.asarray(obs.appearance, dtype=np.float64)
         fields = {
