@@ -10,7 +10,8 @@ them).
 
 The masks are warped into seed 003's rectified images (nearest neighbour), and person
 detections (the tracker's data-driven proposals) are the feet (bottom centre) of the
-connected foreground blobs at least ``min_blob`` pixels large, mapped to the ground.
+connected foreground blobs at least ``min_blob`` pixels large, mapped to the ground (feet
+on or above a view's horizon map behind the camera or to infinity: they are dropped).
 
 Output ``tracks3d.txt``: MOTChallenge 3-D style ``frame,id,-1,-1,-1,-1,conf,x,y,z``
 (frames from 1, metres, ``z = 0`` on the ground, ``conf`` = presence probability); the

@@ -21,6 +21,7 @@ __all__ = [
     "camera_center",
     "ground_homography",
     "homography_jacobian",
+    "in_front",
     "look_at_camera",
     "projection_matrix",
     "rectification",
@@ -90,6 +91,27 @@ def projection_matrix(camera: Camera) -> np.ndarray:
 def camera_center(camera: Camera) -> np.ndarray:
     """Optical centre ``-R^T t`` in world coordinates, shape (3,)."""
     return -camera.R.T @ camera.t
+
+
+def in_front(camera: Camera, ground: np.ndarray) -> np.ndarray:
+    """Whether ground points ``(x, y, 0)`` are in front of ``camera``: depth ``(R X + t)_z
+    > 0``.
+
+    A pixel above the horizon maps through the ground homography to a point behind the
+    camera, on the ray's backward extension: a place the camera cannot see.
+
+    Parameters
+    ----------
+    camera : Camera
+    ground : ndarray, shape (n, 2)
+        Points on the ground plane (metres).
+
+    Returns
+    -------
+    ndarray, shape (n,), bool
+    """
+    g = np.asarray(ground, dtype=np.float64).reshape(-1, 2)
+    return g @ camera.R[2, :2] + camera.t[2] > 0
 
 
 def look_at_camera(

@@ -73,8 +73,29 @@ def _scene(ctx, views, floor: np.ndarray | None, sigma_px: float):
     return scene_from_cameras(ctx.seed, cams, floor, np.ones((V, 3)), sigma)
 
 
+def _ground(scene, dv: np.ndarray, dpx: np.ndarray):
+    """``(det_view, det_px, det_ground)`` of the detections whose feet map to a ground point
+    in front of their camera (:func:`~models.rjmcmc3d.geometry.in_front`) and within
+    :data:`~models.rjmcmc3d.frames.MAX_METRES`. A blob above a view's horizon (a moving
+    tree, a reflection in the sky) maps behind the camera, possibly into the floor; one on
+    the horizon maps to infinity. Neither is a place the camera sees, so neither is a
+    detection. Shapes: ``dv`` (n,) int, ``dpx`` (n, 2) rectified pixels."""
+    from models.rjmcmc3d.frames import MAX_METRES
+    from models.rjmcmc3d.geometry import apply_homography, ground_homography, in_front
+
+    ground = np.zeros((len(dv), 2))
+    keep = np.zeros(len(dv), dtype=bool)
+    for v in np.unique(dv):
+        sel = dv == v
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            g = apply_homography(np.linalg.inv(ground_homography(scene.P[v])), dpx[sel])
+        near = np.all(np.abs(g) <= MAX_METRES, axis=1)  # False for NaN and inf
+        keep[sel] = near & in_front(scene.cameras[v], np.where(near[:, None], g, 0.0))
+        ground[sel] = g
+    return dv[keep], dpx[keep], ground[keep]
+
+
 def _frames(views, scene, min_blob: int):
-    from models.rjmcmc3d.geometry import apply_homography, ground_homography
     from models.rjmcmc3d.scene import Frame
 
     shape = (scene.height, scene.width)
@@ -90,12 +111,7 @@ def _frames(views, scene, min_blob: int):
             dv += [v] * len(feet)
             dpx.append(feet)
         dpx = np.concatenate(dpx) if dpx else np.zeros((0, 2))
-        dv = np.array(dv, dtype=np.int64)
-        ground = np.zeros((len(dv), 2))
-        for v in range(len(views)):
-            if (dv == v).any():
-                Hg = ground_homography(scene.P[v])
-                ground[dv == v] = apply_homography(np.linalg.inv(Hg), dpx[dv == v])
+        dv, dpx, ground = _ground(scene, np.array(dv, dtype=np.int64), dpx)
         yield Frame(np.stack(D).astype(np.float32), np.stack(img).astype(np.float32), dv, dpx,
                     ground, t)  # fmt: skip
 
