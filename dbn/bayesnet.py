@@ -17,6 +17,7 @@ from dbn.checks import (
     evidence_state,
     from_package,
     make_rng,
+    refuse_complex,
 )
 from dbn.cpds import ContinuousCPD, DeterministicCPD, LinearGaussianCPD, TabularCPD
 from dbn.errors import (
@@ -339,6 +340,7 @@ def check_evidence(
 
 def check_likelihood(name: str, cardinality: int, lik: Any) -> np.ndarray:
     """A validated virtual-evidence vector of shape ``(cardinality,)``."""
+    refuse_complex(f"soft evidence on {name!r}", lik, EvidenceError)
     try:
         arr = np.asarray(lik, dtype=np.float64)
     except (TypeError, ValueError):

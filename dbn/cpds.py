@@ -31,6 +31,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
+from dbn.checks import refuse_complex
 from dbn.errors import CPDShapeError, ModelError, NegativeProbabilityError, NotNormalizedError
 
 __all__ = [
@@ -76,6 +77,7 @@ def _parents_tuple(variable: str, parents: Sequence[str]) -> tuple[str, ...]:
 
 def _real_array(variable: str, what: str, value: ArrayLike) -> np.ndarray:
     """``value`` as a finite float64 array; else :class:`ModelError` naming the CPD."""
+    refuse_complex(f"CPD of {variable!r}: {what}", value, ModelError)
     try:
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -155,6 +157,7 @@ class TabularCPD:
 
     def __init__(self, variable: str, parents: Sequence[str], table: ArrayLike) -> None:
         parents_t = _parents_tuple(variable, parents)
+        refuse_complex(f"CPD of {variable!r}: table", table, CPDShapeError)
         try:
             arr = np.array(table, dtype=np.float64)
         except (TypeError, ValueError) as exc:
