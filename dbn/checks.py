@@ -22,7 +22,7 @@ from dbn.errors import (
 __all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative",
            "check_number_fields", "check_numbers", "check_size", "check_type",
            "evidence_mapping", "evidence_state", "from_package", "instance_of", "is_whole",
-           "make_rng", "refuse_complex"]
+           "make_rng", "real_array", "refuse_complex"]
 
 MAX_SCALE = 1e100
 """Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
@@ -134,6 +134,18 @@ def refuse_complex(what: str, value: Any, error: type[DBNError] = InputError) ->
     if complex_:
         raise error(f"{what} holds complex numbers: expected real ones (numpy would drop "
                     "the imaginary parts)")  # fmt: skip
+
+
+def real_array(what: str, value: Any, error: type[DBNError] = InputError) -> np.ndarray:
+    """``value`` as a float64 array (any shape; finiteness is the caller's check); else
+    ``error`` naming ``what``: complex numbers (:func:`refuse_complex`), strings, ragged
+    lists and other objects that are not numbers (numpy's own ValueError or TypeError named
+    no argument)."""
+    refuse_complex(what, value, error)
+    try:
+        return np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise error(f"{what} is not an array of numbers ({exc})") from None
 
 
 def check_mapping(what: str, value: Any, error: type[DBNError] = EvidenceError) -> None:

@@ -31,7 +31,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dbn.checks import refuse_complex
+from dbn.checks import real_array
 from dbn.errors import CPDShapeError, ModelError, NegativeProbabilityError, NotNormalizedError
 
 __all__ = [
@@ -76,12 +76,9 @@ def _parents_tuple(variable: str, parents: Sequence[str]) -> tuple[str, ...]:
 
 
 def _real_array(variable: str, what: str, value: ArrayLike) -> np.ndarray:
-    """``value`` as a finite float64 array; else :class:`ModelError` naming the CPD."""
-    refuse_complex(f"CPD of {variable!r}: {what}", value, ModelError)
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ModelError(f"CPD of {variable!r}: {what} is not numeric ({exc})") from None
+    """``value`` as a finite float64 array of the CPD's own (a copy: the CPD freezes it,
+    and the caller's array stays writable); else :class:`ModelError` naming the CPD."""
+    arr = real_array(f"CPD of {variable!r}: {what}", value, ModelError).copy()
     if not np.all(np.isfinite(arr)):
         raise ModelError(f"CPD of {variable!r}: {what} must be finite")
     return arr
@@ -157,11 +154,7 @@ class TabularCPD:
 
     def __init__(self, variable: str, parents: Sequence[str], table: ArrayLike) -> None:
         parents_t = _parents_tuple(variable, parents)
-        refuse_complex(f"CPD of {variable!r}: table", table, CPDShapeError)
-        try:
-            arr = np.array(table, dtype=np.float64)
-        except (TypeError, ValueError) as exc:
-            raise CPDShapeError(f"CPD of {variable!r}: table is not numeric ({exc})") from None
+        arr = real_array(f"CPD of {variable!r}: table", table, CPDShapeError).copy()
         if arr.ndim != len(parents_t) + 1:
             raise CPDShapeError(
                 f"CPD of {variable!r}: table has {arr.ndim} axes, expected {len(parents_t) + 1} "

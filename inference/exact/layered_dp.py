@@ -30,7 +30,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.errors import NonFiniteError, ShapeError
+from dbn.checks import real_array
+from dbn.errors import InputError, NonFiniteError, ShapeError
 
 __all__ = ["LayeredPath", "layered_shortest_path"]
 
@@ -51,7 +52,13 @@ class LayeredPath(NamedTuple):
 
 
 def _check(node_costs: Sequence[np.ndarray], edge_costs: Sequence[np.ndarray]) -> tuple[list, list]:
-    nodes = [np.asarray(c, dtype=np.float64) for c in node_costs]
+    for name, seq in (("node_costs", node_costs), ("edge_costs", edge_costs)):
+        layers = isinstance(seq, Sequence) or (isinstance(seq, np.ndarray) and seq.ndim > 0)
+        if isinstance(seq, str) or not layers:
+            raise InputError(f"{name} must be a sequence of arrays, one per "
+                             f"{'layer' if name == 'node_costs' else 'pair of layers'}, got "
+                             f"{type(seq).__name__}")  # fmt: skip
+    nodes = [real_array(f"node_costs[{t}]", c) for t, c in enumerate(node_costs)]
     if len(edge_costs) != max(len(nodes) - 1, 0):
         raise ShapeError(
             f"edge_costs must hold num_layers - 1 = {max(len(nodes) - 1, 0)} matrices, got {len(edge_costs)}"
@@ -63,7 +70,7 @@ def _check(node_costs: Sequence[np.ndarray], edge_costs: Sequence[np.ndarray]) -
         if not np.all(np.isfinite(c)):
             raise NonFiniteError(f"node_costs[{t}] holds non-finite values: {c!r}")
     for t, e in enumerate(edge_costs):
-        e = np.asarray(e, dtype=np.float64)
+        e = real_array(f"edge_costs[{t}]", e)
         want = (nodes[t].size, nodes[t + 1].size)
         if e.shape != want:
             raise ShapeError(f"edge_costs[{t}] must have shape {want}, got {e.shape}")

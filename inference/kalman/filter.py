@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
-from dbn.checks import check_size, make_rng, refuse_complex
+from dbn.checks import check_size, make_rng, real_array
 from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 
 __all__ = [
@@ -77,11 +77,7 @@ class KalmanResult(NamedTuple):
 
 def _real(name: str, value) -> np.ndarray:
     """A parameter or the observations as a finite float64 array, else the library's error."""
-    refuse_complex(name, value)
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} is not an array of numbers ({exc})") from None
+    arr = real_array(name, value)
     if not np.all(np.isfinite(arr)):
         bad = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
         raise NonFiniteError(f"{name}{list(bad)} = {arr[bad]} is not finite")
@@ -127,11 +123,7 @@ def _check(
     array."""
     p = check_params(params)
     m = p.H.shape[0]
-    refuse_complex("observations", observations)
-    try:
-        y = np.asarray(observations, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"observations is not an array of numbers ({exc})") from None
+    y = real_array("observations", observations)
     if y.ndim != 2 or y.shape[1] != m:
         raise ShapeError(f"observations has shape {y.shape}, expected (num_timesteps, {m})")
     return p, _real("observations", y)

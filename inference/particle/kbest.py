@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dbn.checks import check_count
+from dbn.checks import check_count, real_array
 from dbn.errors import InputError, ShapeError
 
 __all__ = ["k_best_states"]
@@ -48,7 +48,7 @@ def k_best_states(
         Mismatched shapes, ``k < 1``, an unknown ``combine``, negative or NaN weights.
     """
     ids = np.asarray(state_ids)
-    w = np.asarray(weights, dtype=np.float64)
+    w = real_array("weights", weights)
     if ids.ndim != 1 or w.shape != ids.shape:
         raise ShapeError(f"state_ids {ids.shape} and weights {w.shape} must be equal 1-D shapes")
     check_count("k", k)  # True was read as 1

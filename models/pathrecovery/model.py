@@ -23,7 +23,7 @@ import numpy as np
 from scipy.linalg import cholesky
 from scipy.special import ndtr
 
-from dbn.checks import refuse_complex
+from dbn.checks import is_whole, real_array, refuse_complex
 from dbn.errors import (
     InputError,
     ModelError,
@@ -109,6 +109,17 @@ def _delay_pmf_table(gap_mean: np.ndarray, dmax: np.ndarray) -> np.ndarray:
     return table
 
 
+def _whole_numbers(name: str, value) -> np.ndarray:
+    """``value`` as an int64 array of the network's own (a copy: the network freezes it);
+    else :class:`ModelError` naming ``name``. A float must be a whole number (an index of
+    1.7 was truncated to 1)."""
+    arr = real_array(name, value, ModelError)
+    if not np.all(is_whole(arr)):
+        raise ModelError(f"{name} must be whole numbers, got "
+                         f"{arr[~is_whole(arr)][:3].tolist()}")  # fmt: skip
+    return arr.astype(np.int64)
+
+
 @dataclass(frozen=True, eq=False)
 class CameraNetwork:
     """The network graph ``G_mc = <C, E, W^p>`` with travel-time pdfs (seed 001, sec. 3.1).
@@ -151,11 +162,9 @@ class CameraNetwork:
     _diffusion_keys: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        indptr = np.asarray(self.indptr, dtype=np.int64)
-        indices = np.asarray(self.indices, dtype=np.int64)
-        probs = np.asarray(self.probs, dtype=np.float64)
-        gap_mean = np.asarray(self.gap_mean, dtype=np.float64)
-        coords = np.asarray(self.coords, dtype=np.float64)
+        indptr, indices = (_whole_numbers(n, getattr(self, n)) for n in ("indptr", "indices"))
+        probs, gap_mean, coords = (real_array(n, getattr(self, n), ModelError).copy()
+                                   for n in ("probs", "gap_mean", "coords"))  # fmt: skip
         if indptr.ndim != 1 or indptr.size < 2 or indptr[0] != 0:
             raise ModelError(f"indptr must be 1-D, start at 0, length >= 2; got {indptr[:5]!r}")
         n = indptr.size - 1

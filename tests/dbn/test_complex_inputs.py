@@ -1,4 +1,5 @@
-"""Complex numbers in a declaration or in soft evidence are refused, naming the field.
+"""Complex numbers in a declaration or in soft evidence are refused, naming the field;
+a CPD keeps copies of the arrays it is given.
 
 numpy's float conversion keeps the real part with only a ``ComplexWarning``: a CPD table
 ``[0.5, 0.5 + 1j]`` was accepted as ``[0.5, 0.5]`` and a likelihood ``[1 + 1j, 1]`` as
@@ -48,3 +49,21 @@ def test_complex_dtype_with_zero_imaginary_parts_is_refused_too():
     in a complex array is a caller's mistake worth naming, not a guess to make."""
     with pytest.raises(CPDShapeError, match="complex"):
         TabularCPD("a", [], np.array([0.5, 0.5], dtype=complex))
+
+
+def test_a_cpd_copies_the_callers_arrays():
+    """The Gaussian CPDs froze the caller's own bias, cov and weight arrays (read-only, so
+    the caller's next ``b[0] = 1`` raised numpy's error); the CPD keeps a copy."""
+    b, S, W = np.array([0.0]), np.eye(1), np.array([[2.0]])
+    cpd = LinearGaussianCPD("y", ["x"], [W], b, S)
+    b2, S2 = np.zeros((2, 1)), np.ones((2, 1, 1))
+    ccpd = ConditionalLinearGaussianCPD("y", ["k"], [], [], b2, S2)
+    t = np.array([0.5, 0.5])
+    tcpd = TabularCPD("a", [], t)
+    for a in (b, S, W, b2, S2, t):
+        assert a.flags.writeable
+        a[...] = 7.0  # the caller changes its arrays: the CPDs keep theirs
+    assert cpd.bias.tolist() == [0.0] and cpd.weights[0].tolist() == [[2.0]]
+    assert cpd.cov.tolist() == [[1.0]] and ccpd.bias.tolist() == [[0.0], [0.0]]
+    assert tcpd.table.tolist() == [0.5, 0.5]
+    assert not cpd.bias.flags.writeable and not ccpd.cov.flags.writeable

@@ -194,7 +194,7 @@ _XT = TabularCPD("x", [prev("x")], [[0.9, 0.1], [0.2, 0.8]])
         (lambda: TabularCPD("y", None, [0.5, 0.5]), ModelError, "parents must be a sequence"),
         (lambda: LinearGaussianCPD("z", [], [], [np.nan], [[1.0]]), ModelError,
          "bias must be finite"),
-        (lambda: LinearGaussianCPD("z", [], [], ["a"], [[1.0]]), ModelError, "bias is not numeric"),
+        (lambda: LinearGaussianCPD("z", [], [], ["a"], [[1.0]]), ModelError, "bias is not an array of numbers"),
         (lambda: LinearGaussianCPD("z", ["u"], [[[np.inf]]], [0.0], [[1.0]]), ModelError,
          "weight of parent 'u' must be finite"),
         (lambda: LinearGaussianCPD("z", ["u"], None, [0.0], [[1.0]]), CPDShapeError,

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dbn.errors import NonFiniteError, ShapeError
+from dbn.errors import InputError, NonFiniteError, ShapeError
 from inference.exact.layered_dp import layered_shortest_path
 
 
@@ -125,3 +125,25 @@ def test_bad_input():
         layered_shortest_path([np.array([np.nan])], [])
     with pytest.raises(NonFiniteError):
         layered_shortest_path([np.zeros(1), np.zeros(1)], [np.array([[-np.inf]])])
+
+
+@pytest.mark.parametrize(("nodes", "edges", "needle"), [
+    ([["a"]], [], "node_costs[0] is not an array of numbers"),
+    ([np.array([1.0 + 1j])], [], "node_costs[0] holds complex numbers"),
+    ([[1.0], [1.0]], [[["x"]]], "edge_costs[0] is not an array of numbers"),
+    ([[1.0], [1.0]], [np.array([[1j]])], "edge_costs[0] holds complex numbers"),
+    (5, [], "node_costs must be a sequence of arrays, one per layer, got int"),
+    ([[1.0]], None, "edge_costs must be a sequence of arrays, one per pair of layers"),
+])  # fmt: skip
+def test_costs_that_are_not_real_numbers_are_refused_naming_the_layer(nodes, edges, needle):
+    """Strings raised numpy's ValueError, a non-sequence Python's TypeError, and complex
+    costs lost their imaginary parts (a ComplexWarning)."""
+    with pytest.raises(InputError) as exc:
+        layered_shortest_path(nodes, edges)
+    assert needle in str(exc.value)
+
+
+def test_layers_may_come_as_the_rows_of_an_array():
+    """Equal-size layers stacked in one array are still a sequence of layers."""
+    res = layered_shortest_path(np.array([[1.0, 0.0], [0.0, 2.0]]), np.zeros((1, 2, 2)))
+    assert res.path.tolist() == [1, 0] and res.cost == 0.0

@@ -99,3 +99,8 @@ def test_k_best_states_bad_input() -> None:
         k_best_states(np.zeros(3, int), np.zeros(3), 2, "mean")
     with pytest.raises(InputError, match="non-negative"):
         k_best_states(np.zeros(3, int), np.array([0.1, np.nan, 0.2]), 2)
+    # complex weights lost their imaginary parts; strings raised numpy's ValueError
+    with pytest.raises(InputError, match="weights holds complex numbers"):
+        k_best_states(np.zeros(2, int), np.array([1 + 1j, 1.0]), 1)
+    with pytest.raises(InputError, match="weights is not an array of numbers"):
+        k_best_states(np.zeros(2, int), ["a", "b"], 1)

@@ -130,6 +130,36 @@ def test_network_rejects_bad_declarations():
         manhattan_grid(0, p_self=1.5)
 
 
+_NET = dict(indptr=[0, 2, 4], indices=[0, 1, 0, 1], probs=[0.5, 0.5, 0.5, 0.5],
+            gap_mean=[0.0, 1.0, 1.0, 0.0], coords=[[0.0, 0.0], [1.0, 0.0]])
+
+
+@pytest.mark.parametrize(("field", "value", "needle"), [
+    ("probs", np.array([0.5, 0.5, 0.5, 0.5]) + 0j, "probs holds complex numbers"),
+    ("coords", [["a", "b"], ["c", "d"]], "coords is not an array of numbers"),
+    ("indices", [0, 1.7, 0, 1], "indices must be whole numbers, got [1.7]"),
+    ("indptr", [0, 2, np.nan], "indptr must be whole numbers"),
+])  # fmt: skip
+def test_network_arrays_that_are_not_numbers_are_refused_naming_the_field(field, value, needle):
+    """Complex probabilities lost their imaginary parts (a ComplexWarning), an index of 1.7
+    became 1, and strings raised numpy's ValueError."""
+    with pytest.raises(ModelError) as exc:
+        CameraNetwork(**{**_NET, field: value})
+    assert needle in str(exc.value)
+
+
+def test_a_network_copies_the_callers_arrays():
+    """The network froze the caller's own arrays (their next assignment raised numpy's
+    read-only error); it keeps copies, frozen."""
+    arrays = {k: np.array(v) for k, v in _NET.items()}
+    net = CameraNetwork(**arrays)
+    for name, a in arrays.items():
+        assert a.flags.writeable, name
+        assert not getattr(net, name).flags.writeable, name
+    arrays["probs"][:] = 9.0
+    assert net.probs.tolist() == _NET["probs"]
+
+
 @pytest.mark.parametrize("gap", [1e7, 1e200])
 def test_a_gap_whose_delay_table_would_not_fit_is_refused_naming_the_edge(gap, monkeypatch):
     """gap_mean 1e7 (steps) on one edge asked for a 96 x 18,000,001 table (12.9 GiB; it
