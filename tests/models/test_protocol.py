@@ -144,6 +144,34 @@ def test_info_carries_the_one_step_score(name: str) -> None:
         assert isinstance(s, float) and not np.isnan(s) and s < np.inf
 
 
+def _arrays(x, depth: int = 0) -> list:
+    """The numpy arrays inside an observation (NamedTuples, containers, plain objects)."""
+    if isinstance(x, np.ndarray):
+        return [x]
+    if isinstance(x, dict):
+        x = list(x.values())
+    elif not isinstance(x, tuple | list) and hasattr(x, "__dict__") and depth < 6:
+        x = list(vars(x).values())
+    if isinstance(x, tuple | list):
+        return [a for v in x for a in _arrays(v, depth + 1)]
+    return []
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_running_leaves_the_callers_observations_as_they_were(name: str) -> None:
+    """A tracker reads its observations: it neither changes them nor freezes the caller's
+    arrays (CPDs and camera networks once set the caller's arrays read-only)."""
+    ex = _example(name)
+    obs = list(ex.observations[:3])
+    snapshot = copy.deepcopy(obs)
+    arrays = _arrays(obs)
+    writeable = [a.flags.writeable for a in arrays]
+    assert arrays, f"{name}: no numpy arrays found in its observations"
+    ex.tracker.run(jax.random.key(1), obs)
+    _assert_same(obs, snapshot)
+    assert [a.flags.writeable for a in arrays] == writeable
+
+
 @pytest.mark.parametrize("name", NAMES)
 def test_save_load_round_trip(name: str, tmp_path) -> None:
     ex = _example(name)
