@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from dbn.checks import make_rng
-from dbn.errors import FileFormatError, InputError
+from dbn.checks import MIN_SCALE, check_numbers, check_type, make_rng
+from dbn.errors import FileFormatError, InputError, ShapeError
 from models.io.xmlfile import read_xml_root
 from models.rjmcmc3d.geometry import (
     Camera,
@@ -129,6 +129,27 @@ def _smooth_texture(rng: np.random.Generator, h: int, w: int, cells: int = 12) -
     return coarse[yi][:, xi]
 
 
+def _check_scene_arrays(cameras, floor, colour_gain, sigma_px):
+    """``(floor (4,), colour_gain (V, 3), sigma_px (V,))`` as float64, checked: at least one
+    :class:`Camera`; ``floor`` ``x_min < x_max``, ``y_min < y_max``; gains >= 0; pixel
+    noise > 0. Else a :mod:`dbn.errors` class naming the argument (an inverted floor or a
+    negative noise built a scene that tracked nothing, and text raised numpy's error)."""
+    if not isinstance(cameras, list | tuple) or not cameras:
+        raise InputError(f"cameras must be a non-empty list of Camera, got {cameras!r:.60}")
+    for i, c in enumerate(cameras):
+        check_type(f"cameras[{i}]", c, Camera, InputError)
+    V = len(cameras)
+    floor = check_numbers("floor", floor, 4, error=InputError)
+    if not (floor[0] < floor[1] and floor[2] < floor[3]):
+        raise InputError(f"floor = {floor.tolist()}: need [x_min, x_max, y_min, y_max] with "
+                         "x_min < x_max and y_min < y_max")  # fmt: skip
+    gain = check_numbers("colour_gain", colour_gain, 3 * V, low=0.0, error=InputError)
+    if np.shape(colour_gain) != (V, 3):
+        raise ShapeError(f"colour_gain has shape {np.shape(colour_gain)}, expected ({V}, 3)")
+    sigma = check_numbers("sigma_px", sigma_px, V, low=MIN_SCALE, error=InputError)
+    return floor, gain.reshape(V, 3), sigma
+
+
 def scene_from_cameras(
     seed: int,
     cameras: list[Camera],
@@ -145,16 +166,23 @@ def scene_from_cameras(
     cameras : list of Camera, length num_views
         All of the same image size.
     floor : ndarray, shape (4,)
-        ``(x_min, x_max, y_min, y_max)``.
+        ``(x_min, x_max, y_min, y_max)``, metres, ``x_min < x_max`` and ``y_min < y_max``.
     colour_gain : ndarray, shape (num_views, 3)
+        Each view's RGB gain, >= 0.
     sigma_px : ndarray, shape (num_views,)
+        Each view's detector foot noise (pixels), > 0.
+
+    Raises
+    ------
+    InputError, ShapeError, NonFiniteError
+        Naming the argument, before anything is built.
     """
     rng = make_rng(seed)
+    floor, gain, sigma_px = _check_scene_arrays(cameras, floor, colour_gain, sigma_px)
     width, height = cameras[0].width, cameras[0].height
     if any(c.width != width or c.height != height for c in cameras):
         raise InputError("cameras: every view must have the same image size")
     Ps, rects = zip(*(rectified_projection(c) for c in cameras), strict=True)
-    gain = np.asarray(colour_gain, dtype=np.float64)
     bg = []
     for v in range(len(cameras)):
         tex = 0.36 + 0.12 * _smooth_texture(rng, height, width)
@@ -164,11 +192,11 @@ def scene_from_cameras(
         np.stack(Ps),
         tuple(rects),
         np.stack([camera_center(c) for c in cameras]),
-        np.asarray(floor, dtype=np.float64),
+        floor,
         width,
         height,
         gain,
-        np.asarray(sigma_px, dtype=np.float64),
+        sigma_px,
         np.stack(bg),
     )
 

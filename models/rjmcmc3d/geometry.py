@@ -12,6 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dbn.checks import real_array
 from dbn.errors import InputError, NonFiniteError, ShapeError
 
 __all__ = [
@@ -75,7 +76,7 @@ class Rectification(NamedTuple):
 
 
 def _check_matrix(name: str, value: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
-    arr = np.asarray(value, dtype=np.float64)
+    arr = real_array(name, value)
     if arr.shape != shape:
         raise ShapeError(f"{name} has shape {arr.shape}, expected {shape}")
     if not np.all(np.isfinite(arr)):

@@ -123,3 +123,45 @@ def test_metrics_through_motmetrics() -> None:
     for bad in (float("nan"), 0.0, -1.0, "0.5", float("inf")):  # nan ran
         with pytest.raises(InputError, match="must be a positive number"):
             evaluate(truth.frames, perfect, threshold=bad)
+
+
+def _cam():
+    from models.rjmcmc3d.geometry import look_at_camera
+
+    return look_at_camera(np.array([0.0, -5, 5]), np.array([0.0, 5, 0]), 500.0, 320, 240)
+
+
+@pytest.mark.parametrize(("args", "needle"), [
+    (dict(floor=[10, 0, 0, 10]), "floor = [10.0, 0.0, 0.0, 10.0]: need [x_min, x_max"),
+    (dict(floor=np.array([0, 10, 0, 10]) + 0j), "floor holds complex numbers"),
+    (dict(floor=["a"] * 4), "floor must be numbers"),
+    (dict(sigma_px=[-1.0]), "sigma_px = [-1.0]: every number must be >= 1e-100"),
+    (dict(sigma_px=["x"]), "sigma_px must be numbers"),
+    (dict(colour_gain=np.ones((2, 3))), "colour_gain has 6 numbers"),
+    (dict(colour_gain=[[1.0, -1.0, 1.0]]), "colour_gain = [1.0, -1.0, 1.0]"),
+    (dict(cameras=[]), "cameras must be a non-empty list of Camera"),
+    (dict(cameras=[5]), "cameras[0] must be an instance of Camera, got int"),
+])  # fmt: skip
+def test_scene_from_cameras_checks_its_arguments(args, needle) -> None:
+    """An inverted floor, a negative noise or gain, or a gain per view of the wrong shape
+    built a scene that tracked garbage; text raised numpy's ValueError."""
+    from dbn.errors import DBNError
+    from models.rjmcmc3d.calibration import scene_from_cameras
+
+    kw = dict(cameras=[_cam()], floor=[0, 10, 0, 10], colour_gain=np.ones((1, 3)),
+              sigma_px=np.ones(1))  # fmt: skip
+    with pytest.raises(DBNError) as exc:
+        scene_from_cameras(0, **{**kw, **args})
+    assert needle in str(exc.value)
+
+
+def test_camera_geometry_refuses_complex_and_text() -> None:
+    """look_at_camera and the homographies cast complex positions to their real parts."""
+    from models.rjmcmc3d.geometry import ground_homography, look_at_camera, projection_matrix
+
+    with pytest.raises(InputError, match="position holds complex numbers"):
+        look_at_camera(np.array([0.0, -5, 5]) + 0j, np.array([0.0, 5, 0]), 500.0, 320, 240)
+    with pytest.raises(InputError, match="target is not an array of numbers"):
+        look_at_camera(np.array([0.0, -5, 5]), ["a"] * 3, 500.0, 320, 240)
+    with pytest.raises(InputError, match="P holds complex numbers"):
+        ground_homography(projection_matrix(_cam()) + 0j)
