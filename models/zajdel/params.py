@@ -6,7 +6,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.checks import check_type
+from dbn.checks import MAX_SCALE, check_type, real_array
 from dbn.errors import ModelError
 from inference.adf.niw import NIW
 from models.zajdel.path import PathModel
@@ -55,7 +55,11 @@ def default_prior(mean: np.ndarray, within_std: float, between_std: float, dof_e
 def check_params(params: ZajdelParams) -> None:
     """Raise :class:`~dbn.errors.ModelError` for an invalid prior or label prior."""
     check_type("params", params, ZajdelParams)
-    a, kappa, eta, C = (np.asarray(x, float) for x in params.prior)
+    check_type("prior", params.prior, NIW, ModelError)
+    a, kappa, eta, C = (_finite(f"prior.{n}", x) for n, x in zip(NIW._fields, params.prior))
+    if kappa.shape or eta.shape:
+        raise ModelError(f"prior.kappa, prior.eta: expected numbers, got shapes {kappa.shape}, "
+                         f"{eta.shape}")  # fmt: skip
     if a.ndim != 1:
         raise ModelError(f"prior.a: expected shape (obs_dim,), got {a.shape}")
     r = a.shape[0]
@@ -69,5 +73,17 @@ def check_params(params: ZajdelParams) -> None:
         np.linalg.cholesky(C)
     except np.linalg.LinAlgError as exc:
         raise ModelError("prior.C: not symmetric positive definite") from exc
-    if params.p_new is not None and not 0.0 < params.p_new < 1.0:
-        raise ModelError(f"p_new = {params.p_new}: must be None or in (0, 1)")
+    p_new = params.p_new
+    real = isinstance(p_new, int | float | np.integer | np.floating) and not isinstance(p_new, bool)
+    if p_new is not None and not (real and 0.0 < p_new < 1.0):
+        raise ModelError(f"p_new = {p_new!r}: must be None or a number in (0, 1)")
+
+
+def _finite(name: str, value) -> np.ndarray:
+    """``value`` as float64, finite and ``|x| <=`` :data:`~dbn.checks.MAX_SCALE`; else
+    :class:`ModelError` naming ``name`` (a NaN prior mean or scale matrix ran to NaN
+    posteriors, and text raised numpy's ValueError)."""
+    v = real_array(name, value, ModelError)
+    if not np.all(np.isfinite(v)) or np.any(np.abs(v) > MAX_SCALE):
+        raise ModelError(f"{name}: every number must be finite, |x| <= {MAX_SCALE:g}")
+    return v

@@ -24,6 +24,7 @@ import numpy as np
 from jax.scipy.special import log_ndtr as _jlog_ndtr
 from scipy.special import log_ndtr as _log_ndtr
 
+from dbn.checks import real_array
 from dbn.errors import CPDShapeError, ModelError, NegativeProbabilityError, NotNormalizedError
 
 __all__ = [
@@ -115,8 +116,7 @@ def make_path_model(
     window : W > 0
     max_travel : upper bound of a travel time (> 0, may be inf)
     """
-    trans = np.asarray(trans, float)
-    entry = np.asarray(entry, float)
+    trans, entry = real_array("trans", trans, ModelError), real_array("entry", entry, ModelError)
     if entry.ndim != 2:
         raise CPDShapeError(f"entry: expected shape (num_cameras, num_borders), got {entry.shape}")
     C, B = entry.shape
@@ -131,10 +131,20 @@ def make_path_model(
         raise NotNormalizedError(f"trans[{i // B}, {i % B}] sums to {rows[i]}, not 1")
     if abs(entry.sum() - 1) > 1e-9:
         raise NotNormalizedError(f"entry sums to {entry.sum()}, not 1")
-    mu = np.broadcast_to(np.asarray(travel_mean, float), (C, C)).copy()
-    sd = np.broadcast_to(np.asarray(travel_std, float), (C, C)).copy()
+    mu, sd = (real_array(n, v, ModelError) for n, v in (("travel_mean", travel_mean),
+                                                          ("travel_std", travel_std)))
+    try:
+        mu, sd = (np.broadcast_to(v, (C, C)).copy() for v in (mu, sd))
+    except ValueError:
+        raise CPDShapeError(f"travel_mean {mu.shape} / travel_std {sd.shape}: expected "
+                            f"{(C, C)} or a shape that broadcasts to it") from None
     if not np.isfinite(mu).all() or not np.isfinite(sd).all() or (sd <= 0).any():
         raise ModelError("travel_mean / travel_std: must be finite with travel_std > 0")
+    window, max_travel = (real_array(n, v, ModelError) for n, v in (("window", window),
+                                                                    ("max_travel", max_travel)))
+    if window.shape or max_travel.shape:
+        raise ModelError(f"window, max_travel: expected numbers, got shapes {window.shape}, "
+                         f"{max_travel.shape}")  # fmt: skip
     if not (np.isfinite(window) and window > 0):
         raise ModelError(f"window = {window}: must be finite and > 0")
     if not max_travel > 0:

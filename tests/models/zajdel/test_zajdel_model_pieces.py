@@ -68,6 +68,56 @@ def test_path_model_rejects_unnormalised_table():
         make_path_model(trans, np.exp(p.log_entry), p.travel_mean, p.travel_std, 10.0)
 
 
+_C = 2
+_PATH = dict(trans=np.full((_C, 2, _C, 2), 0.25), entry=np.full((_C, 2), 0.25),
+             travel_mean=np.ones((_C, _C)), travel_std=np.ones((_C, _C)), window=5.0)
+
+
+@pytest.mark.parametrize(("field", "value", "needle"), [
+    ("trans", np.full((_C, 2, _C, 2), 0.25) + 0j, "trans holds complex numbers"),
+    ("entry", [["a", "b"], ["c", "d"]], "entry is not an array of numbers"),
+    ("travel_mean", np.ones((3, 3)), "travel_mean (3, 3) / travel_std (2, 2): expected (2, 2)"),
+    ("travel_std", "x", "travel_std is not an array of numbers"),
+    ("window", "a", "window is not an array of numbers"),
+    ("window", np.ones(2), "window, max_travel: expected numbers"),
+    ("max_travel", 1j, "max_travel holds complex numbers"),
+])  # fmt: skip
+def test_path_model_names_arrays_that_are_not_real_numbers(field, value, needle):
+    """Complex tables lost their imaginary parts; text and unbroadcastable travel times
+    raised numpy's ValueError, a text window Python's TypeError."""
+    from dbn.errors import DBNError
+
+    with pytest.raises(DBNError) as exc:
+        make_path_model(**{**_PATH, field: value})
+    assert needle in str(exc.value)
+
+
+@pytest.mark.parametrize(("field", "value", "needle"), [
+    ("a", np.nan, "prior.a: every number must be finite"),
+    ("a", 1j, "prior.a holds complex numbers"),
+    ("C", np.inf, "prior.C: every number must be finite"),
+    ("kappa", "a", "prior.kappa is not an array of numbers"),
+    ("eta", np.inf, "prior.eta: every number must be finite"),
+])  # fmt: skip
+def test_a_prior_that_is_not_finite_real_numbers_is_refused(field, value, needle):
+    """A NaN prior mean, or an infinite scale matrix or degrees of freedom, passed the
+    check and ran to NaN posteriors; text raised numpy's ValueError."""
+    from dbn.errors import ModelError
+    from models.zajdel.params import check_params
+
+    params = simulate_office(0).params
+    old = np.asarray(getattr(params.prior, field))
+    bad = np.full(old.shape, value) if not isinstance(value, str) else value
+    if field == "C" and old.ndim == 2:  # keep it symmetric: infinity on the diagonal
+        bad = np.diag(np.full(old.shape[0], value))
+    with pytest.raises(ModelError) as exc:
+        check_params(params._replace(prior=params.prior._replace(**{field: bad})))
+    assert needle in str(exc.value)
+    for p_new in (float("nan"), "a", True):
+        with pytest.raises(ModelError, match="p_new"):
+            check_params(params._replace(p_new=p_new))
+
+
 # ---------------------------------------------------------------------------- scores
 @pytest.mark.parametrize("p_new", [None, 0.2])
 def test_label_prior_is_a_distribution_over_partitions(p_new):
