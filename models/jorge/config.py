@@ -10,10 +10,11 @@ re-exports every name here.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-from dbn.checks import check_number_fields
+from dbn.checks import check_number_fields, refuse_complex
 from dbn.errors import ModelError
 from models.jorge.evidence import gain_bins_rise
 from models.jorge.labels import LabelParams
@@ -430,9 +431,26 @@ seeds (diagnosis before declaring, seeds 100-104: -0.0073, SE 0.0053); no bar of
 benchmark flipped, and the full run's held-out validation was 0.0280."""
 
 
-def _as_table(value) -> np.ndarray:
+_TABLES = ("palette_count_table", "palette_gain_table", "palette_missing_table",
+           "palette_gain_bins")
+"""The :class:`NetworkConfig` fields that hold tables: kept as nested tuples (an array given
+is converted, so configs compare and print as the defaults do)."""
+
+
+def _nested_tuple(value: Any) -> Any:
+    """An array (numpy, jax) or nested lists as nested tuples; anything else as it is."""
+    if hasattr(value, "tolist") and not isinstance(value, str):
+        value = value.tolist()
+    if isinstance(value, list | tuple):
+        return tuple(_nested_tuple(v) for v in value)
+    return value
+
+
+def _as_table(name: str, value) -> np.ndarray:
     """A palette table as a float array; a ragged or non-numeric one as an empty array, which
-    every shape check of :class:`NetworkConfig` refuses, naming the field."""
+    every shape check of :class:`NetworkConfig` refuses, naming the field; complex numbers
+    are refused naming it."""
+    refuse_complex(f"NetworkConfig.{name}", value, ModelError)
     try:
         return np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
@@ -710,6 +728,8 @@ class NetworkConfig:
     merge_cover: float = 0.2
 
     def __post_init__(self) -> None:
+        for name in _TABLES:  # an array's truth value raised numpy's "ambiguous" error
+            object.__setattr__(self, name, _nested_tuple(getattr(self, name)))
         check_number_fields(self, ModelError)
         for name, low in (("pool_size", 1), ("sibling_window", 0), ("size_min_reference", 0),
                           ("size_reference_neighbours", 0)):  # fmt: skip
@@ -756,17 +776,18 @@ class NetworkConfig:
         if not 0.0 <= self.palette_continued <= 1.0:
             raise ModelError(f"NetworkConfig.palette_continued must be in [0, 1], got {self.palette_continued}")
         if self.palette_count_table:
-            t = _as_table(self.palette_count_table)
+            t = _as_table("palette_count_table", self.palette_count_table)
             if t.ndim != 2 or t.shape[1] < 2 or not np.all(t <= 0):
                 raise ModelError(
                     f"NetworkConfig.palette_count_table must be a 2-D table of log "
                     f"probabilities (max_k, max_count + 1), got shape {t.shape}"
                 )
+        refuse_complex("NetworkConfig.palette_gain_bins", self.palette_gain_bins, ModelError)
         bins = np.asarray(self.palette_gain_bins)
         if not gain_bins_rise(bins):
             raise ModelError(f"NetworkConfig.palette_gain_bins must rise from 0, got {self.palette_gain_bins}")
         if self.palette_gain_table:
-            t = _as_table(self.palette_gain_table)
+            t = _as_table("palette_gain_table", self.palette_gain_table)
             if t.ndim not in (2, 3) or t.shape[-1] % 2 != 1 or not np.all(t <= 0) or (
                     t.ndim == 3 and t.shape[1] != bins.size):
                 raise ModelError(
@@ -777,7 +798,7 @@ class NetworkConfig:
         if not isinstance(self.palette_missing, bool):
             raise ModelError(f"NetworkConfig.palette_missing must be a bool, got {self.palette_missing!r}")
         if self.palette_missing_table:
-            t = _as_table(self.palette_missing_table)
+            t = _as_table("palette_missing_table", self.palette_missing_table)
             if t.ndim != 3 or t.shape[1] != bins.size or t.shape[2] < 2 or not np.all(t <= 0):
                 raise ModelError(
                     f"NetworkConfig.palette_missing_table must be a table of log probabilities "
