@@ -67,7 +67,8 @@ def check_number_fields(obj: Any, error: type[DBNError] = InputError) -> None:
     defaults' types, before its own range checks compare them: a field whose default is
     an int holds an int (a Python or numpy integer: not a float, a bool or NaN), one whose
     default is a float a real number (an int too), finite with ``|x| <=``
-    :data:`MAX_SCALE`; else ``error`` naming ``Class.field``. (NaN passed range checks
+    :data:`MAX_SCALE`, one whose default is a flat tuple of numbers a sequence (tuple, list,
+    1-D array) of such numbers; else ``error`` naming ``Class.field``. (NaN passed range checks
     written as ``x < 1``, 2.5 was truncated or compared as it was, a string raised
     Python's ``TypeError`` on comparison, and 1e300 overflowed once squared.)"""
     if dataclasses.is_dataclass(obj):
@@ -81,12 +82,31 @@ def check_number_fields(obj: Any, error: type[DBNError] = InputError) -> None:
             if isinstance(value, bool) or not isinstance(value, int | np.integer):
                 raise error(f"{cls}.{name} must be an integer, got {value!r}")
         elif type(default) is float:
-            if isinstance(value, np.floating):  # float32 compared with 1e100 overflows
-                value = float(value)
-            real = isinstance(value, int | float | np.integer)
-            if isinstance(value, bool) or not real or not abs(value) <= MAX_SCALE:
+            if not _finite_number(value):
                 raise error(f"{cls}.{name} must be a finite number, |x| <= {MAX_SCALE:g}, "
                             f"got {value!r}")  # fmt: skip
+        elif _numbers_default(default):
+            flat = isinstance(value, tuple | list) or (isinstance(value, np.ndarray)
+                                                       and value.ndim == 1)  # fmt: skip
+            if not flat or not all(_finite_number(v) for v in value):
+                raise error(f"{cls}.{name} must be a sequence of finite numbers, |x| <= "
+                            f"{MAX_SCALE:g}, got {value!r}")  # fmt: skip
+
+
+def _finite_number(value: Any) -> bool:
+    """A real number (a Python or numpy int or float, not a bool), finite, ``|x| <=``
+    :data:`MAX_SCALE`."""
+    if isinstance(value, np.floating):  # float32 compared with 1e100 overflows
+        value = float(value)
+    real = isinstance(value, int | float | np.integer) and not isinstance(value, bool | np.bool_)
+    return real and abs(value) <= MAX_SCALE
+
+
+def _numbers_default(default: Any) -> bool:
+    """A config default that is a non-empty flat tuple of numbers (move probabilities, a
+    range): its field holds a sequence of real numbers."""
+    return (type(default) is tuple and bool(default)
+            and all(type(v) in (int, float) for v in default))  # fmt: skip
 
 
 def check_numbers(name: str, value: Any, size: int, low: float | None = None,

@@ -782,7 +782,6 @@ class NetworkConfig:
                     f"NetworkConfig.palette_count_table must be a 2-D table of log "
                     f"probabilities (max_k, max_count + 1), got shape {t.shape}"
                 )
-        refuse_complex("NetworkConfig.palette_gain_bins", self.palette_gain_bins, ModelError)
         bins = np.asarray(self.palette_gain_bins)
         if not gain_bins_rise(bins):
             raise ModelError(f"NetworkConfig.palette_gain_bins must rise from 0, got {self.palette_gain_bins}")

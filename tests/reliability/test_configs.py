@@ -100,3 +100,47 @@ def test_label_params_name_a_bad_number() -> None:
     for value in (np.nan, 2.5):
         with pytest.raises(ModelError, match="LabelParams.max_group_size"):
             LabelParams(max_group_size=value)
+
+
+def _tuple_fields(cls) -> list[tuple[str, tuple]]:
+    """The fields whose default is a non-empty flat tuple of numbers."""
+    if dataclasses.is_dataclass(cls):
+        defaults = {f.name: f.default for f in dataclasses.fields(cls)}
+    else:
+        defaults = cls._field_defaults
+    return [(n, d) for n, d in defaults.items() if type(d) is tuple and d
+            and all(type(v) in (int, float) for v in d)]  # fmt: skip
+
+
+def _make_any(cls, **change):
+    """Build and check a config as its users do (``simulate_office`` reads OfficeConfig,
+    ``_check_config`` MCMCConfig)."""
+    from models.zajdel.mcmc import MCMCConfig, _check_config
+
+    obj = _make(cls, **change) if cls is not MCMCConfig else MCMCConfig(**change)
+    if cls is OfficeConfig:
+        simulate_office(0, obj)
+    if cls is MCMCConfig:
+        _check_config(obj, 10, 1)
+    return obj
+
+
+def _configs_with_tuples():
+    from models.zajdel.mcmc import MCMCConfig
+
+    return [c for c in (*CONFIGS, LabelParams, OfficeConfig, MCMCConfig) if _tuple_fields(c)]
+
+
+@pytest.mark.parametrize("cls", _configs_with_tuples(), ids=lambda c: c.__name__)
+def test_every_field_of_numbers_refuses_what_is_not_numbers_naming_it(cls) -> None:
+    """Move probabilities, ranges and bins given as text or complex numbers raised numpy's
+    ValueError or Python's TypeError (MCMCConfig, OfficeConfig, LabelParams), or were
+    accepted (TrackerParams: complex shape_sd and move_probs ran)."""
+    for name, default in _tuple_fields(cls):
+        _make_any(cls, **{name: list(default)})  # a list, as JSON gives it, passes
+        _make_any(cls, **{name: np.asarray(default)})  # and a 1-D array
+        n = len(default)
+        for value in (("a",) * n, (1 + 0j,) * n, (np.nan,) * n, (True,) * n, "ab",
+                      np.ones((n, 1)), 5):  # fmt: skip
+            with pytest.raises(DBNError, match=f"{cls.__name__}.{name} must be a sequence"):
+                _make_any(cls, **{name: value})
