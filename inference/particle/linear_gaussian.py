@@ -45,16 +45,27 @@ class LinearGaussianSSM(StateSpaceModel):
 
     def __init__(self, params: LinearGaussianParams) -> None:
         params = check_params(params)
-        self.params = params
-        self._F, self._H, self._m0 = params.F, params.H, params.m0
-        self._L0, self._LQ = _square_root(params.P0), _square_root(params.Q)
+        L0, LQ = _square_root(params.P0), _square_root(params.Q)
         try:
             LR = np.linalg.cholesky(params.R)
         except np.linalg.LinAlgError:
             raise InputError("R must be positive definite: the particle likelihood "
                              "N(y; H s, R) needs its inverse") from None  # fmt: skip
-        self._LR = LR
+        self._params = params
+        self._F, self._H, self._m0 = params.F, params.H, params.m0
+        self._L0, self._LQ, self._LR = L0, LQ, LR
         self._R_logdet = 2.0 * float(np.sum(np.log(np.diag(LR))))
+
+    @property
+    def params(self) -> LinearGaussianParams:
+        """The checked parameters, fixed at construction (a filter compiles them in)."""
+        return self._params
+
+    @params.setter
+    def params(self, params: LinearGaussianParams) -> None:
+        raise InputError("LinearGaussianSSM.params is fixed at construction: the filters "
+                         "compile it in (and so did the model's square roots, which went "
+                         "stale); build LinearGaussianSSM(new_params) instead")  # fmt: skip
 
     def sample_initial(self, key: Array, num_particles: int, dtype: Any) -> Array:
         """``(num_particles, state_dim)`` draws from ``N(m0, P0)``."""

@@ -75,6 +75,18 @@ def test_bad_model_parameters_are_refused_naming_them(field, value, error, needl
     assert needle in str(exc.value)
 
 
+def test_a_models_parameters_cannot_be_swapped_after_construction() -> None:
+    """``model.params = other`` was accepted while the model kept drawing with the old
+    square roots and matrices (and a compiled filter keeps them too): a silently wrong
+    model. Now an InputError that says to build a new model; the model is unchanged."""
+    model = LinearGaussianSSM(PARAMS)
+    with pytest.raises(InputError, match="fixed at construction"):
+        model.params = PARAMS._replace(F=2 * I2)
+    assert model.params is not None and np.array_equal(model.params.F, PARAMS.F)
+    x = jnp.ones((3, 2))
+    assert np.allclose(model.transition_mean(x, None), x @ PARAMS.F.T)
+
+
 def test_an_observation_of_another_dimension_is_refused() -> None:
     """``(T, 1)`` observations of a 2-D model broadcast against ``H s`` and ran."""
     two = PARAMS._replace(H=I2, R=0.1 * I2)
