@@ -241,7 +241,8 @@ class BayesNet:
         """``log P(x)`` of a full assignment of a discrete net (states by index or name)."""
         if not self.is_discrete:
             raise ModelError("log_joint needs a discrete net")
-        x = {n: self.variable(n).index(s) for n, s in assignment.items()}  # type: ignore[union-attr]
+        check_mapping("assignment", assignment)  # a list of pairs raised AttributeError
+        x = {n: self.variable(n).index(s) for n, s in (assignment or {}).items()}  # type: ignore[union-attr]
         missing = [n for n in self._variables if n not in x]
         if missing:
             raise EvidenceError(f"assignment misses variable(s) {missing}")

@@ -1,5 +1,6 @@
 """Complex numbers in a declaration or in soft evidence are refused, naming the field;
-a CPD keeps copies of the arrays it is given.
+a CPD keeps copies of the arrays it is given; ``BayesNet.log_joint`` names an assignment
+that is not a mapping.
 
 numpy's float conversion keeps the real part with only a ``ComplexWarning``: a CPD table
 ``[0.5, 0.5 + 1j]`` was accepted as ``[0.5, 0.5]`` and a likelihood ``[1 + 1j, 1]`` as
@@ -67,3 +68,16 @@ def test_a_cpd_copies_the_callers_arrays():
     assert cpd.cov.tolist() == [[1.0]] and ccpd.bias.tolist() == [[0.0], [0.0]]
     assert tcpd.table.tolist() == [0.5, 0.5]
     assert not cpd.bias.flags.writeable and not ccpd.cov.flags.writeable
+
+
+def test_log_joint_names_an_assignment_that_is_not_a_mapping():
+    """A list of pairs or None raised Python's AttributeError."""
+    from dbn.bayesnet import BayesNet
+    from dbn.variables import DiscreteVariable
+
+    bn = BayesNet([DiscreteVariable("a", 2)], [TabularCPD("a", [], [0.4, 0.6])])
+    assert np.isclose(bn.log_joint({"a": 1}), np.log(0.6))
+    with pytest.raises(EvidenceError, match="assignment must be a mapping"):
+        bn.log_joint([("a", 1)])
+    with pytest.raises(EvidenceError, match=r"assignment misses variable\(s\) \['a'\]"):
+        bn.log_joint(None)
