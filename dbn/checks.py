@@ -22,7 +22,7 @@ from dbn.errors import (
 __all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative",
            "check_number_fields", "check_numbers", "check_size", "check_type",
            "evidence_mapping", "evidence_state", "from_package", "instance_of", "is_whole",
-           "make_rng", "real_array", "refuse_complex"]
+           "make_rng", "real_array", "refuse_complex", "whole_array"]
 
 MAX_SCALE = 1e100
 """Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
@@ -166,6 +166,21 @@ def real_array(what: str, value: Any, error: type[DBNError] = InputError) -> np.
         return np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise error(f"{what} is not an array of numbers ({exc})") from None
+
+
+def whole_array(what: str, value: Any, error: type[DBNError] = InputError) -> np.ndarray:
+    """``value`` as an int64 array of its own (a copy); else ``error`` naming ``what``:
+    what :func:`real_array` refuses, and a float that is not a whole number an int64 holds
+    (:func:`is_whole`: an index of 1.7 was truncated to 1, NaN cast to garbage)."""
+    arr = real_array(what, value, error) if not _is_int_array(value) else np.asarray(value)
+    if arr.dtype.kind == "f" and not np.all(is_whole(arr)):
+        raise error(f"{what} must be whole numbers, got {arr[~is_whole(arr)][:3].tolist()}")
+    return arr.astype(np.int64)
+
+
+def _is_int_array(value: Any) -> bool:
+    """An integer numpy array (its int64 values are taken as they are, not via float)."""
+    return isinstance(value, np.ndarray) and value.dtype.kind in "iu"
 
 
 def check_mapping(what: str, value: Any, error: type[DBNError] = EvidenceError) -> None:

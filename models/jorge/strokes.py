@@ -44,7 +44,14 @@ from pathlib import Path
 
 import numpy as np
 
-from dbn.checks import check_nonnegative, check_number_fields, make_rng
+from dbn.checks import (
+    check_nonnegative,
+    check_number_fields,
+    check_type,
+    make_rng,
+    real_array,
+    whole_array,
+)
 from dbn.errors import (
     DBNError,
     FileFormatError,
@@ -111,9 +118,11 @@ class GroundTruth:
     fps: float = 25.0
 
     def __post_init__(self) -> None:
-        frames = np.asarray(self.frames)
-        boxes = np.asarray(self.boxes, dtype=np.float64)
-        ids = np.asarray(self.ids)
+        check_type("GroundTruth.name", self.name, str, InputError)
+        fps = check_frame_rate(self.fps, "GroundTruth.fps", InputError)
+        frames = whole_array("GroundTruth.frames", self.frames)
+        boxes = real_array("GroundTruth.boxes", self.boxes)
+        ids = whole_array("GroundTruth.ids", self.ids)
         if frames.ndim != 1:
             raise ShapeError(f"GroundTruth.frames must be 1-D, got shape {frames.shape}")
         if boxes.shape != (frames.shape[0], ids.shape[0], 4):
@@ -137,9 +146,10 @@ class GroundTruth:
         if np.any(wh <= 0):
             raise InputError(f"GroundTruth.boxes: width/height must be > 0, got {wh[wh <= 0][0]}")
         _check_pixels(boxes, frames, ids)
-        object.__setattr__(self, "frames", frames.astype(np.int64))
-        object.__setattr__(self, "ids", ids.astype(np.int64))
+        object.__setattr__(self, "frames", frames)
+        object.__setattr__(self, "ids", ids)
         object.__setattr__(self, "boxes", boxes)
+        object.__setattr__(self, "fps", fps)
 
     @property
     def num_frames(self) -> int:

@@ -23,7 +23,7 @@ import numpy as np
 from scipy.linalg import cholesky
 from scipy.special import ndtr
 
-from dbn.checks import is_whole, real_array, refuse_complex
+from dbn.checks import real_array, refuse_complex, whole_array
 from dbn.errors import (
     InputError,
     ModelError,
@@ -109,17 +109,6 @@ def _delay_pmf_table(gap_mean: np.ndarray, dmax: np.ndarray) -> np.ndarray:
     return table
 
 
-def _whole_numbers(name: str, value) -> np.ndarray:
-    """``value`` as an int64 array of the network's own (a copy: the network freezes it);
-    else :class:`ModelError` naming ``name``. A float must be a whole number (an index of
-    1.7 was truncated to 1)."""
-    arr = real_array(name, value, ModelError)
-    if not np.all(is_whole(arr)):
-        raise ModelError(f"{name} must be whole numbers, got "
-                         f"{arr[~is_whole(arr)][:3].tolist()}")  # fmt: skip
-    return arr.astype(np.int64)
-
-
 @dataclass(frozen=True, eq=False)
 class CameraNetwork:
     """The network graph ``G_mc = <C, E, W^p>`` with travel-time pdfs (seed 001, sec. 3.1).
@@ -162,7 +151,8 @@ class CameraNetwork:
     _diffusion_keys: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        indptr, indices = (_whole_numbers(n, getattr(self, n)) for n in ("indptr", "indices"))
+        indptr, indices = (whole_array(n, getattr(self, n), ModelError)
+                           for n in ("indptr", "indices"))  # fmt: skip
         probs, gap_mean, coords = (real_array(n, getattr(self, n), ModelError).copy()
                                    for n in ("probs", "gap_mean", "coords"))  # fmt: skip
         if indptr.ndim != 1 or indptr.size < 2 or indptr[0] != 0:

@@ -83,3 +83,24 @@ def test_evidence_state_reads_a_state_as_a_column_does() -> None:
     assert evidence_state(2.0) == 2 and type(evidence_state(np.float64(2.0))) is int
     for kept in (0.5, float("inf"), "wet", True, 3):
         assert evidence_state(kept) is kept
+
+
+def test_real_array_and_whole_array_name_what_is_not_numbers():
+    """The shared conversions: complex, text and ragged lists are named; whole_array takes
+    whole floats and integer arrays (as they are, beyond 2**53 too) and refuses 1.5 or NaN."""
+    from dbn.checks import real_array, whole_array
+
+    assert real_array("x", [1, 2]).dtype == np.float64
+    for bad, needle in ((np.array([1j]), "x holds complex"), (["a"], "x is not an array"),
+                        ([[1.0], [1.0, 2.0]], "x is not an array")):  # fmt: skip
+        with pytest.raises(InputError, match=needle):
+            real_array("x", bad)
+    big = np.array([2**62 + 1], dtype=np.int64)
+    assert whole_array("i", big).tolist() == [2**62 + 1] and whole_array("i", [3.0]).tolist() == [3]
+    source = np.array([1, 2])
+    assert whole_array("i", source) is not source
+    for bad in ([1.5], [np.nan], [np.inf], ["a"], [1j]):
+        with pytest.raises(InputError, match="i "):
+            whole_array("i", bad)
+    with pytest.raises(ConfigError, match="i must be whole numbers"):
+        whole_array("i", [0.5], ConfigError)

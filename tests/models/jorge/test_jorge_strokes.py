@@ -104,6 +104,36 @@ def test_bad_inputs():
             build_strokes(seed, truth)
 
 
+_TRUTH = dict(name="s", frames=np.arange(3), ids=np.array([1, 2]),
+              boxes=np.tile([10.0, 10.0, 5.0, 5.0], (3, 2, 1)))
+
+
+@pytest.mark.parametrize(("field", "value", "needle"), [
+    ("boxes", np.tile([10.0, 10.0, 5.0, 5.0], (3, 2, 1)) + 0j, "GroundTruth.boxes holds complex"),
+    ("boxes", np.full((3, 2, 4), "x"), "GroundTruth.boxes is not an array of numbers"),
+    ("frames", [0, 1.5, 2], "GroundTruth.frames must be whole numbers, got [1.5]"),
+    ("frames", [0, np.nan, 2], "GroundTruth.frames must be whole numbers, got [nan]"),
+    ("frames", ["a", "b", "c"], "GroundTruth.frames is not an array of numbers"),
+    ("ids", [1.5, 2], "GroundTruth.ids must be whole numbers"),
+    ("fps", float("nan"), "GroundTruth.fps: fps must be a finite number > 0"),
+    ("fps", "25", "GroundTruth.fps: fps must be a finite number > 0"),
+    ("name", 5, "GroundTruth.name must be an instance of str"),
+])  # fmt: skip
+def test_ground_truth_built_by_hand_names_a_bad_field(field, value, needle):
+    """Your own boxes as arrays: a frame of 1.5 or an id of 1.5 was truncated, a NaN frame
+    cast to garbage, complex boxes lost their imaginary parts, text raised numpy's errors,
+    and an fps of NaN or '25' was kept (every gate in seconds then read it)."""
+    with pytest.raises(InputError) as exc:
+        GroundTruth(**{**_TRUTH, field: value})
+    assert needle in str(exc.value)
+
+
+def test_ground_truth_takes_lists_and_whole_floats():
+    truth = GroundTruth(**{**_TRUTH, "frames": [0, 1, 2], "ids": [1.0, 2.0], "fps": 7})
+    assert truth.frames.dtype == truth.ids.dtype == np.int64 and truth.ids.tolist() == [1, 2]
+    assert truth.fps == 7.0 and isinstance(truth.fps, float)
+
+
 def test_loader_rejects_frames_out_of_order(tmp_path):
     xml = (
         '<dataset name="bad"><frame number="1"><objectlist><object id="0">'
