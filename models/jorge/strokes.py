@@ -47,7 +47,9 @@ import numpy as np
 from dbn.checks import (
     check_nonnegative,
     check_number_fields,
+    check_size,
     check_type,
+    is_whole,
     make_rng,
     real_array,
     whole_array,
@@ -555,10 +557,11 @@ def make_stroke(
     NonFiniteError
         A non-finite position or size.
     """
-    start, end = int(start), int(end)
+    index = check_size("stroke index", index)
+    start, end = _frame_number(index, "start", start), _frame_number(index, "end", end)
     if end < start:
         raise TimeOrderError(f"stroke {index}: end frame {end} is before start frame {start}")
-    pos = np.array([start_pos, end_pos], dtype=np.float64)
+    pos = real_array(f"stroke {index}: start_pos/end_pos", [start_pos, end_pos])
     if pos.shape != (2, 2):
         raise ShapeError(f"stroke {index}: start_pos/end_pos must have shape (2,), got {pos.shape}")
     if not np.all(np.isfinite(pos)):
@@ -568,7 +571,7 @@ def make_stroke(
     positions = pos if end > start else pos[:1]
     extent = None
     if size is not None:
-        wh = np.asarray(size, dtype=np.float64)
+        wh = real_array(f"stroke {index}: size", size)
         if wh.shape != (2,):
             raise ShapeError(f"stroke {index}: size must have shape (2,), got {wh.shape}")
         if not np.all(np.isfinite(wh)):
@@ -578,6 +581,16 @@ def make_stroke(
         extent = np.tile(wh, (positions.shape[0], 1))
     return Stroke(index, start, end, frames, positions, col, frozenset(int(t) for t in truth),
                   extent=extent)
+
+
+def _frame_number(index: int, name: str, value) -> int:
+    """A stroke's ``start`` / ``end`` frame as an int: an integer or a whole float, not a
+    bool; else :class:`InputError` naming the stroke (text, NaN raised Python's errors and
+    1.5 was truncated to 1)."""
+    real = isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool)
+    if not real or not is_whole(value):
+        raise InputError(f"stroke {index}: {name} must be a whole frame number, got {value!r}")
+    return int(value)
 
 
 def _check_colours(index: int, colours, pool_size: int) -> np.ndarray:

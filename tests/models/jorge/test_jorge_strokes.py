@@ -128,6 +128,27 @@ def test_ground_truth_built_by_hand_names_a_bad_field(field, value, needle):
     assert needle in str(exc.value)
 
 
+@pytest.mark.parametrize(("change", "needle"), [
+    ({"index": "a"}, "stroke index must be an integer >= 0, got 'a'"),
+    ({"index": 1.5}, "stroke index must be an integer >= 0, got 1.5"),
+    ({"start": 1.5}, "stroke 0: start must be a whole frame number, got 1.5"),
+    ({"start": "a"}, "stroke 0: start must be a whole frame number"),
+    ({"end": float("nan")}, "stroke 0: end must be a whole frame number, got nan"),
+    ({"start_pos": (1 + 1j, 0)}, "stroke 0: start_pos/end_pos holds complex numbers"),
+    ({"start_pos": ("a", 0)}, "stroke 0: start_pos/end_pos is not an array of numbers"),
+    ({"size": (1 + 1j, 2)}, "stroke 0: size holds complex numbers"),
+    ({"size": ("a", 2)}, "stroke 0: size is not an array of numbers"),
+])  # fmt: skip
+def test_make_stroke_names_a_bad_argument(change, needle):
+    """Text and NaN frames or positions raised Python's and numpy's errors, a start of 1.5
+    was truncated to 1, and a text index was kept."""
+    base = dict(index=0, start=0, end=5, start_pos=(0, 0), end_pos=(1, 1), colours=[1, 2])
+    with pytest.raises(InputError) as exc:
+        make_stroke(**{**base, **change})
+    assert needle in str(exc.value)
+    assert make_stroke(**{**base, "start": 2.0, "index": np.int64(3)}).start == 2
+
+
 def test_ground_truth_takes_lists_and_whole_floats():
     truth = GroundTruth(**{**_TRUTH, "frames": [0, 1, 2], "ids": [1.0, 2.0], "fps": 7})
     assert truth.frames.dtype == truth.ids.dtype == np.int64 and truth.ids.tolist() == [1, 2]
