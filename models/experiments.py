@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from dbn.checks import check_count
+from dbn.checks import check_count, check_size
 from dbn.errors import FileFormatError, InputError
 
 __all__ = [
@@ -110,7 +110,23 @@ def make_grid(
     """The cartesian product trackers x data x seeds x every parameter's values.
 
     ``params={"num_particles": [100, 1000]}`` gives two points per (tracker, data, seed).
+
+    Raises
+    ------
+    InputError
+        ``trackers`` or ``data`` not a non-empty list of names (a string was split into
+        its letters), ``seeds`` not integers >= 0 (text raised Python's ValueError, 1.5
+        was truncated, True read as 1, -1 failed only inside a worker), or a parameter
+        that is not a non-empty list of values.
     """
+    for field_name, names in (("trackers", trackers), ("data", data)):
+        if (isinstance(names, str) or not isinstance(names, Sequence) or not names
+                or not all(isinstance(n, str) for n in names)):  # fmt: skip
+            raise InputError(f"{field_name} must be a non-empty list of names, got {names!r}")
+    seeds = list(seeds) if isinstance(seeds, Iterable) and not isinstance(seeds, str) else None
+    if not seeds:
+        raise InputError("seeds must be a non-empty list of integers >= 0")
+    seeds = [check_size("seeds: each seed", s) for s in seeds]
     params = dict(params or {})
     for name, values in params.items():
         if isinstance(values, Mapping):  # TOML reads an unquoted dotted name as a table
@@ -120,7 +136,6 @@ def make_grid(
             raise InputError(f"grid parameter {name!r} must be a non-empty list of values")
     names = sorted(params)
     combos = list(itertools.product(*(params[n] for n in names))) or [()]
-    seeds = [int(s) for s in seeds]
     return [
         GridPoint(t, d, s, tuple(zip(names, combo)))
         for t, d, s, combo in itertools.product(trackers, data, seeds, combos)

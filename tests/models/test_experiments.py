@@ -33,6 +33,25 @@ def test_bad_grid_parameter_is_rejected(params) -> None:
         make_grid(["a"], params=params)
 
 
+@pytest.mark.parametrize(("kwargs", "needle"), [
+    ({"trackers": "chains"}, "trackers must be a non-empty list of names, got 'chains'"),
+    ({"trackers": [5]}, "trackers must be a non-empty list of names"),
+    ({"data": [5]}, "data must be a non-empty list of names"),
+    ({"seeds": "abc"}, "seeds must be a non-empty list of integers >= 0"),
+    ({"seeds": []}, "seeds must be a non-empty list of integers >= 0"),
+    ({"seeds": [1.5]}, "each seed must be an integer >= 0, got 1.5"),
+    ({"seeds": [True]}, "each seed must be an integer >= 0, got True"),
+    ({"seeds": [-1]}, "each seed must be an integer >= 0, got -1"),
+])  # fmt: skip
+def test_bad_grid_names_and_seeds_are_rejected(kwargs, needle) -> None:
+    """A tracker name given as a string was split into its letters, a text seed raised
+    Python's ValueError, 1.5 was truncated, True read as 1, and -1 failed only inside a
+    worker (make_rng)."""
+    with pytest.raises(InputError) as exc:
+        make_grid(**{"trackers": ["chains"], **kwargs})
+    assert needle in str(exc.value)
+
+
 def test_duplicate_points_and_resume_without_file_are_rejected(tmp_path) -> None:
     p = GridPoint("chains")
     with pytest.raises(InputError, match="duplicate"):
