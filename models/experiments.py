@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from dbn.checks import check_count, check_size
+from dbn.checks import check_count, check_size, check_type
 from dbn.errors import FileFormatError, InputError
 
 __all__ = [
@@ -268,7 +268,13 @@ def run_grid(
         One record per grid point, in grid order: ``id``, ``point``, ``status`` (``"ok"``
         or ``"error"``), ``result``, ``error``, ``wall_s``.
     """
+    if not callable(task):  # each point would have failed and been recorded as an error
+        raise InputError(f"task must be a function GridPoint -> dict, got {task!r:.60}")
+    if isinstance(grid, GridPoint) or not isinstance(grid, Iterable):
+        raise InputError(f"grid must be a list of GridPoint (make_grid), got {grid!r:.60}")
     grid = list(grid)
+    for i, p in enumerate(grid):
+        check_type(f"grid[{i}]", p, GridPoint, InputError)
     ids = [p.id for p in grid]
     if len(set(ids)) != len(ids):
         raise InputError("grid has duplicate points (same tracker, data, seed and params)")
@@ -336,7 +342,11 @@ def _records(task: Task, todo: list[GridPoint], client: Any, serial: bool, n_wor
         own_cluster = local_cluster(n_workers)
         client = own_client = Client(own_cluster)
     elif isinstance(client, str):
-        client = own_client = Client(client)
+        try:
+            client = own_client = Client(client)
+        except (ValueError, OSError, TimeoutError) as exc:  # a bad address, no scheduler
+            raise InputError(f"client {client!r}: cannot connect to a Dask scheduler there "
+                             f"({exc}); give an address like 'tcp://host:8786'") from None
     run = uuid.uuid4().hex[:8]  # fresh task keys: a re-run is run again, not fetched
     try:
         futures = [

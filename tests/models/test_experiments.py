@@ -52,6 +52,23 @@ def test_bad_grid_names_and_seeds_are_rejected(kwargs, needle) -> None:
     assert needle in str(exc.value)
 
 
+def test_run_grid_refuses_a_task_grid_or_address_it_cannot_use(tmp_path) -> None:
+    """A task of None ran every point to an 'error' record; a list of names raised
+    AttributeError, one GridPoint TypeError, and an address without a port dask's
+    ValueError. Nothing is written."""
+    grid = make_grid(["chains"], params={"n": [3], "T": [5]})
+    out = tmp_path / "r.jsonl"
+    for kwargs, needle in (({"task": None}, "task must be a function"),
+                           ({"grid": ["a"]}, "grid[0] must be an instance of GridPoint"),
+                           ({"grid": grid[0]}, "grid must be a list of GridPoint")):  # fmt: skip
+        with pytest.raises(InputError) as exc:
+            run_grid(**{"task": chain_task, "grid": grid, **kwargs}, out=out, serial=True)
+        assert needle in str(exc.value)
+    assert not out.exists()
+    with pytest.raises(InputError, match="client 'abc': cannot connect to a Dask scheduler"):
+        run_grid(chain_task, grid, client="abc", progress=False)
+
+
 def test_duplicate_points_and_resume_without_file_are_rejected(tmp_path) -> None:
     p = GridPoint("chains")
     with pytest.raises(InputError, match="duplicate"):
