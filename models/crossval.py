@@ -78,7 +78,7 @@ def fold_blocks(items: Sequence[Hashable], k: int,
         ``k`` not an integer from 2 to the number of items (of groups), an item given
         twice, or ``groups`` not one per item.
     """
-    items = list(items)
+    items = _as_list("items", items)
     _check_unique(items)
     units = items if groups is None else list(dict.fromkeys(_per_item(items, groups)))
     what = "training files" if groups is None else "groups of training files"
@@ -95,6 +95,14 @@ def fold_blocks(items: Sequence[Hashable], k: int,
     return folds
 
 
+def _as_list(what: str, value: Any) -> list:
+    """``value`` as a list; a string (split into its letters before) or what is not a
+    collection is an :class:`InputError` naming ``what``."""
+    if isinstance(value, str | bytes) or not isinstance(value, Iterable):
+        raise InputError(f"cross-validation: {what} must be a list, got {value!r:.60}")
+    return list(value)
+
+
 def _check_unique(items: list) -> None:
     """An :class:`InputError` for the first item given twice (scored by a fit on itself),
     or one that is not hashable."""
@@ -109,7 +117,7 @@ def _check_unique(items: list) -> None:
 
 def _per_item(items: list, groups: Sequence[Hashable]) -> list:
     """``groups`` as a list, checked to hold one hashable group per item."""
-    groups = list(groups)
+    groups = _as_list("groups", groups)
     if len(groups) != len(items):
         raise InputError(f"cross-validation: {len(groups)} groups for {len(items)} items "
                          "(expected one group per item)")  # fmt: skip
@@ -193,7 +201,7 @@ def cross_validate(items: Sequence[Hashable], k: int, candidates: Sequence[Hasha
         or one twice.
     """
     folds = fold_blocks(items, k, groups)
-    candidates = list(candidates)
+    candidates = _as_list("candidates", candidates)
     try:
         distinct = len(set(candidates))
     except TypeError:

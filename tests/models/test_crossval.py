@@ -145,3 +145,18 @@ def test_group_keys_take_the_first_group_or_the_whole_match():
                             (r"_seed\d+$", "no match in 'runs/walk_seed0.jsonl'")):
         with pytest.raises(InputError, match=needle):
             group_keys(files, pattern)
+
+
+@pytest.mark.parametrize(("call", "needle"), [
+    (lambda: fold_blocks("abc", 2), "items must be a list, got 'abc'"),
+    (lambda: fold_blocks(5, 2), "items must be a list, got 5"),
+    (lambda: fold_blocks(["a", "b"], 2, "xy"), "groups must be a list, got 'xy'"),
+    (lambda: cross_validate(["a", "b"], 2, "ab", lambda t, c: 0, lambda m, i: 0.0),
+     "candidates must be a list, got 'ab'"),
+])  # fmt: skip
+def test_a_string_is_not_a_list_of_items(call, needle):
+    """A string was split into its letters (three 'files' a, b, c; candidates 'a' and
+    'b'), and a number raised Python's TypeError."""
+    with pytest.raises(InputError) as exc:
+        call()
+    assert needle in str(exc.value)
