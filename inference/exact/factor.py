@@ -12,7 +12,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dbn.errors import EvidenceError, UnknownVariableError
+from dbn.checks import real_array
+from dbn.errors import (
+    EvidenceError,
+    ModelError,
+    NegativeProbabilityError,
+    ShapeError,
+    UnknownVariableError,
+)
 
 __all__ = ["Factor", "logsumexp", "product"]
 
@@ -45,14 +52,17 @@ class Factor:
     log_values: np.ndarray
 
     def __post_init__(self) -> None:
+        if isinstance(self.variables, str):  # 'ab' was read as the variables 'a', 'b'
+            raise ModelError(f"factor variables must be a tuple of names, got "
+                             f"{self.variables!r}")  # fmt: skip
         variables = tuple(self.variables)
-        values = np.array(self.log_values, dtype=np.float64)
+        values = np.array(real_array(f"factor over {variables}: log_values", self.log_values))
         if values.ndim != len(variables):
-            raise ValueError(
+            raise ShapeError(
                 f"factor over {variables} needs {len(variables)} axes, got shape {values.shape}"
             )
         if len(set(variables)) != len(variables):
-            raise ValueError(f"factor variables must be distinct, got {variables}")
+            raise ModelError(f"factor variables must be distinct, got {variables}")
         values.setflags(write=False)
         object.__setattr__(self, "variables", variables)
         object.__setattr__(self, "log_values", values)
@@ -61,8 +71,12 @@ class Factor:
     @classmethod
     def from_table(cls, variables: Sequence[str], table: np.ndarray) -> Factor:
         """A factor from nonnegative values (not logs)."""
+        table = real_array(f"factor over {tuple(variables)}: table", table)
+        if not np.all(table >= 0):  # log gave NaN with only a RuntimeWarning
+            raise NegativeProbabilityError(f"factor over {tuple(variables)}: table holds a "
+                                           "negative value or NaN")  # fmt: skip
         with np.errstate(divide="ignore"):
-            return cls(tuple(variables), np.log(np.asarray(table, dtype=np.float64)))
+            return cls(tuple(variables), np.log(table))
 
     @classmethod
     def unit(cls) -> Factor:

@@ -8,7 +8,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dbn import pgmpy_adapter as pa
-from dbn.errors import EvidenceError
+from dbn.errors import (
+    EvidenceError,
+    InputError,
+    ModelError,
+    NegativeProbabilityError,
+    ShapeError,
+)
 from inference.exact import Factor, JunctionTree, log_evidence, map_assignment, variable_elimination
 from inference.exact.enumeration import brute_force_map, brute_force_marginals, joint_factor
 
@@ -119,3 +125,22 @@ def test_example_networks_equal_pgmpy(name: str) -> None:
         for n in hidden:
             np.testing.assert_allclose(cal.marginals[n], theirs[n], atol=TOL, rtol=0)
             assert abs(cal.marginals[n].sum() - 1.0) < TOL
+
+
+@pytest.mark.parametrize(("make", "error", "needle"), [
+    (lambda: Factor(("a",), np.array(["x", "y"])), InputError, "log_values is not an array"),
+    (lambda: Factor(("a",), np.array([1j, 0])), InputError, "log_values holds complex"),
+    (lambda: Factor("ab", np.zeros((2, 2))), ModelError, "must be a tuple of names, got 'ab'"),
+    (lambda: Factor(("a", "a"), np.zeros((2, 2))), ModelError, "must be distinct"),
+    (lambda: Factor(("a",), np.zeros((2, 2))), ShapeError, "needs 1 axes, got shape (2, 2)"),
+    (lambda: Factor.from_table(("a",), ["x", "y"]), InputError, "table is not an array"),
+    (lambda: Factor.from_table(("a",), [-1.0, 1.0]), NegativeProbabilityError, "negative"),
+    (lambda: Factor.from_table(("a",), [np.nan, 1.0]), NegativeProbabilityError, "NaN"),
+])  # fmt: skip
+def test_a_factor_names_values_it_cannot_hold(make, error, needle) -> None:
+    """Text raised numpy's ValueError, complex values lost their imaginary parts, 'ab'
+    was read as the variables 'a' and 'b', shapes raised a bare ValueError, and a negative
+    or NaN table became a NaN factor with only a RuntimeWarning."""
+    with pytest.raises(error) as exc:
+        make()
+    assert needle in str(exc.value)
