@@ -38,7 +38,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from dbn.checks import check_count
+from dbn.checks import check_count, real_array
 from dbn.errors import InputError, NegativeProbabilityError, NotNormalizedError
 
 __all__ = [
@@ -233,10 +233,7 @@ def check_start_value(log_target_value: Any) -> None:
 def _check_move_probs(move_probs: Any, num_moves: int | None = None) -> np.ndarray:
     """``move_probs`` as float64 of shape ``(num_moves,)`` (``None``: any length) that are
     finite, >= 0 and sum to 1 within 1e-9; else a :mod:`dbn.errors` class naming it."""
-    try:
-        probs = np.asarray(move_probs, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InputError(f"move_probs must be numbers, got {move_probs!r}") from None
+    probs = real_array("move_probs", move_probs)  # complex ones lost their imaginary parts
     if num_moves is None and probs.ndim != 1:
         raise InputError(f"move_probs has shape {probs.shape}, expected one axis (num_moves,)")
     if num_moves is None:

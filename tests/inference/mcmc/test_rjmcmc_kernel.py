@@ -178,8 +178,9 @@ def test_same_seed_same_chain_and_bad_input() -> None:
 
 def test_select_move_draws_by_the_probabilities_and_refuses_bad_ones_before_drawing() -> None:
     """Frequencies within 5 binomial standard errors of ``move_probs``; probabilities that
-    are NaN, negative, not summing to one or not one axis of numbers are refused before
-    the uniform is drawn (NaN was silently never chosen, a sum of 2 skewed every draw)."""
+    are NaN, negative, not summing to one, complex or not one axis of numbers are refused
+    before the uniform is drawn (NaN was silently never chosen, a sum of 2 skewed every
+    draw, complex ones lost their imaginary parts)."""
     rng = np.random.default_rng(4)
     n = 20000
     counts = np.bincount([select_move(rng, MOVE_PROBS) for _ in range(n)], minlength=3)
@@ -187,7 +188,8 @@ def test_select_move_draws_by_the_probabilities_and_refuses_bad_ones_before_draw
     assert np.all(np.abs(counts / n - MOVE_PROBS) < 5 * se), counts
     for bad, error in (([0.5, 1.5], NotNormalizedError), ([np.nan, 1.0], NegativeProbabilityError),
                        ([-0.5, 1.5], NegativeProbabilityError), ("ab", InputError),
-                       ([[0.5, 0.5]], InputError), (1.0, InputError), ([], NotNormalizedError)):
+                       ([[0.5, 0.5]], InputError), (1.0, InputError), ([], NotNormalizedError),
+                       (np.array([0.5 + 1j, 0.5]), InputError)):  # fmt: skip
         rng = np.random.default_rng(0)
         with pytest.raises(error, match="move_probs"):
             select_move(rng, bad)
