@@ -153,7 +153,7 @@ def group_keys(items: Sequence[str], pattern: str) -> list[str]:
     except (re.error, TypeError) as exc:
         raise InputError(f"fold groups {pattern!r}: not a regular expression ({exc})") from None
     keys = []
-    for item in items:
+    for item in _as_list("items", items):
         m = rx.search(str(item))
         if m is None:
             raise InputError(f"fold groups {pattern!r}: no match in {str(item)!r} (every "

@@ -71,12 +71,14 @@ class Factor:
     @classmethod
     def from_table(cls, variables: Sequence[str], table: np.ndarray) -> Factor:
         """A factor from nonnegative values (not logs)."""
-        table = real_array(f"factor over {tuple(variables)}: table", table)
+        if not isinstance(variables, str):  # a string is refused by the constructor
+            variables = tuple(variables)
+        table = real_array(f"factor over {variables}: table", table)
         if not np.all(table >= 0):  # log gave NaN with only a RuntimeWarning
-            raise NegativeProbabilityError(f"factor over {tuple(variables)}: table holds a "
+            raise NegativeProbabilityError(f"factor over {variables}: table holds a "
                                            "negative value or NaN")  # fmt: skip
         with np.errstate(divide="ignore"):
-            return cls(tuple(variables), np.log(table))
+            return cls(variables, np.log(table))
 
     @classmethod
     def unit(cls) -> Factor:

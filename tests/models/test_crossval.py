@@ -151,6 +151,7 @@ def test_group_keys_take_the_first_group_or_the_whole_match():
     (lambda: fold_blocks("abc", 2), "items must be a list, got 'abc'"),
     (lambda: fold_blocks(5, 2), "items must be a list, got 5"),
     (lambda: fold_blocks(["a", "b"], 2, "xy"), "groups must be a list, got 'xy'"),
+    (lambda: group_keys("abc", r"(\w)"), "items must be a list, got 'abc'"),
     (lambda: cross_validate(["a", "b"], 2, "ab", lambda t, c: 0, lambda m, i: 0.0),
      "candidates must be a list, got 'ab'"),
 ])  # fmt: skip

@@ -134,6 +134,7 @@ def test_example_networks_equal_pgmpy(name: str) -> None:
     (lambda: Factor(("a", "a"), np.zeros((2, 2))), ModelError, "must be distinct"),
     (lambda: Factor(("a",), np.zeros((2, 2))), ShapeError, "needs 1 axes, got shape (2, 2)"),
     (lambda: Factor.from_table(("a",), ["x", "y"]), InputError, "table is not an array"),
+    (lambda: Factor.from_table("ab", np.ones((2, 2))), ModelError, "tuple of names, got 'ab'"),
     (lambda: Factor.from_table(("a",), [-1.0, 1.0]), NegativeProbabilityError, "negative"),
     (lambda: Factor.from_table(("a",), [np.nan, 1.0]), NegativeProbabilityError, "NaN"),
 ])  # fmt: skip
