@@ -17,7 +17,7 @@ from dbn.checks import (
     evidence_state,
     from_package,
     make_rng,
-    refuse_complex,
+    real_array,
 )
 from dbn.cpds import ContinuousCPD, DeterministicCPD, LinearGaussianCPD, TabularCPD
 from dbn.errors import (
@@ -341,11 +341,7 @@ def check_evidence(
 
 def check_likelihood(name: str, cardinality: int, lik: Any) -> np.ndarray:
     """A validated virtual-evidence vector of shape ``(cardinality,)``."""
-    refuse_complex(f"soft evidence on {name!r}", lik, EvidenceError)
-    try:
-        arr = np.asarray(lik, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise EvidenceError(f"soft evidence on {name!r} is not numeric: {lik!r}") from None
+    arr = real_array(f"soft evidence on {name!r}", lik, EvidenceError)
     if arr.shape != (cardinality,):
         raise EvidenceError(
             f"soft evidence on {name!r} has shape {arr.shape}, expected ({cardinality},)"

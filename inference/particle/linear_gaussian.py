@@ -63,9 +63,9 @@ class LinearGaussianSSM(StateSpaceModel):
 
     @params.setter
     def params(self, params: LinearGaussianParams) -> None:
-        raise InputError("LinearGaussianSSM.params is fixed at construction: the filters "
-                         "compile it in (and so did the model's square roots, which went "
-                         "stale); build LinearGaussianSSM(new_params) instead")  # fmt: skip
+        raise InputError("LinearGaussianSSM.params is fixed at construction (the model's "
+                         "square roots and every compiled filter are built from it): build "
+                         "LinearGaussianSSM(new_params) instead")  # fmt: skip
 
     def sample_initial(self, key: Array, num_particles: int, dtype: Any) -> Array:
         """``(num_particles, state_dim)`` draws from ``N(m0, P0)``."""
