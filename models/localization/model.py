@@ -34,7 +34,7 @@ import numpy as np
 from jax import Array
 from scipy.spatial import cKDTree
 
-from dbn.checks import MIN_SCALE, check_numbers, refuse_complex
+from dbn.checks import MIN_SCALE, check_count, check_numbers, real_array, refuse_complex
 from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 from inference.evidence_columns import as_column
 from inference.particle import StateSpaceModel, register_model
@@ -307,8 +307,8 @@ class KNNSensor:
         cell_theta: float,
         threshold: float = math.inf,
     ) -> None:
-        poses = np.asarray(train_poses, dtype=np.float64)
-        obs = np.asarray(train_observations, dtype=np.float64)
+        poses = real_array("train_poses", train_poses, ModelError)
+        obs = real_array("train_observations", train_observations, ModelError)
         if (
             poses.ndim != 2
             or poses.shape[1] != 3
@@ -320,9 +320,15 @@ class KNNSensor:
             )
         if not (np.all(np.isfinite(poses)) and np.all(np.isfinite(obs))):
             raise NonFiniteError("training poses/observations hold NaN or inf")
-        J = int(num_neighbours)
-        if not 1 <= J <= poses.shape[0]:
+        J = check_count("num_neighbours", num_neighbours)  # 2.5 ran as 2, True as 1
+        if not J <= poses.shape[0]:
             raise InputError(f"num_neighbours = {num_neighbours} not in [1, {poses.shape[0]}]")
+        check_count("feature_dim", feature_dim)  # 1.5 raised Python's slice TypeError
+        cell_xy, cell_theta = check_numbers("cell_xy, cell_theta", (cell_xy, cell_theta), 2,
+                                            low=MIN_SCALE)  # 0 or NaN: a NaN kernel
+        real = isinstance(threshold, int | float | np.number) and not isinstance(threshold, bool)
+        if not (real and threshold > 0):  # NaN or <= 0 skipped every observation
+            raise ModelError(f"threshold = {threshold!r}: a distance > 0 (inf: no outliers)")
         self.train_poses = poses
         stride = max(1, len(obs) // 6000)  # PCA from <= ~6000 evenly spaced training rows
         self.pca = fit_pca(obs[::stride], feature_dim)

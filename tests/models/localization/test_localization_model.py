@@ -175,6 +175,32 @@ def test_knn_sensor_neighbours_weights_and_outlier_rule() -> None:
     np.testing.assert_allclose(ll, want, rtol=1e-10, atol=1e-9)
 
 
+@pytest.mark.parametrize(("change", "error", "needle"), [
+    ({"train_poses": np.zeros((6, 3)) + 0j}, ModelError, "train_poses holds complex numbers"),
+    ({"train_observations": np.full((6, 4), "x")}, ModelError, "train_observations is not"),
+    ({"cell_xy": 0.0}, ModelError, "cell_xy, cell_theta = [0.0, 0.3]: every number must be >="),
+    ({"cell_theta": np.nan}, NonFiniteError, "cell_xy, cell_theta = [0.5, nan]"),
+    ({"cell_xy": "a"}, ModelError, "cell_xy, cell_theta must be numbers"),
+    ({"threshold": np.nan}, ModelError, "threshold = nan: a distance > 0"),
+    ({"threshold": -1.0}, ModelError, "threshold = -1.0: a distance > 0"),
+    ({"threshold": "a"}, ModelError, "threshold = 'a'"),
+    ({"num_neighbours": 2.5}, InputError, "num_neighbours must be an integer >= 1, got 2.5"),
+    ({"num_neighbours": True}, InputError, "num_neighbours must be an integer >= 1, got True"),
+    ({"feature_dim": 1.5}, InputError, "feature_dim must be an integer >= 1, got 1.5"),
+])  # fmt: skip
+def test_knn_sensor_names_a_bad_setting(change, error, needle) -> None:
+    """A cell size of 0 or NaN gave a NaN kernel, a NaN or negative threshold skipped
+    every observation, 2.5 neighbours ran as 2 and True as 1, complex training data lost
+    its imaginary parts, and text or a fractional feature_dim raised Python's errors."""
+    rng = np.random.default_rng(0)
+    base = dict(train_poses=rng.normal(size=(6, 3)), train_observations=rng.normal(size=(6, 4)),
+                feature_dim=2, num_neighbours=3, cell_xy=0.5, cell_theta=0.3)  # fmt: skip
+    KNNSensor(**base)
+    with pytest.raises(error) as exc:
+        KNNSensor(**{**base, **change})
+    assert needle in str(exc.value)
+
+
 def test_range_bearing_likelihood_matches_formula() -> None:
     lms = np.array([[0.0, 0.0], [3.0, 1.0], [-2.0, 4.0]])
     m = RangeBearingLocalizationModel(
