@@ -80,7 +80,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.checks import check_count, check_number_fields, make_rng
+from dbn.checks import check_count, check_number_fields, check_type, make_rng, real_array
 from dbn.errors import InputError, NonFiniteError, ShapeError
 from inference.particle.filters import ParticleState
 from inference.particle.kbest import k_best_states
@@ -279,15 +279,17 @@ def make_model(
     -------
     PathFilterModel.
     """
-    config = FilterConfig() if config is None else config
+    check_type("network", network, CameraNetwork, InputError)
+    config = FilterConfig() if config is None else check_type("config", config, FilterConfig,
+                                                                InputError)  # fmt: skip
     config.validate()
-    f0 = np.asarray(f0, dtype=np.float64)
+    f0 = real_array("f0", f0)
     if f0.ndim != 1:
         raise ShapeError(f"f0 must be 1-D, got shape {f0.shape}")
     if not np.all(np.isfinite(f0)):
         raise NonFiniteError(f"f0 holds non-finite values: {f0!r}")
     _, chol = sigma_cholesky(sigma, f0.size)
-    if not isinstance(c0, int | np.integer):
+    if isinstance(c0, bool) or not isinstance(c0, int | np.integer):  # True was camera 1
         raise InputError(f"c0 must be an int camera id, got {c0!r}")
     check_cameras("c0", np.array([c0]), network)
     u0 = whiten(chol, f0)

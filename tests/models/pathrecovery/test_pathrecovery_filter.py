@@ -352,3 +352,22 @@ def test_run_filter_checks_every_step_first(small_scene):
         run_filter(0, model, sc.odb._replace(feat=feat))
     with pytest.raises(ShapeError):
         recover_path(model, run_filter(0, model, sc.odb), sc.odb.feat[:, :1])
+
+
+@pytest.mark.parametrize(("change", "needle"), [
+    ({"f0": np.zeros(4) + 0j}, "f0 holds complex numbers"),
+    ({"f0": ["a"] * 4}, "f0 is not an array of numbers"),
+    ({"c0": True}, "c0 must be an int camera id, got True"),
+    ({"network": None}, "network must be an instance of CameraNetwork, got NoneType"),
+    ({"config": "a"}, "config must be an instance of FilterConfig, got str"),
+])  # fmt: skip
+def test_make_model_names_a_bad_argument(change, needle):
+    """Complex features lost their imaginary parts, text raised numpy's ValueError, True
+    was camera 1, and a network or config of another kind raised AttributeError."""
+    from models.pathrecovery.simulate import manhattan_grid
+
+    base = dict(network=manhattan_grid(3), c0=0, f0=np.zeros(4), sigma=np.eye(4))
+    make_model(**base)
+    with pytest.raises(InputError) as exc:
+        make_model(**{**base, **change})
+    assert needle in str(exc.value)
