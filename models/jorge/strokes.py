@@ -39,6 +39,7 @@ Rules of the simulated tracker (defaults of issue 4)
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -661,8 +662,12 @@ class StrokeSet:
             in start order, or bad colours.
         """
         fps = check_frame_rate(fps, "StrokeSet.from_strokes", InputError)
+        if isinstance(strokes, str) or not isinstance(strokes, Iterable):
+            raise InputError(f"StrokeSet.from_strokes: strokes must be a list of Stroke, got "
+                             f"{strokes!r:.60}")  # fmt: skip
         strokes = tuple(strokes)
         for k, s in enumerate(strokes):
+            check_type(f"StrokeSet.from_strokes: strokes[{k}]", s, Stroke, InputError)
             if s.index != k:
                 raise InputError(f"stroke at position {k} has index {s.index}; indices must be 0..n-1")
             if s.end < s.start:

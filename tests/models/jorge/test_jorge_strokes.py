@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gzip
+import re
 
 import numpy as np
 import pytest
@@ -147,6 +148,18 @@ def test_make_stroke_names_a_bad_argument(change, needle):
         make_stroke(**{**base, **change})
     assert needle in str(exc.value)
     assert make_stroke(**{**base, "start": 2.0, "index": np.int64(3)}).start == 2
+
+
+def test_from_strokes_names_what_is_not_a_list_of_strokes():
+    """A list of names raised AttributeError (its message showed str.index), a number
+    Python's TypeError."""
+    s0 = make_stroke(0, 0, 5, (0, 0), (1, 1), [1, 2])
+    assert len(StrokeSet.from_strokes([s0], fps=25.0).strokes) == 1
+    for bad, needle in ((["a"], "strokes[0] must be an instance of Stroke, got str"),
+                        (5, "strokes must be a list of Stroke, got 5"),
+                        ("ab", "strokes must be a list of Stroke, got 'ab'")):  # fmt: skip
+        with pytest.raises(InputError, match=re.escape(needle)):
+            StrokeSet.from_strokes(bad, fps=25.0)
 
 
 def test_ground_truth_takes_lists_and_whole_floats():
