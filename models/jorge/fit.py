@@ -60,6 +60,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from dbn.checks import check_type
 from dbn.errors import InputError
 from models.jorge.evidence import palette_gain_bin
 from models.jorge.network import LabelGraph, NetworkConfig
@@ -456,7 +457,8 @@ def fit_parameters(stroke_sets: Iterable[StrokeSet], config: NetworkConfig | Non
         :math:`P_{split}, P_{part}, P_{join}, q_m`, and ``split_cover`` where ``config``
         has it on, :func:`fit_split_cover`) and size likelihood.
     """
-    config = NetworkConfig() if config is None else config
+    config = (NetworkConfig() if config is None  # a dict raised AttributeError
+              else check_type("config", config, NetworkConfig, InputError))  # fmt: skip
     c = EventCounts()
     for strokes in stroke_sets:
         count_events(strokes, config, c)

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dbn.checks import check_type
 from dbn.errors import InputError, ModelError, ShapeError, TimeOrderError
 from models.jorge.config import (
     FITTED_LABELS,
@@ -121,7 +122,8 @@ class LabelGraph(LinkRule):
 
     def __init__(self, config: NetworkConfig | None = None, with_domains: bool = True,
                  fps: float | None = None) -> None:
-        self.config = NetworkConfig() if config is None else config
+        self.config = (NetworkConfig() if config is None  # a dict raised AttributeError
+                       else check_type("config", config, NetworkConfig, InputError))  # fmt: skip
         self.fps = check_frame_rate(fps, "LabelGraph")
         self.with_domains = with_domains
         self.nodes: list[_Node] = []

@@ -30,6 +30,7 @@ from models.jorge.network import (
     FITTED_PALETTE_COUNTS,
     FITTED_PALETTE_GAINS,
     FITTED_SPLIT_COVER,
+    LabelGraph,
     NetworkConfig,
 )
 from models.jorge.online import label_online
@@ -102,6 +103,16 @@ def test_fit_needs_stroke_sets():
     strokes = [make_stroke(0, 0, 10, (0, 0), (1, 0), [0, 1], {0}), make_stroke(1, 12, 20, (1, 0), (2, 0), [0, 1], {0})]
     with pytest.raises(InputError, match="count_events: expected a StrokeSet"):
         fit_parameters([strokes])
+
+
+def test_a_config_of_another_kind_is_refused_naming_it():
+    """A dict for the NetworkConfig raised AttributeError ('pool_size') in the fit, the
+    event counts and the label graph."""
+    ss = StrokeSet.from_strokes(_meet_and_part(), fps=25.0)
+    for call in (lambda: fit_parameters([ss], {}), lambda: fit_parameters([], {}),
+                 lambda: count_events(ss, {}), lambda: LabelGraph({}, fps=25.0)):  # fmt: skip
+        with pytest.raises(InputError, match="config must be an instance of NetworkConfig"):
+            call()
 
 
 def test_validation_is_held_out_of_training():
