@@ -259,6 +259,7 @@ def check_run_inputs(observations: Any, actions: Any) -> int:
     for name, a in leaves:
         if np.ndim(a) == 0:
             raise ShapeError(f"{name} is a scalar: a run needs leading axis num_timesteps")
+        _check_leaf_dtype(name, a)
     num_steps = np.shape(leaves[0][1])[0]
     for name, a in leaves:
         if np.shape(a)[0] != num_steps:
@@ -267,6 +268,17 @@ def check_run_inputs(observations: Any, actions: Any) -> int:
     if num_steps == 0:
         raise InputError("observations have no steps (leading axis 0)")
     return int(num_steps)
+
+
+def _check_leaf_dtype(name: str, leaf: Any) -> None:
+    """An :class:`InputError` naming ``name`` unless ``leaf`` holds real numbers or bools:
+    text raised jax's TypeError from ``lax.scan``, and complex observations ran, the
+    likelihood taking a complex residual."""
+    dtype = getattr(leaf, "dtype", None)
+    dtype = np.asarray(leaf).dtype if dtype is None else dtype
+    if jnp.issubdtype(dtype, jnp.complexfloating) or not (
+            jnp.issubdtype(dtype, jnp.number) or jnp.issubdtype(dtype, jnp.bool_)):  # fmt: skip
+        raise InputError(f"{name} has dtype {dtype}: a run needs real numbers")
 
 
 # A first stage: ``(state, observation, action) -> (log_weights, ess, base)``: the log
@@ -505,6 +517,9 @@ def run(
         raise ModelError(f"pf must be a ParticleFilter (bootstrap_filter, auxiliary_filter), "
                          f"got {type(pf).__name__}")  # fmt: skip
     check_run_inputs(observations, actions)
+    if summary is not None and not callable(summary):  # else Python's TypeError in the scan
+        raise InputError(f"summary must be a function ParticleState -> pytree or None, got "
+                         f"{summary!r:.60}")  # fmt: skip
     with precision_scope(pf.dtype):
         k0, k_steps = jax.random.split(key)
         state = pf.init(k0) if initial_state is None else initial_state

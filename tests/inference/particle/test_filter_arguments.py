@@ -75,6 +75,23 @@ def test_bad_model_parameters_are_refused_naming_them(field, value, error, needl
     assert needle in str(exc.value)
 
 
+@pytest.mark.parametrize(("kwargs", "needle"), [
+    ({"observations": np.zeros((4, 1)) + 0j}, "observations leaf 0 has dtype complex128"),
+    ({"observations": np.full((4, 1), "x")}, "observations leaf 0 has dtype <U1"),
+    ({"actions": np.full((4, 1), "x")}, "actions leaf 0 has dtype <U1"),
+    ({"summary": "mean"}, "summary must be a function ParticleState -> pytree or None"),
+])  # fmt: skip
+def test_run_refuses_observations_that_are_not_real_numbers(kwargs, needle) -> None:
+    """Complex observations ran (the likelihood took a complex residual), text raised jax's
+    TypeError from lax.scan, and a summary of 'mean' Python's TypeError."""
+    pf = bootstrap_filter(LinearGaussianSSM(PARAMS), 8)
+    args = {"observations": np.zeros((4, 1)), **kwargs}
+    with pytest.raises(InputError) as exc:
+        run(jax.random.key(0), pf, **args)
+    assert needle in str(exc.value)
+    run(jax.random.key(0), pf, np.zeros((4, 1), dtype=int), summary=None)  # ints are numbers
+
+
 def test_a_models_parameters_cannot_be_swapped_after_construction() -> None:
     """``model.params = other`` was accepted while the model kept drawing with the old
     square roots and matrices (and a compiled filter keeps them too): a silently wrong
