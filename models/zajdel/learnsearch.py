@@ -48,11 +48,11 @@ from typing import NamedTuple
 import numpy as np
 from scipy.special import logsumexp
 
-from dbn.checks import check_number_fields
+from dbn.checks import check_number_fields, real_array
 from dbn.errors import InputError, ModelError
 from models.zajdel.data import Observations, take, validate_observations
 from models.zajdel.oracle import enumerate_partitions
-from models.zajdel.params import ZajdelParams
+from models.zajdel.params import ZajdelParams, check_p_new
 from models.zajdel.path import PathModel, pairwise_path_logprob
 from models.zajdel.scores import label_prior_log_prob, labels_to_links, path_log_prob
 
@@ -252,7 +252,7 @@ def _check_params(params: LSParams) -> None:
     ncam = params.path.num_cameras
     shapes = {"mean": (r,), "prior_cov": (r, r), "bias": (ncam, r), "noise_cov": (ncam, r, r)}
     for name, shape in shapes.items():
-        v = np.asarray(getattr(params, name))
+        v = real_array(name, getattr(params, name), ModelError)  # complex ran, text raised
         if v.shape != shape:
             raise ModelError(f"{name}: expected shape {shape}, got {v.shape}")
         if not np.isfinite(v).all():
@@ -262,8 +262,7 @@ def _check_params(params: LSParams) -> None:
             np.linalg.cholesky(np.asarray(getattr(params, name)))
         except np.linalg.LinAlgError as exc:
             raise ModelError(f"{name}: not symmetric positive definite") from exc
-    if params.p_new is not None and not 0.0 < params.p_new < 1.0:
-        raise ModelError(f"p_new = {params.p_new}: must be None or in (0, 1)")
+    check_p_new(params.p_new)
 
 
 # --------------------------------------------------------------------------- evidence

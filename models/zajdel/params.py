@@ -11,7 +11,7 @@ from dbn.errors import ModelError
 from inference.adf.niw import NIW
 from models.zajdel.path import PathModel
 
-__all__ = ["ZajdelParams", "default_prior", "check_params"]
+__all__ = ["ZajdelParams", "default_prior", "check_params", "check_p_new"]
 
 
 class ZajdelParams(NamedTuple):
@@ -73,7 +73,13 @@ def check_params(params: ZajdelParams) -> None:
         np.linalg.cholesky(C)
     except np.linalg.LinAlgError as exc:
         raise ModelError("prior.C: not symmetric positive definite") from exc
-    p_new = params.p_new
+    check_p_new(params.p_new)
+
+
+def check_p_new(p_new) -> None:
+    """A :class:`ModelError` unless ``p_new`` (the label prior's probability of a new
+    person) is None or a number in (0, 1): NaN, a bool or text were refused by Python's
+    errors or not at all."""
     real = isinstance(p_new, int | float | np.integer | np.floating) and not isinstance(p_new, bool)
     if p_new is not None and not (real and 0.0 < p_new < 1.0):
         raise ModelError(f"p_new = {p_new!r}: must be None or a number in (0, 1)")

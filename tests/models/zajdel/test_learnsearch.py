@@ -209,3 +209,19 @@ def test_bad_input_raises():
         learn_search(obs._replace(appearance=obs.appearance[:, :2]), p)
     with pytest.raises(ShapeError):
         learn_search(obs._replace(camera=obs.camera + 5), p)
+
+
+@pytest.mark.parametrize(("change", "needle"), [
+    ({"mean": np.zeros(3) + 0j}, "mean holds complex numbers"),
+    ({"mean": ["a", "b", "c"]}, "mean is not an array of numbers"),
+    ({"bias": np.full((3, 3), "x")}, "bias is not an array of numbers"),
+    ({"p_new": "a"}, "p_new = 'a': must be None or a number in (0, 1)"),
+    ({"p_new": float("nan")}, "p_new = nan"),
+])  # fmt: skip
+def test_learn_search_names_parameters_that_are_not_real_numbers(change, needle):
+    """Complex parameters passed the check (and ran in complex arithmetic), text raised
+    numpy's TypeError from isfinite, and a text p_new Python's TypeError."""
+    obs, params = small_problem(0)
+    with pytest.raises(ModelError) as exc:
+        learn_search(obs, params._replace(**change))
+    assert needle in str(exc.value)
