@@ -22,7 +22,7 @@ from dbn.errors import (
 __all__ = ["MAX_SCALE", "MIN_SCALE", "check_count", "check_mapping", "check_nonnegative",
            "check_number_fields", "check_numbers", "check_size", "check_type",
            "evidence_mapping", "evidence_state", "from_package", "instance_of", "is_whole",
-           "make_rng", "real_array", "refuse_complex", "whole_array"]
+           "is_real_number", "make_rng", "real_array", "refuse_complex", "whole_array"]
 
 MAX_SCALE = 1e100
 """Largest ``|value|`` a tracker takes as a time (s), a spread or a model parameter: its
@@ -53,11 +53,18 @@ def check_size(name: str, value: Any, error: type[DBNError] = InputError) -> int
     return int(value)
 
 
+def is_real_number(value: Any) -> bool:
+    """Whether ``value`` is one real number: a Python or numpy int or float, not a bool
+    (True read as 1) and not complex (``np.number`` takes complex scalars, which numpy
+    orders by their real parts and ``float()`` casts with only a warning)."""
+    return (isinstance(value, int | float | np.integer | np.floating)
+            and not isinstance(value, bool | np.bool_))  # fmt: skip
+
+
 def check_nonnegative(name: str, value: Any, error: type[DBNError] = InputError) -> float:
     """``value`` as a float >= 0: a real number, not a bool (True read as 1) or a string
     (raised ``TypeError`` on comparison); NaN is refused; else ``error`` naming ``name``."""
-    real = isinstance(value, int | float | np.integer | np.floating)
-    if isinstance(value, bool) or not real or not value >= 0:
+    if not is_real_number(value) or not value >= 0:
         raise error(f"{name} must be a number >= 0, got {value!r}")
     return float(value)
 
@@ -98,8 +105,7 @@ def _finite_number(value: Any) -> bool:
     :data:`MAX_SCALE`."""
     if isinstance(value, np.floating):  # float32 compared with 1e100 overflows
         value = float(value)
-    real = isinstance(value, int | float | np.integer) and not isinstance(value, bool | np.bool_)
-    return real and abs(value) <= MAX_SCALE
+    return is_real_number(value) and abs(value) <= MAX_SCALE
 
 
 def _numbers_default(default: Any) -> bool:

@@ -35,6 +35,7 @@ from dbn.checks import (
     evidence_mapping,
     evidence_state,
     instance_of,
+    is_real_number,
     is_whole,
     refuse_complex,
 )
@@ -308,8 +309,7 @@ def _frame_column(series) -> np.ndarray:
     if series.dtype.kind in "iuf" and not missing.any():
         return series.to_numpy()
     values = series.to_numpy(dtype=object)
-    numbers = all(isinstance(x, int | float | np.integer | np.floating)
-                  and not isinstance(x, bool | np.bool_) for x in values[~missing])  # fmt: skip
+    numbers = all(is_real_number(x) for x in values[~missing])
     if numbers:
         return np.where(missing, np.nan, values).astype(np.float64)
     values[missing] = None

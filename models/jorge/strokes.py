@@ -50,6 +50,7 @@ from dbn.checks import (
     check_number_fields,
     check_size,
     check_type,
+    is_real_number,
     is_whole,
     make_rng,
     real_array,
@@ -453,7 +454,7 @@ def check_frame_rate(fps: object, where: str, error: type[Exception] = ModelErro
     if fps is None:
         raise error(f"{where}: fps is required (the strokes' frame rate, e.g. StrokeSet.fps): "
                     "the link gates and the inference period are in seconds")
-    if isinstance(fps, bool) or not isinstance(fps, int | float | np.number) or not (np.isfinite(fps) and fps > 0):
+    if not is_real_number(fps) or not (np.isfinite(fps) and fps > 0):
         raise error(f"{where}: fps must be a finite number > 0, got {fps!r}")
     return float(fps)
 
@@ -588,8 +589,7 @@ def _frame_number(index: int, name: str, value) -> int:
     """A stroke's ``start`` / ``end`` frame as an int: an integer or a whole float, not a
     bool; else :class:`InputError` naming the stroke (text, NaN raised Python's errors and
     1.5 was truncated to 1)."""
-    real = isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool)
-    if not real or not is_whole(value):
+    if not is_real_number(value) or not is_whole(value):
         raise InputError(f"stroke {index}: {name} must be a whole frame number, got {value!r}")
     return int(value)
 

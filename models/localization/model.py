@@ -34,7 +34,14 @@ import numpy as np
 from jax import Array
 from scipy.spatial import cKDTree
 
-from dbn.checks import MIN_SCALE, check_count, check_numbers, real_array, refuse_complex
+from dbn.checks import (
+    MIN_SCALE,
+    check_count,
+    check_numbers,
+    is_real_number,
+    real_array,
+    refuse_complex,
+)
 from dbn.errors import InputError, ModelError, NonFiniteError, ShapeError
 from inference.evidence_columns import as_column
 from inference.particle import StateSpaceModel, register_model
@@ -326,8 +333,7 @@ class KNNSensor:
         check_count("feature_dim", feature_dim)  # 1.5 raised Python's slice TypeError
         cell_xy, cell_theta = check_numbers("cell_xy, cell_theta", (cell_xy, cell_theta), 2,
                                             low=MIN_SCALE)  # 0 or NaN: a NaN kernel
-        real = isinstance(threshold, int | float | np.number) and not isinstance(threshold, bool)
-        if not (real and threshold > 0):  # NaN or <= 0 skipped every observation
+        if not (is_real_number(threshold) and threshold > 0):  # NaN, <= 0: skipped every one
             raise ModelError(f"threshold = {threshold!r}: a distance > 0 (inf: no outliers)")
         self.train_poses = poses
         stride = max(1, len(obs) // 6000)  # PCA from <= ~6000 evenly spaced training rows

@@ -12,6 +12,7 @@ from collections.abc import Sequence
 import motmetrics as mm
 import numpy as np
 
+from dbn.checks import is_real_number
 from dbn.errors import InputError
 from models.rjmcmc3d.tracker import FrameResult
 from models.rjmcmc3d.types import FrameTruth
@@ -39,8 +40,7 @@ def evaluate(
     """
     if len(truth) != len(results):
         raise InputError(f"truth has {len(truth)} frames but results has {len(results)}")
-    real = isinstance(threshold, int | float | np.integer | np.floating)
-    if isinstance(threshold, bool) or not real or not 0 < threshold < float("inf"):
+    if not is_real_number(threshold) or not 0 < threshold < float("inf"):
         raise InputError(f"threshold={threshold!r} must be a positive number (m)")  # nan ran
     acc = mm.MOTAccumulator(auto_id=True)
     for ft, res in zip(truth, results, strict=True):

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dbn.checks import is_real_number
 from dbn.errors import ConfigError, InputError
 from models.crossval import CrossValidation, cross_validate, fold_blocks, group_keys
 from models.track.context import RunContext, short_names, shown_strength
@@ -116,7 +117,7 @@ def check_strengths(prior_strength: float | Sequence[float], folds: int, train: 
     one = np.ndim(prior_strength) == 0
     strengths = [prior_strength] if one else list(prior_strength)  # type: ignore[arg-type]
     for lam in strengths:
-        if isinstance(lam, bool) or not isinstance(lam, (int, float, np.number)) or not lam >= 0:
+        if not is_real_number(lam) or not lam >= 0:
             raise InputError(f"prior strength {lam!r}: expected a number >= 0 (or inf)")
     if not strengths or len(set(strengths)) != len(strengths):
         raise InputError(f"prior strengths {strengths!r}: expected at least one, none twice")

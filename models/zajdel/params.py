@@ -6,7 +6,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dbn.checks import MAX_SCALE, check_type, real_array
+from dbn.checks import MAX_SCALE, check_type, is_real_number, real_array
 from dbn.errors import ModelError
 from inference.adf.niw import NIW
 from models.zajdel.path import PathModel
@@ -80,8 +80,7 @@ def check_p_new(p_new) -> None:
     """A :class:`ModelError` unless ``p_new`` (the label prior's probability of a new
     person) is None or a number in (0, 1): NaN, a bool or text were refused by Python's
     errors or not at all."""
-    real = isinstance(p_new, int | float | np.integer | np.floating) and not isinstance(p_new, bool)
-    if p_new is not None and not (real and 0.0 < p_new < 1.0):
+    if p_new is not None and not (is_real_number(p_new) and 0.0 < p_new < 1.0):
         raise ModelError(f"p_new = {p_new!r}: must be None or a number in (0, 1)")
 
 

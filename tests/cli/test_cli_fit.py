@@ -136,6 +136,8 @@ def test_fit_refusals(tmp_path, capsys):
 
     with pytest.raises(InputError, match=r"prior strength -1.0: expected a number >= 0 \(or inf"):
         fit(RunContext("jorge", out, 0, quiet=True), [str(XML)], [], {}, 1, -1.0)
+    with pytest.raises(InputError, match=r"prior strength np.complex128\(2\+1j\): expected a number"):
+        fit(RunContext("jorge", out, 0, quiet=True), [str(XML)], [], {}, 1, np.complex128(2 + 1j))
     assert not (out / "config.json").exists() and not (out / "summary.json").exists()
     with pytest.raises(SystemExit):  # argparse: usage and exit status 2
         main(["fit", "jorge", str(XML), "-o", str(out), "--seeds", "0"])

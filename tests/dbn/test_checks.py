@@ -104,3 +104,14 @@ def test_real_array_and_whole_array_name_what_is_not_numbers():
             whole_array("i", bad)
     with pytest.raises(ConfigError, match="i must be whole numbers"):
         whole_array("i", [0.5], ConfigError)
+
+
+def test_is_real_number_refuses_bools_complex_and_text():
+    """np.number takes complex scalars, which numpy orders by their real parts: a complex
+    k-NN threshold, frame rate or prior strength passed their range checks."""
+    from dbn.checks import is_real_number
+
+    for ok in (0, 2.5, np.int64(3), np.float32(1.5), float("nan"), float("inf")):
+        assert is_real_number(ok), ok
+    for bad in (True, np.bool_(False), 1j, np.complex128(2 + 1j), "1", None, np.ones(1)):
+        assert not is_real_number(bad), bad

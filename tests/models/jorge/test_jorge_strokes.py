@@ -118,6 +118,7 @@ _TRUTH = dict(name="s", frames=np.arange(3), ids=np.array([1, 2]),
     ("ids", [1.5, 2], "GroundTruth.ids must be whole numbers"),
     ("fps", float("nan"), "GroundTruth.fps: fps must be a finite number > 0"),
     ("fps", "25", "GroundTruth.fps: fps must be a finite number > 0"),
+    ("fps", np.complex128(25 + 1j), "GroundTruth.fps: fps must be a finite number > 0"),
     ("name", 5, "GroundTruth.name must be an instance of str"),
 ])  # fmt: skip
 def test_ground_truth_built_by_hand_names_a_bad_field(field, value, needle):

@@ -184,6 +184,7 @@ def test_knn_sensor_neighbours_weights_and_outlier_rule() -> None:
     ({"threshold": np.nan}, ModelError, "threshold = nan: a distance > 0"),
     ({"threshold": -1.0}, ModelError, "threshold = -1.0: a distance > 0"),
     ({"threshold": "a"}, ModelError, "threshold = 'a'"),
+    ({"threshold": np.complex128(2 + 1j)}, ModelError, "threshold = np.complex128(2+1j)"),
     ({"num_neighbours": 2.5}, InputError, "num_neighbours must be an integer >= 1, got 2.5"),
     ({"num_neighbours": True}, InputError, "num_neighbours must be an integer >= 1, got True"),
     ({"feature_dim": 1.5}, InputError, "feature_dim must be an integer >= 1, got 1.5"),
